@@ -1,0 +1,98 @@
+//! Frames and rotations (thesis chapter 9).
+//!
+//! Earth frame: NED. Body frame: FRD (x nose, y right, z down along the shaft).
+//! Attitude: 3-2-1 (yaw ψ, pitch θ, roll φ) Euler angles, thesis (9.5).
+//! Rotations are named by what they map: `ned_from_body` takes body-frame
+//! components to NED components (the thesis's R_eb, (9.5)/(9.8)), and
+//! `body_from_ned` is its transpose (R_be).
+
+use nalgebra::{Matrix3, Vector3};
+
+/// `ned_from_body` = R_eb(φ, θ, ψ), thesis (9.5): v_ned = R_eb · v_body.
+pub fn ned_from_body(phi: f64, theta: f64, psi: f64) -> Matrix3<f64> {
+    let (sf, cf) = phi.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    let (sp, cp) = psi.sin_cos();
+    Matrix3::new(
+        ct * cp,
+        sf * st * cp - cf * sp,
+        cf * st * cp + sf * sp,
+        ct * sp,
+        sf * st * sp + cf * cp,
+        cf * st * sp - sf * cp,
+        -st,
+        sf * ct,
+        cf * ct,
+    )
+}
+
+/// `body_from_ned` = R_be = R_ebᵀ, thesis (9.5): v_body = R_be · v_ned.
+pub fn body_from_ned(phi: f64, theta: f64, psi: f64) -> Matrix3<f64> {
+    ned_from_body(phi, theta, psi).transpose()
+}
+
+/// Euler-angle rates from body rates, thesis (9.14): Θ̇ = P_eb · ω_body.
+///
+/// Singular at θ = ±π/2 (the 3-2-1 gimbal lock); callers that may reach it
+/// must check `cos θ` themselves.
+pub fn euler_rates(phi: f64, theta: f64, omega_body: &Vector3<f64>) -> Vector3<f64> {
+    let (sf, cf) = phi.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    let tt = st / ct;
+    let (p, q, r) = (omega_body.x, omega_body.y, omega_body.z);
+    Vector3::new(
+        p + sf * tt * q + cf * tt * r,
+        cf * q - sf * r,
+        (sf * q + cf * r) / ct,
+    )
+}
+
+/// Gravity in body axes, thesis (8.3): g_body = R_be · [0, 0, g] =
+/// g · [−sin θ, sin φ cos θ, cos φ cos θ] (m/s²).
+pub fn gravity_body(phi: f64, theta: f64, g_m_s2: f64) -> Vector3<f64> {
+    let (sf, cf) = phi.sin_cos();
+    let (st, ct) = theta.sin_cos();
+    Vector3::new(-g_m_s2 * st, g_m_s2 * sf * ct, g_m_s2 * cf * ct)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn rotation_is_orthonormal_and_matches_elementary_product() {
+        let (phi, theta, psi) = (0.3, -0.4, 2.1);
+        let r = ned_from_body(phi, theta, psi);
+        assert_relative_eq!(r * r.transpose(), Matrix3::identity(), epsilon = 1e-15);
+        assert_relative_eq!(r.determinant(), 1.0, epsilon = 1e-15);
+        // R_eb = Rz(psi) Ry(theta) Rx(phi) with active rotations.
+        let rz = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), psi);
+        let ry = nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), theta);
+        let rx = nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), phi);
+        let expected = (rz * ry * rx).into_inner();
+        assert_relative_eq!(r, expected, epsilon = 1e-15);
+    }
+
+    #[test]
+    fn gravity_body_is_rotated_ned_gravity() {
+        let (phi, theta, psi) = (0.2, 0.5, -1.0);
+        let g = body_from_ned(phi, theta, psi) * Vector3::new(0.0, 0.0, 9.82);
+        assert_relative_eq!(g, gravity_body(phi, theta, 9.82), epsilon = 1e-14);
+    }
+
+    #[test]
+    fn euler_rates_match_finite_difference_of_rotation() {
+        // d/dt R_eb = R_eb [ω]x ; check Θ̇ from (9.14) reproduces it.
+        let (phi, theta, psi) = (0.3, 0.2, 0.7);
+        let w = Vector3::new(0.4, -0.3, 0.9);
+        let rates = euler_rates(phi, theta, &w);
+        let h = 1e-6;
+        let rp = ned_from_body(phi + h * rates.x, theta + h * rates.y, psi + h * rates.z);
+        let rm = ned_from_body(phi - h * rates.x, theta - h * rates.y, psi - h * rates.z);
+        let rdot = (rp - rm) / (2.0 * h);
+        let r = ned_from_body(phi, theta, psi);
+        let expected = r * w.cross_matrix();
+        assert_relative_eq!(rdot, expected, epsilon = 1e-8);
+    }
+}
