@@ -1,0 +1,389 @@
+//! Position, velocity and attitude fusion of GPS + IMU + attitude measurement
+//! as a standard discrete Kalman filter, thesis §13.3 (13.15)–(13.29).
+//!
+//! State (13.15), 9 elements: `Xf = [Ξ_ned (m), Ξ̇_ned (m/s), Θ = (φ, θ, ψ) (rad)]`.
+//! Input (13.16): `Uf = [Ξ̈ (m/s², NED), Θ̇ (rad/s)]`, formed from the IMU:
+//! the specific force measured in body axes is rotated to NED with the current
+//! attitude estimate and gravity is removed, `Ξ̈ = R_eb(Θ) f_body + [0, 0, g]`
+//! ((9.5); the accelerometer reads `f = a − g`), and the Euler rates come from
+//! the gyro rates via (9.14), `Θ̇ = P_eb(φ, θ) ω_body`.
+//! Measurement (13.18): `Zf = [Ξ_gps, Θ_pre]` with `Θ_pre` from the q-method
+//! (§13.2); either part may be missing in a step.
+//!
+//! Discrete model, sample time `T_s`: `A_f` (13.27) and
+//! `B_f = [[T_s²/2 I, 0], [T_s I, 0], [0, T_s I]]`. The printed (13.28) has
+//! only the `T_s²/2` position block in its first three rows and shifts the
+//! remaining blocks; the matrix above is the exact zero-order-hold
+//! discretisation of (13.24)–(13.25) with the input held over the sample.
+//!
+//! Covariance prediction: `P⁻ = A P Aᵀ + Q` with `Q = B diag(σ_a² I, σ_Θ̇² I) Bᵀ`
+//! (input noise mapped through B). **The thesis's (13.20) is misprinted** as
+//! `P⁻(k) = A_f P_f(k−1) Q_f U_f(k−1)`, a product that is not even
+//! dimensionally a covariance; the standard form is used here.
+//! Gain and update (13.21)–(13.23): `K = P⁻Hᵀ(HP⁻Hᵀ + R)⁻¹`,
+//! `X = X⁻ + K(Z − HX⁻)`, `P = (I − KH)P⁻` (then symmetrised), with `H` the
+//! non-zero rows of `C_f` (13.29) present in this step. The GPS and attitude
+//! updates are applied one after the other; with the block-diagonal R used
+//! here this equals the joint update of (13.21)–(13.23).
+//!
+//! Angles: the ψ innovation is wrapped to (−π, π] and ψ is kept in (−π, π].
+
+use helicon_model::frames::{euler_rates, ned_from_body};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
+
+/// 9×9 matrix of the fusion filter.
+pub type Matrix9 = SMatrix<f64, 9, 9>;
+/// 9-vector of the fusion filter.
+pub type Vector9 = SVector<f64, 9>;
+
+/// Smallest |cos θ| accepted by the Euler-rate kinematics (9.14) before the
+/// filter reports gimbal lock.
+pub const MIN_COS_THETA: f64 = 1e-6;
+
+/// Error of the fusion filter.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum FusionError {
+    /// A configuration value is out of range.
+    #[error("fusion config: {field} = {value} is invalid ({allowed})")]
+    InvalidConfig {
+        /// Field name.
+        field: &'static str,
+        /// Value given.
+        value: f64,
+        /// Allowed range.
+        allowed: &'static str,
+    },
+    /// An input is NaN or infinite.
+    #[error("fusion input: non-finite {what}")]
+    NonFiniteInput {
+        /// Which input.
+        what: &'static str,
+    },
+    /// The attitude estimate reached θ = ±π/2 where (9.14) is singular.
+    #[error("fusion: pitch estimate {theta_rad} rad is at the 3-2-1 gimbal lock")]
+    GimbalLock {
+        /// Pitch estimate (rad).
+        theta_rad: f64,
+    },
+    /// The innovation covariance was not invertible.
+    #[error("fusion: singular innovation covariance")]
+    SingularInnovation,
+}
+
+/// Tuning of the fusion filter: the weighting matrices Q_f and R_f of §13.3.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FusionConfig {
+    /// Sample time `T_s` (s).
+    pub dt_s: f64,
+    /// Gravity (m/s²), thesis (13.13): 9.82.
+    pub gravity_m_s2: f64,
+    /// Standard deviation of the NED acceleration input per axis (m/s²).
+    pub accel_sigma_m_s2: f64,
+    /// Standard deviation of the Euler-rate input per axis (rad/s).
+    pub euler_rate_sigma_rad_s: f64,
+    /// Standard deviation of the GPS position (m), per NED axis.
+    pub gps_sigma_m: Vector3<f64>,
+    /// Standard deviation of the attitude measurement (rad), per angle.
+    pub attitude_sigma_rad: Vector3<f64>,
+}
+
+impl Default for FusionConfig {
+    /// 100 Hz, hobby IMU after attitude rotation (0.1 m/s²), gyro 0.01 rad/s,
+    /// GPS 1.5 m horizontal / 3 m vertical, q-method attitude 0.02 rad.
+    fn default() -> Self {
+        Self {
+            dt_s: 0.01,
+            gravity_m_s2: 9.82,
+            accel_sigma_m_s2: 0.1,
+            euler_rate_sigma_rad_s: 0.01,
+            gps_sigma_m: Vector3::new(1.5, 1.5, 3.0),
+            attitude_sigma_rad: Vector3::new(0.02, 0.02, 0.02),
+        }
+    }
+}
+
+impl FusionConfig {
+    fn validate(&self) -> Result<(), FusionError> {
+        let pos = |field: &'static str, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(FusionError::InvalidConfig {
+                    field,
+                    value,
+                    allowed: "finite and > 0",
+                })
+            }
+        };
+        pos("dt_s", self.dt_s)?;
+        pos("gravity_m_s2", self.gravity_m_s2)?;
+        pos("accel_sigma_m_s2", self.accel_sigma_m_s2)?;
+        pos("euler_rate_sigma_rad_s", self.euler_rate_sigma_rad_s)?;
+        for v in self.gps_sigma_m.iter() {
+            pos("gps_sigma_m", *v)?;
+        }
+        for v in self.attitude_sigma_rad.iter() {
+            pos("attitude_sigma_rad", *v)?;
+        }
+        Ok(())
+    }
+}
+
+/// One step of inputs for [`FusionFilter::step`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FusionInput {
+    /// Accelerometer specific force in body axes at k−1 (m/s²), `f = a − g`.
+    pub specific_force_body_m_s2: Vector3<f64>,
+    /// Gyro rates in body axes at k−1 (rad/s).
+    pub gyro_body_rad_s: Vector3<f64>,
+    /// GPS position in NED at k (m), `None` when no fix.
+    pub gps_ned_m: Option<Vector3<f64>>,
+    /// Attitude measurement (φ, θ, ψ) at k (rad) from the q-method, if any.
+    pub attitude_rad: Option<Vector3<f64>>,
+}
+
+/// Wrap an angle to (−π, π].
+pub fn wrap_pi(a: f64) -> f64 {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let mut w = a % two_pi;
+    if w > std::f64::consts::PI {
+        w -= two_pi;
+    } else if w <= -std::f64::consts::PI {
+        w += two_pi;
+    }
+    w
+}
+
+/// The fusion Kalman filter of §13.3; all matrices fixed-size, `step()` does
+/// not allocate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FusionFilter {
+    config: FusionConfig,
+    a: Matrix9,
+    b: SMatrix<f64, 9, 6>,
+    q: Matrix9,
+    x: Vector9,
+    p: Matrix9,
+}
+
+impl FusionFilter {
+    /// A filter with initial state `x0 = [Ξ, Ξ̇, Θ]` and covariance `p0`.
+    pub fn new(config: FusionConfig, x0: Vector9, p0: Matrix9) -> Result<Self, FusionError> {
+        config.validate()?;
+        if !x0.iter().chain(p0.iter()).all(|v| v.is_finite()) {
+            return Err(FusionError::NonFiniteInput {
+                what: "initial state or covariance",
+            });
+        }
+        let ts = config.dt_s;
+        // (13.27)
+        let mut a = Matrix9::identity();
+        for i in 0..3 {
+            a[(i, i + 3)] = ts;
+        }
+        // B_f: exact ZOH discretisation of (13.24)–(13.25), see module docs.
+        let mut b = SMatrix::<f64, 9, 6>::zeros();
+        for i in 0..3 {
+            b[(i, i)] = 0.5 * ts * ts;
+            b[(i + 3, i)] = ts;
+            b[(i + 6, i + 3)] = ts;
+        }
+        let mut qu = SMatrix::<f64, 6, 6>::zeros();
+        for i in 0..3 {
+            qu[(i, i)] = config.accel_sigma_m_s2.powi(2);
+            qu[(i + 3, i + 3)] = config.euler_rate_sigma_rad_s.powi(2);
+        }
+        let q = b * qu * b.transpose();
+        Ok(Self {
+            config,
+            a,
+            b,
+            q,
+            x: x0,
+            p: p0,
+        })
+    }
+
+    /// Current state estimate `[Ξ_ned, Ξ̇_ned, Θ]`.
+    pub fn state(&self) -> &Vector9 {
+        &self.x
+    }
+
+    /// Current covariance.
+    pub fn covariance(&self) -> &Matrix9 {
+        &self.p
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &FusionConfig {
+        &self.config
+    }
+
+    /// Discrete `A_f` (13.27).
+    pub fn a(&self) -> &Matrix9 {
+        &self.a
+    }
+
+    /// Discrete `B_f` (see module docs on (13.28)).
+    pub fn b(&self) -> &SMatrix<f64, 9, 6> {
+        &self.b
+    }
+
+    /// Process-noise covariance `Q_f = B diag(σ_a², σ_Θ̇²) Bᵀ`.
+    pub fn q(&self) -> &Matrix9 {
+        &self.q
+    }
+
+    /// The input (13.16) from IMU samples and the current attitude estimate:
+    /// `[Ξ̈_ned, Θ̇]`.
+    pub fn input_from_imu(
+        &self,
+        specific_force_body_m_s2: &Vector3<f64>,
+        gyro_body_rad_s: &Vector3<f64>,
+    ) -> Result<SVector<f64, 6>, FusionError> {
+        let (phi, theta, psi) = (self.x[6], self.x[7], self.x[8]);
+        if theta.cos().abs() < MIN_COS_THETA {
+            return Err(FusionError::GimbalLock { theta_rad: theta });
+        }
+        let acc_ned = ned_from_body(phi, theta, psi) * specific_force_body_m_s2
+            + Vector3::new(0.0, 0.0, self.config.gravity_m_s2);
+        let rates = euler_rates(phi, theta, gyro_body_rad_s); // (9.14)
+        let mut u = SVector::<f64, 6>::zeros();
+        u.fixed_rows_mut::<3>(0).copy_from(&acc_ned);
+        u.fixed_rows_mut::<3>(3).copy_from(&rates);
+        Ok(u)
+    }
+
+    /// Prediction (13.19) and `P⁻ = A P Aᵀ + Q` (the corrected (13.20)).
+    pub fn predict(&mut self, u: &SVector<f64, 6>) {
+        self.x = self.a * self.x + self.b * u;
+        self.x[8] = wrap_pi(self.x[8]);
+        self.p = self.a * self.p * self.a.transpose() + self.q;
+    }
+
+    /// Measurement update (13.21)–(13.23) with the three states starting at
+    /// `offset` (0: position, 6: attitude) measured with per-axis σ `sigma`.
+    fn update_block(
+        &mut self,
+        offset: usize,
+        z: &Vector3<f64>,
+        sigma: &Vector3<f64>,
+        wrap_last: bool,
+    ) -> Result<(), FusionError> {
+        let mut innov = z - self.x.fixed_rows::<3>(offset);
+        if wrap_last {
+            innov.z = wrap_pi(innov.z);
+        }
+        let p_xh: SMatrix<f64, 9, 3> = self.p.fixed_columns::<3>(offset).into_owned();
+        let mut s: Matrix3<f64> = self.p.fixed_view::<3, 3>(offset, offset).into_owned();
+        for i in 0..3 {
+            s[(i, i)] += sigma[i] * sigma[i];
+        }
+        let s_inv = s.try_inverse().ok_or(FusionError::SingularInnovation)?;
+        let k = p_xh * s_inv; // (13.21)
+        self.x += k * innov; // (13.23)
+        // (13.22): P = (I − K H) P⁻ with H selecting rows offset..offset+3.
+        let hp: SMatrix<f64, 3, 9> = self.p.fixed_rows::<3>(offset).into_owned();
+        self.p -= k * hp;
+        self.p = (self.p + self.p.transpose()) * 0.5;
+        self.x[8] = wrap_pi(self.x[8]);
+        Ok(())
+    }
+
+    /// One filter step: predict with the IMU samples of k−1 ((13.16), (13.19),
+    /// (13.20) corrected), then update with the GPS and/or attitude
+    /// measurements of k if present. Without measurements it only predicts.
+    pub fn step(&mut self, input: &FusionInput) -> Result<(), FusionError> {
+        if !input
+            .specific_force_body_m_s2
+            .iter()
+            .chain(input.gyro_body_rad_s.iter())
+            .all(|v| v.is_finite())
+        {
+            return Err(FusionError::NonFiniteInput { what: "IMU sample" });
+        }
+        if let Some(g) = &input.gps_ned_m
+            && !g.iter().all(|v| v.is_finite())
+        {
+            return Err(FusionError::NonFiniteInput { what: "GPS fix" });
+        }
+        if let Some(a) = &input.attitude_rad
+            && !a.iter().all(|v| v.is_finite())
+        {
+            return Err(FusionError::NonFiniteInput {
+                what: "attitude measurement",
+            });
+        }
+        let u = self.input_from_imu(&input.specific_force_body_m_s2, &input.gyro_body_rad_s)?;
+        self.predict(&u);
+        if let Some(g) = &input.gps_ned_m {
+            let sigma = self.config.gps_sigma_m;
+            self.update_block(0, g, &sigma, false)?;
+        }
+        if let Some(a) = &input.attitude_rad {
+            let sigma = self.config.attitude_sigma_rad;
+            self.update_block(6, a, &sigma, true)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn wrap_pi_range() {
+        let pi = std::f64::consts::PI;
+        assert_relative_eq!(wrap_pi(3.0 * pi / 2.0), -pi / 2.0, epsilon = 1e-15);
+        assert_relative_eq!(wrap_pi(-pi), pi, epsilon = 1e-15);
+        assert_relative_eq!(wrap_pi(0.3), 0.3, epsilon = 1e-15);
+    }
+
+    #[test]
+    fn at_rest_level_prediction_stays_put() {
+        let cfg = FusionConfig::default();
+        let mut f = FusionFilter::new(cfg, Vector9::zeros(), Matrix9::identity()).unwrap();
+        let input = FusionInput {
+            specific_force_body_m_s2: Vector3::new(0.0, 0.0, -cfg.gravity_m_s2),
+            gyro_body_rad_s: Vector3::zeros(),
+            gps_ned_m: None,
+            attitude_rad: None,
+        };
+        for _ in 0..100 {
+            f.step(&input).unwrap();
+        }
+        assert!(f.state().norm() < 1e-12);
+        // Covariance only grows without measurements.
+        assert!(f.covariance()[(0, 0)] > 1.0);
+    }
+
+    #[test]
+    fn bad_inputs_are_errors() {
+        let cfg = FusionConfig::default();
+        let mut f = FusionFilter::new(cfg, Vector9::zeros(), Matrix9::identity()).unwrap();
+        let input = FusionInput {
+            specific_force_body_m_s2: Vector3::new(f64::NAN, 0.0, 0.0),
+            gyro_body_rad_s: Vector3::zeros(),
+            gps_ned_m: None,
+            attitude_rad: None,
+        };
+        assert!(f.step(&input).is_err());
+        let bad = FusionConfig {
+            dt_s: 0.0,
+            ..cfg
+        };
+        assert!(FusionFilter::new(bad, Vector9::zeros(), Matrix9::identity()).is_err());
+        let mut x0 = Vector9::zeros();
+        x0[7] = std::f64::consts::FRAC_PI_2;
+        let mut f = FusionFilter::new(cfg, x0, Matrix9::identity()).unwrap();
+        let input = FusionInput {
+            specific_force_body_m_s2: Vector3::zeros(),
+            gyro_body_rad_s: Vector3::zeros(),
+            gps_ned_m: None,
+            attitude_rad: None,
+        };
+        assert!(matches!(f.step(&input), Err(FusionError::GimbalLock { .. })));
+    }
+}

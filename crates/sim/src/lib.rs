@@ -1,0 +1,3 @@
+//! # helicon-sim
+//!
+//! The world around the helicopter: sensor models, wind and turbulence, plots.
