@@ -3,7 +3,43 @@
 //! The first-principles nonlinear model of a miniature helicopter from the thesis
 //! *Nonlinear Modeling and Optimal Control of a Miniature Autonomous Helicopter*
 //! (Aalborg University, 2006), chapters 4–10 and appendices B–D, with the
-//! corrections documented in `shared/spec/MODEL.md`.
+//! readings and corrections documented in `shared/spec/MODEL.md`.
+//!
+//! The blocks of thesis Figure 4.4, one module each:
+//! [`actuators`] (servos), [`flapping`] (main rotor and stabilizer bar),
+//! [`rotor`] (blade-element forces and torques) with [`inflow`],
+//! [`tail_rotor`], [`drag`], and [`rigid_body`]; [`model`] assembles them into
+//! `ẋ = f(x, u, wind_ned)` and [`integrate`] steps it with RK4.
+//! [`params`] holds the constants, [`options`] the presets, [`state`] the
+//! layout and names, [`frames`] the rotations.
+//!
+//! ```
+//! use helicon_model::{Model, Preset, State, Input};
+//! let model = Model::bergen_twin(Preset::Physical);
+//! let (xdot, aux) = model
+//!     .derivative(&State::zeros(), &Input::zeros(), &nalgebra::Vector3::zeros())
+//!     .unwrap();
+//! assert!(xdot.iter().all(|v| v.is_finite()));
+//! assert!(aux.lambda_mr.is_finite());
+//! ```
 
+pub mod actuators;
+pub mod drag;
+pub mod flapping;
 pub mod frames;
+pub mod inflow;
+pub mod integrate;
+pub mod model;
+pub mod options;
+pub mod params;
+pub mod rigid_body;
+pub mod rotor;
 pub mod state;
+pub mod tail_rotor;
+
+pub use model::{Aux, Model, ModelError};
+pub use options::{InflowMode, ModelOptions, Preset};
+pub use params::{ParamError, Params};
+pub use state::{
+    INPUT_NAMES, Input, NU, NX, NX_REDUCED, REDUCED_STATE_NAMES, ReducedState, STATE_NAMES, State,
+};

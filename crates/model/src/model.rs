@@ -1,0 +1,510 @@
+//! The assembled model: the five blocks of thesis Figure 4.4 (actuators,
+//! flapping, force and torque generation, summation, rigid body) evaluated in
+//! the order of Appendix D, giving ẋ = f(x, u, wind).
+//!
+//! Order (exact, not iterated): actuators → aerodynamic velocities → main-rotor
+//! blade integrals → main-rotor inflow (7.33) → main-rotor forces → tail rotor
+//! and its inflow (7.56) → drag (needs both induced velocities) → summation
+//! (8.3)/(8.5) → rigid body (9.21)/(9.22) → flapping (6.47)/(6.53), which
+//! needs the body accelerations only with `flap_accel` and then follows the
+//! rigid body because the forces do not depend on flapping accelerations
+//! (MODEL.md §10).
+
+use crate::actuators::servo_derivative;
+use crate::drag::{DragWrench, drag};
+use crate::flapping::{FlapBody, main_rotor_accel, stabilizer_bar_accel};
+use crate::frames::{body_from_ned, euler_rates, gravity_body, ned_from_body};
+use crate::inflow::{InflowError, InflowProblem};
+use crate::options::{InflowMode, ModelOptions, Preset, SbVelocityScale, WindSign};
+use crate::params::Params;
+use crate::rigid_body::{angular_accel, linear_accel};
+use crate::rotor::{BladeInputs, Grid, blade_integrals};
+use crate::state::{INPUT_NAMES, Input, NX, STATE_NAMES, State, iu, ix};
+use crate::tail_rotor::{self, TailRotorConsts};
+use nalgebra::{Vector2, Vector3};
+
+/// Errors of a derivative evaluation.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// A state, input or wind component is NaN or infinite.
+    #[error("non-finite {what} `{name}` = {value}")]
+    NonFinite {
+        /// "state", "input" or "wind".
+        what: &'static str,
+        /// Component name.
+        name: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// |θ| reached π/2, where the 3-2-1 Euler kinematics (9.14) are singular.
+    #[error(
+        "pitch angle theta = {theta_rad} rad is at the 3-2-1 Euler singularity (|theta| -> pi/2)"
+    )]
+    GimbalLock {
+        /// θ (rad).
+        theta_rad: f64,
+    },
+    /// The inflow solver failed (non-finite intermediate values).
+    #[error("{rotor} inflow: {source}")]
+    Inflow {
+        /// "main rotor" or "tail rotor".
+        rotor: &'static str,
+        /// Cause.
+        source: InflowError,
+    },
+}
+
+/// Everything a derivative evaluation computes besides ẋ: inflow and the
+/// forces and torques of each block, for logging and plotting.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Aux {
+    /// Main-rotor inflow ratio used by the forces.
+    pub lambda_mr: f64,
+    /// Tail-rotor inflow ratio used by the forces.
+    pub lambda_tr: f64,
+    /// Main-rotor inflow ratio used by the flapping (equal to `lambda_mr`
+    /// with converged inflow).
+    pub lambda_mr_flap: f64,
+    /// Main-rotor induced velocity vi = hż − λΩR (m/s, positive down).
+    pub vi_mr_m_s: f64,
+    /// Tail-rotor induced velocity vi,tr = tẏ − λtr Ωtr Rtr (m/s, positive +y).
+    pub vi_tr_m_s: f64,
+    /// Main-rotor thrust coefficient C_T (7.30).
+    pub ct_mr: f64,
+    /// Tail-rotor thrust coefficient C_T,tr (7.53).
+    pub ct_tr: f64,
+    /// Main-rotor advance ratios [μx, μy, μz] (D.7)–(D.9).
+    pub mu_mr: Vector3<f64>,
+    /// Tail-rotor advance ratios [μx,tr, μy,tr, μz,tr] (D.13)–(D.15).
+    pub mu_tr: Vector3<f64>,
+    /// Main-rotor force in the hub frame [hFx, hFy, hFz] (N), (7.7)–(7.9).
+    pub force_mr_hub_n: Vector3<f64>,
+    /// Main-rotor torque at the hub [hτx, hτy, hτz] (N·m), (7.21), (7.22), (7.25).
+    pub torque_mr_hub_nm: Vector3<f64>,
+    /// Main-rotor torque about the CM (N·m), (7.26).
+    pub torque_mr_body_nm: Vector3<f64>,
+    /// Tail-rotor thrust tFy (N), (7.47)/(D.39).
+    pub force_tr_y_n: f64,
+    /// Tail-rotor torque about the CM (N·m), (7.52).
+    pub torque_tr_body_nm: Vector3<f64>,
+    /// Drag forces and torques, (7.57)–(7.64).
+    pub drag: DragWrench,
+    /// Gravity in body axes (N), (8.3).
+    pub force_gravity_body_n: Vector3<f64>,
+    /// Total force in body axes (N), (8.3).
+    pub force_total_body_n: Vector3<f64>,
+    /// Total torque about the CM in body axes (N·m), (8.5).
+    pub torque_total_body_nm: Vector3<f64>,
+    /// Inflow solver iterations (main, tail).
+    pub inflow_iterations: [u32; 2],
+}
+
+/// Precomputed constants.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Consts {
+    mr_grid: Grid,
+    sb_grid: Grid,
+    tr: TailRotorConsts,
+    lift_k: f64,
+    drag_k: f64,
+    lift_k_sb: f64,
+    ct_den: f64,
+    tip_speed: f64,
+    inertia: Vector3<f64>,
+    sb_scale: f64,
+    wind_sign: f64,
+}
+
+/// The helicopter model: parameters, preset options and precomputed constants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Model {
+    params: Params,
+    options: ModelOptions,
+    c: Consts,
+}
+
+impl Model {
+    /// A model from validated parameters and options.
+    pub fn new(params: Params, options: ModelOptions) -> Model {
+        let mr = &params.main_rotor;
+        let sb = &params.stabilizer_bar;
+        let rho = params.environment.rho_kg_m3;
+        let tip = mr.omega_rad_s * mr.radius_m;
+        let sb_scale = match options.sb_velocity {
+            SbVelocityScale::Physical => 1.0,
+            SbVelocityScale::OuterRadius => sb.outer_radius_m / mr.radius_m,
+        };
+        let c = Consts {
+            mr_grid: Grid::new(0.0, mr.radius_m - mr.hinge_offset_m),
+            sb_grid: Grid::new(sb.inner_radius_m, sb.outer_radius_m),
+            tr: TailRotorConsts::new(&params),
+            lift_k: 0.5 * rho * mr.chord_m * mr.lift_slope_per_rad,
+            drag_k: 0.5 * rho * mr.chord_m * mr.drag_coefficient,
+            lift_k_sb: 0.5 * rho * sb.chord_m * sb.lift_slope_per_rad,
+            ct_den: rho * std::f64::consts::PI * mr.radius_m * mr.radius_m * tip * tip,
+            tip_speed: tip,
+            inertia: Vector3::new(
+                params.body.ixx_kg_m2,
+                params.body.iyy_kg_m2,
+                params.body.izz_kg_m2,
+            ),
+            sb_scale,
+            wind_sign: match options.wind {
+                WindSign::Physical => -1.0,
+                WindSign::Thesis => 1.0,
+            },
+        };
+        Model { params, options, c }
+    }
+
+    /// The Bergen Industrial Twin with a preset.
+    pub fn bergen_twin(preset: Preset) -> Model {
+        Model::new(Params::bergen_twin(), preset.options())
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// The options.
+    pub fn options(&self) -> &ModelOptions {
+        &self.options
+    }
+
+    /// ẋ = f(x, u, wind_ned) with converged inflow. `wind_ned` is the
+    /// air-mass velocity in NED (m/s, where the air moves to).
+    pub fn derivative(
+        &self,
+        x: &State,
+        u: &Input,
+        wind_ned: &Vector3<f64>,
+    ) -> Result<(State, Aux), ModelError> {
+        self.derivative_with(x, u, wind_ned, InflowMode::Converged)
+    }
+
+    /// ẋ = f(x, u, wind_ned) with a chosen inflow mode.
+    pub fn derivative_with(
+        &self,
+        x: &State,
+        u: &Input,
+        wind_ned: &Vector3<f64>,
+        inflow: InflowMode,
+    ) -> Result<(State, Aux), ModelError> {
+        check_finite(x, u, wind_ned)?;
+        let p = &self.params;
+        let mr = &p.main_rotor;
+        let geo = &p.geometry;
+        let c = &self.c;
+        let (phi, theta, psi) = (x[ix::PHI], x[ix::THETA], x[ix::PSI]);
+        if theta.cos().abs() < 1e-9 {
+            return Err(ModelError::GimbalLock { theta_rad: theta });
+        }
+        let v_body = Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
+        let omega = Vector3::new(x[ix::P], x[ix::Q], x[ix::R]);
+        let (pr, qr, rr) = (omega.x, omega.y, omega.z);
+        let mut xdot = State::zeros();
+        let mut aux = Aux::default();
+
+        // Actuators (5.1)–(5.4), (D.16)–(D.23).
+        for (ch, (&pos, &rate)) in [ix::THETA0, ix::A1_SWASH, ix::B1_SWASH, ix::THETA_TR]
+            .iter()
+            .zip(
+                [
+                    ix::THETA0_DOT,
+                    ix::A1_SWASH_DOT,
+                    ix::B1_SWASH_DOT,
+                    ix::THETA_TR_DOT,
+                ]
+                .iter(),
+            )
+            .enumerate()
+        {
+            let (d_pos, d_rate) = servo_derivative(&p.servos[ch], u[ch], x[pos], x[rate]);
+            xdot[pos] = d_pos;
+            xdot[rate] = d_rate;
+        }
+        debug_assert_eq!(iu::S_COL, 0);
+
+        // Aerodynamic velocity (DESIGN.md wind convention; thesis (14.46) adds it).
+        let v_air = v_body + c.wind_sign * (body_from_ned(phi, theta, psi) * wind_ned);
+        // Hub velocities (D.4)–(D.6) and advance ratios (D.7)–(D.9).
+        let hub = Vector3::new(
+            v_air.x - qr * geo.kappa_v_m,
+            v_air.y + pr * geo.kappa_v_m - rr * geo.kappa_h_m,
+            v_air.z + qr * geo.kappa_h_m,
+        );
+        let mu = hub / c.tip_speed;
+        aux.mu_mr = mu;
+
+        // Main-rotor pitch inputs: Bell-Hiller mixing (4.3), (D.26)/(D.27).
+        let (a1sb, b1sb) = (x[ix::A1SB], x[ix::B1SB]);
+        let a1_swash = x[ix::A1_SWASH];
+        let b1_swash = x[ix::B1_SWASH];
+        let a1_mr = mr.bell_factor * a1_swash - mr.hiller_factor * b1sb;
+        let b1_mr = mr.bell_factor * b1_swash - mr.hiller_factor * a1sb;
+        let flap = Vector3::new(x[ix::A0], x[ix::A1], x[ix::B1]);
+        let flap_rate = Vector3::new(x[ix::A0_DOT], x[ix::A1_DOT], x[ix::B1_DOT]);
+        let bi = blade_integrals(
+            &c.mr_grid,
+            &BladeInputs {
+                omega_rad_s: mr.omega_rad_s,
+                hinge_offset_m: mr.hinge_offset_m,
+                hub_u_m_s: hub.x,
+                hub_v_m_s: hub.y,
+                lambda_speed_m_s: c.tip_speed,
+                p_rad_s: pr,
+                q_rad_s: qr,
+                flap_rad: flap,
+                flap_rate_rad_s: flap_rate,
+                theta0_rad: x[ix::THETA0],
+                cyclic_a_rad: a1_mr,
+                cyclic_b_rad: b1_mr,
+                twist_rad_per_m: mr.twist_rad / mr.radius_m,
+                k1: mr.pitch_flap_coupling,
+                lift_k: c.lift_k,
+                drag_k: c.drag_k,
+            },
+        );
+        let b = mr.blades;
+        // Inflow (7.29)–(7.33): C_T = b⟨∫dL⟩/(ρπR²(ΩR)²) is affine in λ.
+        let mr_problem = InflowProblem {
+            mu_inplane2: mu.x * mu.x + mu.y * mu.y,
+            mu_axial: mu.z,
+            ct0: b * bi.lift.0 / c.ct_den,
+            ct1: b * bi.lift.1 / c.ct_den,
+        };
+        // Tail rotor frame velocities (D.10)–(D.12) and advance ratios (D.13)–(D.15).
+        let v_tr = Vector3::new(
+            v_air.x - qr * geo.kappa_v_tr_m,
+            v_air.y + pr * geo.kappa_v_tr_m - rr * geo.kappa_h_tr_m,
+            v_air.z + qr * geo.kappa_h_tr_m,
+        );
+        let mu_tr = tail_rotor::advance_ratios(&c.tr, &v_tr);
+        aux.mu_tr = mu_tr;
+        let theta_tr = x[ix::THETA_TR];
+        let tr_problem = tail_rotor::inflow_problem(&c.tr, &mu_tr, theta_tr, pr, rr);
+
+        let (lam_flap, lam, lam_tr) = match inflow {
+            InflowMode::Converged => {
+                let s = mr_problem.solve().map_err(|source| ModelError::Inflow {
+                    rotor: "main rotor",
+                    source,
+                })?;
+                let st = tr_problem.solve().map_err(|source| ModelError::Inflow {
+                    rotor: "tail rotor",
+                    source,
+                })?;
+                aux.inflow_iterations = [s.iterations, st.iterations];
+                (s.lambda, s.lambda, st.lambda)
+            }
+            InflowMode::ThesisIteration {
+                lambda_mr_in,
+                lambda_tr_in,
+                iterations,
+            } => {
+                let l = mr_problem.thesis_iterate(lambda_mr_in, iterations);
+                let lt = tr_problem.thesis_iterate(lambda_tr_in, iterations);
+                aux.inflow_iterations = [iterations, iterations];
+                if !(l.is_finite() && lt.is_finite()) {
+                    let source = InflowError::NoConvergence {
+                        iterations,
+                        residual: f64::NAN,
+                    };
+                    let rotor = if l.is_finite() {
+                        "tail rotor"
+                    } else {
+                        "main rotor"
+                    };
+                    return Err(ModelError::Inflow { rotor, source });
+                }
+                (lambda_mr_in, l, lt)
+            }
+        };
+        aux.lambda_mr = lam;
+        aux.lambda_mr_flap = lam_flap;
+        aux.lambda_tr = lam_tr;
+        aux.ct_mr = mr_problem.ct(lam);
+        aux.ct_tr = tr_problem.ct(lam_tr);
+
+        // Main-rotor forces and torques (7.7)–(7.9), (7.21), (7.22), (7.25).
+        let ks_half = 0.5 * b * mr.spring_n_m_per_rad;
+        let f_hub = Vector3::new(b * bi.fx.at(lam), b * bi.fy.at(lam), -b * bi.lift.at(lam));
+        let t_hub = Vector3::new(
+            b * bi.tx.at(lam) + ks_half * flap.z,
+            b * bi.ty.at(lam) + ks_half * flap.y,
+            b * bi.tz.at(lam),
+        );
+        // (7.26): hub offset from the CM.
+        let t_mr = Vector3::new(
+            t_hub.x + f_hub.y * geo.kappa_v_m,
+            t_hub.y - f_hub.x * geo.kappa_v_m + f_hub.z * geo.kappa_h_m,
+            t_hub.z - f_hub.y * geo.kappa_h_m,
+        );
+        aux.force_mr_hub_n = f_hub;
+        aux.torque_mr_hub_nm = t_hub;
+        aux.torque_mr_body_nm = t_mr;
+        let vi = hub.z - lam * c.tip_speed;
+        aux.vi_mr_m_s = vi;
+
+        // Tail rotor (D.39)–(D.43).
+        let f_tr = tail_rotor::thrust_y(&c.tr, &mu_tr, theta_tr, pr, rr, lam_tr);
+        let tq_tr = tail_rotor::torque_y(&c.tr, &mu_tr, theta_tr, pr, rr, lam_tr);
+        let t_tr = tail_rotor::body_torque(f_tr, tq_tr, geo.kappa_v_tr_m, geo.kappa_h_tr_m);
+        let vi_tr = v_tr.y - lam_tr * c.tr.tip_speed;
+        aux.force_tr_y_n = f_tr;
+        aux.torque_tr_body_nm = t_tr;
+        aux.vi_tr_m_s = vi_tr;
+
+        // Drag (7.57)–(7.64).
+        let d = drag(
+            &p.fuselage,
+            geo,
+            p.environment.rho_kg_m3,
+            &v_air,
+            qr,
+            vi,
+            v_tr.y,
+            vi_tr,
+            p.tail_rotor.fin_area_ratio,
+            self.options.front_plane_q.sign(),
+        );
+        aux.drag = d;
+
+        // Summation (8.3), (8.5).
+        let m = p.body.mass_kg;
+        let grav = m * gravity_body(phi, theta, p.environment.g_m_s2);
+        let force = f_hub + Vector3::new(0.0, f_tr, 0.0) + d.force_body_n + grav;
+        let torque = t_mr + t_tr + d.torque_body_nm;
+        aux.force_gravity_body_n = grav;
+        aux.force_total_body_n = force;
+        aux.torque_total_body_nm = torque;
+
+        // Rigid body (9.8), (9.14), (9.21), (9.22).
+        let v_dot = linear_accel(&force, m, &v_body, &omega);
+        let w_dot = angular_accel(&torque, &c.inertia, &omega);
+        let e_dot = euler_rates(phi, theta, &omega);
+        let pos_dot = ned_from_body(phi, theta, psi) * v_body;
+        for i in 0..3 {
+            xdot[ix::X + i] = pos_dot[i];
+            xdot[ix::PHI + i] = e_dot[i];
+            xdot[ix::U + i] = v_dot[i];
+            xdot[ix::P + i] = w_dot[i];
+        }
+
+        // Flapping (6.47)/(6.53) by harmonic balance (flapping module).
+        let body = if self.options.flap_accel {
+            // (6.40): hub inertial velocities and the hub normal acceleration.
+            let hx_in = v_body.x - qr * geo.kappa_v_m;
+            let hy_in = v_body.y + pr * geo.kappa_v_m - rr * geo.kappa_h_m;
+            let hz_ddot = v_dot.z + w_dot.y * geo.kappa_h_m;
+            FlapBody {
+                p_rad_s: pr,
+                q_rad_s: qr,
+                p_dot_rad_s2: w_dot.x,
+                q_dot_rad_s2: w_dot.y,
+                normal_accel_m_s2: hz_ddot - hx_in * qr + hy_in * pr,
+            }
+        } else {
+            FlapBody {
+                p_rad_s: pr,
+                q_rad_s: qr,
+                p_dot_rad_s2: 0.0,
+                q_dot_rad_s2: 0.0,
+                normal_accel_m_s2: 0.0,
+            }
+        };
+        let aero = [
+            bi.flap_torque[0].at(lam_flap),
+            bi.flap_torque[1].at(lam_flap),
+            bi.flap_torque[2].at(lam_flap),
+        ];
+        let a_ddot = main_rotor_accel(
+            mr.omega_rad_s,
+            mr.hinge_offset_m,
+            mr.blade_inertia_kg_m2,
+            mr.blade_mass_moment_kg_m,
+            mr.spring_n_m_per_rad,
+            &flap,
+            &flap_rate,
+            aero,
+            &body,
+        );
+        let sb = &p.stabilizer_bar;
+        let sb_flap = Vector2::new(a1sb, b1sb);
+        let sb_rate = Vector2::new(x[ix::A1SB_DOT], x[ix::B1SB_DOT]);
+        let sbi = blade_integrals(
+            &c.sb_grid,
+            &BladeInputs {
+                omega_rad_s: mr.omega_rad_s,
+                hinge_offset_m: 0.0,
+                hub_u_m_s: c.sb_scale * hub.x,
+                hub_v_m_s: c.sb_scale * hub.y,
+                lambda_speed_m_s: c.sb_scale * c.tip_speed,
+                p_rad_s: pr,
+                q_rad_s: qr,
+                flap_rad: Vector3::new(0.0, a1sb, b1sb),
+                flap_rate_rad_s: Vector3::new(0.0, sb_rate.x, sb_rate.y),
+                theta0_rad: 0.0,
+                cyclic_a_rad: a1_swash,
+                cyclic_b_rad: b1_swash,
+                twist_rad_per_m: 0.0,
+                k1: 0.0,
+                lift_k: c.lift_k_sb,
+                drag_k: 0.0,
+            },
+        );
+        let sb_ddot = stabilizer_bar_accel(
+            mr.omega_rad_s,
+            sb.paddle_inertia_kg_m2,
+            &sb_flap,
+            &sb_rate,
+            [
+                sbi.flap_torque[1].at(lam_flap),
+                sbi.flap_torque[2].at(lam_flap),
+            ],
+            &body,
+        );
+        for i in 0..3 {
+            xdot[ix::A0 + i] = flap_rate[i];
+            xdot[ix::A0_DOT + i] = a_ddot[i];
+        }
+        xdot[ix::A1SB] = sb_rate.x;
+        xdot[ix::B1SB] = sb_rate.y;
+        xdot[ix::A1SB_DOT] = sb_ddot.x;
+        xdot[ix::B1SB_DOT] = sb_ddot.y;
+        Ok((xdot, aux))
+    }
+}
+
+fn check_finite(x: &State, u: &Input, wind: &Vector3<f64>) -> Result<(), ModelError> {
+    for i in 0..NX {
+        if !x[i].is_finite() {
+            return Err(ModelError::NonFinite {
+                what: "state",
+                name: STATE_NAMES[i],
+                value: x[i],
+            });
+        }
+    }
+    for i in 0..4 {
+        if !u[i].is_finite() {
+            return Err(ModelError::NonFinite {
+                what: "input",
+                name: INPUT_NAMES[i],
+                value: u[i],
+            });
+        }
+    }
+    const W: [&str; 3] = ["wind_n", "wind_e", "wind_d"];
+    for i in 0..3 {
+        if !wind[i].is_finite() {
+            return Err(ModelError::NonFinite {
+                what: "wind",
+                name: W[i],
+                value: wind[i],
+            });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,1106 @@
+//! Model parameters: every constant of the thesis Nomenclature (pp. XIII–XV)
+//! plus the main-rotor speed Ω, loaded from TOML and validated.
+//!
+//! The Bergen Industrial Twin ships as `params/bergen_twin.toml` and is
+//! embedded in the library ([`Params::bergen_twin`]). A user's file may
+//! override any subset of its keys ([`Params::from_toml_str`] applies a file on
+//! top of the embedded set). Every key is described once, in [`DESCRIPTORS`]:
+//! its TOML section and name, its unit, its thesis symbol and the rule it must
+//! obey; loading, validation and printing all walk that table.
+//!
+//! Ω = 100 rad/s is **not printed in the thesis**; it is inferred from
+//! Appendix E (see `shared/reference/NOTES.md`). The tail-rotor speed is
+//! derived, Ωtr = G·Ω ([`Params::omega_tr_rad_s`]).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The shipped Bergen Industrial Twin parameter file.
+pub const BERGEN_TWIN_TOML: &str = include_str!("../../../params/bergen_twin.toml");
+
+/// Errors from loading or validating parameters. Each names the file (or
+/// `<embedded>` / `<string>`), the key as `section.key`, and the rule broken.
+#[derive(Debug, thiserror::Error)]
+pub enum ParamError {
+    /// The file could not be read.
+    #[error("{file}: cannot read: {source}")]
+    Io {
+        /// File name.
+        file: String,
+        /// Underlying error.
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML.
+    #[error("{file}: not valid TOML: {message}")]
+    Syntax {
+        /// File name.
+        file: String,
+        /// Parser message.
+        message: String,
+    },
+    /// A key that is not a model parameter.
+    #[error("{file}: unknown key `{key}` (run `helicon params` for the list of keys)")]
+    UnknownKey {
+        /// File name.
+        file: String,
+        /// The offending key.
+        key: String,
+    },
+    /// A value of the wrong type.
+    #[error("{file}: key `{key}` must be a number, found {found}")]
+    WrongType {
+        /// File name.
+        file: String,
+        /// The offending key.
+        key: String,
+        /// TOML type found.
+        found: String,
+    },
+    /// A value that breaks its rule.
+    #[error("{file}: key `{key}` = {value} is invalid: {rule}")]
+    Invalid {
+        /// File name.
+        file: String,
+        /// The offending key.
+        key: String,
+        /// The value given.
+        value: f64,
+        /// The rule broken.
+        rule: String,
+    },
+}
+
+/// Air and gravity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Environment {
+    /// ρ, air density (kg/m³).
+    pub rho_kg_m3: f64,
+    /// g, gravitational acceleration (m/s²).
+    pub g_m_s2: f64,
+}
+
+/// Rigid-body mass properties (principal axes = body axes, thesis (9.22)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Body {
+    /// M, mass (kg).
+    pub mass_kg: f64,
+    /// I(1,1), roll inertia (kg·m²).
+    pub ixx_kg_m2: f64,
+    /// I(2,2), pitch inertia (kg·m²).
+    pub iyy_kg_m2: f64,
+    /// I(3,3), yaw inertia (kg·m²).
+    pub izz_kg_m2: f64,
+}
+
+/// Distances from the centre of mass (κ of the thesis). Horizontal distances
+/// are positive **aft** of the CM except `kappa_h_fp_m`, positive forward;
+/// vertical distances are positive **above** the CM (MODEL.md §2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Geometry {
+    /// κh, main-rotor hub, horizontal (m, aft).
+    pub kappa_h_m: f64,
+    /// κv, main-rotor hub, vertical (m, above).
+    pub kappa_v_m: f64,
+    /// κh,fp, front plane, horizontal (m, forward).
+    pub kappa_h_fp_m: f64,
+    /// κh,tf, tail fin, horizontal (m, aft).
+    pub kappa_h_tf_m: f64,
+    /// κh,tp, tail plane, horizontal (m, aft).
+    pub kappa_h_tp_m: f64,
+    /// κh,tr, tail-rotor hub, horizontal (m, aft).
+    pub kappa_h_tr_m: f64,
+    /// κv,tf, tail fin, vertical (m, above).
+    pub kappa_v_tf_m: f64,
+    /// κv,tr, tail-rotor hub, vertical (m, above).
+    pub kappa_v_tr_m: f64,
+}
+
+/// Main rotor (chapters 6–7).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MainRotor {
+    /// b, number of blades.
+    pub blades: f64,
+    /// R, radius (m).
+    pub radius_m: f64,
+    /// c, blade chord (m).
+    pub chord_m: f64,
+    /// e, flapping-hinge offset (m).
+    pub hinge_offset_m: f64,
+    /// Cls, lift-curve slope (1/rad).
+    pub lift_slope_per_rad: f64,
+    /// Cd, blade profile drag coefficient.
+    pub drag_coefficient: f64,
+    /// Ib, blade flap inertia about the hinge (kg·m²).
+    pub blade_inertia_kg_m2: f64,
+    /// mb, first mass moment of a blade about the hinge (kg·m).
+    pub blade_mass_moment_kg_m: f64,
+    /// Ks, hinge spring (N·m/rad; printed "N/m").
+    pub spring_n_m_per_rad: f64,
+    /// K1, flap-pitch coupling.
+    pub pitch_flap_coupling: f64,
+    /// θt, blade twist (rad).
+    pub twist_rad: f64,
+    /// Kb, Bell mixing gain.
+    pub bell_factor: f64,
+    /// Kh, Hiller mixing gain.
+    pub hiller_factor: f64,
+    /// Ω, rotor speed (rad/s), inferred (not printed in the thesis).
+    pub omega_rad_s: f64,
+}
+
+/// Stabilizer (Bell-Hiller) bar (§6.11).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StabilizerBar {
+    /// Ri, hub to the inner paddle edge (m).
+    pub inner_radius_m: f64,
+    /// Ro, hub to the outer paddle edge (m).
+    pub outer_radius_m: f64,
+    /// csb, paddle chord (m).
+    pub chord_m: f64,
+    /// Cls,sb, paddle lift-curve slope (1/rad).
+    pub lift_slope_per_rad: f64,
+    /// Ib,sb, paddle flap inertia about the hub (kg·m²).
+    pub paddle_inertia_kg_m2: f64,
+}
+
+/// Tail rotor (§7.3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TailRotor {
+    /// btr, number of blades.
+    pub blades: f64,
+    /// Rtr, radius (m).
+    pub radius_m: f64,
+    /// ctr, blade chord (m).
+    pub chord_m: f64,
+    /// Cls,tr, lift-curve slope (1/rad).
+    pub lift_slope_per_rad: f64,
+    /// Cd,tr, blade profile drag coefficient.
+    pub drag_coefficient: f64,
+    /// G, gear ratio Ωtr/Ω.
+    pub gear_ratio: f64,
+    /// Ktf, part of the tail fin in the tail-rotor wake.
+    pub fin_area_ratio: f64,
+}
+
+/// Fuselage and surfaces drag (§7.4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fuselage {
+    /// Ax (m²).
+    pub area_x_m2: f64,
+    /// Ay (m²).
+    pub area_y_m2: f64,
+    /// Az (m²).
+    pub area_z_m2: f64,
+    /// Afp, front plane (m²).
+    pub area_fp_m2: f64,
+    /// Atf, tail fin (m²).
+    pub area_tf_m2: f64,
+    /// Atp, tail plane (m²).
+    pub area_tp_m2: f64,
+    /// dx.
+    pub drag_x: f64,
+    /// dy.
+    pub drag_y: f64,
+    /// dz.
+    pub drag_z: f64,
+    /// dfp.
+    pub drag_fp: f64,
+    /// dtf.
+    pub drag_tf: f64,
+    /// dtp.
+    pub drag_tp: f64,
+}
+
+/// One servo channel (5.1)–(5.4), (D.16)–(D.23).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Servo {
+    /// K, DC gain (rad per unit command).
+    pub gain_rad: f64,
+    /// ωn, natural frequency (rad/s; printed "rad").
+    pub omega_n_rad_s: f64,
+    /// ζ, damping ratio.
+    pub zeta: f64,
+    /// θ̇max, rate limit (rad/s).
+    pub rate_max_rad_s: f64,
+    /// S_min, lower command saturation.
+    pub s_min: f64,
+    /// S_max, upper command saturation.
+    pub s_max: f64,
+}
+
+/// Controller constants.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Control {
+    /// Ts, sampling time (s), (14.5).
+    pub sample_time_s: f64,
+}
+
+/// Every model constant. Build with [`Params::bergen_twin`] or
+/// [`Params::from_toml_str`] / [`Params::from_file`]; all are validated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Params {
+    /// Air and gravity.
+    pub environment: Environment,
+    /// Mass properties.
+    pub body: Body,
+    /// CM distances.
+    pub geometry: Geometry,
+    /// Main rotor.
+    pub main_rotor: MainRotor,
+    /// Stabilizer bar.
+    pub stabilizer_bar: StabilizerBar,
+    /// Tail rotor.
+    pub tail_rotor: TailRotor,
+    /// Fuselage drag.
+    pub fuselage: Fuselage,
+    /// Servos in input order `[S_col, S_lat, S_lon, S_tr]` →
+    /// `[θ0, A1, B1, θtr]`.
+    pub servos: [Servo; 4],
+    /// Controller constants.
+    pub control: Control,
+}
+
+/// The rule a parameter must obey.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rule {
+    /// Finite and > 0.
+    Positive,
+    /// Finite and ≥ 0.
+    NonNegative,
+    /// Finite.
+    Finite,
+    /// A whole number ≥ 1.
+    Count,
+}
+
+impl Rule {
+    fn check(self, v: f64) -> Result<(), &'static str> {
+        if !v.is_finite() {
+            return Err("must be finite");
+        }
+        match self {
+            Rule::Positive if v <= 0.0 => Err("must be > 0"),
+            Rule::NonNegative if v < 0.0 => Err("must be >= 0"),
+            Rule::Count if v < 1.0 || v.fract() != 0.0 => Err("must be a whole number >= 1"),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Accessor for one field of [`Params`].
+pub type Field = fn(&mut Params) -> &mut f64;
+
+/// Description of one parameter key.
+#[derive(Clone, Copy)]
+pub struct Descriptor {
+    /// TOML section (dotted for nested tables, e.g. `servo.tail`).
+    pub section: &'static str,
+    /// Key inside the section.
+    pub key: &'static str,
+    /// SI unit ("1" for dimensionless).
+    pub unit: &'static str,
+    /// Thesis symbol and meaning.
+    pub symbol: &'static str,
+    /// Validation rule.
+    pub rule: Rule,
+    /// Accessor.
+    pub field: Field,
+}
+
+macro_rules! d {
+    ($sec:literal, $key:literal, $unit:literal, $sym:literal, $rule:ident, |$p:ident| $e:expr) => {
+        Descriptor {
+            section: $sec,
+            key: $key,
+            unit: $unit,
+            symbol: $sym,
+            rule: Rule::$rule,
+            field: |$p: &mut Params| &mut $e,
+        }
+    };
+}
+
+macro_rules! servo_descriptors {
+    ($sec:literal, $i:literal, $k:literal, $wn:literal, $z:literal, $rm:literal, $smin:literal, $smax:literal) => {
+        [
+            d!($sec, "gain_rad", "rad", $k, Positive, |p| p.servos[$i]
+                .gain_rad),
+            d!($sec, "omega_n_rad_s", "rad/s", $wn, Positive, |p| p.servos
+                [$i]
+                .omega_n_rad_s),
+            d!($sec, "zeta", "1", $z, Positive, |p| p.servos[$i].zeta),
+            d!($sec, "rate_max_rad_s", "rad/s", $rm, Positive, |p| p.servos
+                [$i]
+                .rate_max_rad_s),
+            d!($sec, "s_min", "1", $smin, Finite, |p| p.servos[$i].s_min),
+            d!($sec, "s_max", "1", $smax, Finite, |p| p.servos[$i].s_max),
+        ]
+    };
+}
+
+const SERVO_COL: [Descriptor; 6] = servo_descriptors!(
+    "servo.collective",
+    0,
+    "K0",
+    "ωn,0",
+    "ζ0",
+    "θ̇max,0",
+    "Scol,min",
+    "Scol,max"
+);
+const SERVO_LAT: [Descriptor; 6] = servo_descriptors!(
+    "servo.lateral",
+    1,
+    "KA",
+    "ωn,A",
+    "ζA",
+    "θ̇max,A",
+    "Slat,min",
+    "Slat,max"
+);
+const SERVO_LON: [Descriptor; 6] = servo_descriptors!(
+    "servo.longitudinal",
+    2,
+    "KB",
+    "ωn,B",
+    "ζB",
+    "θ̇max,B",
+    "Slon,min",
+    "Slon,max"
+);
+const SERVO_TR: [Descriptor; 6] = servo_descriptors!(
+    "servo.tail",
+    3,
+    "Ktr",
+    "ωn,tr",
+    "ζtr",
+    "θ̇max,tr",
+    "Str,min",
+    "Str,max"
+);
+
+const BASE: [Descriptor; 53] = [
+    d!(
+        "environment",
+        "rho_kg_m3",
+        "kg/m^3",
+        "ρ air density",
+        Positive,
+        |p| p.environment.rho_kg_m3
+    ),
+    d!(
+        "environment",
+        "g_m_s2",
+        "m/s^2",
+        "g gravity",
+        Positive,
+        |p| p.environment.g_m_s2
+    ),
+    d!("body", "mass_kg", "kg", "M mass", Positive, |p| p
+        .body
+        .mass_kg),
+    d!(
+        "body",
+        "ixx_kg_m2",
+        "kg*m^2",
+        "I(1,1) roll inertia",
+        Positive,
+        |p| p.body.ixx_kg_m2
+    ),
+    d!(
+        "body",
+        "iyy_kg_m2",
+        "kg*m^2",
+        "I(2,2) pitch inertia",
+        Positive,
+        |p| p.body.iyy_kg_m2
+    ),
+    d!(
+        "body",
+        "izz_kg_m2",
+        "kg*m^2",
+        "I(3,3) yaw inertia",
+        Positive,
+        |p| p.body.izz_kg_m2
+    ),
+    d!("geometry", "kappa_h_m", "m", "κh hub, aft", Finite, |p| p
+        .geometry
+        .kappa_h_m),
+    d!(
+        "geometry",
+        "kappa_v_m",
+        "m",
+        "κv hub, above",
+        Finite,
+        |p| p.geometry.kappa_v_m
+    ),
+    d!(
+        "geometry",
+        "kappa_h_fp_m",
+        "m",
+        "κh,fp front plane, forward",
+        Finite,
+        |p| p.geometry.kappa_h_fp_m
+    ),
+    d!(
+        "geometry",
+        "kappa_h_tf_m",
+        "m",
+        "κh,tf tail fin, aft",
+        Finite,
+        |p| p.geometry.kappa_h_tf_m
+    ),
+    d!(
+        "geometry",
+        "kappa_h_tp_m",
+        "m",
+        "κh,tp tail plane, aft",
+        Finite,
+        |p| p.geometry.kappa_h_tp_m
+    ),
+    d!(
+        "geometry",
+        "kappa_h_tr_m",
+        "m",
+        "κh,tr tail-rotor hub, aft",
+        Finite,
+        |p| p.geometry.kappa_h_tr_m
+    ),
+    d!(
+        "geometry",
+        "kappa_v_tf_m",
+        "m",
+        "κv,tf tail fin, above",
+        Finite,
+        |p| p.geometry.kappa_v_tf_m
+    ),
+    d!(
+        "geometry",
+        "kappa_v_tr_m",
+        "m",
+        "κv,tr tail-rotor hub, above",
+        Finite,
+        |p| p.geometry.kappa_v_tr_m
+    ),
+    d!(
+        "main_rotor",
+        "blades",
+        "1",
+        "b number of blades",
+        Count,
+        |p| p.main_rotor.blades
+    ),
+    d!("main_rotor", "radius_m", "m", "R radius", Positive, |p| p
+        .main_rotor
+        .radius_m),
+    d!("main_rotor", "chord_m", "m", "c chord", Positive, |p| p
+        .main_rotor
+        .chord_m),
+    d!(
+        "main_rotor",
+        "hinge_offset_m",
+        "m",
+        "e hinge offset",
+        NonNegative,
+        |p| p.main_rotor.hinge_offset_m
+    ),
+    d!(
+        "main_rotor",
+        "lift_slope_per_rad",
+        "1/rad",
+        "Cls lift slope",
+        Positive,
+        |p| p.main_rotor.lift_slope_per_rad
+    ),
+    d!(
+        "main_rotor",
+        "drag_coefficient",
+        "1",
+        "Cd blade drag",
+        NonNegative,
+        |p| p.main_rotor.drag_coefficient
+    ),
+    d!(
+        "main_rotor",
+        "blade_inertia_kg_m2",
+        "kg*m^2",
+        "Ib blade inertia",
+        Positive,
+        |p| p.main_rotor.blade_inertia_kg_m2
+    ),
+    d!(
+        "main_rotor",
+        "blade_mass_moment_kg_m",
+        "kg*m",
+        "mb blade mass moment",
+        NonNegative,
+        |p| p.main_rotor.blade_mass_moment_kg_m
+    ),
+    d!(
+        "main_rotor",
+        "spring_n_m_per_rad",
+        "N*m/rad",
+        "Ks hinge spring",
+        NonNegative,
+        |p| p.main_rotor.spring_n_m_per_rad
+    ),
+    d!(
+        "main_rotor",
+        "pitch_flap_coupling",
+        "1",
+        "K1 flap-pitch coupling",
+        Finite,
+        |p| p.main_rotor.pitch_flap_coupling
+    ),
+    d!(
+        "main_rotor",
+        "twist_rad",
+        "rad",
+        "θt blade twist",
+        Finite,
+        |p| p.main_rotor.twist_rad
+    ),
+    d!(
+        "main_rotor",
+        "bell_factor",
+        "1",
+        "Kb Bell factor",
+        Finite,
+        |p| p.main_rotor.bell_factor
+    ),
+    d!(
+        "main_rotor",
+        "hiller_factor",
+        "1",
+        "Kh Hiller factor",
+        Finite,
+        |p| p.main_rotor.hiller_factor
+    ),
+    d!(
+        "main_rotor",
+        "omega_rad_s",
+        "rad/s",
+        "Ω rotor speed (inferred)",
+        Positive,
+        |p| p.main_rotor.omega_rad_s
+    ),
+    d!(
+        "stabilizer_bar",
+        "inner_radius_m",
+        "m",
+        "Ri inner radius",
+        NonNegative,
+        |p| p.stabilizer_bar.inner_radius_m
+    ),
+    d!(
+        "stabilizer_bar",
+        "outer_radius_m",
+        "m",
+        "Ro outer radius",
+        Positive,
+        |p| p.stabilizer_bar.outer_radius_m
+    ),
+    d!(
+        "stabilizer_bar",
+        "chord_m",
+        "m",
+        "csb paddle chord",
+        Positive,
+        |p| p.stabilizer_bar.chord_m
+    ),
+    d!(
+        "stabilizer_bar",
+        "lift_slope_per_rad",
+        "1/rad",
+        "Cls,sb lift slope",
+        Positive,
+        |p| p.stabilizer_bar.lift_slope_per_rad
+    ),
+    d!(
+        "stabilizer_bar",
+        "paddle_inertia_kg_m2",
+        "kg*m^2",
+        "Ib,sb paddle inertia",
+        Positive,
+        |p| p.stabilizer_bar.paddle_inertia_kg_m2
+    ),
+    d!(
+        "tail_rotor",
+        "blades",
+        "1",
+        "btr number of blades",
+        Count,
+        |p| p.tail_rotor.blades
+    ),
+    d!("tail_rotor", "radius_m", "m", "Rtr radius", Positive, |p| p
+        .tail_rotor
+        .radius_m),
+    d!("tail_rotor", "chord_m", "m", "ctr chord", Positive, |p| p
+        .tail_rotor
+        .chord_m),
+    d!(
+        "tail_rotor",
+        "lift_slope_per_rad",
+        "1/rad",
+        "Cls,tr lift slope",
+        Positive,
+        |p| p.tail_rotor.lift_slope_per_rad
+    ),
+    d!(
+        "tail_rotor",
+        "drag_coefficient",
+        "1",
+        "Cd,tr blade drag",
+        NonNegative,
+        |p| p.tail_rotor.drag_coefficient
+    ),
+    d!(
+        "tail_rotor",
+        "gear_ratio",
+        "1",
+        "G gear ratio",
+        Positive,
+        |p| p.tail_rotor.gear_ratio
+    ),
+    d!(
+        "tail_rotor",
+        "fin_area_ratio",
+        "1",
+        "Ktf fin/wake ratio",
+        NonNegative,
+        |p| p.tail_rotor.fin_area_ratio
+    ),
+    d!("fuselage", "area_x_m2", "m^2", "Ax", NonNegative, |p| p
+        .fuselage
+        .area_x_m2),
+    d!("fuselage", "area_y_m2", "m^2", "Ay", NonNegative, |p| p
+        .fuselage
+        .area_y_m2),
+    d!("fuselage", "area_z_m2", "m^2", "Az", NonNegative, |p| p
+        .fuselage
+        .area_z_m2),
+    d!("fuselage", "area_fp_m2", "m^2", "Afp", NonNegative, |p| p
+        .fuselage
+        .area_fp_m2),
+    d!("fuselage", "area_tf_m2", "m^2", "Atf", NonNegative, |p| p
+        .fuselage
+        .area_tf_m2),
+    d!("fuselage", "area_tp_m2", "m^2", "Atp", NonNegative, |p| p
+        .fuselage
+        .area_tp_m2),
+    d!("fuselage", "drag_x", "1", "dx", NonNegative, |p| p
+        .fuselage
+        .drag_x),
+    d!("fuselage", "drag_y", "1", "dy", NonNegative, |p| p
+        .fuselage
+        .drag_y),
+    d!("fuselage", "drag_z", "1", "dz", NonNegative, |p| p
+        .fuselage
+        .drag_z),
+    d!("fuselage", "drag_fp", "1", "dfp", NonNegative, |p| p
+        .fuselage
+        .drag_fp),
+    d!("fuselage", "drag_tf", "1", "dtf", NonNegative, |p| p
+        .fuselage
+        .drag_tf),
+    d!("fuselage", "drag_tp", "1", "dtp", NonNegative, |p| p
+        .fuselage
+        .drag_tp),
+    d!(
+        "control",
+        "sample_time_s",
+        "s",
+        "Ts sampling time",
+        Positive,
+        |p| p.control.sample_time_s
+    ),
+];
+
+/// All parameter descriptors, in file order.
+pub fn descriptors() -> impl Iterator<Item = &'static Descriptor> {
+    BASE.iter()
+        .chain(SERVO_COL.iter())
+        .chain(SERVO_LAT.iter())
+        .chain(SERVO_LON.iter())
+        .chain(SERVO_TR.iter())
+}
+
+/// Number of parameter keys.
+pub fn descriptor_count() -> usize {
+    descriptors().count()
+}
+
+fn find(section: &str, key: &str) -> Option<&'static Descriptor> {
+    descriptors().find(|d| d.section == section && d.key == key)
+}
+
+const ZERO_SERVO: Servo = Servo {
+    gain_rad: 0.0,
+    omega_n_rad_s: 0.0,
+    zeta: 0.0,
+    rate_max_rad_s: 0.0,
+    s_min: 0.0,
+    s_max: 0.0,
+};
+
+impl Params {
+    fn zeroed() -> Params {
+        Params {
+            environment: Environment {
+                rho_kg_m3: 0.0,
+                g_m_s2: 0.0,
+            },
+            body: Body {
+                mass_kg: 0.0,
+                ixx_kg_m2: 0.0,
+                iyy_kg_m2: 0.0,
+                izz_kg_m2: 0.0,
+            },
+            geometry: Geometry {
+                kappa_h_m: 0.0,
+                kappa_v_m: 0.0,
+                kappa_h_fp_m: 0.0,
+                kappa_h_tf_m: 0.0,
+                kappa_h_tp_m: 0.0,
+                kappa_h_tr_m: 0.0,
+                kappa_v_tf_m: 0.0,
+                kappa_v_tr_m: 0.0,
+            },
+            main_rotor: MainRotor {
+                blades: 0.0,
+                radius_m: 0.0,
+                chord_m: 0.0,
+                hinge_offset_m: 0.0,
+                lift_slope_per_rad: 0.0,
+                drag_coefficient: 0.0,
+                blade_inertia_kg_m2: 0.0,
+                blade_mass_moment_kg_m: 0.0,
+                spring_n_m_per_rad: 0.0,
+                pitch_flap_coupling: 0.0,
+                twist_rad: 0.0,
+                bell_factor: 0.0,
+                hiller_factor: 0.0,
+                omega_rad_s: 0.0,
+            },
+            stabilizer_bar: StabilizerBar {
+                inner_radius_m: 0.0,
+                outer_radius_m: 0.0,
+                chord_m: 0.0,
+                lift_slope_per_rad: 0.0,
+                paddle_inertia_kg_m2: 0.0,
+            },
+            tail_rotor: TailRotor {
+                blades: 0.0,
+                radius_m: 0.0,
+                chord_m: 0.0,
+                lift_slope_per_rad: 0.0,
+                drag_coefficient: 0.0,
+                gear_ratio: 0.0,
+                fin_area_ratio: 0.0,
+            },
+            fuselage: Fuselage {
+                area_x_m2: 0.0,
+                area_y_m2: 0.0,
+                area_z_m2: 0.0,
+                area_fp_m2: 0.0,
+                area_tf_m2: 0.0,
+                area_tp_m2: 0.0,
+                drag_x: 0.0,
+                drag_y: 0.0,
+                drag_z: 0.0,
+                drag_fp: 0.0,
+                drag_tf: 0.0,
+                drag_tp: 0.0,
+            },
+            servos: [ZERO_SERVO; 4],
+            control: Control { sample_time_s: 0.0 },
+        }
+    }
+
+    /// The Bergen Industrial Twin (thesis Nomenclature), from the embedded
+    /// `params/bergen_twin.toml`.
+    pub fn bergen_twin() -> Params {
+        // The embedded file is complete and valid: `tests::embedded_file_is_complete`
+        // parses it in full, so this cannot fail at run time.
+        #[allow(clippy::expect_used)]
+        Self::parse_complete(BERGEN_TWIN_TOML, "<embedded bergen_twin.toml>")
+            .expect("embedded bergen_twin.toml is valid")
+    }
+
+    /// Parse a complete parameter file: every key must be present.
+    fn parse_complete(text: &str, file: &str) -> Result<Params, ParamError> {
+        let table: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| ParamError::Syntax {
+                file: file.to_string(),
+                message: e.to_string(),
+            })?;
+        if let Some(d) = descriptors().find(|d| lookup(&table, d.section, d.key).is_none()) {
+            return Err(ParamError::Invalid {
+                file: file.to_string(),
+                key: format!("{}.{}", d.section, d.key),
+                value: f64::NAN,
+                rule: "missing from a complete parameter file".into(),
+            });
+        }
+        let mut p = Params::zeroed();
+        p.apply_table(&table, "", file, &mut 0)?;
+        p.validate(file)?;
+        Ok(p)
+    }
+
+    /// Parameters from TOML text: the Bergen Twin with the keys of `text`
+    /// overriding it (any subset). `file` names the source in errors.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Params, ParamError> {
+        let mut p = Params::bergen_twin();
+        p.apply_toml(text, file)?;
+        p.validate(file)?;
+        Ok(p)
+    }
+
+    /// Parameters from a TOML file overriding the Bergen Twin.
+    pub fn from_file(path: &Path) -> Result<Params, ParamError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ParamError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        Self::from_toml_str(&text, &file)
+    }
+
+    /// Apply the keys in `text` to `self`; returns how many were set.
+    fn apply_toml(&mut self, text: &str, file: &str) -> Result<usize, ParamError> {
+        let table: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| ParamError::Syntax {
+                file: file.to_string(),
+                message: e.to_string(),
+            })?;
+        let mut count = 0;
+        self.apply_table(&table, "", file, &mut count)?;
+        Ok(count)
+    }
+
+    fn apply_table(
+        &mut self,
+        table: &toml::Table,
+        prefix: &str,
+        file: &str,
+        count: &mut usize,
+    ) -> Result<(), ParamError> {
+        for (key, value) in table {
+            let full = if prefix.is_empty() {
+                key.clone()
+            } else {
+                format!("{prefix}.{key}")
+            };
+            match value {
+                toml::Value::Table(sub) => self.apply_table(sub, &full, file, count)?,
+                _ => {
+                    let d = find(prefix, key).ok_or_else(|| ParamError::UnknownKey {
+                        file: file.to_string(),
+                        key: full.clone(),
+                    })?;
+                    let v = match value {
+                        toml::Value::Float(f) => *f,
+                        toml::Value::Integer(i) => *i as f64,
+                        other => {
+                            return Err(ParamError::WrongType {
+                                file: file.to_string(),
+                                key: full,
+                                found: other.type_str().to_string(),
+                            });
+                        }
+                    };
+                    d.rule.check(v).map_err(|rule| ParamError::Invalid {
+                        file: file.to_string(),
+                        key: full.clone(),
+                        value: v,
+                        rule: rule.to_string(),
+                    })?;
+                    *(d.field)(self) = v;
+                    *count += 1;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Check every key against its rule and the cross-key rules
+    /// (saturation min < max, e < R, Ri < Ro).
+    pub fn validate(&self, file: &str) -> Result<(), ParamError> {
+        let mut copy = *self;
+        for d in descriptors() {
+            let v = *(d.field)(&mut copy);
+            d.rule.check(v).map_err(|rule| ParamError::Invalid {
+                file: file.to_string(),
+                key: format!("{}.{}", d.section, d.key),
+                value: v,
+                rule: rule.to_string(),
+            })?;
+        }
+        let invalid = |key: &str, value: f64, rule: &str| ParamError::Invalid {
+            file: file.to_string(),
+            key: key.to_string(),
+            value,
+            rule: rule.to_string(),
+        };
+        for (s, name) in self.servos.iter().zip(SERVO_SECTIONS) {
+            if s.s_min >= s.s_max {
+                return Err(invalid(
+                    &format!("{name}.s_min"),
+                    s.s_min,
+                    "must be < s_max",
+                ));
+            }
+        }
+        let mr = &self.main_rotor;
+        if mr.hinge_offset_m >= mr.radius_m {
+            return Err(invalid(
+                "main_rotor.hinge_offset_m",
+                mr.hinge_offset_m,
+                "must be < main_rotor.radius_m",
+            ));
+        }
+        let sb = &self.stabilizer_bar;
+        if sb.inner_radius_m >= sb.outer_radius_m {
+            return Err(invalid(
+                "stabilizer_bar.inner_radius_m",
+                sb.inner_radius_m,
+                "must be < stabilizer_bar.outer_radius_m",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Ωtr = G·Ω, the tail-rotor speed (rad/s).
+    pub fn omega_tr_rad_s(&self) -> f64 {
+        self.tail_rotor.gear_ratio * self.main_rotor.omega_rad_s
+    }
+
+    /// The effective parameter set as a complete TOML file, with units and
+    /// thesis symbols in comments: a starting point for a user's helicopter.
+    pub fn to_toml(&self) -> String {
+        let mut copy = *self;
+        let mut out = String::from(
+            "# helicon model parameters (SI units). Keys, units and thesis symbols:\n\
+             # see `params/bergen_twin.toml`. Ω is inferred (not printed in the thesis).\n",
+        );
+        let mut section = "";
+        for d in descriptors() {
+            if d.section != section {
+                section = d.section;
+                let _ = write!(out, "\n[{section}]\n");
+            }
+            let v = *(d.field)(&mut copy);
+            let value = if d.rule == Rule::Count {
+                format!("{v:.0}")
+            } else {
+                format!("{v:?}")
+            };
+            let _ = writeln!(out, "{} = {}  # {} [{}]", d.key, value, d.symbol, d.unit);
+        }
+        out
+    }
+}
+
+/// Servo TOML sections in input order.
+pub const SERVO_SECTIONS: [&str; 4] = [
+    "servo.collective",
+    "servo.lateral",
+    "servo.longitudinal",
+    "servo.tail",
+];
+
+fn lookup<'a>(table: &'a toml::Table, section: &str, key: &str) -> Option<&'a toml::Value> {
+    let mut t = table;
+    for part in section.split('.') {
+        t = t.get(part)?.as_table()?;
+    }
+    t.get(key)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_file_is_complete() {
+        let table: toml::Table = BERGEN_TWIN_TOML.parse().unwrap();
+        for d in descriptors() {
+            assert!(
+                lookup(&table, d.section, d.key).is_some(),
+                "{}.{} missing",
+                d.section,
+                d.key
+            );
+        }
+        let p = Params::parse_complete(BERGEN_TWIN_TOML, "x").unwrap();
+        assert_eq!(p, Params::bergen_twin());
+    }
+
+    #[test]
+    fn bergen_twin_matches_reference_values() {
+        // shared/reference/thesis_params.toml (Nomenclature) values.
+        let p = Params::bergen_twin();
+        assert_eq!(p.body.mass_kg, 14.0);
+        assert_eq!(p.body.ixx_kg_m2, 0.199);
+        assert_eq!(p.main_rotor.omega_rad_s, 100.0);
+        assert_eq!(p.omega_tr_rad_s(), 650.0);
+        assert_eq!(p.main_rotor.spring_n_m_per_rad, 200.0);
+        assert_eq!(p.servos[0].s_max, 0.30);
+        assert_eq!(p.servos[3].s_min, -0.37);
+        assert_eq!(p.stabilizer_bar.outer_radius_m, 0.65);
+        assert_eq!(p.tail_rotor.radius_m, 0.18);
+        assert_eq!(descriptor_count(), 77);
+    }
+
+    #[test]
+    fn override_subset_and_roundtrip() {
+        let p = Params::from_toml_str(
+            "[body]\nmass_kg = 12\n[servo.tail]\ns_max = 0.5\n",
+            "u.toml",
+        )
+        .unwrap();
+        assert_eq!(p.body.mass_kg, 12.0);
+        assert_eq!(p.servos[3].s_max, 0.5);
+        assert_eq!(p.body.iyy_kg_m2, 0.62);
+        let again = Params::parse_complete(&p.to_toml(), "roundtrip").unwrap();
+        assert_eq!(again, p);
+    }
+
+    #[test]
+    fn errors_name_file_key_and_rule() {
+        let e = Params::from_toml_str("[body]\nmass_kg = -1.0\n", "heli.toml").unwrap_err();
+        let s = e.to_string();
+        assert!(
+            s.contains("heli.toml") && s.contains("body.mass_kg") && s.contains("> 0"),
+            "{s}"
+        );
+
+        let e = Params::from_toml_str("[body]\nmas_kg = 1.0\n", "heli.toml").unwrap_err();
+        assert!(matches!(e, ParamError::UnknownKey { .. }), "{e}");
+        assert!(e.to_string().contains("body.mas_kg"));
+
+        let e = Params::from_toml_str("[body]\nmass_kg = \"heavy\"\n", "h.toml").unwrap_err();
+        assert!(matches!(e, ParamError::WrongType { .. }), "{e}");
+
+        let e = Params::from_toml_str("[servo.collective]\ns_min = 0.5\n", "h.toml").unwrap_err();
+        assert!(e.to_string().contains("servo.collective.s_min"), "{e}");
+
+        let e = Params::from_toml_str("[body]\nmass_kg = nan\n", "h.toml").unwrap_err();
+        assert!(e.to_string().contains("finite"), "{e}");
+
+        let e = Params::from_toml_str("[main_rotor]\nradius_m = 0.0\n", "h.toml").unwrap_err();
+        assert!(e.to_string().contains("main_rotor.radius_m"), "{e}");
+
+        let e = Params::from_toml_str("[main_rotor]\nblades = 2.5\n", "h.toml").unwrap_err();
+        assert!(e.to_string().contains("whole number"), "{e}");
+
+        let e = Params::from_toml_str("[body\n", "h.toml").unwrap_err();
+        assert!(matches!(e, ParamError::Syntax { .. }), "{e}");
+
+        let e = Params::from_file(Path::new("/nonexistent/x.toml")).unwrap_err();
+        assert!(e.to_string().contains("/nonexistent/x.toml"));
+    }
+}
