@@ -22,16 +22,42 @@ const MAX_ITER: usize = 10_000;
 /// Eigenvalues of a general real square matrix (real Schur form, nalgebra), ordered by
 /// ascending real part, then imaginary part.
 ///
+/// nalgebra's Francis QR has no exceptional shifts and can stagnate on matrices that are
+/// exactly reducible (e.g. the integral-augmented [[Φ, 0], [−H, I]] of thesis (14.31)). We
+/// therefore try, in order: A; Aᵀ; the orthogonal similarity P A P with a fixed Householder
+/// reflector P = I − 2vvᵀ (v ∝ (1, 2, …, n)); each first with tolerance ε, then 1e-14.
+/// All have the same eigenvalues; the first converging decomposition is used.
+///
 /// # Errors
-/// Non-square or non-finite input; Schur iteration not converging.
+/// Non-square or non-finite input; Schur iteration not converging in any variant.
 pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>> {
     check::square("A", a)?;
     check::finite("A", a)?;
-    if a.nrows() == 0 {
+    let n = a.nrows();
+    if n == 0 {
         return Ok(Vec::new());
     }
-    let schur = nalgebra::Schur::try_new(a.clone(), f64::EPSILON, MAX_ITER)
-        .ok_or(LtiError::Decomposition { what: "Schur" })?;
+    let reflected = || {
+        let v = DMatrix::from_fn(n, 1, |i, _| (i + 1) as f64);
+        let v = &v / v.norm();
+        let p = DMatrix::<f64>::identity(n, n) - &v * v.transpose() * 2.0;
+        &p * a * &p
+    };
+    let mut schur = None;
+    'outer: for eps in [f64::EPSILON, 1e-14] {
+        for variant in 0..3 {
+            let m = match variant {
+                0 => a.clone(),
+                1 => a.transpose(),
+                _ => reflected(),
+            };
+            if let Some(s) = nalgebra::Schur::try_new(m, eps, MAX_ITER) {
+                schur = Some(s);
+                break 'outer;
+            }
+        }
+    }
+    let schur = schur.ok_or(LtiError::Decomposition { what: "Schur" })?;
     let ev = schur.complex_eigenvalues();
     let mut v: Vec<Complex<f64>> = ev.iter().copied().collect();
     v.sort_by(|x, y| x.re.total_cmp(&y.re).then(x.im.total_cmp(&y.im)));

@@ -8,11 +8,17 @@
 //!
 //! * [`expm()`] / [`c2d`]: matrix exponential (Higham 2005) and ZOH discretization.
 //! * [`analysis`]: poles, damping, PBH and staircase controllability/observability.
+//! * [`riccati`]: DARE by the structured doubling algorithm (Chu et al. 2004).
+//! * [`lqr`]: `dlqr`, Bryson's rule, pincer α, integral action (thesis ch. 14).
+//! * [`kalman`]: steady-state Kalman predictor/filter gains (thesis ch. 15).
 
 pub mod analysis;
 mod check;
 pub mod error;
 pub mod expm;
+pub mod kalman;
+pub mod lqr;
+pub mod riccati;
 
 pub use analysis::{
     Pole, damp, damp_discrete, eigenvalues, observable_dimension, pbh_controllability,
@@ -20,3 +26,9 @@ pub use analysis::{
 };
 pub use error::{LtiError, Result};
 pub use expm::{c2d, expm};
+pub use kalman::{Kalman, dlqe};
+pub use lqr::{
+    IntegralAugmented, IntegralLqr, Lqr, alpha_from_settling_time, augment_integral, bryson,
+    bryson_weights, dlqr, dlqr_integral, dlqr_pincer,
+};
+pub use riccati::{DareOptions, DareSolution, dare, dare_with};
