@@ -1,3 +1,15 @@
 //! # helicon-sim
 //!
-//! The world around the helicopter: sensor models, wind and turbulence, plots.
+//! The world around the helicopter of the thesis *Nonlinear Modeling and
+//! Optimal Control of a Miniature Autonomous Helicopter* (Aalborg 2006):
+//!
+//! - [`wind`]: steady wind, 1-cosine gust, the thesis wind model
+//!   (14.38)–(14.42) and Dryden turbulence;
+//! - [`sensors`]: IMU, magnetometer and GPS models with a seeded RNG;
+//! - [`trajectory`]: a scripted smooth trajectory to drive the sensors;
+//! - [`plot`]: time-series line plots to PNG and SVG.
+
+pub mod plot;
+pub mod sensors;
+pub mod trajectory;
+pub mod wind;

@@ -1,0 +1,447 @@
+//! Sensor models: accelerometer, gyro, magnetometer and GPS, configured in TOML
+//! with defaults for a typical hobby IMU/GPS, one seeded RNG stream each.
+//!
+//! Inertial axis model (per axis, body FRD, sampled at `imu.rate_hz`):
+//! `y = Q_res(sat_range((1 + s) x + b + n))` with `s` a scale-factor error
+//! drawn once per run, `b` a bias that starts at a random value and random-walks
+//! (`b += σ_rw √dt ν`), `n` white noise of density `N` (σ = N √rate),
+//! saturation at ±range (accelerometer ±10 g, the IMU fitted after the
+//! vibration problem of Appendix A / §3) and quantisation to the resolution.
+//! The accelerometer measures specific force `f = R_be (a − g)`; the gyro the
+//! body rates. Magnetometer: `R_be m_ned + n` at `mag.rate_hz` (a divisor of
+//! the IMU rate). GPS: NED position + white noise at 1–10 Hz, delivered
+//! `latency_s` after its epoch, each fix dropped with probability
+//! `dropout_probability`. GPS noise is white per fix here (real receivers show
+//! slowly correlated errors; not modelled).
+
+use crate::trajectory::TruthSample;
+use nalgebra::Vector3;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+use std::path::Path;
+
+/// Standard gravity for unit conversions of datasheet values (m/s²).
+pub const G0_M_S2: f64 = 9.80665;
+
+/// Error loading or validating a sensor configuration.
+#[derive(Debug, thiserror::Error)]
+pub enum SensorConfigError {
+    /// The file could not be read.
+    #[error("{file}: {source}")]
+    Io {
+        /// File name.
+        file: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax or unknown/mistyped field (the message names the key).
+    #[error("{file}: {message}")]
+    Parse {
+        /// File name.
+        file: String,
+        /// Parser message naming the field and position.
+        message: String,
+    },
+    /// A field is out of its allowed range.
+    #[error("{file}: field `{field}` = {value} is invalid (allowed: {allowed})")]
+    Invalid {
+        /// File name.
+        file: String,
+        /// Dotted field name.
+        field: String,
+        /// Value given.
+        value: f64,
+        /// Allowed range.
+        allowed: &'static str,
+    },
+}
+
+/// One inertial sensor axis triad (accelerometer or gyro). Units: the
+/// sensor's unit `u` (m/s² or rad/s).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InertialConfig {
+    /// White-noise density (u/√Hz).
+    pub noise_density: f64,
+    /// Bias random walk (u/√s).
+    pub bias_random_walk: f64,
+    /// Standard deviation of the initial (turn-on) bias (u).
+    pub initial_bias_sigma: f64,
+    /// Standard deviation of the per-axis scale-factor error (dimensionless).
+    pub scale_factor_sigma: f64,
+    /// Saturation: output limited to ±range (u).
+    pub range: f64,
+    /// Quantisation step (u); 0 disables.
+    pub resolution: f64,
+}
+
+/// IMU (accelerometer + gyro) configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImuConfig {
+    /// Sample rate (Hz); the sensor suite is stepped at this rate.
+    pub rate_hz: f64,
+    /// Accelerometer (m/s²).
+    pub accel: InertialConfig,
+    /// Gyro (rad/s).
+    pub gyro: InertialConfig,
+}
+
+impl Default for ImuConfig {
+    /// A typical hobby MEMS IMU (MPU-6000 class) at 400 Hz (the thesis's
+    /// control rate): accelerometer 400 µg/√Hz, ±10 g (Appendix A), 16 bit;
+    /// gyro 0.005 °/s/√Hz, ±500 °/s, 16 bit.
+    fn default() -> Self {
+        let acc_range = 10.0 * G0_M_S2;
+        let gyro_range = 500f64.to_radians();
+        Self {
+            rate_hz: 400.0,
+            accel: InertialConfig {
+                noise_density: 400e-6 * G0_M_S2,
+                bias_random_walk: 3e-4,
+                initial_bias_sigma: 0.05,
+                scale_factor_sigma: 0.005,
+                range: acc_range,
+                resolution: 2.0 * acc_range / 65536.0,
+            },
+            gyro: InertialConfig {
+                noise_density: 0.005f64.to_radians(),
+                bias_random_walk: 2e-5,
+                initial_bias_sigma: 0.5f64.to_radians(),
+                scale_factor_sigma: 0.005,
+                range: gyro_range,
+                resolution: 2.0 * gyro_range / 65536.0,
+            },
+        }
+    }
+}
+
+/// Magnetometer configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MagConfig {
+    /// Sample rate (Hz); must divide the IMU rate.
+    pub rate_hz: f64,
+    /// White-noise standard deviation per axis (field units).
+    pub noise_sigma: f64,
+    /// Local field in NED (field units), default thesis (13.14).
+    pub field_ned: [f64; 3],
+}
+
+impl Default for MagConfig {
+    /// 100 Hz, 2 mG noise (HMC5883-class), thesis field (13.14) in gauss.
+    fn default() -> Self {
+        Self {
+            rate_hz: 100.0,
+            noise_sigma: 0.002,
+            field_ned: [0.153, 0.008, -0.438],
+        }
+    }
+}
+
+/// GPS configuration.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GpsConfig {
+    /// Fix rate (Hz), 1–10.
+    pub rate_hz: f64,
+    /// Horizontal noise σ per axis (m).
+    pub horizontal_sigma_m: f64,
+    /// Vertical noise σ (m).
+    pub vertical_sigma_m: f64,
+    /// Delay between a fix's epoch and its delivery (s), ≥ 0.
+    pub latency_s: f64,
+    /// Probability that a fix is lost, 0–1.
+    pub dropout_probability: f64,
+}
+
+impl Default for GpsConfig {
+    /// u-blox M8-class hobby GPS: 5 Hz, 1.5 m / 3 m, 100 ms latency, 2% dropouts.
+    fn default() -> Self {
+        Self {
+            rate_hz: 5.0,
+            horizontal_sigma_m: 1.5,
+            vertical_sigma_m: 3.0,
+            latency_s: 0.1,
+            dropout_probability: 0.02,
+        }
+    }
+}
+
+/// Full sensor configuration (TOML).
+///
+/// ```toml
+/// seed = 42
+/// gravity_m_s2 = 9.82
+/// [imu]
+/// rate_hz = 400.0
+/// [imu.accel]
+/// noise_density = 0.0039
+/// # ... all six fields of an InertialConfig
+/// [gps]
+/// rate_hz = 5.0
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SensorConfig {
+    /// Seed of the sensor RNG streams.
+    pub seed: u64,
+    /// Gravity (m/s²), thesis (13.13): 9.82.
+    pub gravity_m_s2: f64,
+    /// IMU.
+    pub imu: ImuConfig,
+    /// Magnetometer.
+    pub mag: MagConfig,
+    /// GPS.
+    pub gps: GpsConfig,
+}
+
+impl Default for SensorConfig {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            gravity_m_s2: 9.82,
+            imu: ImuConfig::default(),
+            mag: MagConfig::default(),
+            gps: GpsConfig::default(),
+        }
+    }
+}
+
+impl SensorConfig {
+    /// Parse TOML text; `file` names the source in errors.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Self, SensorConfigError> {
+        let cfg: Self = toml::from_str(text).map_err(|e| SensorConfigError::Parse {
+            file: file.to_string(),
+            message: e.to_string(),
+        })?;
+        cfg.validate(file)?;
+        Ok(cfg)
+    }
+
+    /// Load and validate a TOML file.
+    pub fn from_file(path: &Path) -> Result<Self, SensorConfigError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SensorConfigError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        Self::from_toml_str(&text, &file)
+    }
+
+    /// Check every field's range; `file` names the source in errors.
+    pub fn validate(&self, file: &str) -> Result<(), SensorConfigError> {
+        let bad = |field: String, value: f64, allowed: &'static str| SensorConfigError::Invalid {
+            file: file.to_string(),
+            field,
+            value,
+            allowed,
+        };
+        let nonneg = |field: String, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(bad(field, v, "finite, >= 0"))
+            }
+        };
+        if !(self.gravity_m_s2.is_finite() && self.gravity_m_s2 > 0.0) {
+            return Err(bad("gravity_m_s2".into(), self.gravity_m_s2, "> 0"));
+        }
+        if !(self.imu.rate_hz.is_finite() && self.imu.rate_hz >= 1.0 && self.imu.rate_hz <= 10_000.0) {
+            return Err(bad("imu.rate_hz".into(), self.imu.rate_hz, "1..=10000"));
+        }
+        for (name, c) in [("imu.accel", &self.imu.accel), ("imu.gyro", &self.imu.gyro)] {
+            nonneg(format!("{name}.noise_density"), c.noise_density)?;
+            nonneg(format!("{name}.bias_random_walk"), c.bias_random_walk)?;
+            nonneg(format!("{name}.initial_bias_sigma"), c.initial_bias_sigma)?;
+            nonneg(format!("{name}.scale_factor_sigma"), c.scale_factor_sigma)?;
+            nonneg(format!("{name}.resolution"), c.resolution)?;
+            if !(c.range.is_finite() && c.range > 0.0) {
+                return Err(bad(format!("{name}.range"), c.range, "> 0"));
+            }
+        }
+        let ratio = self.imu.rate_hz / self.mag.rate_hz;
+        if !(self.mag.rate_hz.is_finite() && self.mag.rate_hz > 0.0 && ratio >= 1.0 && (ratio - ratio.round()).abs() < 1e-9) {
+            return Err(bad("mag.rate_hz".into(), self.mag.rate_hz, "> 0 and dividing imu.rate_hz"));
+        }
+        nonneg("mag.noise_sigma".into(), self.mag.noise_sigma)?;
+        let f = self.mag.field_ned;
+        if !f.iter().all(|v| v.is_finite()) || f.iter().all(|v| *v == 0.0) {
+            return Err(bad("mag.field_ned".into(), f[0], "finite, non-zero vector"));
+        }
+        if !(self.gps.rate_hz.is_finite() && (1.0..=10.0).contains(&self.gps.rate_hz)) {
+            return Err(bad("gps.rate_hz".into(), self.gps.rate_hz, "1..=10"));
+        }
+        nonneg("gps.horizontal_sigma_m".into(), self.gps.horizontal_sigma_m)?;
+        nonneg("gps.vertical_sigma_m".into(), self.gps.vertical_sigma_m)?;
+        if !(self.gps.latency_s.is_finite() && (0.0..=2.0).contains(&self.gps.latency_s)) {
+            return Err(bad("gps.latency_s".into(), self.gps.latency_s, "0..=2"));
+        }
+        let p = self.gps.dropout_probability;
+        if !(p.is_finite() && (0.0..=1.0).contains(&p)) {
+            return Err(bad("gps.dropout_probability".into(), p, "0..=1"));
+        }
+        Ok(())
+    }
+}
+
+/// One output sample of the sensor suite (all at `t_s`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorSample {
+    /// Time (s).
+    pub t_s: f64,
+    /// Accelerometer specific force, body (m/s²).
+    pub specific_force_body_m_s2: Vector3<f64>,
+    /// Gyro rates, body (rad/s).
+    pub gyro_body_rad_s: Vector3<f64>,
+    /// Magnetometer, body (field units), when sampled this step.
+    pub mag_body: Option<Vector3<f64>>,
+    /// GPS fix delivered this step: position NED (m).
+    pub gps_ned_m: Option<Vector3<f64>>,
+    /// Epoch (s) of the delivered GPS fix (`t_s − latency`).
+    pub gps_epoch_s: Option<f64>,
+}
+
+#[derive(Debug, Clone)]
+struct InertialState {
+    cfg: InertialConfig,
+    scale: Vector3<f64>,
+    bias: Vector3<f64>,
+}
+
+impl InertialState {
+    fn new(cfg: InertialConfig, rng: &mut ChaCha8Rng) -> Self {
+        let mut n = || -> f64 { StandardNormal.sample(rng) };
+        let scale = Vector3::new(n(), n(), n()) * cfg.scale_factor_sigma;
+        let bias = Vector3::new(n(), n(), n()) * cfg.initial_bias_sigma;
+        Self { cfg, scale, bias }
+    }
+
+    fn measure(&mut self, x: &Vector3<f64>, rate_hz: f64, rng: &mut ChaCha8Rng) -> Vector3<f64> {
+        let dt = 1.0 / rate_hz;
+        let sigma_white = self.cfg.noise_density * rate_hz.sqrt();
+        let mut y = Vector3::zeros();
+        for i in 0..3 {
+            let white: f64 = StandardNormal.sample(rng);
+            let v = (1.0 + self.scale[i]) * x[i] + self.bias[i] + sigma_white * white;
+            let q = if self.cfg.resolution > 0.0 {
+                (v / self.cfg.resolution).round() * self.cfg.resolution
+            } else {
+                v
+            };
+            y[i] = q.clamp(-self.cfg.range, self.cfg.range);
+            let walk: f64 = StandardNormal.sample(rng);
+            self.bias[i] += self.cfg.bias_random_walk * dt.sqrt() * walk;
+        }
+        y
+    }
+}
+
+/// The sensor suite: step it once per IMU sample with the truth.
+#[derive(Debug, Clone)]
+pub struct SensorSuite {
+    config: SensorConfig,
+    accel: InertialState,
+    gyro: InertialState,
+    rng_imu: ChaCha8Rng,
+    rng_mag: ChaCha8Rng,
+    rng_gps: ChaCha8Rng,
+    step_index: u64,
+    mag_every: u64,
+    next_gps_epoch_s: f64,
+    pending_gps: VecDeque<(f64, Vector3<f64>)>,
+}
+
+impl SensorSuite {
+    /// A new suite (config validated; errors name the field).
+    pub fn new(config: SensorConfig) -> Result<Self, SensorConfigError> {
+        config.validate("<sensor config>")?;
+        let stream = |s: u64| {
+            let mut r = ChaCha8Rng::seed_from_u64(config.seed);
+            r.set_stream(s);
+            r
+        };
+        let mut rng_imu = stream(10);
+        let accel = InertialState::new(config.imu.accel, &mut rng_imu);
+        let gyro = InertialState::new(config.imu.gyro, &mut rng_imu);
+        Ok(Self {
+            config,
+            accel,
+            gyro,
+            rng_imu,
+            rng_mag: stream(11),
+            rng_gps: stream(12),
+            step_index: 0,
+            mag_every: (config.imu.rate_hz / config.mag.rate_hz).round() as u64,
+            next_gps_epoch_s: 0.0,
+            pending_gps: VecDeque::new(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &SensorConfig {
+        &self.config
+    }
+
+    /// IMU sample period (s).
+    pub fn dt_s(&self) -> f64 {
+        1.0 / self.config.imu.rate_hz
+    }
+
+    /// Current accelerometer and gyro biases (body; truth for analysis).
+    pub fn biases(&self) -> (Vector3<f64>, Vector3<f64>) {
+        (self.accel.bias, self.gyro.bias)
+    }
+
+    /// Produce the sensor readings for the truth at `truth.t_s` (call at the
+    /// IMU rate with increasing times).
+    pub fn sample(&mut self, truth: &TruthSample) -> SensorSample {
+        let rate = self.config.imu.rate_hz;
+        let f_true = truth.specific_force_body(self.config.gravity_m_s2);
+        let specific_force = self.accel.measure(&f_true, rate, &mut self.rng_imu);
+        let gyro = self.gyro.measure(&truth.omega_body_rad_s, rate, &mut self.rng_imu);
+        let mag_body = if self.step_index % self.mag_every == 0 {
+            let m = truth.to_body(&Vector3::from(self.config.mag.field_ned));
+            let s = self.config.mag.noise_sigma;
+            let mut n = || -> f64 { StandardNormal.sample(&mut self.rng_mag) };
+            Some(m + Vector3::new(n(), n(), n()) * s)
+        } else {
+            None
+        };
+        // GPS epochs: take the fix when the epoch is reached (to within half an
+        // IMU sample), deliver it `latency` later.
+        let half = 0.5 / rate;
+        let gps_dt = 1.0 / self.config.gps.rate_hz;
+        while truth.t_s + half >= self.next_gps_epoch_s {
+            let epoch = self.next_gps_epoch_s;
+            self.next_gps_epoch_s += gps_dt;
+            let dropped = self.rng_gps.random::<f64>() < self.config.gps.dropout_probability;
+            let g = &self.config.gps;
+            let mut n = || -> f64 { StandardNormal.sample(&mut self.rng_gps) };
+            let noise = Vector3::new(n() * g.horizontal_sigma_m, n() * g.horizontal_sigma_m, n() * g.vertical_sigma_m);
+            if !dropped {
+                self.pending_gps.push_back((epoch, truth.pos_ned_m + noise));
+            }
+        }
+        let mut gps = None;
+        while let Some((epoch, _)) = self.pending_gps.front() {
+            if truth.t_s + half >= epoch + self.config.gps.latency_s {
+                gps = self.pending_gps.pop_front();
+            } else {
+                break;
+            }
+        }
+        self.step_index += 1;
+        SensorSample {
+            t_s: truth.t_s,
+            specific_force_body_m_s2: specific_force,
+            gyro_body_rad_s: gyro,
+            mag_body,
+            gps_ned_m: gps.map(|g| g.1),
+            gps_epoch_s: gps.map(|g| g.0),
+        }
+    }
+}
