@@ -1,5 +1,5 @@
 //! Benchmarks of the hot paths: q-method and one fusion step.
-#![allow(missing_docs)]
+#![allow(clippy::unwrap_used, missing_docs)] // bench: criterion macros generate undocumented items
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use helicon_gnc::attitude::{VectorObservation, q_method, quaternion_from_euler};
@@ -16,9 +16,7 @@ fn bench_q_method(c: &mut Criterion) {
         VectorObservation::new(1.0, r * g, g),
         VectorObservation::new(0.5, r * m, m),
     ];
-    c.bench_function("q_method_2obs", |b| {
-        b.iter(|| q_method(black_box(&obs)))
-    });
+    c.bench_function("q_method_2obs", |b| b.iter(|| q_method(black_box(&obs))));
 }
 
 fn bench_fusion_step(c: &mut Criterion) {

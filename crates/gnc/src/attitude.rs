@@ -159,7 +159,7 @@ pub fn q_method(observations: &[VectorObservation]) -> Result<AttitudeSolution, 
         }
         let nb = obs.body.norm();
         let nr = obs.reference_ned.norm();
-        if !(nb > 0.0 && nr > 0.0) || !nb.is_finite() || !nr.is_finite() {
+        if !(nb > 0.0 && nr > 0.0 && nb.is_finite() && nr.is_finite()) {
             return Err(AttitudeError::ZeroVector { index });
         }
         // (13.9)
@@ -197,7 +197,7 @@ pub fn q_method(observations: &[VectorObservation]) -> Result<AttitudeSolution, 
         q = -q;
     }
     let norm = q.norm();
-    if !(norm > 0.0) || !norm.is_finite() {
+    if norm.is_nan() || norm <= 0.0 || norm.is_infinite() {
         return Err(AttitudeError::EigenFailure);
     }
     let body_from_ned = UnitQuaternion::new_unchecked(q / norm);
@@ -213,7 +213,11 @@ pub fn q_method(observations: &[VectorObservation]) -> Result<AttitudeSolution, 
 /// with (13.10)–(13.12).
 pub fn davenport_k(b: &Matrix3<f64>) -> Matrix4<f64> {
     let s = b + b.transpose(); // (13.10)
-    let z = Vector3::new(b[(1, 2)] - b[(2, 1)], b[(2, 0)] - b[(0, 2)], b[(0, 1)] - b[(1, 0)]); // (13.11)
+    let z = Vector3::new(
+        b[(1, 2)] - b[(2, 1)],
+        b[(2, 0)] - b[(0, 2)],
+        b[(0, 1)] - b[(1, 0)],
+    ); // (13.11)
     let sigma = b.trace(); // (13.12)
     let mut k = Matrix4::zeros();
     k.fixed_view_mut::<3, 3>(0, 0)
@@ -280,7 +284,9 @@ pub fn gravity_observation(
     specific_force_body_m_s2: &Vector3<f64>,
     own_acceleration_body_m_s2: Option<&Vector3<f64>>,
 ) -> VectorObservation {
-    let a = own_acceleration_body_m_s2.copied().unwrap_or_else(Vector3::zeros);
+    let a = own_acceleration_body_m_s2
+        .copied()
+        .unwrap_or_else(Vector3::zeros);
     VectorObservation::new(
         weight,
         a - specific_force_body_m_s2,

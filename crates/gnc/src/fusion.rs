@@ -370,10 +370,7 @@ mod tests {
             attitude_rad: None,
         };
         assert!(f.step(&input).is_err());
-        let bad = FusionConfig {
-            dt_s: 0.0,
-            ..cfg
-        };
+        let bad = FusionConfig { dt_s: 0.0, ..cfg };
         assert!(FusionFilter::new(bad, Vector9::zeros(), Matrix9::identity()).is_err());
         let mut x0 = Vector9::zeros();
         x0[7] = std::f64::consts::FRAC_PI_2;
@@ -384,6 +381,9 @@ mod tests {
             gps_ned_m: None,
             attitude_rad: None,
         };
-        assert!(matches!(f.step(&input), Err(FusionError::GimbalLock { .. })));
+        assert!(matches!(
+            f.step(&input),
+            Err(FusionError::GimbalLock { .. })
+        ));
     }
 }

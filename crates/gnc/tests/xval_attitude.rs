@@ -1,6 +1,7 @@
 //! Cross-validation of the q-method against SciPy's `Rotation.align_vectors`
 //! (an SVD solver, fixtures from `tools/gen_attitude_fixtures.py`), plus
 //! noise-free recovery and the predicted attitude covariance under noise.
+#![allow(clippy::unwrap_used)] // test/bench helpers: a failed unwrap is a failed test
 
 use helicon_gnc::attitude::{
     VectorObservation, euler_from_quaternion, predicted_attitude_covariance, q_method,
@@ -33,8 +34,16 @@ fn load_fixtures() -> Vec<Case> {
             .map(|k| {
                 VectorObservation::new(
                     num(&format!("w{k}")),
-                    Vector3::new(num(&format!("b{k}x")), num(&format!("b{k}y")), num(&format!("b{k}z"))),
-                    Vector3::new(num(&format!("r{k}x")), num(&format!("r{k}y")), num(&format!("r{k}z"))),
+                    Vector3::new(
+                        num(&format!("b{k}x")),
+                        num(&format!("b{k}y")),
+                        num(&format!("b{k}z")),
+                    ),
+                    Vector3::new(
+                        num(&format!("r{k}x")),
+                        num(&format!("r{k}y")),
+                        num(&format!("r{k}z")),
+                    ),
                 )
             })
             .collect();
@@ -58,7 +67,12 @@ fn load_fixtures() -> Vec<Case> {
 /// vector part of the relative quaternion so it is accurate near zero.
 fn angle_between(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>) -> f64 {
     let d = a.inverse() * b;
-    2.0 * d.imag().norm().min(1.0).asin().min(std::f64::consts::PI - d.imag().norm().min(1.0).asin())
+    2.0 * d
+        .imag()
+        .norm()
+        .min(1.0)
+        .asin()
+        .min(std::f64::consts::PI - d.imag().norm().min(1.0).asin())
 }
 
 #[test]
@@ -86,7 +100,10 @@ fn xval_q_method_matches_scipy_align_vectors() {
         );
         assert!((wahba_loss(&sol.body_from_ned, &c.obs) - c.loss).abs() < 1e-9 * c.loss + 1e-13);
     }
-    println!("q-method vs SciPy align_vectors: {} cases, worst attitude error {worst:e} rad", cases.len());
+    println!(
+        "q-method vs SciPy align_vectors: {} cases, worst attitude error {worst:e} rad",
+        cases.len()
+    );
 }
 
 #[test]
@@ -95,10 +112,22 @@ fn thesis_worked_example() {
     let b2 = Vector3::new(-0.8285, 0.5522, -0.0955);
     let r1 = Vector3::new(-0.1517, -0.9669, 0.2050);
     let r2 = Vector3::new(-0.8393, 0.4494, -0.3044);
-    let sol = q_method(&[VectorObservation::new(1.0, b1, r1), VectorObservation::new(1.0, b2, r2)]).unwrap();
-    let case = load_fixtures().into_iter().find(|c| c.name == "thesis_equal").unwrap();
+    let sol = q_method(&[
+        VectorObservation::new(1.0, b1, r1),
+        VectorObservation::new(1.0, b2, r2),
+    ])
+    .unwrap();
+    let case = load_fixtures()
+        .into_iter()
+        .find(|c| c.name == "thesis_equal")
+        .unwrap();
     let err = angle_between(&sol.body_from_ned, &case.q);
-    println!("thesis example: q = {:?}, euler = {:?}, loss = {:e}, err vs SciPy = {err:e}", sol.body_from_ned.coords, sol.euler(), sol.loss);
+    println!(
+        "thesis example: q = {:?}, euler = {:?}, loss = {:e}, err vs SciPy = {err:e}",
+        sol.body_from_ned.coords,
+        sol.euler(),
+        sol.loss
+    );
     assert!(err < 1e-9);
     // The example vectors are rounded to 4 decimals; the residual is small.
     assert!(sol.loss < 1e-6);
@@ -147,7 +176,10 @@ fn noise_free_random_attitudes_recovered_to_1e_12() {
         // eigen-solver is ~1e-15 relative for well-separated eigenvalues.
         assert!(err < 1e-12, "case {i}: err {err:e}");
         let e = euler_from_quaternion(&sol.body_from_ned);
-        assert!((e - Vector3::new(phi, theta, psi)).amax() < 1e-11, "case {i}: euler {e}");
+        assert!(
+            (e - Vector3::new(phi, theta, psi)).amax() < 1e-11,
+            "case {i}: euler {e}"
+        );
     }
     println!("noise-free worst attitude error: {worst:e} rad");
 }
@@ -195,7 +227,11 @@ fn noisy_error_statistics_match_predicted_covariance() {
     }
     mean /= n as f64;
     cov /= n as f64;
-    println!("predicted diag {:?}\nsample diag {:?}\nmean {mean:?}", p_pred.diagonal(), cov.diagonal());
+    println!(
+        "predicted diag {:?}\nsample diag {:?}\nmean {mean:?}",
+        p_pred.diagonal(),
+        cov.diagonal()
+    );
     // 10%: the requirement. Sampling error of a variance from 40 000
     // draws is sqrt(2/40000) ≈ 0.7%, and the small-angle model error is
     // O(σ²) ≈ 1e-4, so 10% cannot hide a wrong weight or frame (which change

@@ -1,6 +1,7 @@
 //! The fusion filter against an independent NumPy Kalman filter on the same
 //! data (`tools/gen_fusion_fixtures.py`), and the thesis's Figures 13.5/13.6
 //! experiment with numbers.
+#![allow(clippy::unwrap_used)] // test/bench helpers: a failed unwrap is a failed test
 
 use helicon_gnc::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
 use nalgebra::Vector3;
@@ -66,7 +67,9 @@ fn xval_fusion_matches_numpy_reference_kf() {
         }
         steps += 1;
     }
-    println!("fusion vs NumPy KF: {steps} steps ({gps_steps} GPS fixes), max |dx| = {worst_x:e}, max |dP| = {worst_p:e}");
+    println!(
+        "fusion vs NumPy KF: {steps} steps ({gps_steps} GPS fixes), max |dx| = {worst_x:e}, max |dP| = {worst_p:e}"
+    );
     assert_eq!(steps, 400);
     // 1e-9: the requirement. Sequential vs joint update and
     // different summation order differ only by round-off (~1e-14 here).
@@ -84,9 +87,27 @@ fn thesis_fig_13_5_13_6_fused_beats_gps_and_dead_reckoning() {
     let g = 9.82;
     let pi = std::f64::consts::PI;
     // p(t): smooth analytic trajectory, 30 m north and 30 m east.
-    let pos = |t: f64| Vector3::new(15.0 * (1.0 - (pi * t / t_end).cos()), 30.0 * t / t_end + 5.0 * (2.0 * pi * t / t_end).sin(), 0.0);
-    let vel = |t: f64| Vector3::new(15.0 * pi / t_end * (pi * t / t_end).sin(), 30.0 / t_end + 5.0 * 2.0 * pi / t_end * (2.0 * pi * t / t_end).cos(), 0.0);
-    let acc = |t: f64| Vector3::new(15.0 * (pi / t_end).powi(2) * (pi * t / t_end).cos(), -5.0 * (2.0 * pi / t_end).powi(2) * (2.0 * pi * t / t_end).sin(), 0.0);
+    let pos = |t: f64| {
+        Vector3::new(
+            15.0 * (1.0 - (pi * t / t_end).cos()),
+            30.0 * t / t_end + 5.0 * (2.0 * pi * t / t_end).sin(),
+            0.0,
+        )
+    };
+    let vel = |t: f64| {
+        Vector3::new(
+            15.0 * pi / t_end * (pi * t / t_end).sin(),
+            30.0 / t_end + 5.0 * 2.0 * pi / t_end * (2.0 * pi * t / t_end).cos(),
+            0.0,
+        )
+    };
+    let acc = |t: f64| {
+        Vector3::new(
+            15.0 * (pi / t_end).powi(2) * (pi * t / t_end).cos(),
+            -5.0 * (2.0 * pi / t_end).powi(2) * (2.0 * pi * t / t_end).sin(),
+            0.0,
+        )
+    };
     let sigma_acc = 0.1; // m/s², hobby MEMS accelerometer at 100 Hz
     let bias_acc = Vector3::new(0.02, -0.015, 0.0); // residual calibration bias, m/s²
     let sigma_gps = 1.0; // m, per horizontal axis, 10 Hz
@@ -104,7 +125,9 @@ fn thesis_fig_13_5_13_6_fused_beats_gps_and_dead_reckoning() {
     let mut x0 = Vector9::zeros();
     x0.fixed_rows_mut::<3>(0).copy_from(&pos(0.0));
     x0.fixed_rows_mut::<3>(3).copy_from(&vel(0.0));
-    let p0 = Matrix9::from_diagonal(&Vector9::from_row_slice(&[1.0, 1.0, 1.0, 0.1, 0.1, 0.1, 1e-4, 1e-4, 1e-4]));
+    let p0 = Matrix9::from_diagonal(&Vector9::from_row_slice(&[
+        1.0, 1.0, 1.0, 0.1, 0.1, 0.1, 1e-4, 1e-4, 1e-4,
+    ]));
     let mut filter = FusionFilter::new(config, x0, p0).unwrap();
     let (mut dr_p, mut dr_v) = (pos(0.0), vel(0.0));
     let mut gps_hold = pos(0.0);
@@ -114,7 +137,8 @@ fn thesis_fig_13_5_13_6_fused_beats_gps_and_dead_reckoning() {
         let t_prev = (k - 1) as f64 * dt;
         let t = k as f64 * dt;
         // Level attitude: specific force f = a − g in body = NED axes.
-        let a_meas = acc(t_prev) + bias_acc + Vector3::new(na.sample(&mut rng), na.sample(&mut rng), 0.0);
+        let a_meas =
+            acc(t_prev) + bias_acc + Vector3::new(na.sample(&mut rng), na.sample(&mut rng), 0.0);
         let f_body = a_meas - Vector3::new(0.0, 0.0, g);
         let gps = if k % 10 == 0 {
             let z = pos(t) + Vector3::new(ng.sample(&mut rng), ng.sample(&mut rng), 0.0);
@@ -142,7 +166,9 @@ fn thesis_fig_13_5_13_6_fused_beats_gps_and_dead_reckoning() {
     }
     let rms = |s: f64| (s / n as f64).sqrt();
     let (fused, gps, dr) = (rms(se_fused), rms(se_gps), rms(se_dr));
-    println!("Fig 13.5/13.6 horizontal RMS error: fused {fused:.3} m, GPS only {gps:.3} m, integrated accelerometer {dr:.3} m");
+    println!(
+        "Fig 13.5/13.6 horizontal RMS error: fused {fused:.3} m, GPS only {gps:.3} m, integrated accelerometer {dr:.3} m"
+    );
     assert!(fused < gps, "fused {fused} vs gps {gps}");
     assert!(fused < dr, "fused {fused} vs dead reckoning {dr}");
     // Regression pin (seeded run measured 0.80 m vs 1.41 m, ratio 0.57, with

@@ -78,7 +78,9 @@ pub struct LinePlot<'a> {
 
 fn register_font() -> Result<(), PlotError> {
     static DONE: OnceLock<bool> = OnceLock::new();
-    let ok = *DONE.get_or_init(|| plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).is_ok());
+    let ok = *DONE.get_or_init(|| {
+        plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).is_ok()
+    });
     if ok { Ok(()) } else { Err(PlotError::Font) }
 }
 
@@ -112,7 +114,12 @@ impl<'a> LinePlot<'a> {
     }
 
     fn bounds(&self) -> Option<(f64, f64, f64, f64)> {
-        let mut b = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+        let mut b = (
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        );
         for s in &self.series {
             for &(x, y) in s.points {
                 if x.is_finite() && y.is_finite() {
@@ -131,7 +138,11 @@ impl<'a> LinePlot<'a> {
         Some((b.0, b.1, b.2 - pad, b.3 + pad))
     }
 
-    fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>, path: &str) -> Result<(), PlotError> {
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, Shift>,
+        path: &str,
+    ) -> Result<(), PlotError> {
         let err = |e: &dyn std::fmt::Display| PlotError::Draw {
             path: path.to_string(),
             message: e.to_string(),
@@ -156,12 +167,18 @@ impl<'a> LinePlot<'a> {
             .map_err(|e| err(&e))?;
         for (i, s) in self.series.iter().enumerate() {
             let color = PALETTE[i % PALETTE.len()];
-            let pts = s.points.iter().copied().filter(|(x, y)| x.is_finite() && y.is_finite());
+            let pts = s
+                .points
+                .iter()
+                .copied()
+                .filter(|(x, y)| x.is_finite() && y.is_finite());
             chart
                 .draw_series(LineSeries::new(pts, color.stroke_width(2)))
                 .map_err(|e| err(&e))?
                 .label(s.name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
         }
         chart
             .configure_series_labels()
@@ -179,8 +196,14 @@ impl<'a> LinePlot<'a> {
         register_font()?;
         let name = path.display().to_string();
         match path.extension().and_then(|e| e.to_str()) {
-            Some("png") => self.draw(BitMapBackend::new(path, self.size_px).into_drawing_area(), &name),
-            Some("svg") => self.draw(SVGBackend::new(path, self.size_px).into_drawing_area(), &name),
+            Some("png") => self.draw(
+                BitMapBackend::new(path, self.size_px).into_drawing_area(),
+                &name,
+            ),
+            Some("svg") => self.draw(
+                SVGBackend::new(path, self.size_px).into_drawing_area(),
+                &name,
+            ),
             _ => Err(PlotError::Format { path: name }),
         }
     }

@@ -250,7 +250,10 @@ impl SensorConfig {
         if !(self.gravity_m_s2.is_finite() && self.gravity_m_s2 > 0.0) {
             return Err(bad("gravity_m_s2".into(), self.gravity_m_s2, "> 0"));
         }
-        if !(self.imu.rate_hz.is_finite() && self.imu.rate_hz >= 1.0 && self.imu.rate_hz <= 10_000.0) {
+        if !(self.imu.rate_hz.is_finite()
+            && self.imu.rate_hz >= 1.0
+            && self.imu.rate_hz <= 10_000.0)
+        {
             return Err(bad("imu.rate_hz".into(), self.imu.rate_hz, "1..=10000"));
         }
         for (name, c) in [("imu.accel", &self.imu.accel), ("imu.gyro", &self.imu.gyro)] {
@@ -264,8 +267,16 @@ impl SensorConfig {
             }
         }
         let ratio = self.imu.rate_hz / self.mag.rate_hz;
-        if !(self.mag.rate_hz.is_finite() && self.mag.rate_hz > 0.0 && ratio >= 1.0 && (ratio - ratio.round()).abs() < 1e-9) {
-            return Err(bad("mag.rate_hz".into(), self.mag.rate_hz, "> 0 and dividing imu.rate_hz"));
+        if !(self.mag.rate_hz.is_finite()
+            && self.mag.rate_hz > 0.0
+            && ratio >= 1.0
+            && (ratio - ratio.round()).abs() < 1e-9)
+        {
+            return Err(bad(
+                "mag.rate_hz".into(),
+                self.mag.rate_hz,
+                "> 0 and dividing imu.rate_hz",
+            ));
         }
         nonneg("mag.noise_sigma".into(), self.mag.noise_sigma)?;
         let f = self.mag.field_ned;
@@ -402,7 +413,9 @@ impl SensorSuite {
         let rate = self.config.imu.rate_hz;
         let f_true = truth.specific_force_body(self.config.gravity_m_s2);
         let specific_force = self.accel.measure(&f_true, rate, &mut self.rng_imu);
-        let gyro = self.gyro.measure(&truth.omega_body_rad_s, rate, &mut self.rng_imu);
+        let gyro = self
+            .gyro
+            .measure(&truth.omega_body_rad_s, rate, &mut self.rng_imu);
         let mag_body = if self.step_index % self.mag_every == 0 {
             let m = truth.to_body(&Vector3::from(self.config.mag.field_ned));
             let s = self.config.mag.noise_sigma;
@@ -421,7 +434,11 @@ impl SensorSuite {
             let dropped = self.rng_gps.random::<f64>() < self.config.gps.dropout_probability;
             let g = &self.config.gps;
             let mut n = || -> f64 { StandardNormal.sample(&mut self.rng_gps) };
-            let noise = Vector3::new(n() * g.horizontal_sigma_m, n() * g.horizontal_sigma_m, n() * g.vertical_sigma_m);
+            let noise = Vector3::new(
+                n() * g.horizontal_sigma_m,
+                n() * g.horizontal_sigma_m,
+                n() * g.vertical_sigma_m,
+            );
             if !dropped {
                 self.pending_gps.push_back((epoch, truth.pos_ned_m + noise));
             }

@@ -134,10 +134,22 @@ mod tests {
         let h = 1e-5;
         for t in [0.0, 3.3, 17.0] {
             let (a, b, m) = (tr.truth(t - h), tr.truth(t + h), tr.truth(t));
-            assert_relative_eq!((b.pos_ned_m - a.pos_ned_m) / (2.0 * h), m.vel_ned_m_s, epsilon = 1e-7);
-            assert_relative_eq!((b.vel_ned_m_s - a.vel_ned_m_s) / (2.0 * h), m.acc_ned_m_s2, epsilon = 1e-7);
+            assert_relative_eq!(
+                (b.pos_ned_m - a.pos_ned_m) / (2.0 * h),
+                m.vel_ned_m_s,
+                epsilon = 1e-7
+            );
+            assert_relative_eq!(
+                (b.vel_ned_m_s - a.vel_ned_m_s) / (2.0 * h),
+                m.acc_ned_m_s2,
+                epsilon = 1e-7
+            );
             let rates = euler_rates(m.euler_rad.x, m.euler_rad.y, &m.omega_body_rad_s);
-            assert_relative_eq!((b.euler_rad - a.euler_rad) / (2.0 * h), rates, epsilon = 1e-7);
+            assert_relative_eq!(
+                (b.euler_rad - a.euler_rad) / (2.0 * h),
+                rates,
+                epsilon = 1e-7
+            );
         }
     }
 }

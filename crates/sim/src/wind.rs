@@ -32,7 +32,12 @@ pub enum WindError {
     },
 }
 
-fn check(field: &'static str, value: f64, ok: bool, allowed: &'static str) -> Result<(), WindError> {
+fn check(
+    field: &'static str,
+    value: f64,
+    ok: bool,
+    allowed: &'static str,
+) -> Result<(), WindError> {
     if value.is_finite() && ok {
         Ok(())
     } else {
@@ -86,7 +91,12 @@ pub struct OneMinusCosineGust {
 impl OneMinusCosineGust {
     fn validate(&self) -> Result<(), WindError> {
         check("gust.start_s", self.start_s, true, "finite")?;
-        check("gust.duration_s", self.duration_s, self.duration_s > 0.0, "> 0")?;
+        check(
+            "gust.duration_s",
+            self.duration_s,
+            self.duration_s > 0.0,
+            "> 0",
+        )?;
         for v in self.peak_ned_m_s {
             check("gust.peak_ned_m_s", v, true, "finite")?;
         }
@@ -149,16 +159,36 @@ impl Default for ThesisWindConfig {
 
 impl ThesisWindConfig {
     fn validate(&self) -> Result<(), WindError> {
-        check("thesis.max_gust_m_s", self.max_gust_m_s, self.max_gust_m_s >= 0.0, ">= 0")?;
+        check(
+            "thesis.max_gust_m_s",
+            self.max_gust_m_s,
+            self.max_gust_m_s >= 0.0,
+            ">= 0",
+        )?;
         check(
             "thesis.turbulence_sigma_m_s",
             self.turbulence_sigma_m_s,
             self.turbulence_sigma_m_s >= 0.0,
             ">= 0",
         )?;
-        check("thesis.gust_omega_rad_s", self.gust_omega_rad_s, true, "finite")?;
-        check("thesis.longitude_omega_rad_s", self.longitude_omega_rad_s, true, "finite")?;
-        check("thesis.latitude_omega_rad_s", self.latitude_omega_rad_s, true, "finite")?;
+        check(
+            "thesis.gust_omega_rad_s",
+            self.gust_omega_rad_s,
+            true,
+            "finite",
+        )?;
+        check(
+            "thesis.longitude_omega_rad_s",
+            self.longitude_omega_rad_s,
+            true,
+            "finite",
+        )?;
+        check(
+            "thesis.latitude_omega_rad_s",
+            self.latitude_omega_rad_s,
+            true,
+            "finite",
+        )?;
         Ok(())
     }
 
@@ -172,7 +202,11 @@ impl ThesisWindConfig {
     pub fn direction(&self, t_s: f64) -> Vector3<f64> {
         let theta_w = PI * (self.longitude_omega_rad_s * t_s).sin() + PI;
         let phi_w = 0.5 * PI * (self.latitude_omega_rad_s * t_s).sin() + 0.5 * PI;
-        Vector3::new(theta_w.cos() * phi_w.sin(), theta_w.sin() * phi_w.sin(), phi_w.cos())
+        Vector3::new(
+            theta_w.cos() * phi_w.sin(),
+            theta_w.sin() * phi_w.sin(),
+            phi_w.cos(),
+        )
     }
 }
 
@@ -272,7 +306,12 @@ impl DrydenConfig {
             self.altitude_m >= 0.0 && self.altitude_m < 1000.0 * FT,
             "0 <= h < 304.8 m (low-altitude model)",
         )?;
-        check("dryden.airspeed_m_s", self.airspeed_m_s, self.airspeed_m_s >= 0.5, ">= 0.5")?;
+        check(
+            "dryden.airspeed_m_s",
+            self.airspeed_m_s,
+            self.airspeed_m_s >= 0.5,
+            ">= 0.5",
+        )?;
         check("dryden.heading_rad", self.heading_rad, true, "finite")?;
         Ok(())
     }
@@ -378,7 +417,8 @@ impl Shaping2 {
         let mut m = Matrix4::zeros();
         m.fixed_view_mut::<2, 2>(0, 0).copy_from(&(-self.a * dt));
         m[(1, 3)] = NOISE_INTENSITY * dt; // S b bᵀ with b = [0, 1]
-        m.fixed_view_mut::<2, 2>(2, 2).copy_from(&(self.a.transpose() * dt));
+        m.fixed_view_mut::<2, 2>(2, 2)
+            .copy_from(&(self.a.transpose() * dt));
         let e = m.exp();
         let g12 = e.fixed_view::<2, 2>(0, 2).into_owned();
         let phi = e.fixed_view::<2, 2>(2, 2).transpose();
@@ -609,7 +649,11 @@ mod tests {
         assert_relative_eq!(s.sigma_m_s[2], 1.0, epsilon = 1e-12);
         assert_relative_eq!(s.sigma_m_s[0], 0.19346f64.powf(-0.4), epsilon = 1e-9);
         assert_relative_eq!(s.length_m[2], 20.0 * FT, epsilon = 1e-12);
-        assert_relative_eq!(s.length_m[0], 20.0 / 0.19346f64.powf(1.2) * FT, epsilon = 1e-9);
+        assert_relative_eq!(
+            s.length_m[0],
+            20.0 / 0.19346f64.powf(1.2) * FT,
+            epsilon = 1e-9
+        );
     }
 
     #[test]

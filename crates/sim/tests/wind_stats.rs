@@ -1,5 +1,6 @@
 //! Statistics of the wind models: Dryden PSD and σ against MIL-F-8785C, and
 //! the thesis's wind model (14.38)–(14.42), its Figures 14.6/14.7.
+#![allow(clippy::unwrap_used)] // test/bench helpers: a failed unwrap is a failed test
 
 use helicon_sim::wind::{DrydenConfig, DrydenTurbulence, ThesisWind, ThesisWindConfig, WindModel};
 use std::f64::consts::PI;
@@ -41,7 +42,9 @@ fn fft(re: &mut [f64], im: &mut [f64]) {
 
 /// Welch one-sided PSD ((m/s)²/Hz), Hann window, 50% overlap.
 fn welch(x: &[f64], dt: f64, seg: usize) -> Vec<f64> {
-    let w: Vec<f64> = (0..seg).map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / seg as f64).cos()).collect();
+    let w: Vec<f64> = (0..seg)
+        .map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / seg as f64).cos())
+        .collect();
     let wss: f64 = w.iter().map(|v| v * v).sum();
     let mut psd = vec![0.0; seg / 2 + 1];
     let mut count = 0;
@@ -63,7 +66,11 @@ fn welch(x: &[f64], dt: f64, seg: usize) -> Vec<f64> {
 
 fn simulate(cfg: DrydenConfig, dt: f64, n: usize, seed: u64) -> [Vec<f64>; 3] {
     let mut d = DrydenTurbulence::new(cfg, seed, 2).unwrap();
-    let mut out = [Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n)];
+    let mut out = [
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    ];
     for _ in 0..n {
         let v = d.step_uvw(dt);
         for a in 0..3 {
@@ -116,10 +123,17 @@ fn dryden_psd_matches_analytic_in_octave_bands() {
                 report.push(format!("{lo:.2}-{hi:.2} Hz: {:+.1}%", 100.0 * rel));
                 // 10%: the criterion. A wrong factor (2π, the 2 in
                 // 2L, or a dt-dependent intensity) shows up as ≥ 40%.
-                assert!(rel.abs() < 0.10, "dt={dt} axis {axis} band {lo}-{hi} Hz: {rel}");
+                assert!(
+                    rel.abs() < 0.10,
+                    "dt={dt} axis {axis} band {lo}-{hi} Hz: {rel}"
+                );
                 lo = hi;
             }
-            println!("Dryden PSD dt={dt} axis {axis}: worst band {:.1}%: {}", 100.0 * worst, report.join(", "));
+            println!(
+                "Dryden PSD dt={dt} axis {axis}: worst band {:.1}%: {}",
+                100.0 * worst,
+                report.join(", ")
+            );
         }
     }
 }
@@ -136,7 +150,10 @@ fn dryden_sigma_independent_of_dt() {
             .iter()
             .map(|x| (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt())
             .collect();
-        println!("Dryden dt={dt}: sigma u,v,w = {:.4}, {:.4}, {:.4} (analytic {:.4}, {:.4}, {:.4})", std[0], std[1], std[2], scales.sigma_m_s[0], scales.sigma_m_s[1], scales.sigma_m_s[2]);
+        println!(
+            "Dryden dt={dt}: sigma u,v,w = {:.4}, {:.4}, {:.4} (analytic {:.4}, {:.4}, {:.4})",
+            std[0], std[1], std[2], scales.sigma_m_s[0], scales.sigma_m_s[1], scales.sigma_m_s[2]
+        );
         for a in 0..3 {
             let rel = std[a] / scales.sigma_m_s[a] - 1.0;
             // 5%: the criterion; sampling scatter ~1.5% (u) and less
