@@ -159,7 +159,7 @@ fn thesis_fig_13_5_13_6_fused_beats_gps_and_dead_reckoning() {
         dr_p += dr_v * dt + 0.5 * a_meas * dt * dt;
         dr_v += a_meas * dt;
         let truth = pos(t);
-        let horiz = |p: &Vector3<f64>| ((p.x - truth.x).powi(2) + (p.y - truth.y).powi(2));
+        let horiz = |p: &Vector3<f64>| (p.x - truth.x).powi(2) + (p.y - truth.y).powi(2);
         se_fused += horiz(&filter.state().fixed_rows::<3>(0).into_owned());
         se_gps += horiz(&gps_hold);
         se_dr += horiz(&dr_p);
