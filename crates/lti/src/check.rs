@@ -103,7 +103,9 @@ pub fn pd(what: &'static str, m: &DMatrix<f64>) -> Result<()> {
     symmetric(what, m)?;
     let lmin = min_sym_eigenvalue(what, m)?;
     let scale = m.norm();
-    if !(lmin > (m.nrows().max(1) as f64) * f64::EPSILON * scale) {
+    let floor = (m.nrows().max(1) as f64) * f64::EPSILON * scale;
+    // NaN-safe: a NaN eigenvalue also fails.
+    if lmin.partial_cmp(&floor) != Some(std::cmp::Ordering::Greater) {
         return Err(LtiError::NotPositiveDefinite {
             what,
             min_eigenvalue: lmin,

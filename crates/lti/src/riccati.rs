@@ -386,10 +386,9 @@ pub fn dare_with(
     }
     // Report in terms of the original data (with N).
     let (rel_orig, k_orig, _) = residual_and_gain(a, b, q, r, n, &x)?;
-    let _ = (rel, k);
     let acl = a - b * &k_orig;
     let rho = analysis::spectral_radius(&acl)?;
-    if !(rho < 1.0) {
+    if rho.partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
         return Err(LtiError::NoStabilizingSolution {
             spectral_radius: rho,
         });

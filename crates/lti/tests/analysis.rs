@@ -1,5 +1,7 @@
 //! Analysis and c2d on the thesis hover model and on small cases.
 
+#![allow(clippy::unwrap_used)] // test helpers outside #[test] fns
+
 mod common;
 
 use common::*;

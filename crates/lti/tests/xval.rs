@@ -8,6 +8,8 @@
 //! 1e-9 leaves room for conditioning while catching any algorithmic mistake (a wrong sign
 //! or transpose produces O(1) differences).
 
+#![allow(clippy::unwrap_used)] // test helpers outside #[test] fns
+
 mod common;
 
 use common::rel_err;
