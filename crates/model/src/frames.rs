@@ -8,22 +8,92 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+/// Sines and cosines of a 3-2-1 Euler attitude, computed once and shared by
+/// the rotations, the gravity vector and the Euler-rate kinematics.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EulerTrig {
+    /// sin φ, cos φ.
+    pub sf: f64,
+    /// cos φ.
+    pub cf: f64,
+    /// sin θ.
+    pub st: f64,
+    /// cos θ.
+    pub ct: f64,
+    /// sin ψ.
+    pub sp: f64,
+    /// cos ψ.
+    pub cp: f64,
+}
+
+impl EulerTrig {
+    /// From roll φ, pitch θ, yaw ψ (rad).
+    #[inline]
+    pub fn new(phi: f64, theta: f64, psi: f64) -> Self {
+        let (sf, cf) = phi.sin_cos();
+        let (st, ct) = theta.sin_cos();
+        let (sp, cp) = psi.sin_cos();
+        EulerTrig {
+            sf,
+            cf,
+            st,
+            ct,
+            sp,
+            cp,
+        }
+    }
+
+    /// `ned_from_body` = R_eb(φ, θ, ψ), thesis (9.5): v_ned = R_eb · v_body.
+    #[inline]
+    pub fn ned_from_body(&self) -> Matrix3<f64> {
+        let EulerTrig {
+            sf,
+            cf,
+            st,
+            ct,
+            sp,
+            cp,
+        } = *self;
+        Matrix3::new(
+            ct * cp,
+            sf * st * cp - cf * sp,
+            cf * st * cp + sf * sp,
+            ct * sp,
+            sf * st * sp + cf * cp,
+            cf * st * sp - sf * cp,
+            -st,
+            sf * ct,
+            cf * ct,
+        )
+    }
+
+    /// Euler-angle rates (9.14): Θ̇ = P_eb · ω_body (singular at cos θ = 0).
+    #[inline]
+    pub fn euler_rates(&self, omega_body: &Vector3<f64>) -> Vector3<f64> {
+        let EulerTrig { sf, cf, st, ct, .. } = *self;
+        let tt = st / ct;
+        let (p, q, r) = (omega_body.x, omega_body.y, omega_body.z);
+        Vector3::new(
+            p + sf * tt * q + cf * tt * r,
+            cf * q - sf * r,
+            (sf * q + cf * r) / ct,
+        )
+    }
+
+    /// Gravity in body axes (8.3): g · [−sin θ, sin φ cos θ, cos φ cos θ].
+    #[inline]
+    pub fn gravity_body(&self, g_m_s2: f64) -> Vector3<f64> {
+        Vector3::new(
+            -g_m_s2 * self.st,
+            g_m_s2 * self.sf * self.ct,
+            g_m_s2 * self.cf * self.ct,
+        )
+    }
+}
+
 /// `ned_from_body` = R_eb(φ, θ, ψ), thesis (9.5): v_ned = R_eb · v_body.
 pub fn ned_from_body(phi: f64, theta: f64, psi: f64) -> Matrix3<f64> {
-    let (sf, cf) = phi.sin_cos();
-    let (st, ct) = theta.sin_cos();
-    let (sp, cp) = psi.sin_cos();
-    Matrix3::new(
-        ct * cp,
-        sf * st * cp - cf * sp,
-        cf * st * cp + sf * sp,
-        ct * sp,
-        sf * st * sp + cf * cp,
-        cf * st * sp - sf * cp,
-        -st,
-        sf * ct,
-        cf * ct,
-    )
+    EulerTrig::new(phi, theta, psi).ned_from_body()
 }
 
 /// `body_from_ned` = R_be = R_ebᵀ, thesis (9.5): v_body = R_be · v_ned.
@@ -36,23 +106,26 @@ pub fn body_from_ned(phi: f64, theta: f64, psi: f64) -> Matrix3<f64> {
 /// Singular at θ = ±π/2 (the 3-2-1 gimbal lock); callers that may reach it
 /// must check `cos θ` themselves.
 pub fn euler_rates(phi: f64, theta: f64, omega_body: &Vector3<f64>) -> Vector3<f64> {
-    let (sf, cf) = phi.sin_cos();
-    let (st, ct) = theta.sin_cos();
-    let tt = st / ct;
-    let (p, q, r) = (omega_body.x, omega_body.y, omega_body.z);
-    Vector3::new(
-        p + sf * tt * q + cf * tt * r,
-        cf * q - sf * r,
-        (sf * q + cf * r) / ct,
-    )
+    EulerTrig::new(phi, 0.0, 0.0)
+        .with_theta(theta)
+        .euler_rates(omega_body)
 }
 
 /// Gravity in body axes, thesis (8.3): g_body = R_be · [0, 0, g] =
 /// g · [−sin θ, sin φ cos θ, cos φ cos θ] (m/s²).
 pub fn gravity_body(phi: f64, theta: f64, g_m_s2: f64) -> Vector3<f64> {
-    let (sf, cf) = phi.sin_cos();
-    let (st, ct) = theta.sin_cos();
-    Vector3::new(-g_m_s2 * st, g_m_s2 * sf * ct, g_m_s2 * cf * ct)
+    EulerTrig::new(phi, 0.0, 0.0)
+        .with_theta(theta)
+        .gravity_body(g_m_s2)
+}
+
+impl EulerTrig {
+    fn with_theta(mut self, theta: f64) -> Self {
+        let (st, ct) = theta.sin_cos();
+        self.st = st;
+        self.ct = ct;
+        self
+    }
 }
 
 #[cfg(test)]

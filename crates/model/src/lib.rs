@@ -29,6 +29,7 @@ pub mod flapping;
 pub mod frames;
 pub mod inflow;
 pub mod integrate;
+pub mod linearize;
 pub mod model;
 pub mod options;
 pub mod params;

@@ -12,8 +12,9 @@
 
 use crate::actuators::servo_derivative;
 use crate::drag::{DragWrench, drag};
-use crate::flapping::{FlapBody, main_rotor_accel, stabilizer_bar_accel};
-use crate::frames::{body_from_ned, euler_rates, gravity_body, ned_from_body};
+use crate::flapping::StabilizerBarCoefficients;
+use crate::flapping::{FlapBody, main_rotor_accel};
+use crate::frames::EulerTrig;
 use crate::inflow::{InflowError, InflowProblem};
 use crate::options::{InflowMode, ModelOptions, Preset, SbVelocityScale, WindSign};
 use crate::params::Params;
@@ -97,17 +98,20 @@ pub struct Aux {
     pub torque_total_body_nm: Vector3<f64>,
     /// Inflow solver iterations (main, tail).
     pub inflow_iterations: [u32; 2],
+    /// |g(λ)| of (7.33)/(7.56) at the λ used by the forces (main, tail): the
+    /// solver's residual with converged inflow, the iteration's with the
+    /// thesis emulation.
+    pub inflow_residual: [f64; 2],
 }
 
 /// Precomputed constants.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Consts {
     mr_grid: Grid,
-    sb_grid: Grid,
     tr: TailRotorConsts,
     lift_k: f64,
     drag_k: f64,
-    lift_k_sb: f64,
+    a_cal_sb: f64,
     ct_den: f64,
     tip_speed: f64,
     inertia: Vector3<f64>,
@@ -136,11 +140,10 @@ impl Model {
         };
         let c = Consts {
             mr_grid: Grid::new(0.0, mr.radius_m - mr.hinge_offset_m),
-            sb_grid: Grid::new(sb.inner_radius_m, sb.outer_radius_m),
             tr: TailRotorConsts::new(&params),
             lift_k: 0.5 * rho * mr.chord_m * mr.lift_slope_per_rad,
             drag_k: 0.5 * rho * mr.chord_m * mr.drag_coefficient,
-            lift_k_sb: 0.5 * rho * sb.chord_m * sb.lift_slope_per_rad,
+            a_cal_sb: rho * sb.lift_slope_per_rad * sb.chord_m / (2.0 * sb.paddle_inertia_kg_m2),
             ct_den: rho * std::f64::consts::PI * mr.radius_m * mr.radius_m * tip * tip,
             tip_speed: tip,
             inertia: Vector3::new(
@@ -197,7 +200,8 @@ impl Model {
         let geo = &p.geometry;
         let c = &self.c;
         let (phi, theta, psi) = (x[ix::PHI], x[ix::THETA], x[ix::PSI]);
-        if theta.cos().abs() < 1e-9 {
+        let trig = EulerTrig::new(phi, theta, psi);
+        if trig.ct.abs() < 1e-9 {
             return Err(ModelError::GimbalLock { theta_rad: theta });
         }
         let v_body = Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
@@ -227,7 +231,8 @@ impl Model {
         debug_assert_eq!(iu::S_COL, 0);
 
         // Aerodynamic velocity (DESIGN.md wind convention; thesis (14.46) adds it).
-        let v_air = v_body + c.wind_sign * (body_from_ned(phi, theta, psi) * wind_ned);
+        let ned_from_body = trig.ned_from_body();
+        let v_air = v_body + c.wind_sign * (ned_from_body.transpose() * wind_ned);
         // Hub velocities (D.4)–(D.6) and advance ratios (D.7)–(D.9).
         let hub = Vector3::new(
             v_air.x - qr * geo.kappa_v_m,
@@ -296,6 +301,7 @@ impl Model {
                     source,
                 })?;
                 aux.inflow_iterations = [s.iterations, st.iterations];
+                aux.inflow_residual = [s.residual, st.residual];
                 (s.lambda, s.lambda, st.lambda)
             }
             InflowMode::ThesisIteration {
@@ -306,6 +312,7 @@ impl Model {
                 let l = mr_problem.thesis_iterate(lambda_mr_in, iterations);
                 let lt = tr_problem.thesis_iterate(lambda_tr_in, iterations);
                 aux.inflow_iterations = [iterations, iterations];
+                aux.inflow_residual = [mr_problem.residual(l), tr_problem.residual(lt)];
                 if !(l.is_finite() && lt.is_finite()) {
                     let source = InflowError::NoConvergence {
                         iterations,
@@ -373,7 +380,7 @@ impl Model {
 
         // Summation (8.3), (8.5).
         let m = p.body.mass_kg;
-        let grav = m * gravity_body(phi, theta, p.environment.g_m_s2);
+        let grav = m * trig.gravity_body(p.environment.g_m_s2);
         let force = f_hub + Vector3::new(0.0, f_tr, 0.0) + d.force_body_n + grav;
         let torque = t_mr + t_tr + d.torque_body_nm;
         aux.force_gravity_body_n = grav;
@@ -383,8 +390,8 @@ impl Model {
         // Rigid body (9.8), (9.14), (9.21), (9.22).
         let v_dot = linear_accel(&force, m, &v_body, &omega);
         let w_dot = angular_accel(&torque, &c.inertia, &omega);
-        let e_dot = euler_rates(phi, theta, &omega);
-        let pos_dot = ned_from_body(phi, theta, psi) * v_body;
+        let e_dot = trig.euler_rates(&omega);
+        let pos_dot = ned_from_body * v_body;
         for i in 0..3 {
             xdot[ix::X + i] = pos_dot[i];
             xdot[ix::PHI + i] = e_dot[i];
@@ -433,37 +440,24 @@ impl Model {
         let sb = &p.stabilizer_bar;
         let sb_flap = Vector2::new(a1sb, b1sb);
         let sb_rate = Vector2::new(x[ix::A1SB_DOT], x[ix::B1SB_DOT]);
-        let sbi = blade_integrals(
-            &c.sb_grid,
-            &BladeInputs {
-                omega_rad_s: mr.omega_rad_s,
-                hinge_offset_m: 0.0,
-                hub_u_m_s: c.sb_scale * hub.x,
-                hub_v_m_s: c.sb_scale * hub.y,
-                lambda_speed_m_s: c.sb_scale * c.tip_speed,
-                p_rad_s: pr,
-                q_rad_s: qr,
-                flap_rad: Vector3::new(0.0, a1sb, b1sb),
-                flap_rate_rad_s: Vector3::new(0.0, sb_rate.x, sb_rate.y),
-                theta0_rad: 0.0,
-                cyclic_a_rad: a1_swash,
-                cyclic_b_rad: b1_swash,
-                twist_rad_per_m: 0.0,
-                k1: 0.0,
-                lift_k: c.lift_k_sb,
-                drag_k: 0.0,
-            },
-        );
-        let sb_ddot = stabilizer_bar_accel(
+        // Stabilizer bar (6.53): the closed form of MODEL.md §6.4 is exact for
+        // the paddles (no twist, no δ3, no hinge); `tests::stabilizer_bar_closed_form_is_the_quadrature`
+        // checks it against the blade-element quadrature used for the main rotor.
+        let sbc = StabilizerBarCoefficients::new(
             mr.omega_rad_s,
-            sb.paddle_inertia_kg_m2,
+            c.a_cal_sb,
+            sb.inner_radius_m,
+            sb.outer_radius_m,
+            c.sb_scale * mr.radius_m,
+            mu.x,
+            mu.y,
+            &body,
+        );
+        let sb_ddot = sbc.accel(
             &sb_flap,
             &sb_rate,
-            [
-                sbi.flap_torque[1].at(lam_flap),
-                sbi.flap_torque[2].at(lam_flap),
-            ],
-            &body,
+            &Vector2::new(a1_swash, b1_swash),
+            lam_flap,
         );
         for i in 0..3 {
             xdot[ix::A0 + i] = flap_rate[i];
@@ -507,4 +501,83 @@ fn check_finite(x: &State, u: &Input, wind: &Vector3<f64>) -> Result<(), ModelEr
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flapping::stabilizer_bar_accel;
+
+    #[test]
+    fn stabilizer_bar_closed_form_is_the_quadrature() {
+        // The model uses the §6.4 closed form for the paddles; the blade-element
+        // quadrature of `rotor` (exact for these integrands) must agree to round-off.
+        let p = Params::bergen_twin();
+        let sb = p.stabilizer_bar;
+        let om = p.main_rotor.omega_rad_s;
+        let rho = p.environment.rho_kg_m3;
+        let grid = Grid::new(sb.inner_radius_m, sb.outer_radius_m);
+        for (scale, hu, hv, lam, pr, qr) in [
+            (0.65, 7.0, -2.0, -0.03, 0.3, -0.2),
+            (1.0, -4.0, 9.0, 0.01, -0.5, 0.7),
+        ] {
+            let flap = Vector2::new(0.01, -0.02);
+            let rate = Vector2::new(0.4, -0.3);
+            let (a1, b1) = (0.02, -0.015);
+            let body = FlapBody {
+                p_rad_s: pr,
+                q_rad_s: qr,
+                p_dot_rad_s2: 0.7,
+                q_dot_rad_s2: -0.4,
+                normal_accel_m_s2: 0.0,
+            };
+            let bi = blade_integrals(
+                &grid,
+                &BladeInputs {
+                    omega_rad_s: om,
+                    hinge_offset_m: 0.0,
+                    hub_u_m_s: scale * hu,
+                    hub_v_m_s: scale * hv,
+                    lambda_speed_m_s: scale * om * p.main_rotor.radius_m,
+                    p_rad_s: pr,
+                    q_rad_s: qr,
+                    flap_rad: Vector3::new(0.0, flap.x, flap.y),
+                    flap_rate_rad_s: Vector3::new(0.0, rate.x, rate.y),
+                    theta0_rad: 0.0,
+                    cyclic_a_rad: a1,
+                    cyclic_b_rad: b1,
+                    twist_rad_per_m: 0.0,
+                    k1: 0.0,
+                    lift_k: 0.5 * rho * sb.chord_m * sb.lift_slope_per_rad,
+                    drag_k: 0.0,
+                },
+            );
+            let quad = stabilizer_bar_accel(
+                om,
+                sb.paddle_inertia_kg_m2,
+                &flap,
+                &rate,
+                [bi.flap_torque[1].at(lam), bi.flap_torque[2].at(lam)],
+                &body,
+            );
+            let a_cal = rho * sb.lift_slope_per_rad * sb.chord_m / (2.0 * sb.paddle_inertia_kg_m2);
+            let mu = (
+                hu / (om * p.main_rotor.radius_m),
+                hv / (om * p.main_rotor.radius_m),
+            );
+            let cf = StabilizerBarCoefficients::new(
+                om,
+                a_cal,
+                sb.inner_radius_m,
+                sb.outer_radius_m,
+                scale * p.main_rotor.radius_m,
+                mu.0,
+                mu.1,
+                &body,
+            )
+            .accel(&flap, &rate, &Vector2::new(a1, b1), lam);
+            // terms are ~Ω²𝒜·n3·(a) ≈ 1e4·0.02 = 200 rad/s²: 1e-12 relative → 1e-9
+            assert!((quad - cf).norm() < 1e-9, "{quad:?} vs {cf:?}");
+        }
+    }
 }

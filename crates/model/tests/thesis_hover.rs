@@ -1,5 +1,9 @@
 //! The model against the thesis's published hover trim (12.10)/(12.11).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod common;
+
 use helicon_model::state::{State, ix};
 use helicon_model::{Input, Model, Preset};
 use nalgebra::Vector3;
@@ -80,24 +84,7 @@ fn xval_six_digit_trim_of_independent_reading_is_an_equilibrium() {
     // of the 3-digit case: the largest sensitivity is ẇ/θ0 ≈ 100 m/s²/rad times
     // a printing error ≤ 5e-7 rad → 5e-5; flap rows: J ≈ 2300/s² × 5e-9 ≈ 1e-5
     // relative to terms of ~300 rad/s².
-    let mut x = State::zeros();
-    let vals = [
-        (ix::PHI, 5.72781e-2),
-        (ix::THETA, -6.58128e-4),
-        (ix::A0, 1.60806e-2),
-        (ix::A1, 6.40736e-4),
-        (ix::B1, 2.32171e-6),
-        (ix::A1SB, 5.74145e-4),
-        (ix::B1SB, -2.05493e-4),
-        (ix::THETA0, 0.129482),
-        (ix::A1_SWASH, 2.05493e-4),
-        (ix::B1_SWASH, -5.74145e-4),
-        (ix::THETA_TR, 0.111433),
-    ];
-    for (i, v) in vals {
-        x[i] = v;
-    }
-    let u = Input::new(0.184975, 2.93562e-4, -8.20207e-4, 0.159190);
+    let (x, u, _, _) = common::six_digit_hover_trim();
     let model = Model::bergen_twin(Preset::Thesis);
     let (xd, aux) = model.derivative(&x, &u, &Vector3::zeros()).unwrap();
     println!("xdot = {:?}", xd.as_slice());

@@ -1,0 +1,61 @@
+//! The derivative and the RK4 step allocate nothing on the heap (counting
+//! global allocator around the calls).
+#![allow(unsafe_code)]
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use helicon_model::{Input, Model, Preset, State};
+use nalgebra::Vector3;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+struct Counting;
+thread_local! {
+    // Per-thread count: the test harness's own threads allocate concurrently.
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+// SAFETY: forwards to the system allocator and only counts.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn derivative_and_step_do_not_allocate() {
+    for preset in [Preset::Physical, Preset::Thesis] {
+        let model = Model::bergen_twin(preset);
+        let mut x = State::zeros();
+        x[22] = 0.13;
+        x[25] = 0.11;
+        x[6] = 3.0;
+        let u = Input::new(0.18, 0.01, -0.01, 0.16);
+        let wind = Vector3::new(1.0, -2.0, 0.3);
+        // warm up (lazy statics, if any)
+        let _ = model.derivative(&x, &u, &wind).unwrap();
+        let before = ALLOCS.with(Cell::get);
+        let mut acc = 0.0;
+        for _ in 0..1000 {
+            let (xd, aux) = model.derivative(&x, &u, &wind).unwrap();
+            acc += xd[8] + aux.lambda_mr;
+            x = model.step(&x, &u, &wind, 1.0 / 400.0).unwrap().0;
+        }
+        let after = ALLOCS.with(Cell::get);
+        assert!(acc.is_finite());
+        assert_eq!(
+            after - before,
+            0,
+            "{preset:?}: {} allocations",
+            after - before
+        );
+    }
+}
