@@ -37,6 +37,7 @@ pub mod rigid_body;
 pub mod rotor;
 pub mod state;
 pub mod tail_rotor;
+pub mod trim;
 
 pub use model::{Aux, Model, ModelError};
 pub use options::{InflowMode, ModelOptions, Preset};

@@ -23,7 +23,7 @@ pub const BERGEN_TWIN_TOML: &str = include_str!("../../../params/bergen_twin.tom
 #[derive(Debug, thiserror::Error)]
 pub enum ParamError {
     /// The file could not be read.
-    #[error("{file}: cannot read: {source}")]
+    #[error("{file}: cannot read")]
     Io {
         /// File name.
         file: String,

@@ -1,0 +1,112 @@
+//! Trim (12.2)–(12.9) against the thesis hover trim (12.10)/(12.11), and
+//! across the flight envelope.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use helicon_model::state::{REDUCED_OFFSET, expand, ix};
+use helicon_model::trim::{TrimOptions, TrimTarget, sweep, trim};
+use helicon_model::{Model, Preset};
+use nalgebra::Vector3;
+
+#[test]
+fn thesis_hover_trim_reproduces_12_10_and_12_11() {
+    let model = Model::bergen_twin(Preset::Thesis);
+    let t = trim(&model, &TrimTarget::hover(), &TrimOptions::default()).unwrap();
+    println!("iterations {} history {:?}", t.iterations, t.history);
+    assert!(t.residual_norm < 1e-10);
+    assert!(t.beyond_saturation.is_empty());
+    let o = REDUCED_OFFSET;
+    // (value, printed) — printed to 3 significant digits, rounded or truncated.
+    let checks = [
+        ("S_col", t.u[0], 0.185_f64),
+        ("S_lat", t.u[1], 2.94e-4),
+        ("S_lon", t.u[2], -8.20e-4),
+        ("S_tr", t.u[3], 0.159),
+        ("phi", t.x[ix::PHI - o], 5.73e-2),
+        ("theta", t.x[ix::THETA - o], -6.58e-4),
+        ("a0", t.x[ix::A0 - o], 1.60e-2),
+        ("a1", t.x[ix::A1 - o], 6.41e-4),
+        ("a1sb", t.x[ix::A1SB - o], 5.74e-4),
+        ("b1sb", t.x[ix::B1SB - o], -2.06e-4),
+        ("theta0", t.x[ix::THETA0 - o], 0.129),
+        ("A1", t.x[ix::A1_SWASH - o], 2.06e-4),
+        ("B1", t.x[ix::B1_SWASH - o], -5.74e-4),
+        ("theta_tr", t.x[ix::THETA_TR - o], 0.111),
+        ("lambda_mr", t.aux.lambda_mr, -4.15e-2),
+        ("lambda_tr", t.aux.lambda_tr, -4.68e-2),
+    ];
+    for (name, ours, printed) in checks {
+        // within the printed 3 significant digits (rounded or truncated), or 0.3 %
+        let mag = 10f64.powf(printed.abs().log10().floor() - 2.0);
+        let rounded = (ours / mag).round() * mag;
+        let truncated = (ours / mag).trunc() * mag;
+        let ok = (rounded - printed).abs() < 0.5 * mag
+            || (truncated - printed).abs() < 0.5 * mag
+            || (ours - printed).abs() <= 0.003 * printed.abs();
+        println!("{name:>10}: ours {ours:>12.6e} printed {printed:>10.3e}");
+        assert!(ok, "{name}: ours {ours:e} printed {printed:e}");
+    }
+    // b1 is a near-cancellation quantity: printed 2.16e-6, independent reading
+    // 2.32e-6 (MODEL.md §12). Its size is set by differences of ~1e-3 terms, so
+    // we check only the order of magnitude and sign.
+    let b1 = t.x[ix::B1 - o];
+    assert!(b1 > 1e-6 && b1 < 4e-6, "b1 = {b1:e}");
+}
+
+#[test]
+fn starting_at_a_trim_the_derivative_vanishes() {
+    for preset in [Preset::Thesis, Preset::Physical] {
+        let model = Model::bergen_twin(preset);
+        let target = TrimTarget {
+            velocity_ned_m_s: Vector3::new(3.0, -1.0, 0.5),
+            yaw_rad: 0.7,
+            wind_ned_m_s: Vector3::zeros(),
+        };
+        let t = trim(&model, &target, &TrimOptions::default()).unwrap();
+        let (xd, _) = model
+            .derivative(&expand(&t.x, [0.0; 3]), &t.u, &Vector3::zeros())
+            .unwrap();
+        // all 27 dynamic rows below 1e-9; position rates equal the target velocity
+        for i in 3..30 {
+            assert!(
+                xd[i].abs() < 1e-9,
+                "{preset:?} {}: {}",
+                helicon_model::STATE_NAMES[i],
+                xd[i]
+            );
+        }
+        assert!((Vector3::new(xd[0], xd[1], xd[2]) - target.velocity_ned_m_s).norm() < 1e-9);
+    }
+}
+
+#[test]
+fn forward_sweep_0_to_15_converges_continuously() {
+    let model = Model::bergen_twin(Preset::Physical);
+    let targets: Vec<TrimTarget> = (0..=30)
+        .map(|k| TrimTarget {
+            velocity_ned_m_s: Vector3::new(0.5 * k as f64, 0.0, 0.0),
+            yaw_rad: 0.0,
+            wind_ned_m_s: Vector3::zeros(),
+        })
+        .collect();
+    let res = sweep(&model, &targets, &TrimOptions::default());
+    let mut prev: Option<helicon_model::trim::Trim> = None;
+    for (k, r) in res.into_iter().enumerate() {
+        let t = r.unwrap_or_else(|e| panic!("{} m/s: {e}", 0.5 * k as f64));
+        assert!(t.residual_norm < 1e-9);
+        if let Some(p) = &prev {
+            // continuity: no input or attitude jumps between 0.5 m/s neighbours
+            assert!(
+                (t.u - p.u).amax() < 0.02,
+                "jump in inputs at {} m/s",
+                0.5 * k as f64
+            );
+            assert!(
+                (t.x[1] - p.x[1]).abs() < 0.02,
+                "jump in pitch at {} m/s",
+                0.5 * k as f64
+            );
+        }
+        prev = Some(t);
+    }
+}
