@@ -49,8 +49,13 @@ pub struct DareOptions {
     /// If the relative residual after the SDA exceeds this, up to 3 Newton steps are
     /// attempted (default 1e-12).
     pub refine_above: f64,
-    /// Check stabilizability of (A, B) and detectability of (Q, A) first, by PBH at the
-    /// eigenvalues with |λ| ≥ 1 − 1e-8, to return a typed error (default true).
+    /// Strict mode: run the PBH checks of stabilizability of (A, B) and detectability of
+    /// (Q, A) (at the eigenvalues with |λ| ≥ 1 − 1e-8) *before* solving (default false).
+    /// Without it the same diagnosis runs only when the iteration fails (no convergence, no
+    /// stabilizing solution, singular step), so successful solves do not pay for it. SDA
+    /// from H₀ = Q converges to the minimal PSD solution, which is not stabilizing when an
+    /// unstable mode is unobservable in Q, so such problems end in the same typed
+    /// [`LtiError::NotStabilizable`] / [`LtiError::NotDetectable`] either way.
     pub check_structure: bool,
 }
 
@@ -61,7 +66,7 @@ impl Default for DareOptions {
             max_iter: 100,
             newton_steps: 0,
             refine_above: 1e-12,
-            check_structure: true,
+            check_structure: false,
         }
     }
 }
@@ -190,7 +195,13 @@ fn scaled(m: &DMatrix<f64>, target: f64) -> DMatrix<f64> {
 fn check_structure(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<()> {
     let target = fro(a).max(1.0);
     let margin = 1e-8;
-    let rep = analysis::pbh_discrete_unstable(a, &scaled(b, target), analysis::PBH_TOL, margin)?;
+    // One eigen-decomposition serves both tests: eig(Aᵀ) = eig(A).
+    let eig = analysis::eigenvalues(a)?;
+    let outside = |z: nalgebra::Complex<f64>| z.norm() >= 1.0 - margin;
+    if !eig.iter().any(|&z| outside(z)) {
+        return Ok(());
+    }
+    let rep = analysis::pbh_at(a, &scaled(b, target), &eig, analysis::PBH_TOL, outside)?;
     if let Some(l) = rep.failing.first() {
         return Err(LtiError::NotStabilizable {
             re: l.re,
@@ -198,11 +209,12 @@ fn check_structure(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>) -> Resu
             ratio: rep.min_ratio,
         });
     }
-    let rep = analysis::pbh_discrete_unstable(
+    let rep = analysis::pbh_at(
         &a.transpose(),
         &scaled(q, target),
+        &eig,
         analysis::PBH_TOL,
-        margin,
+        outside,
     )?;
     if let Some(l) = rep.failing.first() {
         return Err(LtiError::NotDetectable {
@@ -255,29 +267,27 @@ fn sda(
     let mut h = q.clone();
     let mut ak = a.clone();
     let ident = DMatrix::<f64>::identity(nx, nx);
-    let mut rhs = DMatrix::<f64>::zeros(nx, 2 * nx);
     let mut prev_change = f64::INFINITY;
     let mut change = f64::INFINITY;
     for it in 1..=opts.max_iter {
         let w = &ident + &g * &h;
-        rhs.view_mut((0, 0), (nx, nx)).copy_from(&ak);
-        rhs.view_mut((0, nx), (nx, nx)).copy_from(&g);
-        let sol = w.lu().solve(&rhs).ok_or(LtiError::Singular {
+        // One LU and an explicit inverse (n right-hand sides instead of 2n), then products.
+        let winv = w.try_inverse().ok_or(LtiError::Singular {
             what: "I + G_k H_k (SDA)",
         })?;
-        let y1 = sol.view((0, 0), (nx, nx)); // W⁻¹ A_k
-        let y2 = sol.view((0, nx), (nx, nx)); // W⁻¹ G_k
+        let y1 = &winv * &ak; // W⁻¹ A_k
+        let y2 = &winv * &g; // W⁻¹ G_k
         let h_next = {
-            let mut t = &h + ak.transpose() * (&h * y1);
+            let mut t = &h + ak.transpose() * (&h * &y1);
             check::symmetrize(&mut t);
             t
         };
         let g_next = {
-            let mut t = &g + &ak * (y2 * ak.transpose());
+            let mut t = &g + &ak * (&y2 * ak.transpose());
             check::symmetrize(&mut t);
             t
         };
-        let a_next = &ak * y1;
+        let a_next = &ak * &y1;
         let hn = fro(&h_next);
         let diff = fro(&(&h_next - &h));
         change = if hn > 0.0 { diff / hn } else { diff };
@@ -357,9 +367,34 @@ pub fn dare_with(
     if opts.check_structure {
         check_structure(&at, b, &qt)?;
     }
-    let (mut x, iterations) = sda(&at, b, &qt, r, opts)?;
+    match solve_checked(a, b, q, r, n, &at, &qt, opts) {
+        Err(
+            e @ (LtiError::NoConvergence { .. }
+            | LtiError::NoStabilizingSolution { .. }
+            | LtiError::Singular { .. }),
+        ) => {
+            // Diagnose: a structural cause is the more useful error.
+            check_structure(&at, b, &qt)?;
+            Err(e)
+        }
+        other => other,
+    }
+}
+
+/// SDA, optional Newton refinement, residual and stability of the result.
+fn solve_checked(
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    q: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    n: Option<&DMatrix<f64>>,
+    at: &DMatrix<f64>,
+    qt: &DMatrix<f64>,
+    opts: &DareOptions,
+) -> Result<DareSolution> {
+    let (mut x, iterations) = sda(at, b, qt, r, opts)?;
     check::symmetrize(&mut x);
-    let (mut rel, mut k, mut res) = residual_and_gain(&at, b, &qt, r, None, &x)?;
+    let (mut rel, mut k, mut res) = residual_and_gain(at, b, qt, r, None, &x)?;
     let mut accepted = 0;
     let max_newton = if rel > opts.refine_above {
         opts.newton_steps.max(3)
@@ -367,13 +402,13 @@ pub fn dare_with(
         opts.newton_steps
     };
     for _ in 0..max_newton {
-        let ac = &at - b * &k;
+        let ac = at - b * &k;
         let Ok(delta) = stein_doubling(&ac, &res) else {
             break;
         };
         let mut xn = &x + delta;
         check::symmetrize(&mut xn);
-        let (rn, kn, resn) = residual_and_gain(&at, b, &qt, r, None, &xn)?;
+        let (rn, kn, resn) = residual_and_gain(at, b, qt, r, None, &xn)?;
         if rn < rel {
             x = xn;
             rel = rn;

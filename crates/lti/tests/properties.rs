@@ -166,13 +166,35 @@ fn regress_dare_input_errors() {
         dare(&a2, &b2, &q, &r, None),
         Err(LtiError::NotStabilizable { .. })
     ));
-    // Unstable mode invisible in Q: not detectable.
+    // Unstable mode (z = 2) invisible in Q: not detectable. Strict mode rejects it up
+    // front. Without strict mode, SDA (H₀ = Q, H_k = the 2^k-horizon cost, increasing)
+    // converges to the minimal PSD solution, which leaves the mode unstable; the failed
+    // stability check is then diagnosed as NotDetectable as well.
     let a3 = common::mat(2, 2, &[2.0, 0.0, 0.0, 0.5]);
     let b3 = DMatrix::identity(2, 2);
     let q3 = common::mat(2, 2, &[0.0, 0.0, 0.0, 1.0]);
+    let strict = DareOptions {
+        check_structure: true,
+        ..DareOptions::default()
+    };
+    assert!(matches!(
+        dare_with(&a3, &b3, &q3, &DMatrix::identity(2, 2), None, &strict),
+        Err(LtiError::NotDetectable { .. })
+    ));
     assert!(matches!(
         dare(&a3, &b3, &q3, &DMatrix::identity(2, 2), None),
         Err(LtiError::NotDetectable { .. })
+    ));
+    // Unobservable mode ON the unit circle: no stabilizing solution exists either.
+    let a4 = common::mat(2, 2, &[1.0, 0.0, 0.0, 0.5]);
+    assert!(matches!(
+        dare(&a4, &b3, &q3, &DMatrix::identity(2, 2), None),
+        Err(LtiError::NotDetectable { .. })
+    ));
+    // Same for strict mode on a non-stabilizable problem.
+    assert!(matches!(
+        dare_with(&a2, &b2, &q, &r, None, &strict),
+        Err(LtiError::NotStabilizable { .. })
     ));
     // Joint weight [[Q, N], [Nᵀ, R]] indefinite.
     let n = common::mat(2, 1, &[5.0, 0.0]);
