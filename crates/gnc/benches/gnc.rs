@@ -1,7 +1,7 @@
 //! Benchmarks of the hot paths: q-method and one fusion step.
 #![allow(clippy::unwrap_used, missing_docs)] // bench: criterion macros generate undocumented items
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use helicon_gnc::attitude::{VectorObservation, q_method, quaternion_from_euler};
 use helicon_gnc::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
 use nalgebra::Vector3;
@@ -21,15 +21,21 @@ fn bench_q_method(c: &mut Criterion) {
 
 fn bench_fusion_step(c: &mut Criterion) {
     let cfg = FusionConfig::default();
-    let mut f = FusionFilter::new(cfg, Vector9::zeros(), Matrix9::identity()).unwrap();
+    let f = FusionFilter::new(cfg, Vector9::zeros(), Matrix9::identity()).unwrap();
     let input = FusionInput {
         specific_force_body_m_s2: Vector3::new(0.1, -0.05, -9.8),
         gyro_body_rad_s: Vector3::new(0.01, 0.02, -0.01),
         gps_ned_m: Some(Vector3::new(0.1, 0.2, -0.1)),
         attitude_rad: Some(Vector3::new(0.01, 0.0, 0.02)),
     };
+    // Each iteration starts from the same filter (a long run of constant
+    // gyro input would otherwise drift into gimbal lock and time the error path).
     c.bench_function("fusion_step_gps_att", |b| {
-        b.iter(|| f.step(black_box(&input)))
+        b.iter_batched_ref(
+            || f.clone(),
+            |f| f.step(black_box(&input)).unwrap(),
+            BatchSize::SmallInput,
+        )
     });
     let input_pred = FusionInput {
         gps_ned_m: None,
@@ -37,7 +43,11 @@ fn bench_fusion_step(c: &mut Criterion) {
         ..input
     };
     c.bench_function("fusion_step_predict_only", |b| {
-        b.iter(|| f.step(black_box(&input_pred)))
+        b.iter_batched_ref(
+            || f.clone(),
+            |f| f.step(black_box(&input_pred)).unwrap(),
+            BatchSize::SmallInput,
+        )
     });
 }
 

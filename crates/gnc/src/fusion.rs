@@ -255,10 +255,34 @@ impl FusionFilter {
     }
 
     /// Prediction (13.19) and `P⁻ = A P Aᵀ + Q` (the corrected (13.20)).
+    ///
+    /// Uses the block structure of `A_f` (identity plus `T_s` coupling of
+    /// position to velocity) instead of dense 9×9 products; the result equals
+    /// `A P Aᵀ + Q` (cross-checked against the dense NumPy reference).
     pub fn predict(&mut self, u: &SVector<f64, 6>) {
-        self.x = self.a * self.x + self.b * u;
+        let ts = self.config.dt_s;
+        let h = 0.5 * ts * ts;
+        for i in 0..3 {
+            self.x[i] += ts * self.x[i + 3] + h * u[i];
+            self.x[i + 3] += ts * u[i];
+            self.x[i + 6] += ts * u[i + 3];
+        }
         self.x[8] = wrap_pi(self.x[8]);
-        self.p = self.a * self.p * self.a.transpose() + self.q;
+        // P ← A P: rows 0..3 += T_s · rows 3..6.
+        for i in 0..3 {
+            for j in 0..9 {
+                let v = self.p[(i + 3, j)];
+                self.p[(i, j)] += ts * v;
+            }
+        }
+        // P ← P Aᵀ: columns 0..3 += T_s · columns 3..6.
+        for j in 0..3 {
+            for i in 0..9 {
+                let v = self.p[(i, j + 3)];
+                self.p[(i, j)] += ts * v;
+            }
+        }
+        self.p += self.q;
     }
 
     /// Measurement update (13.21)–(13.23) with the three states starting at
@@ -283,9 +307,20 @@ impl FusionFilter {
         let k = p_xh * s_inv; // (13.21)
         self.x += k * innov; // (13.23)
         // (13.22): P = (I − K H) P⁻ with H selecting rows offset..offset+3.
-        let hp: SMatrix<f64, 3, 9> = self.p.fixed_rows::<3>(offset).into_owned();
-        self.p -= k * hp;
-        self.p = (self.p + self.p.transpose()) * 0.5;
+        // P ← P − K (H P); H P = P_xhᵀ (P symmetric). Only the lower
+        // triangle is computed and mirrored, which keeps P exactly symmetric
+        // (the dense form followed by (P + Pᵀ)/2 differs by round-off only).
+        for i in 0..9 {
+            for j in 0..=i {
+                let mut acc = 0.0;
+                for m in 0..3 {
+                    acc += k[(i, m)] * p_xh[(j, m)];
+                }
+                let v = self.p[(i, j)] - acc;
+                self.p[(i, j)] = v;
+                self.p[(j, i)] = v;
+            }
+        }
         self.x[8] = wrap_pi(self.x[8]);
         Ok(())
     }
