@@ -2,6 +2,11 @@
 
 use clap::{Parser, Subcommand};
 
+mod control;
+mod model_cmd;
+mod sensors;
+mod trim_cmd;
+
 /// helicon: model, trim, linearize, estimate and control miniature helicopters.
 #[derive(Parser)]
 #[command(name = "helicon", version, about)]
@@ -11,9 +16,57 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
-enum Command {}
+enum Command {
+    /// Evaluate the nonlinear model ẋ = f(x, u, wind) for JSON lines (stdin or --input).
+    Eval(model_cmd::EvalArgs),
+    /// Print the effective model parameters as TOML (a starting point for your helicopter).
+    Params(model_cmd::ParamsArgs),
+    /// Trim at a steady flight condition (or sweep the envelope with --sweep).
+    Trim(trim_cmd::TrimArgs),
+    /// Trim and linearize: A.csv, B.csv, poles.csv, summary.json (and Phi/Gamma with --discrete).
+    Linearize(trim_cmd::LinearizeArgs),
+    /// Linear control design: DARE, dlqr (pincer), Kalman gain, c2d (JSON out).
+    Control(control::ControlArgs),
+    /// Batch Wahba solver (q-method, thesis §13.2) over a CSV of vector observations.
+    Attitude(sensors::AttitudeArgs),
+    /// Sensor simulation (IMU, magnetometer, GPS).
+    Sensors(sensors::SensorsArgs),
+    /// Replay a sensor log through attitude determination and the fusion filter (§13.3).
+    Fuse(sensors::FuseArgs),
+}
 
-fn main() -> anyhow::Result<()> {
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        // A closed pipe (`helicon ... | head`) is not an error.
+        Err(e)
+            if e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            }) =>
+        {
+            std::process::ExitCode::SUCCESS
+        }
+        Err(e) => {
+            // One line per cause, no backtrace: errors here are the user's input.
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> anyhow::Result<()> {
     let cli = Cli::parse();
-    match cli.command {}
+    match cli.command {
+        Command::Eval(a) => model_cmd::run_eval(&a),
+        Command::Params(a) => model_cmd::run_params(&a),
+        Command::Trim(a) => trim_cmd::run_trim(&a),
+        Command::Linearize(a) => trim_cmd::run_linearize(&a),
+        Command::Control(args) => control::run(args),
+        Command::Attitude(a) => sensors::run_attitude(&a),
+        Command::Sensors(a) => match a.command {
+            sensors::SensorsCommand::Simulate(s) => sensors::run_simulate(&s),
+        },
+        Command::Fuse(a) => sensors::run_fuse(&a),
+    }
 }

@@ -83,6 +83,38 @@ pub fn linearize(
     })
 }
 
+impl LinearModel {
+    /// A as a dynamic matrix (for the generic analysis of `helicon-lti`).
+    pub fn a_dyn(&self) -> nalgebra::DMatrix<f64> {
+        nalgebra::DMatrix::from_column_slice(NX_REDUCED, NX_REDUCED, self.a.as_slice())
+    }
+
+    /// B as a dynamic matrix.
+    pub fn b_dyn(&self) -> nalgebra::DMatrix<f64> {
+        nalgebra::DMatrix::from_column_slice(NX_REDUCED, NU, self.b.as_slice())
+    }
+
+    /// Poles with natural frequency and damping (MATLAB `damp` conventions),
+    /// sorted by natural frequency.
+    pub fn poles(&self) -> Result<Vec<helicon_lti::analysis::Pole>, helicon_lti::LtiError> {
+        let mut p = helicon_lti::analysis::damp(&self.a_dyn())?;
+        p.sort_by(|a, b| {
+            a.natural_frequency_rad_s
+                .total_cmp(&b.natural_frequency_rad_s)
+                .then(a.value.im.total_cmp(&b.value.im))
+        });
+        Ok(p)
+    }
+
+    /// Zero-order-hold discretization (Φ, Γ) at sample time `ts_s`.
+    pub fn discretize(
+        &self,
+        ts_s: f64,
+    ) -> Result<(nalgebra::DMatrix<f64>, nalgebra::DMatrix<f64>), helicon_lti::LtiError> {
+        helicon_lti::expm::c2d(&self.a_dyn(), &self.b_dyn(), ts_s)
+    }
+}
+
 fn richardson(
     h: f64,
     mut f: impl FnMut(f64) -> Result<ReducedState, ModelError>,
