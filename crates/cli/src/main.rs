@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 
 mod control;
+mod demo;
 mod model_cmd;
 mod sensors;
 mod trim_cmd;
@@ -17,6 +18,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The main job on the embedded Bergen Twin: trim, linearize, fly (writes out/demo).
+    Demo(demo::DemoArgs),
     /// Evaluate the nonlinear model ẋ = f(x, u, wind) for JSON lines (stdin or --input).
     Eval(model_cmd::EvalArgs),
     /// Print the effective model parameters as TOML (a starting point for your helicopter).
@@ -58,6 +61,7 @@ fn main() -> std::process::ExitCode {
 fn run() -> anyhow::Result<()> {
     let cli = Cli::parse();
     match cli.command {
+        Command::Demo(a) => demo::run(&a),
         Command::Eval(a) => model_cmd::run_eval(&a),
         Command::Params(a) => model_cmd::run_params(&a),
         Command::Trim(a) => trim_cmd::run_trim(&a),
