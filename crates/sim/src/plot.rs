@@ -45,7 +45,8 @@ pub enum PlotError {
     },
 }
 
-/// One named line.
+/// One named line. Consecutive points whose y differs by more than half the
+/// plot's y-range are not connected (angle wrap-arounds).
 #[derive(Debug, Clone, Copy)]
 pub struct Series<'a> {
     /// Legend name.
@@ -165,20 +166,38 @@ impl<'a> LinePlot<'a> {
             .label_style(("sans-serif", 14))
             .draw()
             .map_err(|e| err(&e))?;
+        let jump = 0.5 * (y1 - y0);
         for (i, s) in self.series.iter().enumerate() {
             let color = PALETTE[i % PALETTE.len()];
-            let pts = s
+            // Split into runs at jumps larger than half the y-range (angle
+            // wrap-arounds): no vertical connector, and no miter spike where
+            // the wide polyline would reverse direction.
+            let mut runs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+            for &(x, y) in s
                 .points
                 .iter()
-                .copied()
-                .filter(|(x, y)| x.is_finite() && y.is_finite());
-            chart
-                .draw_series(LineSeries::new(pts, color.stroke_width(2)))
-                .map_err(|e| err(&e))?
-                .label(s.name)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
+                .filter(|(x, y)| x.is_finite() && y.is_finite())
+            {
+                if let Some(run) = runs.last_mut()
+                    && let Some(&(_, yl)) = run.last()
+                    && (y - yl).abs() > jump
+                {
+                    runs.push(Vec::new());
+                }
+                if let Some(run) = runs.last_mut() {
+                    run.push((x, y));
+                }
+            }
+            for (r, run) in runs.into_iter().enumerate() {
+                let anno = chart
+                    .draw_series(LineSeries::new(run, color.stroke_width(2)))
+                    .map_err(|e| err(&e))?;
+                if r == 0 {
+                    anno.label(s.name).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                    });
+                }
+            }
         }
         chart
             .configure_series_labels()
