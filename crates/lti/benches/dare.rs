@@ -51,11 +51,12 @@ fn bench(c: &mut Criterion) {
     c.bench_function("dare_thesis_31_integral_pincer", |bch| {
         bch.iter(|| dare(black_box(&pa), black_box(&ga), &q1i, &r, None).unwrap())
     });
+    // Strict mode: PBH stabilizability/detectability checks before solving.
     let opts = DareOptions {
-        check_structure: false,
+        check_structure: true,
         ..DareOptions::default()
     };
-    c.bench_function("dare_thesis_31_integral_pincer_nocheck", |bch| {
+    c.bench_function("dare_thesis_31_integral_pincer_strict", |bch| {
         bch.iter(|| dare_with(black_box(&pa), black_box(&ga), &q1i, &r, None, &opts).unwrap())
     });
     c.bench_function("c2d_thesis_27", |bch| {

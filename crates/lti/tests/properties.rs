@@ -226,3 +226,38 @@ fn regress_bryson_thesis_q2() {
     }
     assert!(bryson(&[0.0]).is_err());
 }
+
+/// The Newton (Hewer) refinement works: stop SDA early (relative change 0.3: a few doubling
+/// steps short, residual ~1e-4) and let the automatic refinement (residual above
+/// 1e-12) repair it; the result must match the fully converged solution.
+#[test]
+fn newton_refinement_repairs_early_stopped_sda() {
+    let (a, b) = common::thesis_ab();
+    let (phi, gamma) = c2d(&a, &b, 1.0 / 400.0).unwrap();
+    let hs = DMatrix::from_fn(4, 27, |i, j| if j == i + 2 { 1.0 } else { 0.0 });
+    let (q1, r) = bryson_weights(&hs, &[3.0; 4], &[0.1, 0.7, 0.7, 0.04], 10.0).unwrap();
+    let full = dare(&phi, &gamma, &q1, &r, None).unwrap();
+    let early = DareOptions {
+        tol: 0.3,
+        refine_above: f64::INFINITY,
+        ..DareOptions::default()
+    };
+    let rough = dare_with(&phi, &gamma, &q1, &r, None, &early).unwrap();
+    assert!(
+        rough.residual > 1e-10,
+        "early stop should leave a visible residual: {:e}",
+        rough.residual
+    );
+    let fix = DareOptions {
+        tol: 0.3,
+        ..DareOptions::default()
+    };
+    let refined = dare_with(&phi, &gamma, &q1, &r, None, &fix).unwrap();
+    println!(
+        "early residual {:e} → refined {:e} with {} Newton steps",
+        rough.residual, refined.residual, refined.newton_steps
+    );
+    assert!(refined.newton_steps >= 1);
+    assert!(refined.residual < 1e-13, "{:e}", refined.residual);
+    assert!(common::rel_err(&refined.x, &full.x) < 1e-11);
+}

@@ -40,6 +40,7 @@ fn xval_dare_random() {
     let cases = f["dare"].as_array().unwrap();
     assert!(cases.len() >= 50);
     let mut worst = (0.0, String::new());
+    let mut newton = 0;
     for c in cases {
         let name = c["name"].as_str().unwrap();
         let n = c.get("N").map(m);
@@ -57,7 +58,9 @@ fn xval_dare_random() {
         if e > worst.0 {
             worst = (e, name.to_string());
         }
+        newton = newton.max(sol.newton_steps);
     }
+    println!("max Newton steps accepted: {newton}");
     println!(
         "xval_dare_random worst X rel err {:e} ({})",
         worst.0, worst.1
