@@ -5,7 +5,7 @@
 //! exponential revisited", SIAM J. Matrix Anal. Appl. 26(4):1179–1193, 2005 (Algorithm 2.3,
 //! with the θ_m of Table 2.3 and the coefficients b_j of the Padé approximants).
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, SMatrix};
 
 use crate::check;
 use crate::error::{LtiError, Result};
@@ -178,4 +178,23 @@ pub fn c2d(a: &DMatrix<f64>, b: &DMatrix<f64>, ts_s: f64) -> Result<(DMatrix<f64
     let phi = e.view((0, 0), (n, n)).into_owned();
     let gamma = e.view((0, n), (n, m)).into_owned();
     Ok((phi, gamma))
+}
+
+/// Fixed-size convenience for [`c2d`]: the same ZOH discretization for `SMatrix` arguments
+/// (converted through `DMatrix`; design-time code, not a hot path).
+///
+/// # Errors
+/// As [`c2d`].
+pub fn c2d_fixed<const N: usize, const M: usize>(
+    a: &SMatrix<f64, N, N>,
+    b: &SMatrix<f64, N, M>,
+    ts_s: f64,
+) -> Result<(SMatrix<f64, N, N>, SMatrix<f64, N, M>)> {
+    let ad = DMatrix::from_column_slice(N, N, a.as_slice());
+    let bd = DMatrix::from_column_slice(N, M, b.as_slice());
+    let (phi, gamma) = c2d(&ad, &bd, ts_s)?;
+    Ok((
+        SMatrix::from_column_slice(phi.as_slice()),
+        SMatrix::from_column_slice(gamma.as_slice()),
+    ))
 }

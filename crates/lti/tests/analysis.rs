@@ -213,3 +213,15 @@ fn damp_discrete_maps_back() {
         assert!((p.damping - 1.0 / 5f64.sqrt()).abs() < 1e-12);
     }
 }
+
+#[test]
+fn c2d_fixed_matches_dynamic() {
+    let (a, b) = common::thesis_ab();
+    let af = nalgebra::SMatrix::<f64, 27, 27>::from_column_slice(a.as_slice());
+    let bf = nalgebra::SMatrix::<f64, 27, 4>::from_column_slice(b.as_slice());
+    let (pf, gf) = c2d_fixed(&af, &bf, 0.0025).unwrap();
+    let (pd, gd) = c2d(&a, &b, 0.0025).unwrap();
+    // Same arithmetic, so bit-identical.
+    assert_eq!(pf.as_slice(), pd.as_slice());
+    assert_eq!(gf.as_slice(), gd.as_slice());
+}
