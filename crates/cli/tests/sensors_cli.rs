@@ -6,7 +6,10 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn helicon(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_helicon")).args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 fn tmpdir(name: &str) -> PathBuf {
@@ -50,7 +53,13 @@ fn attitude_batch_thesis_example_and_degenerate_row() {
     // Degenerate row: two parallel observations → error naming the row.
     std::fs::write(&input, "w1,b1x,b1y,b1z,r1x,r1y,r1z,w2,b2x,b2y,b2z,r2x,r2y,r2z\n1,1,0,0,0,1,0,1,0,0,1,0,0,1\n1,1,0,0,1,0,0,2,2,0,0,3,0,0\n").unwrap();
     let out_file = d.join("out.csv");
-    let o = helicon(&["attitude", "--input", input.to_str().unwrap(), "--out", out_file.to_str().unwrap()]);
+    let o = helicon(&[
+        "attitude",
+        "--input",
+        input.to_str().unwrap(),
+        "--out",
+        out_file.to_str().unwrap(),
+    ]);
     no_panic(&o);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
@@ -66,21 +75,45 @@ fn attitude_batch_thesis_example_and_degenerate_row() {
 fn simulate_then_fuse_beats_gps_and_rejects_bad_logs() {
     let d = tmpdir("fuse");
     let log = d.join("log.csv");
-    let o = helicon(&["sensors", "simulate", "--duration-s", "60", "--seed", "3", "--out", log.to_str().unwrap()]);
+    let o = helicon(&[
+        "sensors",
+        "simulate",
+        "--duration-s",
+        "60",
+        "--seed",
+        "3",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
     no_panic(&o);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = d.join("run");
-    let o = helicon(&["fuse", log.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = helicon(&[
+        "fuse",
+        log.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     no_panic(&o);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for f in ["fused.csv", "summary.json", "position.png", "position.svg", "attitude.png", "attitude.svg"] {
+    for f in [
+        "fused.csv",
+        "summary.json",
+        "position.png",
+        "position.svg",
+        "attitude.png",
+        "attitude.svg",
+    ] {
         assert!(out.join(f).exists(), "{f} missing");
     }
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let fused = summary["rms_horizontal_position_error_m"].as_f64().unwrap();
     let gps = summary["rms_gps_horizontal_error_m"].as_f64().unwrap();
     let att = summary["rms_attitude_error_rad"].as_f64().unwrap();
-    println!("fuse: horizontal RMS fused {fused:.3} m vs GPS {gps:.3} m; attitude RMS {att:.4} rad");
+    println!(
+        "fuse: horizontal RMS fused {fused:.3} m vs GPS {gps:.3} m; attitude RMS {att:.4} rad"
+    );
     assert!(fused < gps, "fused {fused} vs gps {gps}");
     assert!(att < 0.05);
 
@@ -92,7 +125,12 @@ fn simulate_then_fuse_beats_gps_and_rejects_bad_logs() {
     cells[1] = "NaN".into();
     nan[100] = cells.join(",");
     std::fs::write(d.join("nan.csv"), nan.join("\n")).unwrap();
-    let o = helicon(&["fuse", d.join("nan.csv").to_str().unwrap(), "--out", d.join("nan_out").to_str().unwrap()]);
+    let o = helicon(&[
+        "fuse",
+        d.join("nan.csv").to_str().unwrap(),
+        "--out",
+        d.join("nan_out").to_str().unwrap(),
+    ]);
     no_panic(&o);
     assert!(o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("1 IMU rows skipped"));
@@ -102,7 +140,12 @@ fn simulate_then_fuse_beats_gps_and_rejects_bad_logs() {
     cells[0] = "0.001".into();
     back[50] = cells.join(",");
     std::fs::write(d.join("back.csv"), back.join("\n")).unwrap();
-    let o = helicon(&["fuse", d.join("back.csv").to_str().unwrap(), "--out", d.join("back_out").to_str().unwrap()]);
+    let o = helicon(&[
+        "fuse",
+        d.join("back.csv").to_str().unwrap(),
+        "--out",
+        d.join("back_out").to_str().unwrap(),
+    ]);
     no_panic(&o);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
@@ -110,15 +153,30 @@ fn simulate_then_fuse_beats_gps_and_rejects_bad_logs() {
     // Missing column → error naming it.
     lines[1] = lines[1].replace("gps_d_m", "gps_x");
     std::fs::write(d.join("miss.csv"), lines.join("\n")).unwrap();
-    let o = helicon(&["fuse", d.join("miss.csv").to_str().unwrap(), "--out", d.join("miss_out").to_str().unwrap()]);
+    let o = helicon(&[
+        "fuse",
+        d.join("miss.csv").to_str().unwrap(),
+        "--out",
+        d.join("miss_out").to_str().unwrap(),
+    ]);
     no_panic(&o);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("gps_d_m"));
     // Bad sensor config → error naming file and field.
     std::fs::write(d.join("s.toml"), "[gps]\nrate_hz = 50.0\n").unwrap();
-    let o = helicon(&["sensors", "simulate", "--config", d.join("s.toml").to_str().unwrap(), "--duration-s", "1"]);
+    let o = helicon(&[
+        "sensors",
+        "simulate",
+        "--config",
+        d.join("s.toml").to_str().unwrap(),
+        "--duration-s",
+        "1",
+    ]);
     no_panic(&o);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("s.toml") && err.contains("gps.rate_hz"), "{err}");
+    assert!(
+        err.contains("s.toml") && err.contains("gps.rate_hz"),
+        "{err}"
+    );
 }

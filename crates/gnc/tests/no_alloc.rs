@@ -1,0 +1,68 @@
+//! The hot paths (`q_method`, `FusionFilter::step`) do not allocate: counted
+//! with a wrapping global allocator (this test binary only).
+#![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
+#![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; we only forward to System
+
+use helicon_gnc::attitude::{VectorObservation, q_method, quaternion_from_euler};
+use helicon_gnc::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
+use nalgebra::Vector3;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+struct Counting;
+static ALLOCS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards every call unchanged to the system allocator.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn q_method_and_fusion_step_do_not_allocate() {
+    let q = quaternion_from_euler(0.1, -0.2, 0.7);
+    let r = q.to_rotation_matrix();
+    let g = Vector3::new(0.0, 0.0, 1.0);
+    let m = Vector3::new(0.153, 0.008, -0.438);
+    let obs = [
+        VectorObservation::new(1.0, r * g, g),
+        VectorObservation::new(0.5, r * m, m),
+    ];
+    let mut f = FusionFilter::new(
+        FusionConfig::default(),
+        Vector9::zeros(),
+        Matrix9::identity(),
+    )
+    .unwrap();
+    let input = FusionInput {
+        specific_force_body_m_s2: Vector3::new(0.1, -0.05, -9.8),
+        gyro_body_rad_s: Vector3::new(0.01, 0.02, -0.01),
+        gps_ned_m: Some(Vector3::new(0.1, 0.2, -0.1)),
+        attitude_rad: Some(Vector3::new(0.01, 0.0, 0.02)),
+    };
+    let before = ALLOCS.load(Ordering::SeqCst);
+    let mut acc = 0.0;
+    for _ in 0..1000 {
+        let s = q_method(&obs).unwrap();
+        acc += s.loss;
+        f.step(&input).unwrap();
+    }
+    let after = ALLOCS.load(Ordering::SeqCst);
+    assert!(acc.is_finite());
+    assert_eq!(
+        after - before,
+        0,
+        "hot paths allocated {} times",
+        after - before
+    );
+}
