@@ -251,15 +251,15 @@ pub fn run_simulate(args: &SimulateArgs) -> Result<()> {
 
 /// Source of the helicopter's own acceleration subtracted from the
 /// accelerometer to obtain gravity for attitude determination, (13.2).
+///
+/// The fusion filter's own velocity cannot serve: its derivative is
+/// `R̂ f + g`, and subtracting it from `f` returns `R̂ᵀ g`, the predicted
+/// attitude itself (no tilt information; tried, it diverged). The
+/// acceleration must come from the model or state estimator (closed loop).
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OwnAccel {
     /// Assume zero (the thesis implementation; valid only when not accelerating).
     None,
-    /// Low-pass-filtered derivative of the fused NED velocity (τ = 0.5 s).
-    /// Experimental: this closes the loop attitude → acceleration → attitude
-    /// that the thesis warns about (§13.4) and was seen to diverge with the
-    /// default (fast) attitude weighting; see docs/sensors.md.
-    Fused,
     /// The log's truth columns `true_an_m_s2…` (simulated logs only).
     Truth,
 }
@@ -499,9 +499,6 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
         "t_s,n_m,e_m,d_m,vn_m_s,ve_m_s,vd_m_s,phi_rad,theta_rad,psi_rad,sigma_n_m,sigma_e_m,sigma_d_m,sigma_phi_rad,sigma_theta_rad,sigma_psi_rad,qm_phi_rad,qm_theta_rad,qm_psi_rad,err_n_m,err_e_m,err_d_m,err_phi_rad,err_theta_rad,err_psi_rad"
     )?;
     let (mut last_f, mut last_w) = (Vector3::new(0.0, 0.0, -g), Vector3::zeros());
-    let mut acc_lp = Vector3::zeros();
-    let mut prev_vel = filter.state().fixed_rows::<3>(3).into_owned();
-    let tau = 0.5;
     let (mut n_att, mut n_att_fail, mut n_gps) = (0usize, 0usize, 0usize);
     let (mut e_pos_h, mut e_pos_v, mut e_att, mut e_gps_h) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -510,7 +507,6 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
         let euler_now = filter.state().fixed_rows::<3>(6).into_owned();
         let own_acc = match args.own_accel {
             OwnAccel::None => None,
-            OwnAccel::Fused => Some(acc_lp),
             OwnAccel::Truth => r.true_acc,
         };
         let att = if r.f.is_some() && r.mag.is_some() {
@@ -540,12 +536,6 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
             last_w = wg;
         }
         let x = *filter.state();
-        let vel = x.fixed_rows::<3>(3).into_owned();
-        if k > 0 {
-            let alpha = dt / (tau + dt);
-            acc_lp += ((vel - prev_vel) / dt - acc_lp) * alpha;
-        }
-        prev_vel = vel;
         let p = filter.covariance();
         let sd: Vec<f64> = [0, 1, 2, 6, 7, 8]
             .iter()

@@ -553,6 +553,54 @@ pub struct WindConfig {
     pub dryden: Option<DrydenConfig>,
 }
 
+impl WindConfig {
+    /// Parse TOML text; `file` names the source in errors (TOML errors name
+    /// the key; range errors the dotted field).
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Self, WindConfigError> {
+        let cfg: Self = toml::from_str(text).map_err(|e| WindConfigError::Parse {
+            file: file.to_string(),
+            message: e.to_string(),
+        })?;
+        // Validate by building once (same checks as `Wind::from_config`).
+        Wind::from_config(&cfg).map_err(|source| WindConfigError::Invalid {
+            file: file.to_string(),
+            source,
+        })?;
+        Ok(cfg)
+    }
+
+    /// Load and validate a TOML file.
+    pub fn from_file(path: &std::path::Path) -> Result<Self, WindConfigError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| WindConfigError::Parse {
+            file: file.clone(),
+            message: e.to_string(),
+        })?;
+        Self::from_toml_str(&text, &file)
+    }
+}
+
+/// Error loading a wind configuration file.
+#[derive(Debug, thiserror::Error)]
+pub enum WindConfigError {
+    /// Unreadable file, TOML syntax, or unknown/mistyped key.
+    #[error("{file}: {message}")]
+    Parse {
+        /// File name.
+        file: String,
+        /// Message naming the key and position.
+        message: String,
+    },
+    /// A value is out of range.
+    #[error("{file}: {source}")]
+    Invalid {
+        /// File name.
+        file: String,
+        /// The range error (names the field).
+        source: WindError,
+    },
+}
+
 /// The sum of the configured wind components.
 #[derive(Debug, Clone)]
 pub struct Wind {
@@ -664,6 +712,32 @@ mod tests {
         assert_relative_eq!(f.phi[(1, 1)], e, epsilon = 1e-14);
         let q = NOISE_INTENSITY * 2.0 / 2.0 * (1.0 - (-2.0 * 0.1f64 / 2.0).exp());
         assert_relative_eq!(f.chol[(1, 1)].powi(2), q, epsilon = 1e-13);
+    }
+
+    #[test]
+    fn wind_toml_sum_and_errors() {
+        let cfg = WindConfig::from_toml_str(
+            "seed = 3\n[steady]\nwind_ned_m_s = [3.0, 1.0, 0.0]\n[gust]\nstart_s = 1.0\nduration_s = 2.0\npeak_ned_m_s = [0.0, 2.0, 0.0]\n",
+            "w.toml",
+        )
+        .unwrap();
+        let mut w = Wind::from_config(&cfg).unwrap();
+        assert_relative_eq!(
+            w.step(2.0, 0.01),
+            Vector3::new(3.0, 3.0, 0.0),
+            epsilon = 1e-12
+        );
+        let e = WindConfig::from_toml_str("[dryden]\nairspeed_m_s = 0.1\n", "x.toml").unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.contains("x.toml") && m.contains("dryden.airspeed_m_s"),
+            "{m}"
+        );
+        let e = WindConfig::from_toml_str("[thesis]\nsigma = 1.0\n", "y.toml").unwrap_err();
+        let m = e.to_string();
+        assert!(m.contains("y.toml") && m.contains("sigma"), "{m}");
+        let mut calm = Wind::calm();
+        assert_eq!(calm.step(0.0, 0.01), Vector3::zeros());
     }
 
     #[test]
