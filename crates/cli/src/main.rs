@@ -70,6 +70,7 @@ fn run() -> anyhow::Result<()> {
         Command::Attitude(a) => sensors::run_attitude(&a),
         Command::Sensors(a) => match a.command {
             sensors::SensorsCommand::Simulate(s) => sensors::run_simulate(&s),
+            sensors::SensorsCommand::Config => sensors::run_sensors_config(),
         },
         Command::Fuse(a) => sensors::run_fuse(&a),
     }

@@ -165,6 +165,15 @@ pub enum SensorsCommand {
     /// Write a sensor log (CSV, see `helicon fuse --help`) from the scripted
     /// trajectory (a model-driven trajectory comes with the closed loop).
     Simulate(SimulateArgs),
+    /// Print the default sensor configuration as TOML (edit and pass with
+    /// `simulate --config`).
+    Config,
+}
+
+/// Print the default sensor configuration (TOML) to stdout.
+pub fn run_sensors_config() -> Result<()> {
+    print!("{}", SensorConfig::default().to_toml()?);
+    Ok(())
 }
 
 /// Arguments of `helicon sensors simulate`.

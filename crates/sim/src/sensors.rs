@@ -222,6 +222,15 @@ impl SensorConfig {
         Ok(cfg)
     }
 
+    /// This configuration as TOML (e.g. the defaults, as a starting point for
+    /// a user's own sensors).
+    pub fn to_toml(&self) -> Result<String, SensorConfigError> {
+        toml::to_string(self).map_err(|e| SensorConfigError::Parse {
+            file: "<serialise>".to_string(),
+            message: e.to_string(),
+        })
+    }
+
     /// Load and validate a TOML file.
     pub fn from_file(path: &Path) -> Result<Self, SensorConfigError> {
         let file = path.display().to_string();

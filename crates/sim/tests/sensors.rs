@@ -136,6 +136,14 @@ fn same_seed_same_data_other_seed_differs() {
 }
 
 #[test]
+fn default_config_toml_round_trips() {
+    let cfg = SensorConfig::default();
+    let text = cfg.to_toml().unwrap();
+    let back = SensorConfig::from_toml_str(&text, "default.toml").unwrap();
+    assert_eq!(back, cfg);
+}
+
+#[test]
 fn toml_config_errors_name_file_and_field() {
     let ok = SensorConfig::from_toml_str("seed = 3\n[gps]\nrate_hz = 2.0\n", "a.toml").unwrap();
     assert_eq!(ok.seed, 3);
