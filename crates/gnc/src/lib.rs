@@ -10,6 +10,8 @@
 //! Rotations and Euler kinematics come from `helicon_model::frames` (chapter 9).
 
 pub mod attitude;
+pub mod controller;
+pub mod design;
 pub mod fusion;
 
 pub use attitude::{AttitudeError, AttitudeSolution, VectorObservation, q_method};

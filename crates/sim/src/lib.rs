@@ -9,7 +9,11 @@
 //! - [`trajectory`]: a scripted smooth trajectory to drive the sensors;
 //! - [`plot`]: time-series line plots to PNG and SVG.
 
+pub mod closed_loop;
+pub mod metrics;
+pub mod navigation;
 pub mod plot;
+pub mod scenario;
 pub mod sensors;
 pub mod trajectory;
 pub mod wind;

@@ -1,0 +1,522 @@
+//! The closed loop: the thesis's Simulink environment (Appendix E figure)
+//! rebuilt as software. World (nonlinear model + wind [+ sensor models]) and
+//! the on-board [`FlightController`] exchange servo commands and measurements
+//! once per controller sample; the plant is integrated with RK4 in between
+//! (inputs held, optional sub-steps).
+//!
+//! Preparation ([`prepare`]): trim at the scenario's design point, linearize,
+//! ZOH-discretize, design (or load) the gains. Flight ([`fly`]): one loop per
+//! sample; divergence (non-finite state, attitude beyond the limit, a model or
+//! estimator failure) stops the run cleanly with the reason, time and state,
+//! keeping the log so far.
+
+use crate::metrics::{OutputMetrics, output_metrics};
+use crate::navigation::Navigator;
+use crate::scenario::{DesignInflow, OUTPUTS, PlantInflow, Scenario};
+use crate::trajectory::TruthSample;
+use crate::wind::{Wind, WindModel};
+use helicon_gnc::controller::{ControllerSwitches, Feedback, FlightController, Reference};
+use helicon_gnc::design::{Gains, design};
+use helicon_gnc::fusion::wrap_pi;
+use helicon_model::integrate::rk4;
+use helicon_model::linearize::linearize;
+use helicon_model::state::{NX, REDUCED_OFFSET, expand, ix, reduce};
+use helicon_model::trim::{Trim, TrimOptions, TrimTarget, trim};
+use helicon_model::{InflowMode, Input, Model, ModelError, Params, ReducedState, State};
+use nalgebra::{SVector, Vector3};
+use serde::Serialize;
+
+/// Errors before the flight starts (a divergence during flight is an outcome, not an error).
+#[derive(Debug, thiserror::Error)]
+pub enum ClosedLoopError {
+    /// Parameters.
+    #[error(transparent)]
+    Params(#[from] helicon_model::ParamError),
+    /// Trim failed.
+    #[error("design point: {0}")]
+    Trim(#[from] helicon_model::trim::TrimError),
+    /// Model evaluation during linearization.
+    #[error("linearization: {0}")]
+    Model(#[from] ModelError),
+    /// Discretization.
+    #[error("discretization: {0}")]
+    Lti(#[from] helicon_lti::LtiError),
+    /// Controller design or gains file.
+    #[error(transparent)]
+    Design(#[from] helicon_gnc::design::DesignError),
+    /// Wind configuration.
+    #[error(transparent)]
+    Wind(#[from] crate::wind::WindError),
+    /// Sensor configuration.
+    #[error(transparent)]
+    Sensors(#[from] crate::sensors::SensorConfigError),
+    /// Navigation (fusion) setup.
+    #[error(transparent)]
+    Fusion(#[from] helicon_gnc::fusion::FusionError),
+}
+
+/// Everything prepared for flying a scenario.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The plant model.
+    pub model: Model,
+    /// The design trim.
+    pub trim: Trim,
+    /// The gains flown.
+    pub gains: Gains,
+}
+
+/// Trim, linearize, discretize and design (or load) the gains for a scenario.
+pub fn prepare(scenario: &Scenario) -> Result<Prepared, ClosedLoopError> {
+    let params = match &scenario.params {
+        Some(p) => Params::from_file(&scenario.resolve(p))?,
+        None => Params::bergen_twin(),
+    };
+    prepare_with_params(scenario, params)
+}
+
+/// As [`prepare`] with explicit parameters (Monte Carlo dispersions).
+pub fn prepare_with_params(
+    scenario: &Scenario,
+    params: Params,
+) -> Result<Prepared, ClosedLoopError> {
+    let model = Model::new(params, scenario.preset.options());
+    let target = TrimTarget {
+        velocity_ned_m_s: Vector3::from(scenario.trim.velocity_ned_m_s),
+        yaw_rad: scenario.trim.yaw_rad,
+        wind_ned_m_s: Vector3::zeros(),
+    };
+    let t = trim(&model, &target, &TrimOptions::default())?;
+    let gains = match &scenario.controller.gains_file {
+        Some(f) => Gains::load(&scenario.resolve(f))?,
+        None => {
+            let inflow = match scenario.controller.design_inflow {
+                DesignInflow::Converged => InflowMode::Converged,
+                DesignInflow::ThesisIteration => InflowMode::ThesisIteration {
+                    lambda_mr_in: t.aux.lambda_mr,
+                    lambda_tr_in: t.aux.lambda_tr,
+                    iterations: scenario.plant.inflow_iterations,
+                },
+            };
+            let lm = linearize(&model, &t.x, &t.u, &Vector3::zeros(), inflow)?;
+            let (phi, gamma) = lm.discretize(scenario.controller.design.sample_time_s)?;
+            design(
+                &phi,
+                &gamma,
+                t.x.as_slice(),
+                t.u.as_slice(),
+                &scenario.controller.design,
+            )?
+        }
+    };
+    Ok(Prepared {
+        model,
+        trim: t,
+        gains,
+    })
+}
+
+/// How a flight ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Outcome {
+    /// Flew the whole duration.
+    Completed,
+    /// Stopped early (see the reason).
+    Diverged,
+}
+
+/// One logged sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogRow {
+    /// Time (s).
+    pub t_s: f64,
+    /// True state (30).
+    pub x: State,
+    /// Servo command (after saturation).
+    pub u: Input,
+    /// Reference [vn, ve, vd, psi].
+    pub reference: [f64; 4],
+    /// True outputs [vn, ve, vd, psi].
+    pub output: [f64; 4],
+    /// Estimated 9 measured states (absolute).
+    pub estimate9: [f64; 9],
+    /// Measurement given to the controller (9).
+    pub measured9: [f64; 9],
+    /// Wind NED (m/s).
+    pub wind_ned: [f64; 3],
+    /// Inflow ratios [main, tail].
+    pub lambda: [f64; 2],
+    /// Main-rotor thrust −hFz (N) and tail-rotor force tFy (N).
+    pub thrust: [f64; 2],
+}
+
+/// Summary of a flight.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Summary {
+    /// Scenario name.
+    pub scenario: String,
+    /// "completed" or "diverged".
+    pub outcome: Outcome,
+    /// Why it stopped early (None when completed).
+    pub reason: Option<String>,
+    /// Time reached (s).
+    pub t_end_s: f64,
+    /// Metrics per output `vn`, `ve`, `vd`, `psi`.
+    pub metrics: std::collections::BTreeMap<String, OutputMetrics>,
+    /// RMS of u − u_trim per input.
+    pub control_effort_rms: [f64; 4],
+    /// Time each input spent saturated (s).
+    pub saturation_time_s: [f64; 4],
+    /// RMS estimation error of the nine measured states (truth − estimate).
+    pub estimator_error_rms: [f64; 9],
+    /// Model preset.
+    pub preset: String,
+    /// Wind seed.
+    pub wind_seed: u64,
+    /// Sensor seed.
+    pub sensor_seed: u64,
+    /// FNV-1a hash of the effective parameter TOML.
+    pub parameter_hash: String,
+    /// helicon version.
+    pub version: String,
+    /// Closed-loop poles of the design: largest |z|.
+    pub design_spectral_radius: f64,
+    /// Pincer α of the design.
+    pub design_alpha: f64,
+}
+
+/// A finished flight: the log and the summary.
+#[derive(Debug, Clone)]
+pub struct Flight {
+    /// Samples (every sample; decimate when writing).
+    pub log: Vec<LogRow>,
+    /// Summary and metrics.
+    pub summary: Summary,
+}
+
+/// FNV-1a 64-bit hash, as hex.
+pub fn fnv1a_hex(text: &str) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.as_bytes() {
+        h ^= u64::from(*b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+/// The initial true state: the trim plus the scenario's deviations.
+pub fn initial_state(scenario: &Scenario, trim: &Trim) -> State {
+    let mut x = expand(&trim.x, [0.0; 3]);
+    let o = REDUCED_OFFSET;
+    let mut dv_ned = Vector3::zeros();
+    for (k, v) in &scenario.initial {
+        match k.as_str() {
+            "vn" => dv_ned.x += v,
+            "ve" => dv_ned.y += v,
+            "vd" => dv_ned.z += v,
+            name => {
+                if let Some(i) = helicon_model::REDUCED_STATE_NAMES
+                    .iter()
+                    .position(|n| *n == name)
+                {
+                    x[i + o] += v;
+                }
+            }
+        }
+    }
+    if dv_ned.norm() > 0.0 {
+        let dv_body =
+            helicon_model::frames::body_from_ned(x[ix::PHI], x[ix::THETA], x[ix::PSI]) * dv_ned;
+        x[ix::U] += dv_body.x;
+        x[ix::V] += dv_body.y;
+        x[ix::W] += dv_body.z;
+    }
+    x
+}
+
+fn outputs(x: &State) -> [f64; 4] {
+    let v = helicon_model::frames::ned_from_body(x[ix::PHI], x[ix::THETA], x[ix::PSI])
+        * Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
+    [v.x, v.y, v.z, x[ix::PSI]]
+}
+
+/// Progress callback: fraction done in [0, 1].
+pub type Progress<'a> = &'a mut dyn FnMut(f64);
+
+/// Fly a prepared scenario.
+pub fn fly(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    progress: Option<Progress<'_>>,
+) -> Result<Flight, ClosedLoopError> {
+    let mut progress = progress;
+    let model = &prepared.model;
+    let p = model.params();
+    let servos = &p.servos;
+    let u_min = [
+        servos[0].s_min,
+        servos[1].s_min,
+        servos[2].s_min,
+        servos[3].s_min,
+    ];
+    let u_max = [
+        servos[0].s_max,
+        servos[1].s_max,
+        servos[2].s_max,
+        servos[3].s_max,
+    ];
+    let sw = ControllerSwitches {
+        feedback: scenario.controller.feedback,
+        estimator: scenario.controller.estimator,
+    };
+    let mut ctrl = FlightController::new(&prepared.gains, u_min, u_max, sw)?;
+    let mut x = initial_state(scenario, &prepared.trim);
+    let x_trim27 = prepared.trim.x;
+    // The estimator starts from the measured states and the trim for the rest.
+    let mut x0_est = x_trim27;
+    for i in 0..9 {
+        x0_est[i] = x[i + REDUCED_OFFSET];
+    }
+    ctrl.reset(&x0_est);
+    let mut wind = Wind::from_config(&scenario.wind)?;
+    let ts = scenario.controller.design.sample_time_s;
+    let n = (scenario.duration_s / ts).round() as usize;
+    let h = ts / f64::from(scenario.plant.substeps);
+    let mut nav = if scenario.controller.fusion {
+        Some(Navigator::new(scenario.sensors, ts, &x)?)
+    } else {
+        None
+    };
+    let mut lam = (prepared.trim.aux.lambda_mr, prepared.trim.aux.lambda_tr);
+    let mut log = Vec::with_capacity(n + 1);
+    let mut reason: Option<String> = None;
+    let mut t = 0.0;
+    let mut prev_xdot = State::zeros();
+    for k in 0..=n {
+        t = k as f64 * ts;
+        let wind_ned = wind.step(t, ts);
+        let r = scenario.reference_at(t);
+        let reference = Reference {
+            velocity_ned_m_s: Vector3::new(r[0], r[1], r[2]),
+            yaw_rad: r[3],
+        };
+        let xr: ReducedState = reduce(&x);
+        // measurement
+        let measured9: SVector<f64, 9> = match nav.as_mut() {
+            Some(nv) => {
+                let acc_ned =
+                    helicon_model::frames::ned_from_body(x[ix::PHI], x[ix::THETA], x[ix::PSI])
+                        * (Vector3::new(prev_xdot[ix::U], prev_xdot[ix::V], prev_xdot[ix::W])
+                            + Vector3::new(x[ix::P], x[ix::Q], x[ix::R]).cross(&Vector3::new(
+                                x[ix::U],
+                                x[ix::V],
+                                x[ix::W],
+                            )));
+                let truth = TruthSample {
+                    t_s: t,
+                    pos_ned_m: Vector3::new(x[ix::X], x[ix::Y], x[ix::Z]),
+                    vel_ned_m_s: helicon_model::frames::ned_from_body(
+                        x[ix::PHI],
+                        x[ix::THETA],
+                        x[ix::PSI],
+                    ) * Vector3::new(x[ix::U], x[ix::V], x[ix::W]),
+                    acc_ned_m_s2: acc_ned,
+                    euler_rad: Vector3::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]),
+                    omega_body_rad_s: Vector3::new(x[ix::P], x[ix::Q], x[ix::R]),
+                };
+                let own = if scenario.controller.estimator {
+                    Some(ctrl.predicted_accel_body())
+                } else {
+                    None
+                };
+                match nv.step(&truth, own.as_ref()) {
+                    Ok(y) => y,
+                    Err(e) => {
+                        reason = Some(format!("navigation failed at t = {t:.3} s: {e}"));
+                        break;
+                    }
+                }
+            }
+            None => SVector::from_fn(|i, _| xr[i]),
+        };
+        let fb = if scenario.controller.estimator {
+            Feedback::Measured(&measured9)
+        } else {
+            Feedback::Full(&xr)
+        };
+        let out = ctrl.step(fb, &reference);
+        let x_start = x;
+        let est = out.x_estimate;
+        let u = out.u;
+        // plant: RK4 sub-steps with u and wind held
+        let mut aux_first = None;
+        let mut step_err: Option<ModelError> = None;
+        for _ in 0..scenario.plant.substeps {
+            let res = rk4(&x, h, |s| {
+                let inflow = match scenario.plant.inflow {
+                    PlantInflow::Converged => InflowMode::Converged,
+                    PlantInflow::ThesisIteration => InflowMode::ThesisIteration {
+                        lambda_mr_in: lam.0,
+                        lambda_tr_in: lam.1,
+                        iterations: scenario.plant.inflow_iterations,
+                    },
+                };
+                let (d, a) = model.derivative_with(s, &u, &wind_ned, inflow)?;
+                if scenario.plant.inflow == PlantInflow::ThesisIteration {
+                    lam = (a.lambda_mr, a.lambda_tr);
+                }
+                if aux_first.is_none() {
+                    aux_first = Some((a, d));
+                }
+                Ok::<_, ModelError>(d)
+            });
+            match res {
+                Ok(next) => x = next,
+                Err(e) => {
+                    step_err = Some(e);
+                    break;
+                }
+            }
+        }
+        let (aux, xdot) = aux_first.unwrap_or_default();
+        prev_xdot = xdot;
+        log.push(LogRow {
+            t_s: t,
+            x: x_start,
+            u,
+            reference: r,
+            output: outputs(&x_start),
+            estimate9: std::array::from_fn(|i| est[i]),
+            measured9: std::array::from_fn(|i| measured9[i]),
+            wind_ned: [wind_ned.x, wind_ned.y, wind_ned.z],
+            lambda: [aux.lambda_mr, aux.lambda_tr],
+            thrust: [-aux.force_mr_hub_n.z, aux.force_tr_y_n],
+        });
+        if let Some(e) = step_err {
+            reason = Some(format!("model failed at t = {t:.3} s: {e}"));
+            break;
+        }
+        if !x.iter().all(|v| v.is_finite()) {
+            reason = Some(format!("non-finite state at t = {:.3} s", t + ts));
+            break;
+        }
+        let lim = scenario.plant.max_attitude_rad;
+        if x[ix::PHI].abs() > lim || x[ix::THETA].abs() > lim {
+            reason = Some(format!(
+                "attitude beyond {lim} rad at t = {:.3} s (phi = {:.3}, theta = {:.3})",
+                t + ts,
+                x[ix::PHI],
+                x[ix::THETA]
+            ));
+            break;
+        }
+        if let Some(cb) = progress.as_mut()
+            && k % 400 == 0
+        {
+            cb(k as f64 / n.max(1) as f64);
+        }
+    }
+    if let Some(cb) = progress.as_mut() {
+        cb(1.0);
+    }
+    let summary = summarize(scenario, prepared, &log, reason, t);
+    Ok(Flight { log, summary })
+}
+
+fn summarize(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    log: &[LogRow],
+    reason: Option<String>,
+    t_end: f64,
+) -> Summary {
+    let t: Vec<f64> = log.iter().map(|r| r.t_s).collect();
+    let mut metrics = std::collections::BTreeMap::new();
+    let mut excitations = Vec::with_capacity(4);
+    for (j, name) in OUTPUTS.iter().enumerate() {
+        let e: Vec<f64> = log
+            .iter()
+            .map(|r| {
+                let d = r.reference[j] - r.output[j];
+                if j == 3 { wrap_pi(d) } else { d }
+            })
+            .collect();
+        // excitation: the last reference change on this output, else the initial error
+        let mut t_exc = 0.0;
+        let mut size = e.first().map_or(0.0, |v| v.abs());
+        let mut changes: Vec<_> = scenario
+            .reference
+            .iter()
+            .filter(|c| c.output == *name && c.t_s <= t_end)
+            .collect();
+        changes.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+        if let Some(c) = changes.last() {
+            let before = scenario.reference_at(c.t_s - 1e-9)[j];
+            t_exc = c.t_s + c.ramp_s;
+            size = (c.value - before).abs();
+        }
+        excitations.push((e, t_exc, size));
+    }
+    let band_scale = excitations.iter().fold(0.0f64, |m, x| m.max(x.2));
+    for (name, (e, t_exc, size)) in OUTPUTS.iter().zip(excitations) {
+        metrics.insert(
+            (*name).to_string(),
+            output_metrics(&t, &e, t_exc, size, band_scale),
+        );
+    }
+    let u_trim = &prepared.gains.u_trim;
+    let nrow = log.len().max(1) as f64;
+    let ts = scenario.controller.design.sample_time_s;
+    let servos = prepared.model.params().servos;
+    let mut effort = [0.0; 4];
+    let mut sat = [0.0; 4];
+    for r in log {
+        for i in 0..4 {
+            effort[i] += (r.u[i] - u_trim[i]).powi(2);
+            if r.u[i] <= servos[i].s_min + 1e-12 || r.u[i] >= servos[i].s_max - 1e-12 {
+                sat[i] += ts;
+            }
+        }
+    }
+    let mut est = [0.0; 9];
+    for r in log {
+        for i in 0..9 {
+            let mut d = r.x[i + REDUCED_OFFSET] - r.estimate9[i];
+            if i == 2 {
+                d = wrap_pi(d);
+            }
+            est[i] += d * d;
+        }
+    }
+    let rho = prepared
+        .gains
+        .closed_loop_poles
+        .iter()
+        .map(|z| (z[0] * z[0] + z[1] * z[1]).sqrt())
+        .fold(0.0, f64::max);
+    Summary {
+        scenario: scenario.name.clone(),
+        outcome: if reason.is_some() {
+            Outcome::Diverged
+        } else {
+            Outcome::Completed
+        },
+        reason,
+        t_end_s: t_end,
+        metrics,
+        control_effort_rms: effort.map(|v| (v / nrow).sqrt()),
+        saturation_time_s: sat,
+        estimator_error_rms: est.map(|v| (v / nrow).sqrt()),
+        preset: scenario.preset.name().to_string(),
+        wind_seed: scenario.wind.seed,
+        sensor_seed: scenario.sensors.seed,
+        parameter_hash: fnv1a_hex(&prepared.model.params().to_toml()),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        design_spectral_radius: rho,
+        design_alpha: prepared.gains.alpha,
+    }
+}
+
+/// Number of state columns logged.
+pub const LOG_STATES: usize = NX;

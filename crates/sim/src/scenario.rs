@@ -1,0 +1,411 @@
+//! Closed-loop scenarios (TOML): model, initial condition, references, wind,
+//! sensors, controller and plant settings.
+//!
+//! ```toml
+//! name = "thesis-fig14-5"
+//! preset = "thesis"            # or "physical"
+//! duration_s = 10.0
+//! [trim]                        # the operating point the controller is designed at
+//! velocity_ned_m_s = [0.0, 0.0, 0.0]
+//! yaw_rad = 0.0
+//! [initial]                     # deviations from the trim (state names, or vn/ve/vd)
+//! psi = 1.0
+//! [[reference]]                 # steps (ramp_s = 0) or ramps on vn, ve, vd, psi
+//! t_s = 1.0
+//! output = "vn"
+//! value = 2.0
+//! [controller]                  # gnc::design::ControllerConfig plus switches
+//! input_max = [0.1, 0.7, 0.7, 0.04]
+//! [wind]                        # sim::wind::WindConfig
+//! [sensors]                     # sim::sensors::SensorConfig (used when fusion = true)
+//! ```
+
+use crate::sensors::SensorConfig;
+use crate::wind::WindConfig;
+use helicon_gnc::design::ControllerConfig;
+use helicon_model::Preset;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Errors reading a scenario.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    /// The file could not be read.
+    #[error("{file}: cannot read: {message}")]
+    Io {
+        /// File.
+        file: String,
+        /// Message.
+        message: String,
+    },
+    /// Invalid TOML or a field of the wrong type / unknown field.
+    #[error("{file}: {message}")]
+    Parse {
+        /// File.
+        file: String,
+        /// Message (names the field).
+        message: String,
+    },
+    /// A field out of range.
+    #[error("{file}: `{field}` = {value}: {rule}")]
+    Invalid {
+        /// File.
+        file: String,
+        /// Field.
+        field: String,
+        /// Value as text.
+        value: String,
+        /// Rule.
+        rule: String,
+    },
+}
+
+/// The trim the controller is designed at (and the initial condition's base).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrimSection {
+    /// Inertial velocity NED (m/s).
+    pub velocity_ned_m_s: [f64; 3],
+    /// Heading (rad).
+    pub yaw_rad: f64,
+}
+
+impl Default for TrimSection {
+    fn default() -> Self {
+        TrimSection {
+            velocity_ned_m_s: [0.0; 3],
+            yaw_rad: 0.0,
+        }
+    }
+}
+
+/// A reference change on one output.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReferenceChange {
+    /// Start time (s).
+    pub t_s: f64,
+    /// Output: `vn`, `ve`, `vd` (NED velocity, m/s) or `psi` (rad).
+    pub output: String,
+    /// New value (absolute).
+    pub value: f64,
+    /// Ramp duration (s); 0 for a step.
+    #[serde(default)]
+    pub ramp_s: f64,
+}
+
+/// How the plant's inflow is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlantInflow {
+    /// Converged inflow (the safeguarded solver).
+    #[default]
+    Converged,
+    /// The thesis implementation: N plain Newton–Raphson steps per derivative
+    /// evaluation, warm-started from the previous evaluation's λ (Appendix F).
+    ThesisIteration,
+}
+
+/// The inflow used to linearize the model for the design.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum DesignInflow {
+    /// Converged inflow.
+    #[default]
+    Converged,
+    /// The thesis emulation (Appendix E).
+    ThesisIteration,
+}
+
+/// Controller section: design settings plus the thesis's switches.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerSection {
+    /// Design settings.
+    #[serde(flatten)]
+    pub design: ControllerConfig,
+    /// Feedback on (off: trim inputs held).
+    #[serde(default = "yes")]
+    pub feedback: bool,
+    /// State estimator on (off: true state fed back).
+    #[serde(default = "yes")]
+    pub estimator: bool,
+    /// Sensor models + attitude determination + fusion produce the
+    /// measurement (off: the ideal nine measured states).
+    #[serde(default)]
+    pub fusion: bool,
+    /// Load gains from this file instead of designing (relative to the scenario).
+    #[serde(default)]
+    pub gains_file: Option<PathBuf>,
+    /// Inflow of the linearization used for the design.
+    #[serde(default)]
+    pub design_inflow: DesignInflow,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for ControllerSection {
+    fn default() -> Self {
+        ControllerSection {
+            design: ControllerConfig::default(),
+            feedback: true,
+            estimator: true,
+            fusion: false,
+            gains_file: None,
+            design_inflow: DesignInflow::Converged,
+        }
+    }
+}
+
+/// Plant integration settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlantSection {
+    /// RK4 sub-steps per controller sample.
+    pub substeps: u32,
+    /// Plant inflow computation.
+    pub inflow: PlantInflow,
+    /// Newton–Raphson steps for `thesis-iteration`.
+    pub inflow_iterations: u32,
+    /// Divergence: |φ| or |θ| beyond this (rad) stops the run.
+    pub max_attitude_rad: f64,
+}
+
+impl Default for PlantSection {
+    fn default() -> Self {
+        PlantSection {
+            substeps: 1,
+            inflow: PlantInflow::Converged,
+            inflow_iterations: 7,
+            max_attitude_rad: 1.2,
+        }
+    }
+}
+
+/// Log settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LogSection {
+    /// Keep every n-th sample in `log.csv` (metrics use every sample).
+    pub decimation: u32,
+}
+
+impl Default for LogSection {
+    fn default() -> Self {
+        LogSection { decimation: 1 }
+    }
+}
+
+/// A closed-loop scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Name (used in reports).
+    #[serde(default = "default_name")]
+    pub name: String,
+    /// Model preset.
+    #[serde(default, with = "preset_serde")]
+    pub preset: Preset,
+    /// Parameter file overriding the Bergen Twin (relative to the scenario).
+    #[serde(default)]
+    pub params: Option<PathBuf>,
+    /// Flight time (s).
+    pub duration_s: f64,
+    /// Trim / design point.
+    #[serde(default)]
+    pub trim: TrimSection,
+    /// Initial deviations from the trim: reduced-state names, or `vn`, `ve`,
+    /// `vd` for NED velocity deviations.
+    #[serde(default)]
+    pub initial: BTreeMap<String, f64>,
+    /// Reference changes.
+    #[serde(default)]
+    pub reference: Vec<ReferenceChange>,
+    /// Wind.
+    #[serde(default)]
+    pub wind: WindConfig,
+    /// Sensors (used when `controller.fusion`).
+    #[serde(default)]
+    pub sensors: SensorConfig,
+    /// Controller.
+    #[serde(default)]
+    pub controller: ControllerSection,
+    /// Plant.
+    #[serde(default)]
+    pub plant: PlantSection,
+    /// Log.
+    #[serde(default)]
+    pub log: LogSection,
+    /// Folder of the scenario file (for relative paths); not in the TOML.
+    #[serde(skip)]
+    pub base_dir: Option<PathBuf>,
+}
+
+fn default_name() -> String {
+    "scenario".to_string()
+}
+
+mod preset_serde {
+    use helicon_model::Preset;
+    use serde::{Deserialize, Deserializer, Serializer};
+    pub fn serialize<S: Serializer>(p: &Preset, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(p.name())
+    }
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Preset, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+/// Output names of the metrics, in order.
+pub const OUTPUTS: [&str; 4] = ["vn", "ve", "vd", "psi"];
+
+impl Scenario {
+    /// Parse and validate TOML text; `file` names the source in errors.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
+        let s: Scenario = toml::from_str(text).map_err(|e| ScenarioError::Parse {
+            file: file.to_string(),
+            message: e.to_string(),
+        })?;
+        s.validate(file)?;
+        Ok(s)
+    }
+
+    /// Load a scenario file (relative paths inside resolve against its folder).
+    pub fn from_file(path: &Path) -> Result<Scenario, ScenarioError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError::Io {
+            file: file.clone(),
+            message: e.to_string(),
+        })?;
+        let mut s = Self::from_toml_str(&text, &file)?;
+        s.base_dir = path.parent().map(Path::to_path_buf);
+        Ok(s)
+    }
+
+    /// Resolve a path relative to the scenario's folder.
+    pub fn resolve(&self, p: &Path) -> PathBuf {
+        match (&self.base_dir, p.is_relative()) {
+            (Some(b), true) => b.join(p),
+            _ => p.to_path_buf(),
+        }
+    }
+
+    /// Check ranges and names.
+    pub fn validate(&self, file: &str) -> Result<(), ScenarioError> {
+        let bad = |field: &str, value: String, rule: &str| ScenarioError::Invalid {
+            file: file.to_string(),
+            field: field.to_string(),
+            value,
+            rule: rule.to_string(),
+        };
+        if !(self.duration_s.is_finite() && self.duration_s > 0.0) {
+            return Err(bad(
+                "duration_s",
+                self.duration_s.to_string(),
+                "must be finite and > 0",
+            ));
+        }
+        for v in self
+            .trim
+            .velocity_ned_m_s
+            .iter()
+            .chain([&self.trim.yaw_rad])
+        {
+            if !v.is_finite() {
+                return Err(bad("trim", v.to_string(), "must be finite"));
+            }
+        }
+        for (k, v) in &self.initial {
+            let known = helicon_model::REDUCED_STATE_NAMES.contains(&k.as_str())
+                || matches!(k.as_str(), "vn" | "ve" | "vd");
+            if !known {
+                return Err(bad(
+                    &format!("initial.{k}"),
+                    v.to_string(),
+                    "not a state name (reduced states, or vn/ve/vd)",
+                ));
+            }
+            if !v.is_finite() {
+                return Err(bad(
+                    &format!("initial.{k}"),
+                    v.to_string(),
+                    "must be finite",
+                ));
+            }
+        }
+        for (i, r) in self.reference.iter().enumerate() {
+            if !OUTPUTS.contains(&r.output.as_str()) {
+                return Err(bad(
+                    &format!("reference[{i}].output"),
+                    r.output.clone(),
+                    "must be vn, ve, vd or psi",
+                ));
+            }
+            if !(r.t_s.is_finite()
+                && r.t_s >= 0.0
+                && r.value.is_finite()
+                && r.ramp_s.is_finite()
+                && r.ramp_s >= 0.0)
+            {
+                return Err(bad(
+                    &format!("reference[{i}]"),
+                    format!("t_s={}, value={}, ramp_s={}", r.t_s, r.value, r.ramp_s),
+                    "times >= 0 and finite values",
+                ));
+            }
+        }
+        self.controller
+            .design
+            .validate()
+            .map_err(|e| bad("controller", String::new(), &e.to_string()))?;
+        if self.plant.substeps == 0 {
+            return Err(bad("plant.substeps", "0".into(), "must be >= 1"));
+        }
+        if !(self.plant.max_attitude_rad.is_finite() && self.plant.max_attitude_rad > 0.0) {
+            return Err(bad(
+                "plant.max_attitude_rad",
+                self.plant.max_attitude_rad.to_string(),
+                "must be > 0",
+            ));
+        }
+        if self.log.decimation == 0 {
+            return Err(bad("log.decimation", "0".into(), "must be >= 1"));
+        }
+        self.sensors
+            .validate(file)
+            .map_err(|e| bad("sensors", String::new(), &e.to_string()))?;
+        crate::wind::Wind::from_config(&self.wind)
+            .map_err(|e| bad("wind", String::new(), &e.to_string()))?;
+        Ok(())
+    }
+
+    /// The reference at time t: (vn, ve, vd, psi), starting from the trim.
+    pub fn reference_at(&self, t_s: f64) -> [f64; 4] {
+        let mut r = [
+            self.trim.velocity_ned_m_s[0],
+            self.trim.velocity_ned_m_s[1],
+            self.trim.velocity_ned_m_s[2],
+            self.trim.yaw_rad,
+        ];
+        // changes apply in time order; each ramps from the value before it
+        let mut changes: Vec<&ReferenceChange> = self.reference.iter().collect();
+        changes.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
+        for c in changes {
+            if t_s < c.t_s {
+                break;
+            }
+            let i = OUTPUTS.iter().position(|o| *o == c.output).unwrap_or(0);
+            let frac = if c.ramp_s > 0.0 {
+                ((t_s - c.t_s) / c.ramp_s).min(1.0)
+            } else {
+                1.0
+            };
+            r[i] += frac * (c.value - r[i]);
+        }
+        r
+    }
+}
