@@ -6,6 +6,7 @@ mod control;
 mod demo;
 mod model_cmd;
 mod sensors;
+mod sim_cmd;
 mod trim_cmd;
 
 /// helicon: model, trim, linearize, estimate and control miniature helicopters.
@@ -18,7 +19,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// The main job on the embedded Bergen Twin: trim, linearize, fly (writes out/demo).
+    /// The main job on the embedded Bergen Twin: trim, linearize, design, fly closed loop (writes out/demo).
     Demo(demo::DemoArgs),
     /// Evaluate the nonlinear model ẋ = f(x, u, wind) for JSON lines (stdin or --input).
     Eval(model_cmd::EvalArgs),
@@ -36,6 +37,8 @@ enum Command {
     Sensors(sensors::SensorsArgs),
     /// Replay a sensor log through attitude determination and the fusion filter (§13.3).
     Fuse(sensors::FuseArgs),
+    /// Fly a closed-loop scenario (TOML): log.csv, summary.json, gains, plots, report.
+    Sim(sim_cmd::SimArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -73,5 +76,6 @@ fn run() -> anyhow::Result<()> {
             sensors::SensorsCommand::Config => sensors::run_sensors_config(),
         },
         Command::Fuse(a) => sensors::run_fuse(&a),
+        Command::Sim(a) => sim_cmd::run(&a),
     }
 }

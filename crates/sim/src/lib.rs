@@ -12,6 +12,7 @@
 pub mod closed_loop;
 pub mod metrics;
 pub mod navigation;
+pub mod output;
 pub mod plot;
 pub mod scenario;
 pub mod sensors;

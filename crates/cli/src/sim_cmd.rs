@@ -1,0 +1,208 @@
+//! `helicon sim SCENARIO.toml [--out DIR]`: fly a closed-loop scenario and
+//! write its run folder (log, summary, gains, scenario, plots, report).
+//!
+//! A divergence is a result, not an error: it is printed clearly and the exit
+//! status is 0. Only bad input (scenario, parameter or gains files) or a
+//! failure to write the outputs exits non-zero.
+
+use anyhow::{Context, Result};
+use clap::Args;
+use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly, prepare};
+use helicon_sim::output::{RunFiles, write_run};
+use helicon_sim::scenario::{OUTPUTS, Scenario};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// `helicon sim`.
+#[derive(Args, Debug)]
+pub struct SimArgs {
+    /// Scenario file (TOML; see docs/closed-loop.md and scenarios/).
+    pub scenario: PathBuf,
+    /// Output folder (default `out/<scenario name>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// What a run did and how long each part took.
+pub struct RunReport {
+    /// The flight.
+    pub flight: Flight,
+    /// The files written.
+    pub files: RunFiles,
+    /// Wall time of trim + linearization + design (s).
+    pub prepare_s: f64,
+    /// Wall time of the flight (s).
+    pub fly_s: f64,
+    /// Wall time of writing the outputs (s).
+    pub write_s: f64,
+}
+
+/// Trim, linearize and design (or load the gains), with a spinner on
+/// stderr; returns the prepared scenario and the wall time (s).
+pub fn prepare_step(scenario: &Scenario) -> Result<(Prepared, f64)> {
+    let spinner = ProgressBar::new_spinner();
+    spinner.set_message("trim, linearize, design");
+    spinner.enable_steady_tick(Duration::from_millis(100));
+    let t0 = Instant::now();
+    let prepared = prepare(scenario);
+    spinner.finish_and_clear();
+    let prepared = prepared.with_context(|| {
+        format!(
+            "scenario `{}`: preparing the design point and gains",
+            scenario.name
+        )
+    })?;
+    Ok((prepared, t0.elapsed().as_secs_f64()))
+}
+
+/// Fly with a progress bar on stderr; returns the flight and the wall time (s).
+pub fn fly_step(scenario: &Scenario, prepared: &Prepared) -> Result<(Flight, f64)> {
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{msg} [{bar:40.cyan/blue}] {percent:>3}% {elapsed_precise} (eta {eta})",
+        )
+        .context("progress bar template")?
+        .progress_chars("=> "),
+    );
+    bar.set_message(format!("flying {:.1} s", scenario.duration_s));
+    let t1 = Instant::now();
+    let mut cb = |f: f64| bar.set_position((f.clamp(0.0, 1.0) * 1000.0).round() as u64);
+    let flight = fly(scenario, prepared, Some(&mut cb));
+    bar.finish_and_clear();
+    let flight =
+        flight.with_context(|| format!("scenario `{}`: setting up the flight", scenario.name))?;
+    Ok((flight, t1.elapsed().as_secs_f64()))
+}
+
+/// Write the run folder; returns the files and the wall time (s).
+pub fn write_step(
+    out: &Path,
+    scenario: &Scenario,
+    prepared: &Prepared,
+    flight: &Flight,
+) -> Result<(RunFiles, f64)> {
+    let t2 = Instant::now();
+    let files = write_run(out, scenario, prepared, flight)
+        .with_context(|| format!("writing the run outputs to {}", out.display()))?;
+    Ok((files, t2.elapsed().as_secs_f64()))
+}
+
+/// Prepare, fly (with a progress bar on stderr) and write a scenario.
+pub fn run_scenario(scenario: &Scenario, out: &Path) -> Result<RunReport> {
+    let (prepared, prepare_s) = prepare_step(scenario)?;
+    let (flight, fly_s) = fly_step(scenario, &prepared)?;
+    let (files, write_s) = write_step(out, scenario, &prepared, &flight)?;
+    Ok(RunReport {
+        flight,
+        files,
+        prepare_s,
+        fly_s,
+        write_s,
+    })
+}
+
+/// A folder name from a scenario name (anything but letters, digits, `-`,
+/// `_` and `.` becomes `_`, so a name cannot escape `out/`).
+pub fn folder_name(name: &str) -> String {
+    let s: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if s.is_empty() || s.chars().all(|c| c == '.') {
+        "run".to_string()
+    } else {
+        s
+    }
+}
+
+/// Print the outcome, the key metrics and where the files are.
+pub fn print_run(report: &RunReport) {
+    let s = &report.flight.summary;
+    match s.outcome {
+        Outcome::Completed => println!(
+            "outcome: COMPLETED, {:.2} s flown (preset {}, wind seed {}, sensor seed {})",
+            s.t_end_s, s.preset, s.wind_seed, s.sensor_seed
+        ),
+        Outcome::Diverged => println!(
+            "outcome: DIVERGED at t = {:.3} s: {}",
+            s.t_end_s,
+            s.reason.as_deref().unwrap_or("unknown reason")
+        ),
+    }
+    println!(
+        "  {:<4} {:>10} {:>8} {:>13} {:>10} {:>10} {:>10}",
+        "out", "excitation", "at [s]", "settle 1% [s]", "overshoot", "RMS err", "max err"
+    );
+    for name in OUTPUTS {
+        if let Some(m) = s.metrics.get(name) {
+            let settle = m
+                .settling_time_s
+                .map_or_else(|| "not settled".to_string(), |v| format!("{v:.2}"));
+            println!(
+                "  {:<4} {:>10.3} {:>8.2} {:>13} {:>9.1}% {:>10.4} {:>10.4}",
+                name,
+                m.excitation,
+                m.excitation_time_s,
+                settle,
+                m.overshoot_pct,
+                m.rms_error,
+                m.max_abs_error
+            );
+        }
+    }
+    println!(
+        "  (velocities in m/s, psi in rad; RMS of u - u_trim [{:.4}, {:.4}, {:.4}, {:.4}], saturated [{:.2}, {:.2}, {:.2}, {:.2}] s)",
+        s.control_effort_rms[0],
+        s.control_effort_rms[1],
+        s.control_effort_rms[2],
+        s.control_effort_rms[3],
+        s.saturation_time_s[0],
+        s.saturation_time_s[1],
+        s.saturation_time_s[2],
+        s.saturation_time_s[3]
+    );
+    let f = &report.files;
+    println!(
+        "wrote {} ({} rows), summary.json, gains.json, scenario.toml, report.md and {} plots to {}",
+        f.log
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        f.log_rows,
+        f.plots.len(),
+        f.dir.display()
+    );
+    println!(
+        "  times: prepare {:.2} s, flight {:.2} s ({:.0}x real time), outputs {:.2} s",
+        report.prepare_s,
+        report.fly_s,
+        s.t_end_s / report.fly_s.max(1e-9),
+        report.write_s
+    );
+}
+
+/// Run `helicon sim`.
+pub fn run(args: &SimArgs) -> Result<()> {
+    let scenario = Scenario::from_file(&args.scenario)?;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("out").join(folder_name(&scenario.name)));
+    println!(
+        "helicon sim: scenario `{}` ({}), preset {}, {} s",
+        scenario.name,
+        args.scenario.display(),
+        scenario.preset.name(),
+        scenario.duration_s
+    );
+    let report = run_scenario(&scenario, &out)?;
+    print_run(&report);
+    Ok(())
+}
