@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 
 mod control;
 mod demo;
+mod mc_cmd;
 mod model_cmd;
 mod sensors;
 mod sim_cmd;
@@ -37,6 +38,10 @@ enum Command {
     Sensors(sensors::SensorsArgs),
     /// Replay a sensor log through attitude determination and the fusion filter (§13.3).
     Fuse(sensors::FuseArgs),
+    /// Monte Carlo campaign: dispersed parameters, wind and sensor seeds (rayon, shards, resume).
+    Mc(mc_cmd::McArgs),
+    /// Time the hot path on this machine: derivative, closed-loop step, real-time factor.
+    Bench(mc_cmd::BenchArgs),
     /// Fly a closed-loop scenario (TOML): log.csv, summary.json, gains, plots, report.
     Sim(sim_cmd::SimArgs),
 }
@@ -76,6 +81,8 @@ fn run() -> anyhow::Result<()> {
             sensors::SensorsCommand::Config => sensors::run_sensors_config(),
         },
         Command::Fuse(a) => sensors::run_fuse(&a),
+        Command::Mc(a) => mc_cmd::run_mc(&a),
+        Command::Bench(a) => mc_cmd::run_bench(&a),
         Command::Sim(a) => sim_cmd::run(&a),
     }
 }

@@ -10,6 +10,7 @@
 //! - [`plot`]: time-series line plots to PNG and SVG.
 
 pub mod closed_loop;
+pub mod mc;
 pub mod metrics;
 pub mod navigation;
 pub mod output;

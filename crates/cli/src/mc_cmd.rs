@@ -1,0 +1,235 @@
+//! `helicon mc CAMPAIGN.toml` (Monte Carlo campaigns, shards, merge) and
+//! `helicon bench` (timings of the hot path on this machine).
+
+use anyhow::{Context, Result};
+use clap::{Args, Subcommand};
+use helicon_model::integrate::rk4;
+use helicon_model::state::expand;
+use helicon_model::trim::{TrimOptions, TrimTarget, trim};
+use helicon_model::{Input, Model, Preset, State};
+use helicon_sim::closed_loop::{fly, prepare};
+use helicon_sim::mc::{Campaign, RunOptions, Shard, merge, run};
+use helicon_sim::scenario::Scenario;
+use indicatif::{ProgressBar, ProgressStyle};
+use nalgebra::Vector3;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// `helicon mc`.
+#[derive(Args, Debug)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct McArgs {
+    /// Merge shard folders instead of running.
+    #[command(subcommand)]
+    pub command: Option<McCommand>,
+    /// Campaign file (TOML; see docs/monte-carlo.md and campaigns/).
+    #[arg(required = true)]
+    pub campaign: Option<PathBuf>,
+    /// Number of runs (overrides the campaign's `runs`).
+    #[arg(long)]
+    pub runs: Option<usize>,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output folder (default `out/mc/<name>-seed<seed>[-shard<K>of<M>]`);
+    /// runs already recorded there are skipped (resume).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Run only indices ≡ K (mod M); K is 0-based (0 ≤ K < M), e.g. a Slurm
+    /// array index `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
+    #[arg(long)]
+    pub shard: Option<Shard>,
+}
+
+/// `helicon mc` subcommands.
+#[derive(Subcommand, Debug)]
+pub enum McCommand {
+    /// Combine shard folders of one campaign (checked by hash) into one.
+    Merge(MergeArgs),
+}
+
+/// `helicon mc merge`.
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// Shard folders.
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Run `helicon mc`.
+pub fn run_mc(args: &McArgs) -> Result<()> {
+    if let Some(McCommand::Merge(m)) = &args.command {
+        let report = merge(&m.dirs, &m.out).context("merging shard folders")?;
+        let s = &report.stats;
+        eprintln!(
+            "merged {} runs into {}: {} completed, {} failed ({:.1} %)",
+            s.runs,
+            m.out.display(),
+            s.completed,
+            s.failed,
+            100.0 * s.failure_fraction
+        );
+        return Ok(());
+    }
+    let Some(path) = &args.campaign else {
+        anyhow::bail!("give a campaign file (or `helicon mc merge DIR... --out DIR`)");
+    };
+    let campaign = Campaign::from_file(path)?;
+    let out = args.out.clone().unwrap_or_else(|| {
+        let mut n = format!("{}-seed{}", campaign.name, campaign.seed);
+        if let Some(s) = args.shard {
+            n.push_str(&format!("-shard{}of{}", s.k, s.m));
+        }
+        PathBuf::from("out").join("mc").join(n)
+    });
+    let options = RunOptions {
+        runs: args.runs,
+        threads: args.threads,
+        shard: args.shard,
+    };
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} runs ({per_sec}, ETA {eta})",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let progress = |done: usize, total: usize| {
+        if bar.length() != Some(total as u64) {
+            bar.set_length(total as u64);
+        }
+        bar.set_position(done as u64);
+    };
+    let t0 = Instant::now();
+    let report = run(&campaign, &options, &out, Some(&progress))
+        .with_context(|| format!("campaign {}", path.display()))?;
+    bar.finish_and_clear();
+    let s = &report.stats;
+    eprintln!(
+        "{}: {} runs flown in {:.1} s ({} already done), {} recorded: {} completed, {} failed ({:.1} %)",
+        campaign.name,
+        report.flown,
+        t0.elapsed().as_secs_f64(),
+        report.skipped,
+        s.runs,
+        s.completed,
+        s.failed,
+        100.0 * s.failure_fraction
+    );
+    for (reason, n) in &s.reasons {
+        eprintln!("  {n:6} × {reason}");
+    }
+    eprintln!("outputs in {}", out.display());
+    Ok(())
+}
+
+/// `helicon bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Print `{"derivative_ns", "closed_loop_step_ns", "closed_loop_rtf"}` as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The closed loop measured by `helicon bench`: thesis controller with
+/// sensors, q-method + fusion and the state estimator, hovering in calm air.
+pub const BENCH_SCENARIO: &str = r#"
+name = "bench"
+preset = "thesis"
+duration_s = 2.0
+[controller]
+input_max = [0.1, 0.7, 0.7, 0.04]
+estimator = true
+fusion = true
+"#;
+
+/// Run `helicon bench`.
+pub fn run_bench(args: &BenchArgs) -> Result<()> {
+    // 1. derivative: hover trim of the Bergen Twin, batches of evaluations
+    let model = Model::bergen_twin(Preset::Thesis);
+    let t = trim(
+        &model,
+        &TrimTarget {
+            velocity_ned_m_s: Vector3::zeros(),
+            yaw_rad: 0.0,
+            wind_ned_m_s: Vector3::zeros(),
+        },
+        &TrimOptions::default(),
+    )
+    .context("hover trim")?;
+    let x: State = expand(&t.x, [0.0; 3]);
+    let u: Input = t.u;
+    let w = Vector3::zeros();
+    let batch = 20_000;
+    let mut per = Vec::new();
+    let mut sink = 0.0;
+    for _ in 0..15 {
+        let t0 = Instant::now();
+        for _ in 0..batch {
+            let (d, _) = model.derivative(std::hint::black_box(&x), &u, &w)?;
+            sink += d[5];
+        }
+        per.push(t0.elapsed().as_secs_f64() * 1e9 / f64::from(batch));
+    }
+    let derivative_ns = median(per);
+    // RK4 step for reference (4 derivatives)
+    let mut per = Vec::new();
+    for _ in 0..15 {
+        let t0 = Instant::now();
+        for _ in 0..batch / 4 {
+            let n = rk4(std::hint::black_box(&x), 0.0025, |s| {
+                model.derivative(s, &u, &w).map(|r| r.0)
+            })?;
+            sink += n[5];
+        }
+        per.push(t0.elapsed().as_secs_f64() * 1e9 / f64::from(batch / 4));
+    }
+    let rk4_ns = median(per);
+    std::hint::black_box(sink);
+    // 2. closed loop: whole flights (sensors, fusion, estimator, controller,
+    // RK4, logging and metrics) divided by their steps; median of flights
+    let scenario = Scenario::from_toml_str(BENCH_SCENARIO, "<bench scenario>")?;
+    let prepared = prepare(&scenario)?;
+    let mut per = Vec::new();
+    for _ in 0..15 {
+        let t0 = Instant::now();
+        let f = fly(&scenario, &prepared, None)?;
+        let steps = f.log.len().max(1) as f64;
+        per.push(t0.elapsed().as_secs_f64() * 1e9 / steps);
+    }
+    let step_ns = median(per);
+    let ts = scenario.controller.design.sample_time_s;
+    let rtf = ts * 1e9 / step_ns;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "derivative_ns": derivative_ns,
+                "closed_loop_step_ns": step_ns,
+                "closed_loop_rtf": rtf,
+            })
+        );
+    } else {
+        println!(
+            "derivative f(x, u, wind)        {derivative_ns:10.0} ns (median of 15 batches of {batch})"
+        );
+        println!("RK4 step (4 derivatives)         {rk4_ns:10.0} ns");
+        println!(
+            "closed-loop step (sensors, fusion, estimator, controller, RK4, log) {step_ns:10.0} ns (median of 15 flights of {} s)",
+            scenario.duration_s
+        );
+        println!(
+            "closed-loop real-time factor     {rtf:10.0} × (one thread, Ts = {} ms)",
+            ts * 1e3
+        );
+    }
+    Ok(())
+}
