@@ -81,6 +81,7 @@ pub struct FlightController {
     saturated: [bool; NUI],
     ts: f64,
     accel_body: Vector3<f64>,
+    reference_in_proportional: bool,
 }
 
 fn fixed<const R: usize, const C: usize>(
@@ -129,6 +130,7 @@ impl FlightController {
             x_i: SVector::zeros(),
             saturated: [false; NUI],
             ts: gains.config.sample_time_s,
+            reference_in_proportional: gains.config.reference_in_proportional,
             accel_body: Vector3::zeros(),
         })
     }
@@ -179,11 +181,13 @@ impl FlightController {
 
         let u = if self.switches.feedback {
             let mut x_fb = x_dev;
-            // output states relative to the reference (ψ error, body velocity error)
-            x_fb[2] = -e_psi;
-            let r_body = ned_from_body.transpose() * reference.velocity_ned_m_s;
-            for i in 0..3 {
-                x_fb[3 + i] = v_body[i] - r_body[i];
+            if self.reference_in_proportional {
+                // output states relative to the reference (ψ error, body velocity error)
+                x_fb[2] = -e_psi;
+                let r_body = ned_from_body.transpose() * reference.velocity_ned_m_s;
+                for i in 0..3 {
+                    x_fb[3 + i] = v_body[i] - r_body[i];
+                }
             }
             let xi_v_body =
                 ned_from_body.transpose() * Vector3::new(self.x_i[1], self.x_i[2], self.x_i[3]);

@@ -53,6 +53,10 @@ pub struct ControllerConfig {
     pub process_noise: f64,
     /// Rey = measurement_noise · I₉ (15.12).
     pub measurement_noise: f64,
+    /// Reference enters the proportional path too (the output states are fed
+    /// back relative to the reference); off: the reference acts only through
+    /// the integrators, as the thesis's Figure 14.4.
+    pub reference_in_proportional: bool,
     /// Integral action (14.28)–(14.34); off gives the proportional LQR of
     /// §14.3.3 (Figure 14.3), u = −Ls,α x with Q1 = Hsᵀ Qy Hs (14.14).
     pub integral_action: bool,
@@ -72,6 +76,7 @@ impl Default for ControllerConfig {
             process_noise: 1.0,
             measurement_noise: 1e-3,
             integral_action: true,
+            reference_in_proportional: false,
         }
     }
 }

@@ -411,6 +411,25 @@ pub fn fly(
             ));
             break;
         }
+        let rate = x[ix::P].abs().max(x[ix::Q].abs()).max(x[ix::R].abs());
+        if rate > scenario.plant.max_rate_rad_s {
+            reason = Some(format!(
+                "body rate {rate:.2} rad/s beyond {} rad/s at t = {:.3} s",
+                scenario.plant.max_rate_rad_s,
+                t + ts
+            ));
+            break;
+        }
+        let r_next = scenario.reference_at(t + ts);
+        let yaw_err = x[ix::PSI] - r_next[3];
+        if yaw_err.abs() > scenario.plant.max_yaw_error_rad {
+            reason = Some(format!(
+                "heading {:.2} rad is {yaw_err:.2} rad from its reference at t = {:.3} s: the helicopter spins away",
+                x[ix::PSI],
+                t + ts
+            ));
+            break;
+        }
         if let Some(cb) = progress.as_mut()
             && k % 400 == 0
         {

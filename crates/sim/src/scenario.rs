@@ -172,6 +172,11 @@ pub struct PlantSection {
     pub inflow_iterations: u32,
     /// Divergence: |φ| or |θ| beyond this (rad) stops the run.
     pub max_attitude_rad: f64,
+    /// Divergence: any body rate beyond this (rad/s) stops the run.
+    pub max_rate_rad_s: f64,
+    /// Divergence: the heading more than this (rad, unwrapped) away from its
+    /// reference — the helicopter spins away (thesis Figure F.4).
+    pub max_yaw_error_rad: f64,
 }
 
 impl Default for PlantSection {
@@ -181,6 +186,8 @@ impl Default for PlantSection {
             inflow: PlantInflow::Converged,
             inflow_iterations: 7,
             max_attitude_rad: 1.2,
+            max_rate_rad_s: 10.0,
+            max_yaw_error_rad: 2.0 * std::f64::consts::PI,
         }
     }
 }
@@ -365,12 +372,14 @@ impl Scenario {
         if self.plant.substeps == 0 {
             return Err(bad("plant.substeps", "0".into(), "must be >= 1"));
         }
-        if !(self.plant.max_attitude_rad.is_finite() && self.plant.max_attitude_rad > 0.0) {
-            return Err(bad(
-                "plant.max_attitude_rad",
-                self.plant.max_attitude_rad.to_string(),
-                "must be > 0",
-            ));
+        for (f, v) in [
+            ("plant.max_attitude_rad", self.plant.max_attitude_rad),
+            ("plant.max_rate_rad_s", self.plant.max_rate_rad_s),
+            ("plant.max_yaw_error_rad", self.plant.max_yaw_error_rad),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(f, v.to_string(), "must be finite and > 0"));
+            }
         }
         if self.log.decimation == 0 {
             return Err(bad("log.decimation", "0".into(), "must be >= 1"));
