@@ -180,7 +180,7 @@ pub fn print_run(report: &RunReport) {
         f.dir.display()
     );
     println!(
-        "  times: prepare {:.2} s, flight {:.2} s ({:.0}x real time), outputs {:.2} s",
+        "  times: prepare {:.3} s, flight {:.3} s ({:.0}x real time), outputs {:.3} s",
         report.prepare_s,
         report.fly_s,
         s.t_end_s / report.fly_s.max(1e-9),
