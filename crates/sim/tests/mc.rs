@@ -48,10 +48,26 @@ kind = "absolute"
 sigma = 0.01
 "#;
 
-fn tmp(name: &str) -> PathBuf {
+/// A fresh temporary folder, removed when dropped.
+struct Tmp(PathBuf);
+
+impl Drop for Tmp {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+impl std::ops::Deref for Tmp {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+fn tmp(name: &str) -> Tmp {
     let d = std::env::temp_dir().join(format!("helicon-mc-test-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
-    d
+    Tmp(d)
 }
 
 fn small() -> Campaign {
@@ -142,7 +158,7 @@ fn two_shards_merged_equal_the_unsharded_campaign() {
             .skip(1)
             .all(|l| l.split(',').next().unwrap().parse::<usize>().unwrap() % 2 == 0)
     );
-    merge(&[s0.clone(), s1.clone()], &merged).unwrap();
+    merge(&[s0.to_path_buf(), s1.to_path_buf()], &merged).unwrap();
     for f in ["runs.csv", "traces.csv", "stats.json", "stats.md"] {
         assert_eq!(read(&full.join(f)), read(&merged.join(f)), "{f}");
     }
@@ -160,7 +176,7 @@ fn two_shards_merged_equal_the_unsharded_campaign() {
         None,
     )
     .unwrap();
-    let e = merge(&[s0, od.clone()], &tmp("bad-merge")).unwrap_err();
+    let e = merge(&[s0.to_path_buf(), od.to_path_buf()], &tmp("bad-merge")).unwrap_err();
     assert!(matches!(e, McError::Mismatch { .. }), "{e}");
     // and so is running a different campaign into an existing folder
     let e = run(&c, &RunOptions::default(), &od, None).unwrap_err();
