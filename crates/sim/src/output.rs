@@ -515,3 +515,84 @@ pub fn write_run(
         log_rows,
     })
 }
+
+/// One flown case of a multi-case scenario (`[[case]]`), for
+/// [`write_cases_index`].
+#[derive(Debug, Clone, Copy)]
+pub struct CaseRun<'a> {
+    /// Case name (the `[[case]] name`, without the scenario's prefix).
+    pub case: &'a str,
+    /// Its summary.
+    pub summary: &'a Summary,
+}
+
+/// For a scenario with `[[case]]` entries flown into `dir/<case>/`: write
+/// `dir/summary.json` (`{"scenario": name, "cases": {<case>: summary, ...}}`)
+/// and `dir/report.md` (one table row per case, linking each case's
+/// report). Returns the two paths.
+pub fn write_cases_index(
+    dir: &Path,
+    scenario_name: &str,
+    cases: &[CaseRun<'_>],
+) -> Result<(PathBuf, PathBuf), OutputError> {
+    std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
+    let summary = dir.join("summary.json");
+    let mut map = serde_json::Map::new();
+    for c in cases {
+        let v = serde_json::to_value(c.summary).map_err(|e| OutputError::Serialize {
+            path: summary.display().to_string(),
+            message: e.to_string(),
+        })?;
+        map.insert(c.case.to_string(), v);
+    }
+    let doc = serde_json::json!({ "scenario": scenario_name, "cases": map });
+    let text = serde_json::to_string_pretty(&doc).map_err(|e| OutputError::Serialize {
+        path: summary.display().to_string(),
+        message: e.to_string(),
+    })?;
+    std::fs::write(&summary, text + "\n").map_err(|e| io_err(&summary, e))?;
+
+    let mut r = String::new();
+    let _ = writeln!(
+        r,
+        "# helicon run: {scenario_name} ({} cases)\n",
+        cases.len()
+    );
+    let _ = writeln!(
+        r,
+        "1 % settling time (s) / overshoot (%) / RMS error per output; velocities in m/s, psi in rad.\n"
+    );
+    let _ = writeln!(r, "| case | outcome | vn | ve | vd | psi | report |");
+    let _ = writeln!(r, "|---|---|---|---|---|---|---|");
+    for c in cases {
+        let s = c.summary;
+        let outcome = match &s.reason {
+            Some(why) => format!("diverged at {:.3} s: {why}", s.t_end_s),
+            None => "completed".to_string(),
+        };
+        let cells: Vec<String> = OUTPUTS
+            .iter()
+            .map(|o| {
+                s.metrics.get(*o).map_or_else(String::new, |m| {
+                    format!(
+                        "{} / {:.1} / {:.4}",
+                        fmt_opt(m.settling_time_s),
+                        m.overshoot_pct,
+                        m.rms_error
+                    )
+                })
+            })
+            .collect();
+        let _ = writeln!(
+            r,
+            "| {} | {outcome} | {} | [{}/report.md]({}/report.md) |",
+            c.case,
+            cells.join(" | "),
+            c.case,
+            c.case
+        );
+    }
+    let report = dir.join("report.md");
+    std::fs::write(&report, r).map_err(|e| io_err(&report, e))?;
+    Ok((summary, report))
+}
