@@ -461,6 +461,7 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
         accel_sigma_m_s2: args.accel_sigma_m_s2,
         euler_rate_sigma_rad_s: args.rate_sigma_rad_s,
         gps_sigma_m: Vector3::new(args.gps_sigma_h_m, args.gps_sigma_h_m, args.gps_sigma_v_m),
+        gps_vel_sigma_m_s: Vector3::new(0.1, 0.1, 0.2),
         attitude_sigma_rad: Vector3::repeat(args.attitude_sigma_rad),
     };
     if args.own_accel == OwnAccel::Truth && rows.iter().all(|r| r.true_acc.is_none()) {
@@ -536,6 +537,7 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
                     specific_force_body_m_s2: last_f,
                     gyro_body_rad_s: last_w,
                     gps_ned_m: r.gps,
+                    gps_vel_ned_m_s: None,
                     attitude_rad: att,
                 })
                 .with_context(|| format!("{}: row {}: fusion filter", args.log.display(), k + 1))?;

@@ -26,6 +26,7 @@ fn bench_fusion_step(c: &mut Criterion) {
         specific_force_body_m_s2: Vector3::new(0.1, -0.05, -9.8),
         gyro_body_rad_s: Vector3::new(0.01, 0.02, -0.01),
         gps_ned_m: Some(Vector3::new(0.1, 0.2, -0.1)),
+        gps_vel_ned_m_s: None,
         attitude_rad: Some(Vector3::new(0.01, 0.0, 0.02)),
     };
     // Each iteration starts from the same filter (a long run of constant
@@ -39,6 +40,7 @@ fn bench_fusion_step(c: &mut Criterion) {
     });
     let input_pred = FusionInput {
         gps_ned_m: None,
+        gps_vel_ned_m_s: None,
         attitude_rad: None,
         ..input
     };

@@ -85,6 +85,9 @@ pub struct FusionConfig {
     pub gps_sigma_m: Vector3<f64>,
     /// Standard deviation of the attitude measurement (rad), per angle.
     pub attitude_sigma_rad: Vector3<f64>,
+    /// Standard deviation of the GPS (Doppler) velocity (m/s), per NED axis:
+    /// an extension beyond the thesis, which fused GPS position only.
+    pub gps_vel_sigma_m_s: Vector3<f64>,
 }
 
 impl Default for FusionConfig {
@@ -97,6 +100,7 @@ impl Default for FusionConfig {
             accel_sigma_m_s2: 0.1,
             euler_rate_sigma_rad_s: 0.01,
             gps_sigma_m: Vector3::new(1.5, 1.5, 3.0),
+            gps_vel_sigma_m_s: Vector3::new(0.1, 0.1, 0.2),
             attitude_sigma_rad: Vector3::new(0.02, 0.02, 0.02),
         }
     }
@@ -125,6 +129,9 @@ impl FusionConfig {
         for v in self.attitude_sigma_rad.iter() {
             pos("attitude_sigma_rad", *v)?;
         }
+        for v in self.gps_vel_sigma_m_s.iter() {
+            pos("gps_vel_sigma_m_s", *v)?;
+        }
         Ok(())
     }
 }
@@ -138,6 +145,8 @@ pub struct FusionInput {
     pub gyro_body_rad_s: Vector3<f64>,
     /// GPS position in NED at k (m), `None` when no fix.
     pub gps_ned_m: Option<Vector3<f64>>,
+    /// GPS velocity in NED at k (m/s), `None` when the receiver gives none.
+    pub gps_vel_ned_m_s: Option<Vector3<f64>>,
     /// Attitude measurement (φ, θ, ψ) at k (rad) from the q-method, if any.
     pub attitude_rad: Option<Vector3<f64>>,
 }
@@ -342,6 +351,13 @@ impl FusionFilter {
         {
             return Err(FusionError::NonFiniteInput { what: "GPS fix" });
         }
+        if let Some(g) = &input.gps_vel_ned_m_s
+            && !g.iter().all(|v| v.is_finite())
+        {
+            return Err(FusionError::NonFiniteInput {
+                what: "GPS velocity",
+            });
+        }
         if let Some(a) = &input.attitude_rad
             && !a.iter().all(|v| v.is_finite())
         {
@@ -354,6 +370,10 @@ impl FusionFilter {
         if let Some(g) = &input.gps_ned_m {
             let sigma = self.config.gps_sigma_m;
             self.update_block(0, g, &sigma, false)?;
+        }
+        if let Some(v) = &input.gps_vel_ned_m_s {
+            let sigma = self.config.gps_vel_sigma_m_s;
+            self.update_block(3, v, &sigma, false)?;
         }
         if let Some(a) = &input.attitude_rad {
             let sigma = self.config.attitude_sigma_rad;
@@ -384,6 +404,7 @@ mod tests {
             specific_force_body_m_s2: Vector3::new(0.0, 0.0, -cfg.gravity_m_s2),
             gyro_body_rad_s: Vector3::zeros(),
             gps_ned_m: None,
+            gps_vel_ned_m_s: None,
             attitude_rad: None,
         };
         for _ in 0..100 {
@@ -402,6 +423,7 @@ mod tests {
             specific_force_body_m_s2: Vector3::new(f64::NAN, 0.0, 0.0),
             gyro_body_rad_s: Vector3::zeros(),
             gps_ned_m: None,
+            gps_vel_ned_m_s: None,
             attitude_rad: None,
         };
         assert!(f.step(&input).is_err());
@@ -414,6 +436,7 @@ mod tests {
             specific_force_body_m_s2: Vector3::zeros(),
             gyro_body_rad_s: Vector3::zeros(),
             gps_ned_m: None,
+            gps_vel_ned_m_s: None,
             attitude_rad: None,
         };
         assert!(matches!(

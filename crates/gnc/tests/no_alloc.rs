@@ -48,6 +48,7 @@ fn q_method_and_fusion_step_do_not_allocate() {
         specific_force_body_m_s2: Vector3::new(0.1, -0.05, -9.8),
         gyro_body_rad_s: Vector3::new(0.01, 0.02, -0.01),
         gps_ned_m: Some(Vector3::new(0.1, 0.2, -0.1)),
+        gps_vel_ned_m_s: None,
         attitude_rad: Some(Vector3::new(0.01, 0.0, 0.02)),
     };
     let before = ALLOCS.load(Ordering::SeqCst);

@@ -39,6 +39,7 @@ fn xval_fusion_matches_numpy_reference_kf() {
         accel_sigma_m_s2: cfg_line[2],
         euler_rate_sigma_rad_s: cfg_line[3],
         gps_sigma_m: Vector3::new(cfg_line[4], cfg_line[5], cfg_line[6]),
+        gps_vel_sigma_m_s: Vector3::new(0.1, 0.1, 0.2),
         attitude_sigma_rad: Vector3::new(cfg_line[7], cfg_line[8], cfg_line[9]),
     };
     let x0 = Vector9::from_iterator(cfg_line[10..19].iter().copied());
@@ -52,6 +53,7 @@ fn xval_fusion_matches_numpy_reference_kf() {
             specific_force_body_m_s2: Vector3::new(v(0), v(1), v(2)),
             gyro_body_rad_s: Vector3::new(v(3), v(4), v(5)),
             gps_ned_m: parse_opt3(&f, 6),
+            gps_vel_ned_m_s: None,
             attitude_rad: parse_opt3(&f, 9),
         };
         gps_steps += usize::from(input.gps_ned_m.is_some());
@@ -120,6 +122,7 @@ fn thesis_fig_13_5_13_6_fused_beats_gps_and_dead_reckoning() {
         accel_sigma_m_s2: sigma_acc,
         euler_rate_sigma_rad_s: 0.01,
         gps_sigma_m: Vector3::new(sigma_gps, sigma_gps, 2.0),
+        gps_vel_sigma_m_s: Vector3::new(0.1, 0.1, 0.2),
         attitude_sigma_rad: Vector3::repeat(0.01),
     };
     let mut x0 = Vector9::zeros();
@@ -152,6 +155,7 @@ fn thesis_fig_13_5_13_6_fused_beats_gps_and_dead_reckoning() {
                 specific_force_body_m_s2: f_body,
                 gyro_body_rad_s: Vector3::zeros(),
                 gps_ned_m: gps,
+                gps_vel_ned_m_s: None,
                 attitude_rad: Some(Vector3::zeros()),
             })
             .unwrap();

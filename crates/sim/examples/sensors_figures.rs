@@ -64,6 +64,7 @@ fn fig13(dir: &std::path::Path) {
         accel_sigma_m_s2: sigma_acc,
         euler_rate_sigma_rad_s: 0.01,
         gps_sigma_m: Vector3::new(sigma_gps, sigma_gps, 2.0),
+        gps_vel_sigma_m_s: Vector3::new(0.1, 0.1, 0.2),
         attitude_sigma_rad: Vector3::repeat(0.01),
     };
     let mut x0 = Vector9::zeros();
@@ -87,6 +88,7 @@ fn fig13(dir: &std::path::Path) {
             specific_force_body_m_s2: a - Vector3::new(0.0, 0.0, g),
             gyro_body_rad_s: Vector3::zeros(),
             gps_ned_m: z,
+            gps_vel_ned_m_s: None,
             attitude_rad: Some(Vector3::zeros()),
         })
         .unwrap();

@@ -284,7 +284,12 @@ pub fn fly(
     let n = (scenario.duration_s / ts).round() as usize;
     let h = ts / f64::from(scenario.plant.substeps);
     let mut nav = if scenario.controller.fusion {
-        Some(Navigator::new(scenario.sensors, ts, &x)?)
+        Some(Navigator::new(
+            scenario.sensors,
+            &scenario.navigation,
+            ts,
+            &x,
+        )?)
     } else {
         None
     };
@@ -443,6 +448,28 @@ pub fn fly(
     Ok(Flight { log, summary })
 }
 
+/// Make a heading-error sequence continuous (no 2π jumps) and shift it by the
+/// multiple of 2π that brings its final value nearest zero, so a turn through
+/// π in either direction is measured the way the helicopter actually went.
+fn unwrap_heading_error(e: &mut [f64]) {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let mut prev: Option<f64> = None;
+    for v in e.iter_mut() {
+        let w = wrap_pi(*v);
+        *v = match prev {
+            None => w,
+            Some(p) => p + wrap_pi(w - p),
+        };
+        prev = Some(*v);
+    }
+    if let Some(&last) = e.last() {
+        let shift = two_pi * (last / two_pi).round();
+        for v in e.iter_mut() {
+            *v -= shift;
+        }
+    }
+}
+
 fn summarize(
     scenario: &Scenario,
     prepared: &Prepared,
@@ -454,13 +481,12 @@ fn summarize(
     let mut metrics = std::collections::BTreeMap::new();
     let mut excitations = Vec::with_capacity(4);
     for (j, name) in OUTPUTS.iter().enumerate() {
-        let e: Vec<f64> = log
-            .iter()
-            .map(|r| {
-                let d = r.reference[j] - r.output[j];
-                if j == 3 { wrap_pi(d) } else { d }
-            })
-            .collect();
+        let mut e: Vec<f64> = log.iter().map(|r| r.reference[j] - r.output[j]).collect();
+        if j == 3 {
+            unwrap_heading_error(&mut e);
+        }
+        // heading statistics on the wrapped error (a half turn either way is the same heading)
+        let wrapped: Option<Vec<f64>> = (j == 3).then(|| e.iter().map(|v| wrap_pi(*v)).collect());
         // excitation: the last reference change on this output, else the initial error
         let mut t_exc = 0.0;
         let mut size = e.first().map_or(0.0, |v| v.abs());
@@ -475,14 +501,21 @@ fn summarize(
             t_exc = c.t_s + c.ramp_s;
             size = (c.value - before).abs();
         }
-        excitations.push((e, t_exc, size));
+        excitations.push((e, t_exc, size, wrapped));
     }
     let band_scale = excitations.iter().fold(0.0f64, |m, x| m.max(x.2));
-    for (name, (e, t_exc, size)) in OUTPUTS.iter().zip(excitations) {
-        metrics.insert(
-            (*name).to_string(),
-            output_metrics(&t, &e, t_exc, size, band_scale),
-        );
+    for (name, (e, t_exc, size, wrapped)) in OUTPUTS.iter().zip(excitations) {
+        let mut m = output_metrics(&t, &e, t_exc, size, band_scale);
+        if let Some(w) = wrapped {
+            let stats = output_metrics(&t, &w, t_exc, size, band_scale);
+            m.rms_error = stats.rms_error;
+            m.max_abs_error = stats.max_abs_error;
+        }
+        if reason.is_some() {
+            // a run that stopped early never settled
+            m.settling_time_s = None;
+        }
+        metrics.insert((*name).to_string(), m);
     }
     let u_trim = &prepared.gains.u_trim;
     let nrow = log.len().max(1) as f64;

@@ -187,7 +187,7 @@ impl Default for PlantSection {
             inflow_iterations: 7,
             max_attitude_rad: 1.2,
             max_rate_rad_s: 10.0,
-            max_yaw_error_rad: 2.0 * std::f64::consts::PI,
+            max_yaw_error_rad: 3.0 * std::f64::consts::PI,
         }
     }
 }
@@ -237,6 +237,9 @@ pub struct Scenario {
     /// Sensors (used when `controller.fusion`).
     #[serde(default)]
     pub sensors: SensorConfig,
+    /// Navigation filter tuning (used when `controller.fusion`).
+    #[serde(default)]
+    pub navigation: crate::navigation::NavigationConfig,
     /// Controller.
     #[serde(default)]
     pub controller: ControllerSection,
@@ -246,6 +249,9 @@ pub struct Scenario {
     /// Log.
     #[serde(default)]
     pub log: LogSection,
+    /// The expanded `[[case]]` entries (see [`Scenario::cases`]); not a TOML key.
+    #[serde(skip)]
+    pub variants: Vec<Scenario>,
     /// Folder of the scenario file (for relative paths); not in the TOML.
     #[serde(skip)]
     pub base_dir: Option<PathBuf>,
@@ -267,17 +273,69 @@ mod preset_serde {
     }
 }
 
+/// Merge `over` into `base`: tables key by key (recursively), other values replace.
+fn deep_merge(base: &mut toml::Table, over: toml::Table) {
+    for (k, v) in over {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => deep_merge(b, o),
+            (_, v) => {
+                base.insert(k, v);
+            }
+        }
+    }
+}
+
 /// Output names of the metrics, in order.
 pub const OUTPUTS: [&str; 4] = ["vn", "ve", "vd", "psi"];
 
 impl Scenario {
     /// Parse and validate TOML text; `file` names the source in errors.
+    ///
+    /// A scenario may hold `[[case]]` entries (like the thesis's figures with
+    /// sub-plots (a)–(d)): each has a `name` and any scenario keys, deep-merged
+    /// over the rest of the file (tables merge key by key, other values
+    /// replace). Each case is validated as a complete scenario.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
-        let s: Scenario = toml::from_str(text).map_err(|e| ScenarioError::Parse {
+        let parse = |m: String| ScenarioError::Parse {
             file: file.to_string(),
-            message: e.to_string(),
-        })?;
+            message: m,
+        };
+        let mut table: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| parse(e.to_string()))?;
+        let cases = match table.remove("case") {
+            None => Vec::new(),
+            Some(toml::Value::Array(a)) => a,
+            Some(_) => return Err(parse("`case` must be an array of tables ([[case]])".into())),
+        };
+        let base: Scenario = toml::Value::Table(table.clone())
+            .try_into()
+            .map_err(|e: toml::de::Error| parse(e.to_string()))?;
+        let mut variants = Vec::with_capacity(cases.len());
+        let mut names = std::collections::BTreeSet::new();
+        for (i, c) in cases.into_iter().enumerate() {
+            let toml::Value::Table(mut ct) = c else {
+                return Err(parse(format!("case[{i}] must be a table")));
+            };
+            let name = match ct.remove("name") {
+                Some(toml::Value::String(n)) if !n.is_empty() => n,
+                _ => return Err(parse(format!("case[{i}].name must be a non-empty string"))),
+            };
+            if !names.insert(name.clone()) {
+                return Err(parse(format!("case[{i}].name `{name}` is not unique")));
+            }
+            let mut merged = table.clone();
+            deep_merge(&mut merged, ct);
+            let mut v: Scenario = toml::Value::Table(merged)
+                .try_into()
+                .map_err(|e: toml::de::Error| parse(format!("case `{name}`: {e}")))?;
+            v.name = format!("{}-{name}", base.name);
+            v.validate(&format!("{file} (case `{name}`)"))?;
+            variants.push(v);
+        }
+        let mut s = base;
         s.validate(file)?;
+        s.variants = variants;
         Ok(s)
     }
 
@@ -290,7 +348,20 @@ impl Scenario {
         })?;
         let mut s = Self::from_toml_str(&text, &file)?;
         s.base_dir = path.parent().map(Path::to_path_buf);
+        for v in &mut s.variants {
+            v.base_dir = s.base_dir.clone();
+        }
         Ok(s)
+    }
+
+    /// The concrete scenarios to fly: one per `[[case]]` (named
+    /// `<name>-<case>`), or the scenario itself when it has none.
+    pub fn cases(&self) -> Vec<Scenario> {
+        if self.variants.is_empty() {
+            vec![self.clone()]
+        } else {
+            self.variants.clone()
+        }
     }
 
     /// Resolve a path relative to the scenario's folder.
@@ -384,6 +455,9 @@ impl Scenario {
         if self.log.decimation == 0 {
             return Err(bad("log.decimation", "0".into(), "must be >= 1"));
         }
+        self.navigation
+            .validate()
+            .map_err(|e| bad("navigation", String::new(), &e.to_string()))?;
         self.sensors
             .validate(file)
             .map_err(|e| bad("sensors", String::new(), &e.to_string()))?;

@@ -156,6 +156,10 @@ pub struct GpsConfig {
     pub latency_s: f64,
     /// Probability that a fix is lost, 0–1.
     pub dropout_probability: f64,
+    /// Deliver the receiver's (Doppler) velocity with each fix.
+    pub velocity_output: bool,
+    /// Velocity noise σ per horizontal axis (m/s); twice that vertically.
+    pub velocity_sigma_m_s: f64,
 }
 
 impl Default for GpsConfig {
@@ -167,6 +171,8 @@ impl Default for GpsConfig {
             vertical_sigma_m: 3.0,
             latency_s: 0.1,
             dropout_probability: 0.02,
+            velocity_output: true,
+            velocity_sigma_m_s: 0.05,
         }
     }
 }
@@ -297,6 +303,7 @@ impl SensorConfig {
         }
         nonneg("gps.horizontal_sigma_m".into(), self.gps.horizontal_sigma_m)?;
         nonneg("gps.vertical_sigma_m".into(), self.gps.vertical_sigma_m)?;
+        nonneg("gps.velocity_sigma_m_s".into(), self.gps.velocity_sigma_m_s)?;
         if !(self.gps.latency_s.is_finite() && (0.0..=2.0).contains(&self.gps.latency_s)) {
             return Err(bad("gps.latency_s".into(), self.gps.latency_s, "0..=2"));
         }
@@ -321,6 +328,8 @@ pub struct SensorSample {
     pub mag_body: Option<Vector3<f64>>,
     /// GPS fix delivered this step: position NED (m).
     pub gps_ned_m: Option<Vector3<f64>>,
+    /// GPS velocity NED (m/s) delivered with the fix (if the receiver gives it).
+    pub gps_vel_ned_m_s: Option<Vector3<f64>>,
     /// Epoch (s) of the delivered GPS fix (`t_s − latency`).
     pub gps_epoch_s: Option<f64>,
 }
@@ -372,7 +381,8 @@ pub struct SensorSuite {
     step_index: u64,
     mag_every: u64,
     next_gps_epoch_s: f64,
-    pending_gps: VecDeque<(f64, Vector3<f64>)>,
+    pending_gps: VecDeque<(f64, Vector3<f64>, Vector3<f64>)>,
+    rng_gps_vel: ChaCha8Rng,
 }
 
 impl SensorSuite {
@@ -398,6 +408,7 @@ impl SensorSuite {
             mag_every: (config.imu.rate_hz / config.mag.rate_hz).round() as u64,
             next_gps_epoch_s: 0.0,
             pending_gps: VecDeque::new(),
+            rng_gps_vel: stream(13),
         })
     }
 
@@ -448,12 +459,20 @@ impl SensorSuite {
                 n() * g.horizontal_sigma_m,
                 n() * g.vertical_sigma_m,
             );
+            // velocity noise from its own stream: position draws are unchanged
+            let sv = g.velocity_sigma_m_s;
+            let mut nv = || -> f64 { StandardNormal.sample(&mut self.rng_gps_vel) };
+            let vel_noise = Vector3::new(nv() * sv, nv() * sv, 2.0 * nv() * sv);
             if !dropped {
-                self.pending_gps.push_back((epoch, truth.pos_ned_m + noise));
+                self.pending_gps.push_back((
+                    epoch,
+                    truth.pos_ned_m + noise,
+                    truth.vel_ned_m_s + vel_noise,
+                ));
             }
         }
         let mut gps = None;
-        while let Some((epoch, _)) = self.pending_gps.front() {
+        while let Some((epoch, _, _)) = self.pending_gps.front() {
             if truth.t_s + half >= epoch + self.config.gps.latency_s {
                 gps = self.pending_gps.pop_front();
             } else {
@@ -467,6 +486,11 @@ impl SensorSuite {
             gyro_body_rad_s: gyro,
             mag_body,
             gps_ned_m: gps.map(|g| g.1),
+            gps_vel_ned_m_s: if self.config.gps.velocity_output {
+                gps.map(|g| g.2)
+            } else {
+                None
+            },
             gps_epoch_s: gps.map(|g| g.0),
         }
     }
