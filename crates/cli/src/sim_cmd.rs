@@ -8,7 +8,7 @@
 use anyhow::{Context, Result};
 use clap::Args;
 use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly, prepare};
-use helicon_sim::output::{RunFiles, write_run};
+use helicon_sim::output::{CaseRun, RunFiles, write_cases_index, write_run};
 use helicon_sim::scenario::{OUTPUTS, Scenario};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -188,21 +188,62 @@ pub fn print_run(report: &RunReport) {
     );
 }
 
-/// Run `helicon sim`.
+/// Run `helicon sim`: one run folder, or for a scenario with `[[case]]`
+/// entries one sub-folder per case plus a `summary.json`/`report.md` index.
 pub fn run(args: &SimArgs) -> Result<()> {
     let scenario = Scenario::from_file(&args.scenario)?;
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(folder_name(&scenario.name)));
+    let cases = scenario.cases();
     println!(
-        "helicon sim: scenario `{}` ({}), preset {}, {} s",
+        "helicon sim: scenario `{}` ({}), preset {}, {} s{}",
         scenario.name,
         args.scenario.display(),
         scenario.preset.name(),
-        scenario.duration_s
+        scenario.duration_s,
+        if scenario.variants.is_empty() {
+            String::new()
+        } else {
+            format!(", {} cases", cases.len())
+        }
     );
-    let report = run_scenario(&scenario, &out)?;
-    print_run(&report);
+    if scenario.variants.is_empty() {
+        let report = run_scenario(&scenario, &out)?;
+        print_run(&report);
+        return Ok(());
+    }
+    let prefix = format!("{}-", scenario.name);
+    let mut flown = Vec::with_capacity(cases.len());
+    for case in &cases {
+        let label = case
+            .name
+            .strip_prefix(&prefix)
+            .unwrap_or(&case.name)
+            .to_string();
+        let dir = out.join(folder_name(&label));
+        println!("\ncase `{label}` ({})", case.name);
+        let report = run_scenario(case, &dir)?;
+        print_run(&report);
+        flown.push((label, report.flight.summary));
+    }
+    let index: Vec<CaseRun<'_>> = flown
+        .iter()
+        .map(|(label, summary)| CaseRun {
+            case: label,
+            summary,
+        })
+        .collect();
+    let (summary, report) = write_cases_index(&out, &scenario.name, &index)
+        .with_context(|| format!("writing the case index to {}", out.display()))?;
+    let diverged = flown.iter().filter(|(_, s)| s.reason.is_some()).count();
+    println!(
+        "\n{} cases flown, {} completed, {diverged} diverged; index: {} and {}",
+        flown.len(),
+        flown.len() - diverged,
+        summary.display(),
+        report.display()
+    );
     Ok(())
 }

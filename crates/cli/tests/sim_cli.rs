@@ -187,3 +187,61 @@ fn demo_flies_closed_loop_and_writes_plots() {
     assert!(vn_max <= 2.1, "{vn_max}");
     assert!(v["metrics"]["vn"]["rms_error"].as_f64().unwrap() < 1.2);
 }
+
+#[test]
+fn a_scenario_with_cases_flies_each_into_its_folder() {
+    let d = tmpdir("cases");
+    std::fs::write(
+        d.join("two.toml"),
+        "name = \"two\"\nduration_s = 0.3\n[[case]]\nname = \"yaw\"\ninitial = { psi = 0.2 }\n\
+         [[case]]\nname = \"north\"\ninitial = { vn = 0.5 }\n",
+    )
+    .unwrap();
+    let o = helicon_in(&d, &["sim", "two.toml"]);
+    no_panic(&o);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(
+        out.contains("2 cases flown, 2 completed, 0 diverged"),
+        "{out}"
+    );
+    let run = d.join("out/two");
+    for case in ["yaw", "north"] {
+        for f in [
+            "log.csv",
+            "summary.json",
+            "gains.json",
+            "report.md",
+            "output_psi.png",
+        ] {
+            assert!(run.join(case).join(f).exists(), "{case}/{f}");
+        }
+        let s: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(run.join(case).join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(s["scenario"], format!("two-{case}"));
+    }
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(v["scenario"], "two");
+    assert_eq!(v["cases"]["yaw"]["outcome"], "completed");
+    assert_eq!(v["cases"]["north"]["outcome"], "completed");
+    // each case flew its own initial condition
+    assert_eq!(
+        v["cases"]["yaw"]["metrics"]["psi"]["max_abs_error"]
+            .as_f64()
+            .unwrap(),
+        0.2
+    );
+    // (the NED velocity goes through a body rotation and back: within an ulp)
+    let vn = v["cases"]["north"]["metrics"]["vn"]["max_abs_error"]
+        .as_f64()
+        .unwrap();
+    assert!((vn - 0.5).abs() < 1e-12, "{vn}");
+    let report = std::fs::read_to_string(run.join("report.md")).unwrap();
+    assert!(
+        report.contains("[yaw/report.md](yaw/report.md)"),
+        "{report}"
+    );
+}
