@@ -149,6 +149,9 @@ pub struct LogRow {
     pub lambda: [f64; 2],
     /// Main-rotor thrust −hFz (N) and tail-rotor force tFy (N).
     pub thrust: [f64; 2],
+    /// |g(λ)| of the momentum equations (7.33)/(7.56) at the λ used [main,
+    /// tail]: ~1e-13 when converged; large when the thesis iteration is off its root.
+    pub inflow_residual: [f64; 2],
 }
 
 /// Summary of a flight.
@@ -397,6 +400,7 @@ pub fn fly(
             wind_ned: [wind_ned.x, wind_ned.y, wind_ned.z],
             lambda: [aux.lambda_mr, aux.lambda_tr],
             thrust: [-aux.force_mr_hub_n.z, aux.force_tr_y_n],
+            inflow_residual: aux.inflow_residual,
         });
         if let Some(e) = step_err {
             reason = Some(format!("model failed at t = {t:.3} s: {e}"));
