@@ -13,8 +13,9 @@
 //!   dL·φr = (ρ/2)c Cls (Ut θb + Up) Up so nothing is divided by Ut.
 //!
 //! **Exact quadrature.** The integrands are trigonometric polynomials of
-//! degree ≤ 5 in Ψ and polynomials of degree ≤ 5 in r (≤ 4 with twist), so an
-//! 8-point uniform azimuth grid (exact below degree 8) times 3-point
+//! degree ≤ 5 in Ψ and polynomials of degree ≤ 5 in r (≤ 4 with twist), so
+//! a 6-point uniform azimuth grid (exact below degree 6: a uniform N-point sum
+//! of e^{ikΨ} vanishes unless N divides k) times 3-point
 //! Gauss–Legendre in r (exact to degree 5) integrates them exactly; the tests
 //! compare with the closed forms of MODEL.md §6.3 and with a fine grid.
 //!
@@ -24,8 +25,8 @@
 
 use nalgebra::Vector3;
 
-/// Azimuth points (exact for trigonometric degree < 8).
-pub const N_PSI: usize = 8;
+/// Azimuth points (exact for trigonometric degree < 6; the integrands reach 5).
+pub const N_PSI: usize = 6;
 /// Gauss–Legendre points in r (exact to polynomial degree 5).
 pub const N_R: usize = 3;
 

@@ -239,7 +239,8 @@ pub fn initial_state(scenario: &Scenario, trim: &Trim) -> State {
 }
 
 fn outputs(x: &State) -> [f64; 4] {
-    let v = helicon_model::frames::ned_from_body(x[ix::PHI], x[ix::THETA], x[ix::PSI])
+    let v = helicon_model::frames::EulerTrig::new(x[ix::PHI], x[ix::THETA], x[ix::PSI])
+        .ned_from_body()
         * Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
     [v.x, v.y, v.z, x[ix::PSI]]
 }
@@ -297,6 +298,7 @@ pub fn fly(
         None
     };
     let mut lam = (prepared.trim.aux.lambda_mr, prepared.trim.aux.lambda_tr);
+    let schedule = scenario.reference_schedule();
     let mut log = Vec::with_capacity(n + 1);
     let mut reason: Option<String> = None;
     let mut t = 0.0;
@@ -304,7 +306,7 @@ pub fn fly(
     for k in 0..=n {
         t = k as f64 * ts;
         let wind_ned = wind.step(t, ts);
-        let r = scenario.reference_at(t);
+        let r = schedule.at(t);
         let reference = Reference {
             velocity_ned_m_s: Vector3::new(r[0], r[1], r[2]),
             yaw_rad: r[3],
@@ -313,25 +315,22 @@ pub fn fly(
         // measurement
         let measured9: SVector<f64, 9> = match nav.as_mut() {
             Some(nv) => {
-                let acc_ned =
-                    helicon_model::frames::ned_from_body(x[ix::PHI], x[ix::THETA], x[ix::PSI])
-                        * (Vector3::new(prev_xdot[ix::U], prev_xdot[ix::V], prev_xdot[ix::W])
-                            + Vector3::new(x[ix::P], x[ix::Q], x[ix::R]).cross(&Vector3::new(
-                                x[ix::U],
-                                x[ix::V],
-                                x[ix::W],
-                            )));
+                let ned_from_body =
+                    helicon_model::frames::EulerTrig::new(x[ix::PHI], x[ix::THETA], x[ix::PSI])
+                        .ned_from_body();
+                let v_body = Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
+                let omega = Vector3::new(x[ix::P], x[ix::Q], x[ix::R]);
+                // inertial acceleration from the previous sample's derivative (one sample old)
+                let acc_ned = ned_from_body
+                    * (Vector3::new(prev_xdot[ix::U], prev_xdot[ix::V], prev_xdot[ix::W])
+                        + omega.cross(&v_body));
                 let truth = TruthSample {
                     t_s: t,
                     pos_ned_m: Vector3::new(x[ix::X], x[ix::Y], x[ix::Z]),
-                    vel_ned_m_s: helicon_model::frames::ned_from_body(
-                        x[ix::PHI],
-                        x[ix::THETA],
-                        x[ix::PSI],
-                    ) * Vector3::new(x[ix::U], x[ix::V], x[ix::W]),
+                    vel_ned_m_s: ned_from_body * v_body,
                     acc_ned_m_s2: acc_ned,
                     euler_rad: Vector3::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]),
-                    omega_body_rad_s: Vector3::new(x[ix::P], x[ix::Q], x[ix::R]),
+                    omega_body_rad_s: omega,
                 };
                 let own = if scenario.controller.estimator {
                     Some(ctrl.predicted_accel_body())
@@ -429,7 +428,7 @@ pub fn fly(
             ));
             break;
         }
-        let r_next = scenario.reference_at(t + ts);
+        let r_next = schedule.at(t + ts);
         let yaw_err = x[ix::PSI] - r_next[3];
         if yaw_err.abs() > scenario.plant.max_yaw_error_rad {
             reason = Some(format!(

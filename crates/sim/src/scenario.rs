@@ -273,6 +273,34 @@ mod preset_serde {
     }
 }
 
+/// Reference changes sorted by time ([`Scenario::reference_schedule`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReferenceSchedule {
+    start: [f64; 4],
+    /// (t_s, output index, value, ramp_s), sorted by time.
+    changes: Vec<(f64, usize, f64, f64)>,
+}
+
+impl ReferenceSchedule {
+    /// The reference (vn, ve, vd, psi) at time `t_s`: each change ramps (or
+    /// steps) from the value before it. Does not allocate.
+    pub fn at(&self, t_s: f64) -> [f64; 4] {
+        let mut r = self.start;
+        for &(t0, i, value, ramp) in &self.changes {
+            if t_s < t0 {
+                break;
+            }
+            let frac = if ramp > 0.0 {
+                ((t_s - t0) / ramp).min(1.0)
+            } else {
+                1.0
+            };
+            r[i] += frac * (value - r[i]);
+        }
+        r
+    }
+}
+
 /// Merge `over` into `base`: tables key by key (recursively), other values replace.
 fn deep_merge(base: &mut toml::Table, over: toml::Table) {
     for (k, v) in over {
@@ -466,29 +494,36 @@ impl Scenario {
         Ok(())
     }
 
+    /// The reference changes sorted by time, ready for allocation-free
+    /// lookups in the flight loop.
+    pub fn reference_schedule(&self) -> ReferenceSchedule {
+        let mut changes: Vec<(f64, usize, f64, f64)> = self
+            .reference
+            .iter()
+            .map(|c| {
+                (
+                    c.t_s,
+                    OUTPUTS.iter().position(|o| *o == c.output).unwrap_or(0),
+                    c.value,
+                    c.ramp_s,
+                )
+            })
+            .collect();
+        changes.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let t = &self.trim;
+        ReferenceSchedule {
+            start: [
+                t.velocity_ned_m_s[0],
+                t.velocity_ned_m_s[1],
+                t.velocity_ned_m_s[2],
+                t.yaw_rad,
+            ],
+            changes,
+        }
+    }
+
     /// The reference at time t: (vn, ve, vd, psi), starting from the trim.
     pub fn reference_at(&self, t_s: f64) -> [f64; 4] {
-        let mut r = [
-            self.trim.velocity_ned_m_s[0],
-            self.trim.velocity_ned_m_s[1],
-            self.trim.velocity_ned_m_s[2],
-            self.trim.yaw_rad,
-        ];
-        // changes apply in time order; each ramps from the value before it
-        let mut changes: Vec<&ReferenceChange> = self.reference.iter().collect();
-        changes.sort_by(|a, b| a.t_s.total_cmp(&b.t_s));
-        for c in changes {
-            if t_s < c.t_s {
-                break;
-            }
-            let i = OUTPUTS.iter().position(|o| *o == c.output).unwrap_or(0);
-            let frac = if c.ramp_s > 0.0 {
-                ((t_s - c.t_s) / c.ramp_s).min(1.0)
-            } else {
-                1.0
-            };
-            r[i] += frac * (c.value - r[i]);
-        }
-        r
+        self.reference_schedule().at(t_s)
     }
 }

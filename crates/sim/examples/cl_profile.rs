@@ -1,0 +1,14 @@
+//! Flies 10 s of the beyond-thesis scenario once (for profilers such as
+//! `valgrind --tool=callgrind`): `cargo run --release -p helicon-sim --example cl_profile`.
+#![allow(missing_docs, clippy::unwrap_used)]
+use helicon_sim::closed_loop::{fly, prepare};
+use helicon_sim::scenario::Scenario;
+fn main() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenarios/beyond-physical-turbulence.toml");
+    let mut s = Scenario::from_file(&path).unwrap();
+    s.duration_s = 10.0;
+    let p = prepare(&s).unwrap();
+    let f = fly(&s, &p, None).unwrap();
+    println!("{:?}", f.summary.outcome);
+}
