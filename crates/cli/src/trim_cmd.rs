@@ -367,8 +367,9 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
         "inflow": if args.thesis_inflow { "thesis-iteration-7" } else { "converged" },
         "trim": trim_json(&t),
         "affine_residual_norm": lm.xdot0.amax(),
-        "controllable_dimension": reach.dimension,
-        "observable_dimension_c_i9": obs.dimension,
+        "controllability_rank": reach.dimension,
+        "observability_rank": obs.dimension,
+        "observability_outputs": "C = [I9 0]: phi theta psi u v w p q r (15.2)",
         // a numerical zero (the heading integrator) is not unstable
         "unstable_poles": poles.iter().filter(|p| p.value.re > 1e-8).count(),
     });

@@ -147,7 +147,8 @@ fn trim_json_and_linearize_files() {
     assert_eq!(a.lines().count(), 28);
     let s: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
-    assert_eq!(s["controllable_dimension"], 27);
+    assert_eq!(s["controllability_rank"], 27);
+    assert_eq!(s["observability_rank"], 27);
     assert_eq!(s["unstable_poles"], 2);
 
     let out = helicon()
