@@ -389,7 +389,7 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
         )?;
         let dreach = helicon_lti::analysis::reachable_dimension(&phi, &gamma, tol)?;
         summary["discrete"] =
-            json!({"sample_time_s": ts, "controllable_dimension": dreach.dimension});
+            json!({"sample_time_s": ts, "controllability_rank": dreach.dimension});
     }
     std::fs::write(
         args.out.join("summary.json"),
