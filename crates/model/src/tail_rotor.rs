@@ -58,6 +58,13 @@ pub fn advance_ratios(c: &TailRotorConsts, v_tr_m_s: &Vector3<f64>) -> Vector3<f
     v_tr_m_s / c.tip_speed
 }
 
+/// The λ-independent part of the bracket of (D.39):
+/// θtr(1/3 + (μx,tr² + μz,tr²)/2) + (μx,tr p + μz,tr r)/(4Ωtr).
+fn thrust_bracket0(c: &TailRotorConsts, mu: &Vector3<f64>, theta_tr: f64, p: f64, r: f64) -> f64 {
+    let inplane2 = mu.x * mu.x + mu.z * mu.z;
+    theta_tr * (1.0 / 3.0 + inplane2 / 2.0) + (mu.x * p + mu.z * r) / (4.0 * c.omega_tr)
+}
+
 /// The inflow problem (7.56)/(D.41) at collective θtr and body rates p, r:
 /// C_T,tr(λ) from (D.39)/(D.40) is affine in λ.
 pub fn inflow_problem(
@@ -67,14 +74,11 @@ pub fn inflow_problem(
     p: f64,
     r: f64,
 ) -> InflowProblem {
-    let inplane2 = mu.x * mu.x + mu.z * mu.z;
-    let bracket0 =
-        theta_tr * (1.0 / 3.0 + inplane2 / 2.0) + (mu.x * p + mu.z * r) / (4.0 * c.omega_tr);
     let kk = c.k_force / c.ct_denominator;
     InflowProblem {
-        mu_inplane2: inplane2,
+        mu_inplane2: mu.x * mu.x + mu.z * mu.z,
         mu_axial: mu.y,
-        ct0: kk * bracket0,
+        ct0: kk * thrust_bracket0(c, mu, theta_tr, p, r),
         ct1: kk * 0.5,
     }
 }
@@ -88,11 +92,7 @@ pub fn thrust_y(
     r: f64,
     lambda: f64,
 ) -> f64 {
-    let inplane2 = mu.x * mu.x + mu.z * mu.z;
-    -c.k_force
-        * (lambda / 2.0
-            + theta_tr * (1.0 / 3.0 + inplane2 / 2.0)
-            + (mu.x * p + mu.z * r) / (4.0 * c.omega_tr))
+    -c.k_force * (lambda / 2.0 + thrust_bracket0(c, mu, theta_tr, p, r))
 }
 
 /// Tail-rotor torque about its shaft tτy (N·m), (D.42) with the Rtr² factor.
