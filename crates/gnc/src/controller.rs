@@ -193,7 +193,7 @@ impl FlightController {
                 ned_from_body.transpose() * Vector3::new(self.x_i[1], self.x_i[2], self.x_i[3]);
             let xi_body =
                 SVector::<f64, NY>::new(self.x_i[0], xi_v_body.x, xi_v_body.y, xi_v_body.z);
-            self.u_trim - self.ls * x_fb - self.li * xi_body
+            self.u_trim - &self.ls * x_fb - &self.li * xi_body
         } else {
             self.u_trim
         };
@@ -210,7 +210,7 @@ impl FlightController {
                 SVector::<f64, NM>::from_fn(|i, _| y_m[i] - self.x_trim[i] - self.x_hat[i]);
             innov[2] = wrap_pi(innov[2]);
             self.x_hat =
-                self.phi * self.x_hat + self.gamma * (u_sat - self.u_trim) + self.k * innov;
+                &self.phi * self.x_hat + &self.gamma * (u_sat - self.u_trim) + &self.k * innov;
         }
         ControllerOutput {
             u: u_sat,

@@ -28,7 +28,7 @@
 //!
 //! Angles: the ψ innovation is wrapped to (−π, π] and ψ is kept in (−π, π].
 
-use helicon_model::frames::{euler_rates, ned_from_body};
+use helicon_model::frames::EulerTrig;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// 9×9 matrix of the fusion filter.
@@ -254,9 +254,10 @@ impl FusionFilter {
         if theta.cos().abs() < MIN_COS_THETA {
             return Err(FusionError::GimbalLock { theta_rad: theta });
         }
-        let acc_ned = ned_from_body(phi, theta, psi) * specific_force_body_m_s2
+        let trig = EulerTrig::new(phi, theta, psi);
+        let acc_ned = trig.ned_from_body() * specific_force_body_m_s2
             + Vector3::new(0.0, 0.0, self.config.gravity_m_s2);
-        let rates = euler_rates(phi, theta, gyro_body_rad_s); // (9.14)
+        let rates = trig.euler_rates(gyro_body_rad_s); // (9.14)
         let mut u = SVector::<f64, 6>::zeros();
         u.fixed_rows_mut::<3>(0).copy_from(&acc_ned);
         u.fixed_rows_mut::<3>(3).copy_from(&rates);

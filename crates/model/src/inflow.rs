@@ -124,6 +124,14 @@ impl InflowProblem {
     /// Solve g(λ) = 0 to |g| < [`G_TOL`] (and |Δλ| ≤ 1e-15 in Newton),
     /// safeguarded by a bracket (module docs). Never returns NaN.
     pub fn solve(&self) -> Result<InflowSolution, InflowError> {
+        self.solve_from(None)
+    }
+
+    /// As [`InflowProblem::solve`], with Newton started from `hint` (e.g. the
+    /// previous time step's λ) when it is finite and on the same side of
+    /// λ = 0 as the hover-like start; the converged root is the same, only
+    /// the iteration count drops. The bracketed fallback is unchanged.
+    pub fn solve_from(&self, hint: Option<f64>) -> Result<InflowSolution, InflowError> {
         if !(self.mu_inplane2.is_finite()
             && self.mu_axial.is_finite()
             && self.ct0.is_finite()
@@ -136,8 +144,12 @@ impl InflowProblem {
                 ct1: self.ct1,
             });
         }
-        let mut lam = self.start();
-        // Fast path: Newton from the start value (typically 3-5 steps).
+        let start = self.start();
+        let mut lam = match hint {
+            Some(h) if h.is_finite() && h * start > 0.0 => h,
+            _ => start,
+        };
+        // Fast path: Newton from the start value (typically 3-5 steps; 1-2 warm).
         let mut iterations = 0u32;
         for _ in 0..12 {
             iterations += 1;

@@ -291,15 +291,26 @@ impl Model {
         let tr_problem = tail_rotor::inflow_problem(&c.tr, &mu_tr, theta_tr, pr, rr);
 
         let (lam_flap, lam, lam_tr) = match inflow {
-            InflowMode::Converged => {
-                let s = mr_problem.solve().map_err(|source| ModelError::Inflow {
-                    rotor: "main rotor",
-                    source,
-                })?;
-                let st = tr_problem.solve().map_err(|source| ModelError::Inflow {
-                    rotor: "tail rotor",
-                    source,
-                })?;
+            InflowMode::Converged | InflowMode::ConvergedFrom { .. } => {
+                let (h_mr, h_tr) = match inflow {
+                    InflowMode::ConvergedFrom {
+                        lambda_mr_hint,
+                        lambda_tr_hint,
+                    } => (Some(lambda_mr_hint), Some(lambda_tr_hint)),
+                    _ => (None, None),
+                };
+                let s = mr_problem
+                    .solve_from(h_mr)
+                    .map_err(|source| ModelError::Inflow {
+                        rotor: "main rotor",
+                        source,
+                    })?;
+                let st = tr_problem
+                    .solve_from(h_tr)
+                    .map_err(|source| ModelError::Inflow {
+                        rotor: "tail rotor",
+                        source,
+                    })?;
                 aux.inflow_iterations = [s.iterations, st.iterations];
                 aux.inflow_residual = [s.residual, st.residual];
                 (s.lambda, s.lambda, st.lambda)

@@ -128,6 +128,15 @@ impl FromStr for Preset {
 pub enum InflowMode {
     /// Solve (7.33)/(7.56) to convergence; flapping and forces use the same λ.
     Converged,
+    /// As `Converged`, with the solver's Newton iteration started from the
+    /// given ratios (e.g. the previous step's): the same converged root, fewer
+    /// iterations. For simulation loops.
+    ConvergedFrom {
+        /// Main-rotor λ to start from.
+        lambda_mr_hint: f64,
+        /// Tail-rotor λ to start from.
+        lambda_tr_hint: f64,
+    },
     /// Emulate the thesis implementation (MODEL.md §8, §11 items 1–2): the
     /// flapping uses the given λ (carried as a state in the thesis), and the
     /// forces use λ after `iterations` plain Newton–Raphson steps (7.33)/(D.32)

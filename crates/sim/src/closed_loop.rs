@@ -362,7 +362,10 @@ pub fn fly(
         for _ in 0..scenario.plant.substeps {
             let res = rk4(&x, h, |s| {
                 let inflow = match scenario.plant.inflow {
-                    PlantInflow::Converged => InflowMode::Converged,
+                    PlantInflow::Converged => InflowMode::ConvergedFrom {
+                        lambda_mr_hint: lam.0,
+                        lambda_tr_hint: lam.1,
+                    },
                     PlantInflow::ThesisIteration => InflowMode::ThesisIteration {
                         lambda_mr_in: lam.0,
                         lambda_tr_in: lam.1,
@@ -370,9 +373,8 @@ pub fn fly(
                     },
                 };
                 let (d, a) = model.derivative_with(s, &u, &wind_ned, inflow)?;
-                if scenario.plant.inflow == PlantInflow::ThesisIteration {
-                    lam = (a.lambda_mr, a.lambda_tr);
-                }
+                // warm start (converged) or the thesis's recursion (iteration)
+                lam = (a.lambda_mr, a.lambda_tr);
                 if aux_first.is_none() {
                     aux_first = Some((a, d));
                 }

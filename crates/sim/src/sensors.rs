@@ -431,13 +431,16 @@ impl SensorSuite {
     /// IMU rate with increasing times).
     pub fn sample(&mut self, truth: &TruthSample) -> SensorSample {
         let rate = self.config.imu.rate_hz;
-        let f_true = truth.specific_force_body(self.config.gravity_m_s2);
+        // one rotation per sample for the accelerometer and the magnetometer
+        let body_from_ned = truth.body_from_ned();
+        let f_true =
+            body_from_ned * (truth.acc_ned_m_s2 - Vector3::new(0.0, 0.0, self.config.gravity_m_s2));
         let specific_force = self.accel.measure(&f_true, rate, &mut self.rng_imu);
         let gyro = self
             .gyro
             .measure(&truth.omega_body_rad_s, rate, &mut self.rng_imu);
         let mag_body = if self.step_index % self.mag_every == 0 {
-            let m = truth.to_body(&Vector3::from(self.config.mag.field_ned));
+            let m = body_from_ned * Vector3::from(self.config.mag.field_ned);
             let s = self.config.mag.noise_sigma;
             let mut n = || -> f64 { StandardNormal.sample(&mut self.rng_mag) };
             Some(m + Vector3::new(n(), n(), n()) * s)

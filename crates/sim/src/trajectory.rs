@@ -7,7 +7,7 @@
 //! turning at `ω`. Everything (acceleration, Euler rates, body rates) is the
 //! exact derivative, so sensor errors come from the sensor models only.
 
-use helicon_model::frames::body_from_ned;
+use helicon_model::frames::EulerTrig;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -32,14 +32,18 @@ impl TruthSample {
     /// Specific force in body axes `f = R_be (a − g)` (m/s²): what an ideal
     /// accelerometer at the centre of mass reads.
     pub fn specific_force_body(&self, gravity_m_s2: f64) -> Vector3<f64> {
+        self.body_from_ned() * (self.acc_ned_m_s2 - Vector3::new(0.0, 0.0, gravity_m_s2))
+    }
+
+    /// The rotation `body_from_ned` = R_be of this attitude (9.5).
+    pub fn body_from_ned(&self) -> nalgebra::Matrix3<f64> {
         let e = &self.euler_rad;
-        body_from_ned(e.x, e.y, e.z) * (self.acc_ned_m_s2 - Vector3::new(0.0, 0.0, gravity_m_s2))
+        EulerTrig::new(e.x, e.y, e.z).ned_from_body().transpose()
     }
 
     /// A NED vector expressed in body axes, `R_be v` (9.5).
     pub fn to_body(&self, v_ned: &Vector3<f64>) -> Vector3<f64> {
-        let e = &self.euler_rad;
-        body_from_ned(e.x, e.y, e.z) * v_ned
+        self.body_from_ned() * v_ned
     }
 }
 
