@@ -157,3 +157,46 @@ fn open_loop_drift_follows_the_unstable_modes() {
         );
     }
 }
+
+#[test]
+fn conditions_beyond_saturation_are_reported_not_clipped() {
+    // 30 m/s forward needs more collective than S_col,max = 0.30 allows: the
+    // trim converges with saturation lifted and names the input.
+    let model = Model::bergen_twin(Preset::Physical);
+    let target = TrimTarget {
+        velocity_ned_m_s: Vector3::new(30.0, 0.0, 0.0),
+        ..TrimTarget::hover()
+    };
+    let t = trim(&model, &target, &TrimOptions::default()).unwrap();
+    assert!(t.residual_norm < 1e-9);
+    assert_eq!(t.beyond_saturation.len(), 1, "{:?}", t.beyond_saturation);
+    let v = &t.beyond_saturation[0];
+    assert_eq!(v.input, "S_col");
+    assert!(v.value > v.max && t.u[0] == v.value);
+    // and a hover is flyable
+    let h = trim(&model, &TrimTarget::hover(), &TrimOptions::default()).unwrap();
+    assert!(h.beyond_saturation.is_empty());
+}
+
+#[test]
+fn failure_names_the_remaining_equations() {
+    // One iteration cannot converge from a cold start: the error names the
+    // equations with the largest residuals and the iterations used.
+    let model = Model::bergen_twin(Preset::Physical);
+    let opts = TrimOptions {
+        max_iterations: 1,
+        ..TrimOptions::default()
+    };
+    let e = trim(&model, &TrimTarget::hover(), &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("after 1 iterations") && e.contains("d") && e.contains("/dt"),
+        "{e}"
+    );
+    let bad = TrimTarget {
+        yaw_rad: f64::NAN,
+        ..TrimTarget::hover()
+    };
+    assert!(trim(&model, &bad, &TrimOptions::default()).is_err());
+}
