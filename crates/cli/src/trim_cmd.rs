@@ -202,7 +202,11 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
     if !(args.step > 0.0 && args.step.is_finite() && args.from.is_finite() && args.to.is_finite()) {
         bail!("--step must be > 0 and --from/--to finite");
     }
-    let n = ((args.to - args.from).abs() / args.step).round() as usize;
+    let count = ((args.to - args.from).abs() / args.step).round();
+    if count > 100_000.0 {
+        bail!("--from/--to/--step give {count} sweep points; at most 100000");
+    }
+    let n = count as usize;
     let dir = if args.to >= args.from { 1.0 } else { -1.0 };
     let values: Vec<f64> = (0..=n)
         .map(|k| args.from + dir * args.step * k as f64)

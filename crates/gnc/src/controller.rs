@@ -82,6 +82,7 @@ pub struct FlightController {
     ts: f64,
     accel_body: Vector3<f64>,
     reference_in_proportional: bool,
+    anti_windup: bool,
 }
 
 fn fixed<const R: usize, const C: usize>(
@@ -131,6 +132,7 @@ impl FlightController {
             saturated: [false; NUI],
             ts: gains.config.sample_time_s,
             reference_in_proportional: gains.config.reference_in_proportional,
+            anti_windup: gains.config.anti_windup,
             accel_body: Vector3::zeros(),
         })
     }
@@ -206,7 +208,9 @@ impl FlightController {
             self.saturated[i] = u_sat[i] != u[i];
         }
         // integral action (14.29)
-        self.x_i += error;
+        if !(self.anti_windup && self.saturated.iter().any(|&b| b)) {
+            self.x_i += error;
+        }
         // Kalman predictor (15.8), yaw innovation wrapped
         if self.switches.estimator {
             let mut innov =

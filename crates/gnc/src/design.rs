@@ -57,6 +57,10 @@ pub struct ControllerConfig {
     /// back relative to the reference); off: the reference acts only through
     /// the integrators, as the thesis's Figure 14.4.
     pub reference_in_proportional: bool,
+    /// Anti-windup by conditional integration: the integrators hold while
+    /// any servo command is saturated. Off (default) integrates always, as
+    /// the thesis's (14.29).
+    pub anti_windup: bool,
     /// Integral action (14.28)–(14.34); off gives the proportional LQR of
     /// §14.3.3 (Figure 14.3), u = −Ls,α x with Q1 = Hsᵀ Qy Hs (14.14).
     pub integral_action: bool,
@@ -77,6 +81,7 @@ impl Default for ControllerConfig {
             measurement_noise: 1e-3,
             integral_action: true,
             reference_in_proportional: false,
+            anti_windup: false,
         }
     }
 }

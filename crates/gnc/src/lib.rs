@@ -13,6 +13,7 @@ pub mod attitude;
 pub mod controller;
 pub mod design;
 pub mod fusion;
+pub mod navigation;
 
 pub use attitude::{AttitudeError, AttitudeSolution, VectorObservation, q_method};
 pub use fusion::{FusionConfig, FusionError, FusionFilter, FusionInput};

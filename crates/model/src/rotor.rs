@@ -13,7 +13,7 @@
 //!   dL·φr = (ρ/2)c Cls (Ut θb + Up) Up so nothing is divided by Ut.
 //!
 //! **Exact quadrature.** The integrands are trigonometric polynomials of
-//! degree ≤ 5 in Ψ and polynomials of degree ≤ 5 in r (≤ 4 with twist), so
+//! degree ≤ 5 in Ψ and polynomials of degree ≤ 3 in r (≤ 4 with twist), so
 //! a 6-point uniform azimuth grid (exact below degree 6: a uniform N-point sum
 //! of e^{ikΨ} vanishes unless N divides k) times 3-point
 //! Gauss–Legendre in r (exact to degree 5) integrates them exactly; the tests

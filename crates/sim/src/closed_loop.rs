@@ -11,13 +11,15 @@
 //! keeping the log so far.
 
 use crate::metrics::{OutputMetrics, output_metrics};
-use crate::navigation::Navigator;
+use crate::navigation::{frame, navigation_filter_at, sensor_suite_at};
 use crate::scenario::{DesignInflow, OUTPUTS, PlantInflow, Scenario};
+use crate::sensors::SensorSuite;
 use crate::trajectory::TruthSample;
 use crate::wind::{Wind, WindModel};
 use helicon_gnc::controller::{ControllerSwitches, Feedback, FlightController, Reference};
 use helicon_gnc::design::{Gains, design};
 use helicon_gnc::fusion::wrap_pi;
+use helicon_gnc::navigation::FlightComputer;
 use helicon_model::integrate::rk4;
 use helicon_model::linearize::linearize;
 use helicon_model::state::{NX, REDUCED_OFFSET, expand, ix, reduce};
@@ -53,6 +55,12 @@ pub enum ClosedLoopError {
     /// Navigation (fusion) setup.
     #[error(transparent)]
     Fusion(#[from] helicon_gnc::fusion::FusionError),
+    /// The log would not fit in memory.
+    #[error("the flight log would need {rows} rows: raise [log] decimation or shorten duration_s")]
+    LogTooLarge {
+        /// Rows needed.
+        rows: usize,
+    },
 }
 
 /// Everything prepared for flying a scenario.
@@ -198,6 +206,19 @@ pub struct Flight {
     pub summary: Summary,
 }
 
+/// The on-board software flown in the loop.
+enum OnBoard {
+    /// The controller with ideal measurements (or truth).
+    Controller(Box<FlightController>),
+    /// Sensor models feeding the whole flight computer.
+    Computer {
+        /// The world's sensors.
+        suite: Box<SensorSuite>,
+        /// Navigation + controller.
+        computer: Box<FlightComputer>,
+    },
+}
+
 /// FNV-1a 64-bit hash, as hex.
 pub fn fnv1a_hex(text: &str) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -287,19 +308,27 @@ pub fn fly(
     let ts = scenario.controller.design.sample_time_s;
     let n = (scenario.duration_s / ts).round() as usize;
     let h = ts / f64::from(scenario.plant.substeps);
-    let mut nav = if scenario.controller.fusion {
-        Some(Navigator::new(
-            scenario.sensors,
-            &scenario.navigation,
-            ts,
-            &x,
-        )?)
+    // The on-board software: the controller alone (ideal measurements), or the
+    // whole flight computer (navigation + controller) fed by the sensor models.
+    let mut onboard = if scenario.controller.fusion {
+        OnBoard::Computer {
+            suite: Box::new(sensor_suite_at(&scenario.sensors, ts)?),
+            computer: Box::new(FlightComputer {
+                navigation: navigation_filter_at(&scenario.sensors, &scenario.navigation, ts, &x)?,
+                controller: ctrl,
+            }),
+        }
     } else {
-        None
+        OnBoard::Controller(Box::new(ctrl))
     };
     let mut lam = (prepared.trim.aux.lambda_mr, prepared.trim.aux.lambda_tr);
     let schedule = scenario.reference_schedule();
-    let mut log = Vec::with_capacity(n + 1);
+    let decimation = scenario.log.decimation.max(1) as usize;
+    let mut log = Vec::new();
+    log.try_reserve(n / decimation + 2)
+        .map_err(|_| ClosedLoopError::LogTooLarge {
+            rows: n / decimation + 2,
+        })?;
     let mut reason: Option<String> = None;
     let mut t = 0.0;
     let mut prev_xdot = State::zeros();
@@ -312,9 +341,18 @@ pub fn fly(
             yaw_rad: r[3],
         };
         let xr: ReducedState = reduce(&x);
-        // measurement
-        let measured9: SVector<f64, 9> = match nav.as_mut() {
-            Some(nv) => {
+        let fb_full = !scenario.controller.estimator;
+        let (out, measured9) = match &mut onboard {
+            OnBoard::Controller(c) => {
+                let y: SVector<f64, 9> = SVector::from_fn(|i, _| xr[i]);
+                let fb = if fb_full {
+                    Feedback::Full(&xr)
+                } else {
+                    Feedback::Measured(&y)
+                };
+                (c.step(fb, &reference), y)
+            }
+            OnBoard::Computer { suite, computer } => {
                 let ned_from_body =
                     helicon_model::frames::EulerTrig::new(x[ix::PHI], x[ix::THETA], x[ix::PSI])
                         .ned_from_body();
@@ -332,27 +370,26 @@ pub fn fly(
                     euler_rad: Vector3::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]),
                     omega_body_rad_s: omega,
                 };
-                let own = if scenario.controller.estimator {
-                    Some(ctrl.predicted_accel_body())
+                let sensor_frame = frame(&suite.sample(&truth));
+                let res = if fb_full {
+                    // analysis switch: navigation runs (and is logged) but the
+                    // controller is fed the true state
+                    computer
+                        .navigation
+                        .step(&sensor_frame, None)
+                        .map(|y| (computer.controller.step(Feedback::Full(&xr), &reference), y))
                 } else {
-                    None
+                    computer.step(&sensor_frame, &reference)
                 };
-                match nv.step(&truth, own.as_ref()) {
-                    Ok(y) => y,
+                match res {
+                    Ok(v) => v,
                     Err(e) => {
                         reason = Some(format!("navigation failed at t = {t:.3} s: {e}"));
                         break;
                     }
                 }
             }
-            None => SVector::from_fn(|i, _| xr[i]),
         };
-        let fb = if scenario.controller.estimator {
-            Feedback::Measured(&measured9)
-        } else {
-            Feedback::Full(&xr)
-        };
-        let out = ctrl.step(fb, &reference);
         let x_start = x;
         let est = out.x_estimate;
         let u = out.u;
@@ -390,19 +427,23 @@ pub fn fly(
         }
         let (aux, xdot) = aux_first.unwrap_or_default();
         prev_xdot = xdot;
-        log.push(LogRow {
-            t_s: t,
-            x: x_start,
-            u,
-            reference: r,
-            output: outputs(&x_start),
-            estimate9: std::array::from_fn(|i| est[i]),
-            measured9: std::array::from_fn(|i| measured9[i]),
-            wind_ned: [wind_ned.x, wind_ned.y, wind_ned.z],
-            lambda: [aux.lambda_mr, aux.lambda_tr],
-            thrust: [-aux.force_mr_hub_n.z, aux.force_tr_y_n],
-            inflow_residual: aux.inflow_residual,
-        });
+        // the log keeps every `decimation`-th sample (and the last one)
+        let keep = k % decimation == 0 || k == n;
+        if keep {
+            log.push(LogRow {
+                t_s: t,
+                x: x_start,
+                u,
+                reference: r,
+                output: outputs(&x_start),
+                estimate9: std::array::from_fn(|i| est[i]),
+                measured9: std::array::from_fn(|i| measured9[i]),
+                wind_ned: [wind_ned.x, wind_ned.y, wind_ned.z],
+                lambda: [aux.lambda_mr, aux.lambda_tr],
+                thrust: [-aux.force_mr_hub_n.z, aux.force_tr_y_n],
+                inflow_residual: aux.inflow_residual,
+            });
+        }
         if let Some(e) = step_err {
             reason = Some(format!("model failed at t = {t:.3} s: {e}"));
             break;
@@ -532,7 +573,7 @@ fn summarize(
         for i in 0..4 {
             effort[i] += (r.u[i] - u_trim[i]).powi(2);
             if r.u[i] <= servos[i].s_min + 1e-12 || r.u[i] >= servos[i].s_max - 1e-12 {
-                sat[i] += ts;
+                sat[i] += ts * scenario.log.decimation.max(1) as f64;
             }
         }
     }

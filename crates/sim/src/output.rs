@@ -493,7 +493,8 @@ pub fn write_run(
 ) -> Result<RunFiles, OutputError> {
     std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
     let log = dir.join("log.csv");
-    let log_rows = write_log(&log, &flight.log, scenario.log.decimation)?;
+    // the flight log is already decimated (`[log] decimation`) as it is flown
+    let log_rows = write_log(&log, &flight.log, 1)?;
     let summary = dir.join("summary.json");
     write_summary(&summary, &flight.summary)?;
     let gains = dir.join("gains.json");

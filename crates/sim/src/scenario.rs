@@ -196,7 +196,8 @@ impl Default for PlantSection {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LogSection {
-    /// Keep every n-th sample in `log.csv` (metrics use every sample).
+    /// Keep every n-th sample (and the last) in the flight log and
+    /// `log.csv`; the metrics are computed on the kept samples.
     pub decimation: u32,
 }
 
@@ -408,11 +409,11 @@ impl Scenario {
             value,
             rule: rule.to_string(),
         };
-        if !(self.duration_s.is_finite() && self.duration_s > 0.0) {
+        if !(self.duration_s.is_finite() && self.duration_s > 0.0 && self.duration_s <= 86_400.0) {
             return Err(bad(
                 "duration_s",
                 self.duration_s.to_string(),
-                "must be finite and > 0",
+                "must be finite, > 0 and <= 86400 s",
             ));
         }
         for v in self

@@ -407,7 +407,11 @@ impl SensorSuite {
             step_index: 0,
             mag_every: (config.imu.rate_hz / config.mag.rate_hz).round() as u64,
             next_gps_epoch_s: 0.0,
-            pending_gps: VecDeque::new(),
+            // room for the fixes in flight during the latency, so sampling
+            // does not allocate
+            pending_gps: VecDeque::with_capacity(
+                (config.gps.latency_s * config.gps.rate_hz).ceil() as usize + 4,
+            ),
             rng_gps_vel: stream(13),
         })
     }

@@ -59,7 +59,11 @@ fn run_folder_files_csv_and_json() {
     let f = fly(&s, &p, None).unwrap();
     assert_eq!(f.summary.outcome, Outcome::Completed);
     let n = f.log.len();
-    assert_eq!(n, 401, "1 s at 400 Hz, both ends");
+    // 1 s at 400 Hz is 401 samples; the flight keeps every 3rd (k = 0, 3, …,
+    // 399: 134) and the last one (k = 400): 135
+    assert_eq!(n, 135, "decimated flight log");
+    assert_eq!(f.log.last().unwrap().t_s, 1.0);
+    assert!((f.log[1].t_s - 3.0 / 400.0).abs() < 1e-15);
     let dir = tmpdir("files");
     let files = write_run(&dir, &s, &p, &f).unwrap();
     for path in [
@@ -127,12 +131,12 @@ fn run_folder_files_csv_and_json() {
     ] {
         assert!(header.iter().any(|h| h == name), "{name}");
     }
-    assert_eq!(rows.len(), n.div_ceil(3));
+    assert_eq!(rows.len(), n);
     assert_eq!(files.log_rows, rows.len());
     let col = |name: &str| header.iter().position(|h| h == name).unwrap();
     for (k, row) in rows.iter().enumerate() {
         assert_eq!(row.len(), LOG_COLUMNS);
-        let r = &f.log[3 * k];
+        let r = &f.log[k];
         // the shortest round-trip text reads back to the same f64
         assert_eq!(row[0].to_bits(), r.t_s.to_bits());
         assert_eq!(row[col("psi")].to_bits(), r.x[ix::PSI].to_bits());
