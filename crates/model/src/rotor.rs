@@ -165,12 +165,28 @@ pub fn blade_integrals(grid: &Grid, b: &BladeInputs) -> BladeIntegrals {
     let k = b.lift_k;
     let kd = b.drag_k;
     let mut out = BladeIntegrals::default();
+    // Per-call radial constants: position e + r, weights times r and times
+    // (e + r), and their sums (the λ-linear and λ² parts integrate in closed form).
+    let mut pos = [0.0; N_R];
+    let mut wr = [0.0; N_R];
+    let mut wpos = [0.0; N_R];
+    let (mut sw, mut swr, mut sw_pos, mut swr_pos) = (0.0, 0.0, 0.0, 0.0);
+    for kk in 0..N_R {
+        pos[kk] = e + grid.r[kk];
+        wr[kk] = grid.w[kk] * grid.r[kk];
+        wpos[kk] = grid.w[kk] * pos[kk];
+        sw += grid.w[kk];
+        swr += wr[kk];
+        sw_pos += wpos[kk];
+        swr_pos += wr[kk] * pos[kk];
+    }
+    let tw = b.twist_rad_per_m;
     let (mut l0, mut l1) = (0.0, 0.0);
     let mut ft = [(0.0, 0.0); 3];
-    let (mut fx0, mut fx1, mut fx2) = (0.0, 0.0, 0.0);
-    let (mut fy0, mut fy1, mut fy2) = (0.0, 0.0, 0.0);
+    let (mut fx0, mut fx1) = (0.0, 0.0);
+    let (mut fy0, mut fy1) = (0.0, 0.0);
     let (mut tx0, mut tx1, mut ty0, mut ty1) = (0.0, 0.0, 0.0, 0.0);
-    let (mut tz0, mut tz1, mut tz2) = (0.0, 0.0, 0.0);
+    let (mut tz0, mut tz1) = (0.0, 0.0);
     for j in 0..N_PSI {
         let c = grid.cos[j];
         let s = grid.sin[j];
@@ -180,38 +196,39 @@ pub fn blade_integrals(grid: &Grid, b: &BladeInputs) -> BladeIntegrals {
         let up_beta = -(b.hub_u_m_s * c + b.hub_v_m_s * s) * beta;
         let rates = b.q_rad_s * c - b.p_rad_s * s;
         let theta_cyc = b.theta0_rad - b.cyclic_a_rad * c - b.cyclic_b_rad * s - b.k1 * beta;
-        // Azimuth-wise sums over r.
-        let (mut sl0, mut sl1, mut sr0, mut sr1) = (0.0, 0.0, 0.0, 0.0);
-        let (mut sp0, mut sp1, mut sd) = (0.0, 0.0, 0.0);
-        let (mut sz0, mut sz1, mut sz2) = (0.0, 0.0, 0.0);
+        // Sums over r of the λ-independent parts, without the factors k, kd:
+        // a = Ut(Ut θ + Up0) (dL/k), cc·Up0 (dL φr/k), cc + Up0 (its λ slope/(kV)), Ut².
+        let (mut sa, mut sra, mut sp0, mut sp1, mut sd) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        let (mut szp0, mut szd, mut sz1) = (0.0, 0.0, 0.0);
         for kk in 0..N_R {
             let r = grid.r[kk];
             let w = grid.w[kk];
-            let pos = e + r;
-            let ut = om * pos + ut_trans;
-            let up0 = up_beta - beta_dot * r + pos * rates;
-            let th = theta_cyc + b.twist_rad_per_m * pos;
-            // dL = k(Ut²θ + Ut Up0) + k Ut V λ
-            let dl0 = k * ut * (ut * th + up0);
-            let dl1 = k * ut * v;
-            // dL φr = k (Ut θ + Up)(Up), Up = Up0 + Vλ
+            let ps = pos[kk];
+            let ut = om * ps + ut_trans;
+            let up0 = up_beta - beta_dot * r + ps * rates;
+            let th = theta_cyc + tw * ps;
             let cc = ut * th + up0;
-            let p0 = k * cc * up0;
-            let p1 = k * v * (cc + up0);
-            let p2 = k * v * v;
-            let dd = kd * ut * ut;
-            sl0 += w * dl0;
-            sl1 += w * dl1;
-            sr0 += w * r * dl0;
-            sr1 += w * r * dl1;
-            sp0 += w * p0;
-            sp1 += w * p1;
-            sd += w * dd;
-            sz0 += w * pos * (p0 - dd);
-            sz1 += w * pos * p1;
-            sz2 += w * pos * p2;
+            let a = ut * cc;
+            let q0 = cc * up0;
+            let q1 = cc + up0;
+            let uu = ut * ut;
+            sa += w * a;
+            sra += wr[kk] * a;
+            sp0 += w * q0;
+            sp1 += w * q1;
+            sd += w * uu;
+            szp0 += wpos[kk] * q0;
+            szd += wpos[kk] * uu;
+            sz1 += wpos[kk] * q1;
         }
-        let sp2 = p2_sum(grid, k * v * v);
+        // dL = k(a + Ut V λ): Σ w Ut = Ω Σ w pos + Ut,trans Σ w (exact).
+        let sl0 = k * sa;
+        let sl1 = k * v * (om * sw_pos + ut_trans * sw);
+        let sr0 = k * sra;
+        let sr1 = k * v * (om * swr_pos + ut_trans * swr);
+        let sp0 = k * sp0;
+        let sp1 = k * v * sp1;
+        let sd = kd * sd;
         l0 += sl0;
         l1 += sl1;
         ft[0].0 += sr0;
@@ -222,18 +239,20 @@ pub fn blade_integrals(grid: &Grid, b: &BladeInputs) -> BladeIntegrals {
         ft[2].1 += 2.0 * sr1 * s;
         fx0 += -sd * s + sl0 * beta * c + sp0 * s;
         fx1 += sl1 * beta * c + sp1 * s;
-        fx2 += sp2 * s;
         fy0 += sd * c + sl0 * beta * s - sp0 * c;
         fy1 += sl1 * beta * s - sp1 * c;
-        fy2 += -sp2 * c;
         tx0 += e * sl0 * s;
         tx1 += e * sl1 * s;
         ty0 -= e * sl0 * c;
         ty1 -= e * sl1 * c;
-        tz0 += sz0;
-        tz1 += sz1;
-        tz2 += sz2;
+        tz0 += k * szp0 - kd * szd;
+        tz1 += k * v * sz1;
     }
+    // The λ² parts: dL φr has k V² λ², independent of r and Ψ, so its sin/cos
+    // projections (Fx, Fy) vanish over the full circle and the torque gets
+    // N_PSI · k V² Σ w (e + r).
+    let (fx2, fy2) = (0.0, 0.0);
+    let tz2 = N_PSI as f64 * k * v * v * sw_pos;
     out.lift = Lin(l0, l1);
     out.flap_torque = [
         Lin(ft[0].0, ft[0].1),
@@ -246,12 +265,6 @@ pub fn blade_integrals(grid: &Grid, b: &BladeInputs) -> BladeIntegrals {
     out.ty = Lin(ty0, ty1);
     out.tz = Quad(tz0, tz1, tz2);
     out
-}
-
-/// Σ_k w_k · c over the radial nodes (the λ² part of dL φr does not depend on r).
-#[inline]
-fn p2_sum(grid: &Grid, c: f64) -> f64 {
-    c * (grid.w[0] + grid.w[1] + grid.w[2])
 }
 
 #[cfg(test)]
