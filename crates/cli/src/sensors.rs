@@ -284,6 +284,10 @@ pub struct FuseArgs {
     /// Magnetic field in NED (same unit as mx,my,mz), default thesis (13.14).
     #[arg(long, num_args = 3, value_names = ["N", "E", "D"], allow_hyphen_values = true, default_values_t = [0.153, 0.008, -0.438])]
     pub mag_field_ned: Vec<f64>,
+    /// Gravity used by the filter (m/s²); match the log's (`helicon sensors
+    /// simulate` uses the sensor config's `gravity_m_s2`, default 9.82, (13.13)).
+    #[arg(long, default_value_t = 9.82)]
+    pub gravity_m_s2: f64,
     /// Own-acceleration source for the gravity observation.
     #[arg(long, value_enum, default_value_t = OwnAccel::None)]
     pub own_accel: OwnAccel,
@@ -449,7 +453,10 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
     let log = read_log(&args.log)?;
     let rows = &log.rows;
     let dt = (rows[rows.len() - 1].t - rows[0].t) / (rows.len() - 1) as f64;
-    let g = 9.82;
+    let g = args.gravity_m_s2;
+    if !(g.is_finite() && g > 0.0) {
+        bail!("--gravity-m-s2 must be finite and > 0, got {g}");
+    }
     let mag_ned = Vector3::new(
         args.mag_field_ned[0],
         args.mag_field_ned[1],
