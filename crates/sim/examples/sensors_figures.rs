@@ -203,7 +203,7 @@ fn dryden(dir: &std::path::Path) {
     );
     let mut store = Vec::new();
     for a in 0..3 {
-        let psd = welch(&x[a], dt, seg);
+        let psd = helicon_sim::spectral::welch_psd(&x[a], dt, seg);
         let df = 1.0 / (dt * seg as f64);
         // Log-spaced averaging for a readable curve.
         let mut pts = vec![];
@@ -239,60 +239,4 @@ fn dryden(dir: &std::path::Path) {
             .series(Series::new(names[a].1, an));
     }
     pl.write(&dir.join("dryden_psd.png")).unwrap();
-}
-
-fn fft(re: &mut [f64], im: &mut [f64]) {
-    let n = re.len();
-    let mut j = 0;
-    for i in 1..n {
-        let mut bit = n >> 1;
-        while j & bit != 0 {
-            j ^= bit;
-            bit >>= 1;
-        }
-        j |= bit;
-        if i < j {
-            re.swap(i, j);
-            im.swap(i, j);
-        }
-    }
-    let mut len = 2;
-    while len <= n {
-        let ang = -2.0 * PI / len as f64;
-        for start in (0..n).step_by(len) {
-            for k in 0..len / 2 {
-                let (s, c) = (ang * k as f64).sin_cos();
-                let (a, b) = (start + k, start + k + len / 2);
-                let tr = re[b] * c - im[b] * s;
-                let ti = re[b] * s + im[b] * c;
-                re[b] = re[a] - tr;
-                im[b] = im[a] - ti;
-                re[a] += tr;
-                im[a] += ti;
-            }
-        }
-        len <<= 1;
-    }
-}
-
-fn welch(x: &[f64], dt: f64, seg: usize) -> Vec<f64> {
-    let w: Vec<f64> = (0..seg)
-        .map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / seg as f64).cos())
-        .collect();
-    let wss: f64 = w.iter().map(|v| v * v).sum();
-    let mut psd = vec![0.0; seg / 2 + 1];
-    let (mut count, mut start) = (0, 0);
-    while start + seg <= x.len() {
-        let mean = x[start..start + seg].iter().sum::<f64>() / seg as f64;
-        let mut re: Vec<f64> = (0..seg).map(|i| (x[start + i] - mean) * w[i]).collect();
-        let mut im = vec![0.0; seg];
-        fft(&mut re, &mut im);
-        for k in 0..=seg / 2 {
-            psd[k] += 2.0 * (re[k] * re[k] + im[k] * im[k]) * dt / wss;
-        }
-        count += 1;
-        start += seg / 2;
-    }
-    psd.iter_mut().for_each(|p| *p /= count as f64);
-    psd
 }

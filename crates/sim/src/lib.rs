@@ -17,5 +17,6 @@ pub mod output;
 pub mod plot;
 pub mod scenario;
 pub mod sensors;
+pub mod spectral;
 pub mod trajectory;
 pub mod wind;

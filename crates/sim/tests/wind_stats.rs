@@ -3,66 +3,6 @@
 #![allow(clippy::unwrap_used)] // test/bench helpers: a failed unwrap is a failed test
 
 use helicon_sim::wind::{DrydenConfig, DrydenTurbulence, ThesisWind, ThesisWindConfig, WindModel};
-use std::f64::consts::PI;
-
-/// In-place iterative radix-2 FFT (test helper), `re`/`im` of length 2^k.
-fn fft(re: &mut [f64], im: &mut [f64]) {
-    let n = re.len();
-    let mut j = 0;
-    for i in 1..n {
-        let mut bit = n >> 1;
-        while j & bit != 0 {
-            j ^= bit;
-            bit >>= 1;
-        }
-        j |= bit;
-        if i < j {
-            re.swap(i, j);
-            im.swap(i, j);
-        }
-    }
-    let mut len = 2;
-    while len <= n {
-        let ang = -2.0 * PI / len as f64;
-        for start in (0..n).step_by(len) {
-            for k in 0..len / 2 {
-                let (s, c) = (ang * k as f64).sin_cos();
-                let (a, b) = (start + k, start + k + len / 2);
-                let tr = re[b] * c - im[b] * s;
-                let ti = re[b] * s + im[b] * c;
-                re[b] = re[a] - tr;
-                im[b] = im[a] - ti;
-                re[a] += tr;
-                im[a] += ti;
-            }
-        }
-        len <<= 1;
-    }
-}
-
-/// Welch one-sided PSD ((m/s)²/Hz), Hann window, 50% overlap.
-fn welch(x: &[f64], dt: f64, seg: usize) -> Vec<f64> {
-    let w: Vec<f64> = (0..seg)
-        .map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / seg as f64).cos())
-        .collect();
-    let wss: f64 = w.iter().map(|v| v * v).sum();
-    let mut psd = vec![0.0; seg / 2 + 1];
-    let mut count = 0;
-    let mut start = 0;
-    while start + seg <= x.len() {
-        let mean = x[start..start + seg].iter().sum::<f64>() / seg as f64;
-        let mut re: Vec<f64> = (0..seg).map(|i| (x[start + i] - mean) * w[i]).collect();
-        let mut im = vec![0.0; seg];
-        fft(&mut re, &mut im);
-        for k in 0..=seg / 2 {
-            psd[k] += 2.0 * (re[k] * re[k] + im[k] * im[k]) * dt / wss;
-        }
-        count += 1;
-        start += seg / 2;
-    }
-    psd.iter_mut().for_each(|p| *p /= count as f64);
-    psd
-}
 
 fn simulate(cfg: DrydenConfig, dt: f64, n: usize, seed: u64) -> [Vec<f64>; 3] {
     let mut d = DrydenTurbulence::new(cfg, seed, 2).unwrap();
@@ -101,7 +41,7 @@ fn dryden_psd_matches_analytic_in_octave_bands() {
         let fs = 1.0 / dt;
         let df = fs / seg as f64;
         for axis in 0..3 {
-            let psd = welch(&series[axis], dt, seg);
+            let psd = helicon_sim::spectral::welch_psd(&series[axis], dt, seg);
             // Octave bands from 0.05 Hz to fs/10 (aliasing of the analytic
             // spectrum stays below 2% there; lowest band has 8 bins × 199
             // half-overlapping Hann segments, sampling scatter ≈ 3%).
