@@ -124,14 +124,102 @@ pub fn prepare_with_params(
     })
 }
 
-/// How a flight ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+/// How a flight ended, in one word.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, serde::Deserialize,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Outcome {
     /// Flew the whole duration.
     Completed,
-    /// Stopped early (see the reason).
+    /// Stopped early (see the termination and the reason).
     Diverged,
+}
+
+impl Outcome {
+    /// The word written in `summary.json` and `runs.csv`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Outcome::Completed => "completed",
+            Outcome::Diverged => "diverged",
+        }
+    }
+}
+
+/// Why a flight ended: the machine-readable kind (`"termination"` in
+/// `summary.json`); the `reason` next to it is the sentence with times and values.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Termination {
+    /// Flew the whole duration.
+    Completed,
+    /// The true state became NaN or infinite.
+    NonFiniteState,
+    /// Roll or pitch beyond `[plant] max_attitude_rad`.
+    AttitudeLimit,
+    /// A body rate beyond `[plant] max_rate_rad_s`.
+    RateLimit,
+    /// The heading left its reference by more than `[plant] max_yaw_error_rad`.
+    HeadingLost,
+    /// The plant model failed to evaluate (e.g. the inflow did not converge).
+    ModelFailure,
+    /// The on-board navigation or estimator failed.
+    NavigationFailure,
+}
+
+impl Termination {
+    /// Every kind, in declaration order.
+    pub const ALL: [Termination; 7] = [
+        Termination::Completed,
+        Termination::NonFiniteState,
+        Termination::AttitudeLimit,
+        Termination::RateLimit,
+        Termination::HeadingLost,
+        Termination::ModelFailure,
+        Termination::NavigationFailure,
+    ];
+
+    /// The flight's outcome for this termination.
+    pub fn outcome(self) -> Outcome {
+        match self {
+            Termination::Completed => Outcome::Completed,
+            _ => Outcome::Diverged,
+        }
+    }
+
+    /// The snake_case name written in files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Termination::Completed => "completed",
+            Termination::NonFiniteState => "non_finite_state",
+            Termination::AttitudeLimit => "attitude_limit",
+            Termination::RateLimit => "rate_limit",
+            Termination::HeadingLost => "heading_lost",
+            Termination::ModelFailure => "model_failure",
+            Termination::NavigationFailure => "navigation_failure",
+        }
+    }
+}
+
+impl std::fmt::Display for Termination {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for Termination {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Termination::ALL
+            .into_iter()
+            .find(|t| t.as_str() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Termination::ALL.iter().map(|t| t.as_str()).collect();
+                format!("unknown termination `{s}` (one of {})", names.join(", "))
+            })
+    }
 }
 
 /// One logged sample.
@@ -169,7 +257,9 @@ pub struct Summary {
     pub scenario: String,
     /// "completed" or "diverged".
     pub outcome: Outcome,
-    /// Why it stopped early (None when completed).
+    /// Why it ended, machine-readable (`completed`, `attitude_limit`, …).
+    pub termination: Termination,
+    /// Why it stopped early, as a sentence (None when completed).
     pub reason: Option<String>,
     /// Time reached (s).
     pub t_end_s: f64,
@@ -329,7 +419,7 @@ pub fn fly(
         .map_err(|_| ClosedLoopError::LogTooLarge {
             rows: n / decimation + 2,
         })?;
-    let mut reason: Option<String> = None;
+    let mut reason: Option<(Termination, String)> = None;
     let mut t = 0.0;
     let mut prev_xdot = State::zeros();
     for k in 0..=n {
@@ -384,7 +474,10 @@ pub fn fly(
                 match res {
                     Ok(v) => v,
                     Err(e) => {
-                        reason = Some(format!("navigation failed at t = {t:.3} s: {e}"));
+                        reason = Some((
+                            Termination::NavigationFailure,
+                            format!("navigation failed at t = {t:.3} s: {e}"),
+                        ));
                         break;
                     }
                 }
@@ -445,39 +538,54 @@ pub fn fly(
             });
         }
         if let Some(e) = step_err {
-            reason = Some(format!("model failed at t = {t:.3} s: {e}"));
+            reason = Some((
+                Termination::ModelFailure,
+                format!("model failed at t = {t:.3} s: {e}"),
+            ));
             break;
         }
         if !x.iter().all(|v| v.is_finite()) {
-            reason = Some(format!("non-finite state at t = {:.3} s", t + ts));
+            reason = Some((
+                Termination::NonFiniteState,
+                format!("non-finite state at t = {:.3} s", t + ts),
+            ));
             break;
         }
         let lim = scenario.plant.max_attitude_rad;
         if x[ix::PHI].abs() > lim || x[ix::THETA].abs() > lim {
-            reason = Some(format!(
-                "attitude beyond {lim} rad at t = {:.3} s (phi = {:.3}, theta = {:.3})",
-                t + ts,
-                x[ix::PHI],
-                x[ix::THETA]
+            reason = Some((
+                Termination::AttitudeLimit,
+                format!(
+                    "attitude beyond {lim} rad at t = {:.3} s (phi = {:.3}, theta = {:.3})",
+                    t + ts,
+                    x[ix::PHI],
+                    x[ix::THETA]
+                ),
             ));
             break;
         }
         let rate = x[ix::P].abs().max(x[ix::Q].abs()).max(x[ix::R].abs());
         if rate > scenario.plant.max_rate_rad_s {
-            reason = Some(format!(
-                "body rate {rate:.2} rad/s beyond {} rad/s at t = {:.3} s",
-                scenario.plant.max_rate_rad_s,
-                t + ts
+            reason = Some((
+                Termination::RateLimit,
+                format!(
+                    "body rate {rate:.2} rad/s beyond {} rad/s at t = {:.3} s",
+                    scenario.plant.max_rate_rad_s,
+                    t + ts
+                ),
             ));
             break;
         }
         let r_next = schedule.at(t + ts);
         let yaw_err = x[ix::PSI] - r_next[3];
         if yaw_err.abs() > scenario.plant.max_yaw_error_rad {
-            reason = Some(format!(
-                "heading {:.2} rad is {yaw_err:.2} rad from its reference at t = {:.3} s: the helicopter spins away",
-                x[ix::PSI],
-                t + ts
+            reason = Some((
+                Termination::HeadingLost,
+                format!(
+                    "heading {:.2} rad is {yaw_err:.2} rad from its reference at t = {:.3} s: the helicopter spins away",
+                    x[ix::PSI],
+                    t + ts
+                ),
             ));
             break;
         }
@@ -520,9 +628,11 @@ fn summarize(
     scenario: &Scenario,
     prepared: &Prepared,
     log: &[LogRow],
-    reason: Option<String>,
+    reason: Option<(Termination, String)>,
     t_end: f64,
 ) -> Summary {
+    let termination = reason.as_ref().map_or(Termination::Completed, |r| r.0);
+    let reason = reason.map(|r| r.1);
     let t: Vec<f64> = log.iter().map(|r| r.t_s).collect();
     let mut metrics = std::collections::BTreeMap::new();
     let mut excitations = Vec::with_capacity(4);
@@ -595,11 +705,8 @@ fn summarize(
         .fold(0.0, f64::max);
     Summary {
         scenario: scenario.name.clone(),
-        outcome: if reason.is_some() {
-            Outcome::Diverged
-        } else {
-            Outcome::Completed
-        },
+        outcome: termination.outcome(),
+        termination,
         reason,
         t_end_s: t_end,
         metrics,
