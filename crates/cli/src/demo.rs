@@ -163,16 +163,12 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         .iter()
         .map(|z| z[0].hypot(z[1]))
         .fold(0.0, f64::max);
-    let cl_radius = g
-        .closed_loop_poles
-        .iter()
-        .map(|z| z[0].hypot(z[1]))
-        .fold(0.0, f64::max);
+    let cl_radius = g.spectral_radius();
     println!(
         "3. designed at {:.0} Hz: LQR + integral action (Bryson, rho = {}, pincer alpha = {:.5}), closed-loop |z|max = {:.5}; Kalman predictor |z|max = {:.5} ({:.2} s)",
-        1.0 / g.config.sample_time_s,
+        1.0 / g.set.sample_time_s,
         g.config.rho,
-        g.alpha,
+        g.set.alpha,
         cl_radius,
         est_radius,
         prepare_s

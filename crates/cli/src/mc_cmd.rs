@@ -206,7 +206,7 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
         per.push(t0.elapsed().as_secs_f64() * 1e9 / steps);
     }
     let step_ns = median(per);
-    let ts = scenario.controller.design.sample_time_s;
+    let ts = prepared.gains.set.sample_time_s;
     let rtf = ts * 1e9 / step_ns;
     if args.json {
         println!(

@@ -119,21 +119,63 @@ fn simulate_then_fuse_beats_gps_and_rejects_bad_logs() {
 
     let text = std::fs::read_to_string(&log).unwrap();
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
-    // NaN IMU row → skipped and counted.
-    let mut nan = lines.clone();
-    let mut cells: Vec<String> = nan[100].split(',').map(str::to_string).collect();
-    cells[1] = "NaN".into();
-    nan[100] = cells.join(",");
-    std::fs::write(d.join("nan.csv"), nan.join("\n")).unwrap();
+    // Hostile cells: each an error naming the file, the line and the column.
+    // (line numbers: 1 comment + 1 header, so data row i is line i + 1)
+    for (name, col, cell, expect) in [
+        ("nan", 1, "NaN", "fx_m_s2"),
+        ("text", 2, "abc", "fy_m_s2"),
+        ("trunc", 3, "0.", "truncated"),
+        ("huge", 3, "1e308", "physical bound"),
+        ("inf", 4, "inf", "p_rad_s"),
+    ] {
+        let mut bad = lines.clone();
+        let mut cells: Vec<String> = bad[100].split(',').map(str::to_string).collect();
+        cells[col] = cell.into();
+        bad[100] = cells.join(",");
+        let f = d.join(format!("{name}.csv"));
+        std::fs::write(&f, bad.join("\n")).unwrap();
+        let o = helicon(&[
+            "fuse",
+            f.to_str().unwrap(),
+            "--out",
+            d.join(format!("{name}_out")).to_str().unwrap(),
+        ]);
+        no_panic(&o);
+        assert!(!o.status.success(), "{name} accepted");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!("{name}.csv:101:")) && err.contains(expect),
+            "{name}: {err}"
+        );
+    }
+    // A duplicated column → error naming it.
+    let mut dup = lines.clone();
+    dup[1] = dup[1].replacen("fy_m_s2", "fx_m_s2", 1);
+    std::fs::write(d.join("dup.csv"), dup.join("\n")).unwrap();
     let o = helicon(&[
         "fuse",
-        d.join("nan.csv").to_str().unwrap(),
+        d.join("dup.csv").to_str().unwrap(),
         "--out",
-        d.join("nan_out").to_str().unwrap(),
+        d.join("dup_out").to_str().unwrap(),
     ]);
     no_panic(&o);
-    assert!(o.status.success());
-    assert!(String::from_utf8_lossy(&o.stderr).contains("1 IMU rows skipped"));
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("fx_m_s2") && err.contains("twice"), "{err}");
+    // A non-finite magnetic field on the command line.
+    let o = helicon(&[
+        "fuse",
+        log.to_str().unwrap(),
+        "--out",
+        d.join("mag_out").to_str().unwrap(),
+        "--mag-field-ned",
+        "nan",
+        "0",
+        "0",
+    ]);
+    no_panic(&o);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--mag-field-ned"));
     // Time going backwards → error naming the row.
     let mut back = lines.clone();
     let mut cells: Vec<String> = back[50].split(',').map(str::to_string).collect();
@@ -149,7 +191,10 @@ fn simulate_then_fuse_beats_gps_and_rejects_bad_logs() {
     no_panic(&o);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("backwards") && err.contains("row"), "{err}");
+    assert!(
+        err.contains("backwards") && err.contains("back.csv:51:"),
+        "{err}"
+    );
     // Missing column → error naming it.
     lines[1] = lines[1].replace("gps_d_m", "gps_x");
     std::fs::write(d.join("miss.csv"), lines.join("\n")).unwrap();

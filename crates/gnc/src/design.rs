@@ -9,24 +9,24 @@
 //! * Steady-state Kalman predictor (15.8) on the nine measured states (15.2)
 //!   [φ θ ψ u v w p q r], with Rex = q·I₂₇ and Rey = r·I₉ (15.11)–(15.12).
 //!
-//! The result, [`Gains`], is plain data: it serialises to JSON so the on-board
+//! The sample time Ts is the helicopter's parameter `control.sample_time_s`
+//! (one value: the design discretises at it and the flight computer runs at it).
+//!
+//! The result, [`Gains`], carries the core's fixed-size [`GainSet`] (what
+//! flies) and the design record (settings, poles); it is written to and read
+//! from `gains.json` (format version [`GAINS_FORMAT_VERSION`]) so the on-board
 //! runtime flies exactly the gains that were simulated.
 
+use helicon_core::gains::{GainSet, LqiOptions};
+use helicon_core::state::{Input, NM, NU, NX_REDUCED, NY, OUTPUT_STATES, ReducedState};
 use helicon_lti::lqr::{alpha_from_settling_time, bryson, dlqr_integral, dlqr_pincer};
 use helicon_lti::{LtiError, dlqe};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, SMatrix};
 use serde::{Deserialize, Serialize};
+use std::path::Path;
 
-/// Number of controlled outputs (ψ, u, v, w).
-pub const NY: usize = 4;
-/// Number of measured states (15.2).
-pub const NM: usize = 9;
-/// Reduced state size.
-pub const NXR: usize = 27;
-/// Number of inputs.
-pub const NUI: usize = 4;
-/// Indices of the controlled outputs in the reduced state: ψ, u, v, w (14.4).
-pub const OUTPUT_STATES: [usize; NY] = [2, 3, 4, 5];
+/// The version of the `gains.json` format written by [`Gains::save`].
+pub const GAINS_FORMAT_VERSION: u32 = 2;
 
 /// The thesis's retuned input maxima (14.27): S_col, S_lat, S_lon, S_tr.
 pub const U_MAX_RETUNED: [f64; 4] = [0.1, 0.7, 0.7, 0.04];
@@ -40,15 +40,13 @@ pub struct ControllerConfig {
     /// Bryson maximum deviations of the outputs [ψ (rad), u, v, w (m/s)], (14.23).
     pub output_max: [f64; NY],
     /// Bryson maximum deviations of the inputs [S_col, S_lat, S_lon, S_tr], (14.27).
-    pub input_max: [f64; NUI],
+    pub input_max: [f64; NU],
     /// ρ, the output/input weighting (14.17).
     pub rho: f64,
     /// Settling time (s) for the pincer α (14.22); `None` for α = 1.
     pub settling_time_s: Option<f64>,
     /// Qi = integral_weight · Qe (14.36).
     pub integral_weight: f64,
-    /// Controller sample time Ts (s), (14.5).
-    pub sample_time_s: f64,
     /// Rex = process_noise · I₂₇ (15.11).
     pub process_noise: f64,
     /// Rey = measurement_noise · I₉ (15.12).
@@ -68,7 +66,7 @@ pub struct ControllerConfig {
 
 impl Default for ControllerConfig {
     /// The thesis's final design: (14.23), (14.27), ρ = 10, ts = 5 s, (14.36),
-    /// 400 Hz, (15.11)–(15.12).
+    /// (15.11)–(15.12).
     fn default() -> Self {
         ControllerConfig {
             output_max: [3.0; NY],
@@ -76,7 +74,6 @@ impl Default for ControllerConfig {
             rho: 10.0,
             settling_time_s: Some(5.0),
             integral_weight: 1e-4,
-            sample_time_s: 0.0025,
             process_noise: 1.0,
             measurement_noise: 1e-3,
             integral_action: true,
@@ -116,13 +113,19 @@ pub enum DesignError {
         /// Expected columns.
         ec: usize,
     },
+    /// The sample time is not a positive finite number.
+    #[error("controller design: sample time {0} s must be finite and > 0")]
+    SampleTime(f64),
     /// Reading or writing a gains file failed.
     #[error("{file}: {message}")]
     File {
         /// File.
         file: String,
-        /// Message.
+        /// What was wrong (names the field).
         message: String,
+        /// The I/O error, when there was one.
+        #[source]
+        source: Option<std::io::Error>,
     },
 }
 
@@ -157,79 +160,116 @@ impl ControllerConfig {
                 rule: "must be finite and >= 0",
             });
         }
-        pos("sample_time_s", self.sample_time_s)?;
         pos("process_noise", self.process_noise)?;
         pos("measurement_noise", self.measurement_noise)?;
         Ok(())
     }
 }
 
-/// Designed gains and the operating point they belong to. Matrices are
-/// row-major nested vectors (JSON friendly).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+// The law's wiring options, from the settings.
+impl ControllerConfig {
+    /// The core's wiring options of the law these settings design.
+    pub fn lqi_options(&self) -> LqiOptions {
+        LqiOptions {
+            integral_action: self.integral_action,
+            reference_in_proportional: self.reference_in_proportional,
+            anti_windup: self.anti_windup,
+        }
+    }
+}
+
+/// A design: the gain set that flies and the record of how it was made.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Gains {
-    /// Format version.
-    pub version: u32,
     /// The settings used.
     pub config: ControllerConfig,
-    /// Trim state (27, [`helicon_model::REDUCED_STATE_NAMES`] order).
-    pub x_trim: Vec<f64>,
-    /// Trim input (4).
-    pub u_trim: Vec<f64>,
-    /// Pincer α.
-    pub alpha: f64,
-    /// Φs (27×27).
-    pub phi: Vec<Vec<f64>>,
-    /// Γs (27×4).
-    pub gamma: Vec<Vec<f64>>,
-    /// State-feedback gain Ls,α(0) (4×27), (14.34).
-    pub ls: Vec<Vec<f64>>,
-    /// Integral gain Li,α(0) (4×4), (14.34).
-    pub li: Vec<Vec<f64>>,
-    /// Kalman predictor gain K(0) (27×9), (15.8).
-    pub k: Vec<Vec<f64>>,
+    /// What the flight computer flies.
+    pub set: GainSet,
     /// Closed-loop (augmented) discrete poles, as [re, im].
     pub closed_loop_poles: Vec<[f64; 2]>,
     /// Estimator-error discrete poles eig(Φ − K Hm), as [re, im].
     pub estimator_poles: Vec<[f64; 2]>,
 }
 
-fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    (0..m.nrows())
-        .map(|i| m.row(i).iter().copied().collect())
+impl Gains {
+    /// Largest |z| of the closed-loop design poles.
+    pub fn spectral_radius(&self) -> f64 {
+        self.closed_loop_poles
+            .iter()
+            .map(|z| z[0].hypot(z[1]))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// `gains.json` as written on disk: matrices as row-major nested arrays.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GainsFile {
+    version: u32,
+    config: ControllerConfig,
+    sample_time_s: f64,
+    x_trim: Vec<f64>,
+    u_trim: Vec<f64>,
+    alpha: f64,
+    phi: Vec<Vec<f64>>,
+    gamma: Vec<Vec<f64>>,
+    ls: Vec<Vec<f64>>,
+    li: Vec<Vec<f64>>,
+    k: Vec<Vec<f64>>,
+    closed_loop_poles: Vec<[f64; 2]>,
+    estimator_poles: Vec<[f64; 2]>,
+}
+
+fn rows<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> Vec<Vec<f64>> {
+    (0..R)
+        .map(|i| (0..C).map(|j| m[(i, j)]).collect())
         .collect()
 }
 
-/// Dense matrix from nested rows, checking the shape.
-pub fn from_rows(
+fn dyn_to_fixed<const R: usize, const C: usize>(
+    what: &'static str,
+    m: &DMatrix<f64>,
+) -> Result<SMatrix<f64, R, C>, DesignError> {
+    if m.shape() != (R, C) {
+        return Err(DesignError::Shape {
+            what,
+            rows: m.nrows(),
+            cols: m.ncols(),
+            er: R,
+            ec: C,
+        });
+    }
+    Ok(SMatrix::<f64, R, C>::from_fn(|i, j| m[(i, j)]))
+}
+
+/// A fixed-size matrix from nested rows, checking the shape and finiteness.
+pub fn from_rows<const R: usize, const C: usize>(
     what: &'static str,
     r: &[Vec<f64>],
-    er: usize,
-    ec: usize,
-) -> Result<DMatrix<f64>, DesignError> {
+) -> Result<SMatrix<f64, R, C>, DesignError> {
     let cols = r.first().map_or(0, Vec::len);
-    if r.len() != er || r.iter().any(|row| row.len() != ec) {
+    if r.len() != R || r.iter().any(|row| row.len() != C) {
         return Err(DesignError::Shape {
             what,
             rows: r.len(),
             cols,
-            er,
-            ec,
+            er: R,
+            ec: C,
         });
     }
-    if r.iter().flatten().any(|v| !v.is_finite()) {
+    if let Some(v) = r.iter().flatten().find(|v| !v.is_finite()) {
         return Err(DesignError::Config {
             field: what,
-            value: f64::NAN,
+            value: *v,
             rule: "entries must be finite",
         });
     }
-    Ok(DMatrix::from_fn(er, ec, |i, j| r[i][j]))
+    Ok(SMatrix::<f64, R, C>::from_fn(|i, j| r[i][j]))
 }
 
 /// Hs (4×27): ψ, u, v, w (14.4).
 pub fn output_matrix() -> DMatrix<f64> {
-    let mut hs = DMatrix::zeros(NY, NXR);
+    let mut hs = DMatrix::zeros(NY, NX_REDUCED);
     for (row, &col) in OUTPUT_STATES.iter().enumerate() {
         hs[(row, col)] = 1.0;
     }
@@ -238,7 +278,7 @@ pub fn output_matrix() -> DMatrix<f64> {
 
 /// Hm (9×27): the first nine reduced states (15.2).
 pub fn measurement_matrix() -> DMatrix<f64> {
-    let mut hm = DMatrix::zeros(NM, NXR);
+    let mut hm = DMatrix::zeros(NM, NX_REDUCED);
     for i in 0..NM {
         hm[(i, i)] = 1.0;
     }
@@ -246,44 +286,23 @@ pub fn measurement_matrix() -> DMatrix<f64> {
 }
 
 /// Design the controller and estimator for the discrete model (Φs, Γs) at
-/// the trim (x_trim, u_trim).
+/// sample time `sample_time_s` about the trim (x_trim, u_trim).
 pub fn design(
     phi: &DMatrix<f64>,
     gamma: &DMatrix<f64>,
-    x_trim: &[f64],
-    u_trim: &[f64],
+    x_trim: &ReducedState,
+    u_trim: &Input,
+    sample_time_s: f64,
     config: &ControllerConfig,
 ) -> Result<Gains, DesignError> {
     config.validate()?;
-    if phi.shape() != (NXR, NXR) {
-        return Err(DesignError::Shape {
-            what: "Phi",
-            rows: phi.nrows(),
-            cols: phi.ncols(),
-            er: NXR,
-            ec: NXR,
-        });
+    if !(sample_time_s.is_finite() && sample_time_s > 0.0) {
+        return Err(DesignError::SampleTime(sample_time_s));
     }
-    if gamma.shape() != (NXR, NUI) {
-        return Err(DesignError::Shape {
-            what: "Gamma",
-            rows: gamma.nrows(),
-            cols: gamma.ncols(),
-            er: NXR,
-            ec: NUI,
-        });
-    }
-    if x_trim.len() != NXR || u_trim.len() != NUI {
-        return Err(DesignError::Shape {
-            what: "trim",
-            rows: x_trim.len(),
-            cols: u_trim.len(),
-            er: NXR,
-            ec: NUI,
-        });
-    }
+    let phi_s = dyn_to_fixed::<NX_REDUCED, NX_REDUCED>("Phi", phi)?;
+    let gamma_s = dyn_to_fixed::<NX_REDUCED, NU>("Gamma", gamma)?;
     let alpha = match config.settling_time_s {
-        Some(ts) => alpha_from_settling_time(config.sample_time_s, ts)?,
+        Some(ts) => alpha_from_settling_time(sample_time_s, ts)?,
         None => 1.0,
     };
     let hs = output_matrix();
@@ -297,69 +316,156 @@ pub fn design(
         let mut q1 = hs.transpose() * &qe * &hs;
         q1 = (&q1 + q1.transpose()) * 0.5;
         let lqr = dlqr_pincer(phi, gamma, &q1, &(q2 * config.rho), None, alpha)?;
-        (lqr.k, DMatrix::zeros(NUI, NY), lqr.poles)
+        (lqr.k, DMatrix::zeros(NU, NY), lqr.poles)
     };
     let hm = measurement_matrix();
-    let rex = DMatrix::<f64>::identity(NXR, NXR) * config.process_noise;
+    let rex = DMatrix::<f64>::identity(NX_REDUCED, NX_REDUCED) * config.process_noise;
     let rey = DMatrix::<f64>::identity(NM, NM) * config.measurement_noise;
     let kal = dlqe(phi, None, &hm, &rex, &rey)?;
-    Ok(Gains {
-        version: 1,
-        config: config.clone(),
-        x_trim: x_trim.to_vec(),
-        u_trim: u_trim.to_vec(),
+    let set = GainSet {
+        sample_time_s,
         alpha,
-        phi: rows(phi),
-        gamma: rows(gamma),
-        ls: rows(&ls),
-        li: rows(&li),
-        k: rows(&kal.l),
+        x_trim: *x_trim,
+        u_trim: *u_trim,
+        phi: phi_s,
+        gamma: gamma_s,
+        ls: dyn_to_fixed("Ls", &ls)?,
+        li: dyn_to_fixed("Li", &li)?,
+        k: dyn_to_fixed("K", &kal.l)?,
+        options: config.lqi_options(),
+    };
+    set.check().map_err(|e| DesignError::File {
+        file: "(design)".into(),
+        message: e.to_string(),
+        source: None,
+    })?;
+    Ok(Gains {
+        config: config.clone(),
+        set,
         closed_loop_poles: poles.iter().map(|z| [z.re, z.im]).collect(),
         estimator_poles: kal.poles.iter().map(|z| [z.re, z.im]).collect(),
     })
 }
 
 impl Gains {
-    /// Write as pretty JSON.
-    pub fn save(&self, path: &std::path::Path) -> Result<(), DesignError> {
-        let file = path.display().to_string();
-        let text = serde_json::to_string_pretty(self).map_err(|e| DesignError::File {
-            file: file.clone(),
-            message: e.to_string(),
-        })?;
-        std::fs::write(path, text).map_err(|e| DesignError::File {
-            file,
-            message: e.to_string(),
+    fn to_file(&self) -> GainsFile {
+        let s = &self.set;
+        GainsFile {
+            version: GAINS_FORMAT_VERSION,
+            config: self.config.clone(),
+            sample_time_s: s.sample_time_s,
+            x_trim: s.x_trim.iter().copied().collect(),
+            u_trim: s.u_trim.iter().copied().collect(),
+            alpha: s.alpha,
+            phi: rows(&s.phi),
+            gamma: rows(&s.gamma),
+            ls: rows(&s.ls),
+            li: rows(&s.li),
+            k: rows(&s.k),
+            closed_loop_poles: self.closed_loop_poles.clone(),
+            estimator_poles: self.estimator_poles.clone(),
+        }
+    }
+
+    /// The design as `gains.json` text (pretty JSON).
+    pub fn to_json(&self) -> Result<String, DesignError> {
+        serde_json::to_string_pretty(&self.to_file()).map_err(|e| DesignError::File {
+            file: "gains.json".into(),
+            message: format!("cannot serialise: {e}"),
+            source: None,
         })
     }
 
-    /// Read a gains file written by [`Gains::save`], checking every shape.
-    pub fn load(path: &std::path::Path) -> Result<Gains, DesignError> {
+    /// Write as pretty JSON.
+    pub fn save(&self, path: &Path) -> Result<(), DesignError> {
+        let text = self.to_json()?;
+        std::fs::write(path, text).map_err(|e| DesignError::File {
+            file: path.display().to_string(),
+            message: "cannot write".into(),
+            source: Some(e),
+        })
+    }
+
+    /// Read a gains file written by [`Gains::save`], checking the version,
+    /// every shape, finiteness, and that α is the one the recorded settling
+    /// time gives at the recorded sample time (an edited file is refused).
+    pub fn load(path: &Path) -> Result<Gains, DesignError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| DesignError::File {
             file: file.clone(),
-            message: format!("cannot read: {e}"),
+            message: "cannot read".into(),
+            source: Some(e),
         })?;
-        let g: Gains = serde_json::from_str(&text).map_err(|e| DesignError::File {
-            file: file.clone(),
-            message: e.to_string(),
-        })?;
-        g.check().map_err(|e| DesignError::File {
-            file,
-            message: e.to_string(),
-        })?;
-        Ok(g)
+        Gains::from_json(&text).map_err(|e| match e {
+            DesignError::File { message, .. } => DesignError::File {
+                file,
+                message,
+                source: None,
+            },
+            other => DesignError::File {
+                file,
+                message: other.to_string(),
+                source: None,
+            },
+        })
     }
 
-    /// Check the shapes and finiteness of every matrix.
-    pub fn check(&self) -> Result<(), DesignError> {
-        from_rows("phi", &self.phi, NXR, NXR)?;
-        from_rows("gamma", &self.gamma, NXR, NUI)?;
-        from_rows("ls", &self.ls, NUI, NXR)?;
-        from_rows("li", &self.li, NUI, NY)?;
-        from_rows("k", &self.k, NXR, NM)?;
-        from_rows("x_trim", std::slice::from_ref(&self.x_trim), 1, NXR)?;
-        from_rows("u_trim", std::slice::from_ref(&self.u_trim), 1, NUI)?;
-        self.config.validate()
+    /// Parse `gains.json` text (see [`Gains::load`]).
+    pub fn from_json(text: &str) -> Result<Gains, DesignError> {
+        let bad = |message: String| DesignError::File {
+            file: "gains.json".into(),
+            message,
+            source: None,
+        };
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| bad(format!("not valid JSON: {e}")))?;
+        let version = value.get("version").and_then(serde_json::Value::as_u64);
+        if version != Some(u64::from(GAINS_FORMAT_VERSION)) {
+            return Err(bad(format!(
+                "`version` = {}: this helicon reads gains format {GAINS_FORMAT_VERSION} \
+                 (redesign with this version to get one)",
+                version.map_or_else(|| "missing".to_string(), |v| v.to_string())
+            )));
+        }
+        let f: GainsFile = serde_json::from_value(value).map_err(|e| bad(e.to_string()))?;
+        f.config.validate()?;
+        let ts = f.sample_time_s;
+        if !(ts.is_finite() && ts > 0.0) {
+            return Err(bad(format!(
+                "`sample_time_s` = {ts}: must be finite and > 0"
+            )));
+        }
+        let expected_alpha = match f.config.settling_time_s {
+            Some(t) => alpha_from_settling_time(ts, t)?,
+            None => 1.0,
+        };
+        if !((f.alpha - expected_alpha).abs() <= 1e-12 * expected_alpha.abs()) {
+            return Err(bad(format!(
+                "`alpha` = {} does not match the settling time {:?} s at sample time {ts} s \
+                 (which gives {expected_alpha}): the file was edited",
+                f.alpha, f.config.settling_time_s
+            )));
+        }
+        let x_trim = from_rows::<1, NX_REDUCED>("x_trim", std::slice::from_ref(&f.x_trim))?;
+        let u_trim = from_rows::<1, NU>("u_trim", std::slice::from_ref(&f.u_trim))?;
+        let set = GainSet {
+            sample_time_s: ts,
+            alpha: f.alpha,
+            x_trim: x_trim.transpose(),
+            u_trim: u_trim.transpose(),
+            phi: from_rows("phi", &f.phi)?,
+            gamma: from_rows("gamma", &f.gamma)?,
+            ls: from_rows("ls", &f.ls)?,
+            li: from_rows("li", &f.li)?,
+            k: from_rows("k", &f.k)?,
+            options: f.config.lqi_options(),
+        };
+        set.check().map_err(|e| bad(e.to_string()))?;
+        Ok(Gains {
+            config: f.config,
+            set,
+            closed_loop_poles: f.closed_loop_poles,
+            estimator_poles: f.estimator_poles,
+        })
     }
 }

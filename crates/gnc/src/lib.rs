@@ -1,19 +1,14 @@
 //! # helicon-gnc
 //!
-//! On-board guidance, navigation and control algorithms for the helicopter of
-//! the thesis *Nonlinear Modeling and Optimal Control of a Miniature Autonomous
-//! Helicopter* (Aalborg 2006):
+//! Off-board design of the flight software (thesis chapters 14 and 15): the
+//! LQR with integral action and the steady-state Kalman predictor designed on
+//! the linearised model, producing the fixed-size [`helicon_core::GainSet`]
+//! the flight computer flies, and the `gains.json` file that carries it.
 //!
-//! - [`attitude`]: attitude determination by Davenport's q-method (§13.2);
-//! - [`fusion`]: GPS + IMU + attitude fusion Kalman filter (§13.3).
-//!
-//! Rotations and Euler kinematics come from `helicon_model::frames` (chapter 9).
+//! The on-board algorithms themselves (navigation, estimators, the control
+//! law, the flight computer) live in `helicon-core`, which depends on
+//! nalgebra only.
 
-pub mod attitude;
-pub mod controller;
 pub mod design;
-pub mod fusion;
-pub mod navigation;
 
-pub use attitude::{AttitudeError, AttitudeSolution, VectorObservation, q_method};
-pub use fusion::{FusionConfig, FusionError, FusionFilter, FusionInput};
+pub use design::{ControllerConfig, DesignError, Gains, design};

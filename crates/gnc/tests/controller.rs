@@ -4,7 +4,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 #![allow(unsafe_code)] // the counting GlobalAlloc below
 
-use helicon_gnc::controller::{ControllerSwitches, Feedback, FlightController, Reference};
+use helicon_core::{
+    Estimator, FlightComputer, KalmanPredictor, Lqi, Reference, ServoLimits, StateMeasurement,
+};
 use helicon_gnc::design::{ControllerConfig, Gains, design};
 use helicon_model::linearize::linearize;
 use helicon_model::trim::{TrimOptions, TrimTarget, trim};
@@ -43,13 +45,30 @@ fn setup(config: &ControllerConfig) -> Setup {
     let model = Model::bergen_twin(Preset::Thesis);
     let t = trim(&model, &TrimTarget::hover(), &TrimOptions::default()).unwrap();
     let lm = linearize(&model, &t.x, &t.u, &Vector3::zeros(), InflowMode::Converged).unwrap();
-    let (phi, gamma) = lm.discretize(config.sample_time_s).unwrap();
-    let gains = design(&phi, &gamma, t.x.as_slice(), t.u.as_slice(), config).unwrap();
+    let ts = model.params().control.sample_time_s;
+    let (phi, gamma) = lm.discretize(ts).unwrap();
+    let gains = design(&phi, &gamma, &t.x, &t.u, ts, config).unwrap();
     Setup {
         gains,
         phi,
         gamma,
         x_trim: DVector::from_column_slice(t.x.as_slice()),
+    }
+}
+
+fn computer(g: &Gains) -> FlightComputer<KalmanPredictor, Lqi> {
+    let limits = ServoLimits {
+        min: SVector::repeat(-1.0),
+        max: SVector::repeat(1.0),
+    };
+    let est = KalmanPredictor::new(&g.set, &g.set.x_trim).unwrap();
+    FlightComputer::new(est, Lqi::new(&g.set, limits, true).unwrap())
+}
+
+fn measure(k: usize, x: &DVector<f64>) -> <KalmanPredictor as Estimator>::Measurement {
+    StateMeasurement {
+        t_s: k as f64 * 0.0025,
+        measured: SVector::<f64, 9>::from_fn(|i, _| x[i]),
     }
 }
 
@@ -63,8 +82,13 @@ fn design_meets_the_pincer_radius() {
         .iter()
         .map(|z| (z[0] * z[0] + z[1] * z[1]).sqrt())
         .fold(0.0, f64::max);
-    assert!((s.gains.alpha - 1.0023).abs() < 1e-4, "{}", s.gains.alpha);
-    assert!(r < 1.0 / s.gains.alpha, "{r}");
+    assert!(
+        (s.gains.set.alpha - 1.0023).abs() < 1e-4,
+        "{}",
+        s.gains.set.alpha
+    );
+    assert!(r < 1.0 / s.gains.set.alpha, "{r}");
+    assert_eq!(r, s.gains.spectral_radius());
     let re = s
         .gains
         .estimator_poles
@@ -81,26 +105,25 @@ fn linear_closed_loop_with_estimator_tracks_and_converges() {
     // and a 1 m/s north reference is tracked with zero steady-state error
     // (integral action), the separation principle at work.
     let s = setup(&ControllerConfig::default());
-    let sw = ControllerSwitches::default();
-    let mut c = FlightController::new(&s.gains, [-1.0; 4], [1.0; 4], sw).unwrap();
+    let mut c = computer(&s.gains);
     let mut x = s.x_trim.clone();
     x[3] += 0.5; // 0.5 m/s initial error the estimator does not know about
-    let u_trim = DVector::from_column_slice(&s.gains.u_trim);
-    c.reset(&SVector::<f64, 27>::from_column_slice(s.x_trim.as_slice()));
+    let u_trim = DVector::from_column_slice(s.gains.set.u_trim.as_slice());
     let reference = Reference {
         velocity_ned_m_s: Vector3::new(1.0, 0.0, 0.0),
         yaw_rad: 0.0,
     };
     let mut est_err = 0.0;
     for k in 0..8000 {
-        let y = SVector::<f64, 9>::from_fn(|i, _| x[i]);
-        let out = c.step(Feedback::Measured(&y), &reference);
-        let du = DVector::from_column_slice(out.u.as_slice()) - &u_trim;
+        let y = measure(k, &x);
+        let out = c.step(&y, &reference).unwrap();
+        if k == 7999 {
+            // x̂(k|k−1) against x(k)
+            est_err = (SVector::<f64, 27>::from_column_slice(x.as_slice()) - out.estimate).amax();
+        }
+        let du = DVector::from_column_slice(out.command.as_slice()) - &u_trim;
         let dx = &x - &s.x_trim;
         x = &s.x_trim + &s.phi * dx + &s.gamma * du;
-        if k == 7999 {
-            est_err = (SVector::<f64, 27>::from_column_slice(x.as_slice()) - c.estimate()).amax();
-        }
     }
     // earth north velocity ≈ body u at ψ = 0 (small roll/pitch)
     let vn = x[3] * x[1].cos();
@@ -117,24 +140,38 @@ fn step_does_not_allocate_and_gains_round_trip() {
     s.gains.save(&path).unwrap();
     let loaded = Gains::load(&path).unwrap();
     assert_eq!(loaded, s.gains);
-    let mut c =
-        FlightController::new(&loaded, [-1.0; 4], [1.0; 4], ControllerSwitches::default()).unwrap();
-    let y = SVector::<f64, 9>::from_fn(|i, _| s.x_trim[i] + 0.01);
+    let mut c = computer(&loaded);
+    let xt = s.x_trim.map(|v| v + 0.01);
     let r = Reference::default();
-    let _ = c.step(Feedback::Measured(&y), &r);
+    let _ = c.step(&measure(0, &xt), &r).unwrap();
     let before = ALLOCS.with(Cell::get);
     let mut acc = 0.0;
-    for _ in 0..1000 {
-        acc += c.step(Feedback::Measured(&y), &r).u[0];
+    for k in 1..1000 {
+        acc += c.step(&measure(k, &xt), &r).unwrap().command[0];
     }
     assert!(acc.is_finite());
     assert_eq!(
         ALLOCS.with(Cell::get) - before,
         0,
-        "FlightController::step allocated"
+        "FlightComputer::step allocated"
     );
     // a corrupted file is an error naming it, not a panic
     std::fs::write(&path, "{\"version\": 1}").unwrap();
     let e = Gains::load(&path).unwrap_err().to_string();
     assert!(e.contains("gains.json"), "{e}");
+    // an edited sample time (α no longer matches it) is refused
+    let text = s
+        .gains
+        .to_json()
+        .unwrap()
+        .replace("\"sample_time_s\": 0.0025", "\"sample_time_s\": 0.005");
+    assert!(text.contains("0.005"));
+    let e = Gains::from_json(&text).unwrap_err().to_string();
+    assert!(e.contains("alpha"), "{e}");
+    // an edited alpha is refused
+    let v: serde_json::Value = serde_json::from_str(&s.gains.to_json().unwrap()).unwrap();
+    let mut v = v;
+    v["alpha"] = serde_json::json!(1.5);
+    let e = Gains::from_json(&v.to_string()).unwrap_err().to_string();
+    assert!(e.contains("alpha") && e.contains("edited"), "{e}");
 }

@@ -26,7 +26,6 @@
 pub mod actuators;
 pub mod drag;
 pub mod flapping;
-pub mod frames;
 pub mod inflow;
 pub mod integrate;
 pub mod linearize;
@@ -35,9 +34,13 @@ pub mod options;
 pub mod params;
 pub mod rigid_body;
 pub mod rotor;
-pub mod state;
 pub mod tail_rotor;
 pub mod trim;
+
+/// Frames and rotations (thesis chapter 9), shared with the flight software core.
+pub use helicon_core::frames;
+/// The state layout (thesis (4.7), (12.2)), shared with the flight software core.
+pub use helicon_core::state;
 
 pub use model::{Aux, Model, ModelError};
 pub use options::{InflowMode, ModelOptions, Preset};

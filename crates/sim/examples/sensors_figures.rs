@@ -6,7 +6,7 @@
 //! - Dryden turbulence time series and its sample PSD against MIL-F-8785C.
 #![allow(clippy::unwrap_used)] // example: a failure aborts with a message
 
-use helicon_gnc::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
+use helicon_core::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
 use helicon_sim::plot::{LinePlot, Series};
 use helicon_sim::wind::{DrydenConfig, DrydenTurbulence, ThesisWind, ThesisWindConfig, WindModel};
 use nalgebra::Vector3;

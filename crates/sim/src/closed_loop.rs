@@ -11,20 +11,24 @@
 //! keeping the log so far.
 
 use crate::metrics::{OutputMetrics, output_metrics};
-use crate::navigation::{frame, navigation_filter_at, sensor_suite_at};
+use crate::navigation::{navigation_filter_at, sensor_suite_at};
 use crate::scenario::{DesignInflow, OUTPUTS, PlantInflow, Scenario};
+use crate::sensor_log::{LoggedTruth, SensorLogRow};
 use crate::sensors::SensorSuite;
 use crate::trajectory::TruthSample;
 use crate::wind::{Wind, WindModel};
-use helicon_gnc::controller::{ControllerSwitches, Feedback, FlightController, Reference};
+use helicon_core::frames::{EulerTrig, wrap_pi};
+use helicon_core::navigation::NavigationFilter;
+use helicon_core::{
+    CoreError, FlightComputer, KalmanPredictor, Lqi, Reference, ServoLimits, StateMeasurement,
+    Telemetry, ThesisEstimator, ThesisFlightComputer, TruthFeed, TruthMeasurement,
+};
 use helicon_gnc::design::{Gains, design};
-use helicon_gnc::fusion::wrap_pi;
-use helicon_gnc::navigation::FlightComputer;
 use helicon_model::integrate::rk4;
 use helicon_model::linearize::linearize;
 use helicon_model::state::{NX, REDUCED_OFFSET, expand, ix, reduce};
 use helicon_model::trim::{Trim, TrimOptions, TrimTarget, trim};
-use helicon_model::{InflowMode, Input, Model, ModelError, Params, ReducedState, State};
+use helicon_model::{Aux, InflowMode, Input, Model, ModelError, Params, ReducedState, State};
 use nalgebra::{SVector, Vector3};
 use serde::Serialize;
 
@@ -54,7 +58,23 @@ pub enum ClosedLoopError {
     Sensors(#[from] crate::sensors::SensorConfigError),
     /// Navigation (fusion) setup.
     #[error(transparent)]
-    Fusion(#[from] helicon_gnc::fusion::FusionError),
+    Fusion(#[from] helicon_core::fusion::FusionError),
+    /// The flight software could not be built from the gains.
+    #[error("flight software: {0}")]
+    Core(#[from] CoreError),
+    /// A gains file designed for another sample time than the helicopter's.
+    #[error(
+        "{file}: the gains were designed for a sample time of {gains_s} s but the parameters' \
+         `control.sample_time_s` is {params_s} s: redesign, or fly the parameters they were made for"
+    )]
+    SampleTimeMismatch {
+        /// The gains file.
+        file: String,
+        /// Its sample time (s).
+        gains_s: f64,
+        /// The parameters' sample time (s).
+        params_s: f64,
+    },
     /// The log would not fit in memory.
     #[error("the flight log would need {rows} rows: raise [log] decimation or shorten duration_s")]
     LogTooLarge {
@@ -95,8 +115,20 @@ pub fn prepare_with_params(
         wind_ned_m_s: Vector3::zeros(),
     };
     let t = trim(&model, &target, &TrimOptions::default())?;
+    let ts = model.params().control.sample_time_s;
     let gains = match &scenario.controller.gains_file {
-        Some(f) => Gains::load(&scenario.resolve(f))?,
+        Some(f) => {
+            let path = scenario.resolve(f);
+            let g = Gains::load(&path)?;
+            if g.set.sample_time_s != ts {
+                return Err(ClosedLoopError::SampleTimeMismatch {
+                    file: path.display().to_string(),
+                    gains_s: g.set.sample_time_s,
+                    params_s: ts,
+                });
+            }
+            g
+        }
         None => {
             let inflow = match scenario.controller.design_inflow {
                 DesignInflow::Converged => InflowMode::Converged,
@@ -107,14 +139,8 @@ pub fn prepare_with_params(
                 },
             };
             let lm = linearize(&model, &t.x, &t.u, &Vector3::zeros(), inflow)?;
-            let (phi, gamma) = lm.discretize(scenario.controller.design.sample_time_s)?;
-            design(
-                &phi,
-                &gamma,
-                t.x.as_slice(),
-                t.u.as_slice(),
-                &scenario.controller.design,
-            )?
+            let (phi, gamma) = lm.discretize(ts)?;
+            design(&phi, &gamma, &t.x, &t.u, ts, &scenario.controller.design)?
         }
     };
     Ok(Prepared {
@@ -281,6 +307,8 @@ pub struct Summary {
     pub parameter_hash: String,
     /// helicon version.
     pub version: String,
+    /// The flight software's sample time (s): the helicopter's `control.sample_time_s`.
+    pub sample_time_s: f64,
     /// Closed-loop poles of the design: largest |z|.
     pub design_spectral_radius: f64,
     /// Pincer α of the design.
@@ -290,23 +318,13 @@ pub struct Summary {
 /// A finished flight: the log and the summary.
 #[derive(Debug, Clone)]
 pub struct Flight {
-    /// Samples (every sample; decimate when writing).
+    /// Samples (every `[log] decimation`-th).
     pub log: Vec<LogRow>,
+    /// Every sensor frame given to the flight software, with its truth
+    /// (`[log] sensors = true` with sensor models in the loop; else empty).
+    pub sensors: Vec<SensorLogRow>,
     /// Summary and metrics.
     pub summary: Summary,
-}
-
-/// The on-board software flown in the loop.
-enum OnBoard {
-    /// The controller with ideal measurements (or truth).
-    Controller(Box<FlightController>),
-    /// Sensor models feeding the whole flight computer.
-    Computer {
-        /// The world's sensors.
-        suite: Box<SensorSuite>,
-        /// Navigation + controller.
-        computer: Box<FlightComputer>,
-    },
 }
 
 /// FNV-1a 64-bit hash, as hex.
@@ -350,8 +368,7 @@ pub fn initial_state(scenario: &Scenario, trim: &Trim) -> State {
 }
 
 fn outputs(x: &State) -> [f64; 4] {
-    let v = helicon_model::frames::EulerTrig::new(x[ix::PHI], x[ix::THETA], x[ix::PSI])
-        .ned_from_body()
+    let v = EulerTrig::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]).ned_from_body()
         * Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
     [v.x, v.y, v.z, x[ix::PSI]]
 }
@@ -359,59 +376,295 @@ fn outputs(x: &State) -> [f64; 4] {
 /// Progress callback: fraction done in [0, 1].
 pub type Progress<'a> = &'a mut dyn FnMut(f64);
 
-/// Fly a prepared scenario.
+/// The plant: the nonlinear model integrated with RK4 between controller
+/// samples, inputs and wind held, inflow warm-started from the last solution.
+struct Plant<'a> {
+    model: &'a Model,
+    x: State,
+    /// Inflow ratios (main, tail) carried between evaluations.
+    lambda: (f64, f64),
+    /// The derivative at the start of the last step (for the accelerometer).
+    xdot: State,
+    inflow: PlantInflow,
+    inflow_iterations: u32,
+    substeps: u32,
+    h_s: f64,
+}
+
+/// What one plant step reports.
+struct PlantStep {
+    /// Auxiliary outputs at the start of the step (default when the first
+    /// evaluation failed).
+    aux: Aux,
+    /// The model failure that cut the step short, if any.
+    error: Option<ModelError>,
+}
+
+impl<'a> Plant<'a> {
+    fn new(scenario: &Scenario, prepared: &'a Prepared, ts: f64) -> Self {
+        Plant {
+            model: &prepared.model,
+            x: initial_state(scenario, &prepared.trim),
+            lambda: (prepared.trim.aux.lambda_mr, prepared.trim.aux.lambda_tr),
+            xdot: State::zeros(),
+            inflow: scenario.plant.inflow,
+            inflow_iterations: scenario.plant.inflow_iterations,
+            substeps: scenario.plant.substeps,
+            h_s: ts / f64::from(scenario.plant.substeps),
+        }
+    }
+
+    /// The true motion the sensor models sample; the inertial acceleration
+    /// comes from the previous step's derivative (one sample old).
+    fn truth(&self, t_s: f64) -> TruthSample {
+        let x = &self.x;
+        let ned_from_body = EulerTrig::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]).ned_from_body();
+        let v_body = Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
+        let omega = Vector3::new(x[ix::P], x[ix::Q], x[ix::R]);
+        let dv = Vector3::new(self.xdot[ix::U], self.xdot[ix::V], self.xdot[ix::W]);
+        TruthSample {
+            t_s,
+            pos_ned_m: Vector3::new(x[ix::X], x[ix::Y], x[ix::Z]),
+            vel_ned_m_s: ned_from_body * v_body,
+            acc_ned_m_s2: ned_from_body * (dv + omega.cross(&v_body)),
+            euler_rad: Vector3::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]),
+            omega_body_rad_s: omega,
+        }
+    }
+
+    /// Integrate one controller sample with `u` and the wind held.
+    fn advance(&mut self, u: &Input, wind_ned: &Vector3<f64>) -> PlantStep {
+        let mut first: Option<(Aux, State)> = None;
+        let mut error = None;
+        let (inflow, iterations, model) = (self.inflow, self.inflow_iterations, self.model);
+        let lam = &mut self.lambda;
+        for _ in 0..self.substeps {
+            let res = rk4(&self.x, self.h_s, |s| {
+                let mode = match inflow {
+                    PlantInflow::Converged => InflowMode::ConvergedFrom {
+                        lambda_mr_hint: lam.0,
+                        lambda_tr_hint: lam.1,
+                    },
+                    PlantInflow::ThesisIteration => InflowMode::ThesisIteration {
+                        lambda_mr_in: lam.0,
+                        lambda_tr_in: lam.1,
+                        iterations,
+                    },
+                };
+                let (d, a) = model.derivative_with(s, u, wind_ned, mode)?;
+                // warm start (converged) or the thesis's recursion (iteration)
+                *lam = (a.lambda_mr, a.lambda_tr);
+                if first.is_none() {
+                    first = Some((a, d));
+                }
+                Ok::<_, ModelError>(d)
+            });
+            match res {
+                Ok(next) => self.x = next,
+                Err(e) => {
+                    error = Some(e);
+                    break;
+                }
+            }
+        }
+        let (aux, xdot) = first.unwrap_or_default();
+        self.xdot = xdot;
+        PlantStep { aux, error }
+    }
+}
+
+/// The on-board software flown in the loop, as the scenario's switches
+/// compose it from the core's parts.
+enum OnBoard {
+    /// Sensor models feeding the thesis's whole chain (`fusion = true`).
+    Thesis {
+        /// The world's sensors.
+        suite: Box<SensorSuite>,
+        /// Navigation + predictor + LQI.
+        computer: Box<ThesisFlightComputer>,
+    },
+    /// Ideal navigation: the predictor is given the nine measured states.
+    IdealNavigation(Box<FlightComputer<KalmanPredictor, Lqi>>),
+    /// The thesis's "estimator off" switch: the law is fed the true state;
+    /// with `fusion = true` the navigation still runs and is logged.
+    Truth {
+        /// Truth feed + LQI.
+        computer: Box<FlightComputer<TruthFeed, Lqi>>,
+        /// Sensors and navigation run alongside, for the log.
+        navigation: Option<(Box<SensorSuite>, Box<NavigationFilter>)>,
+    },
+}
+
+impl OnBoard {
+    fn new(scenario: &Scenario, prepared: &Prepared, x0: &State) -> Result<Self, ClosedLoopError> {
+        let p = prepared.model.params();
+        let limits = ServoLimits {
+            min: Input::from_fn(|i, _| p.servos[i].s_min),
+            max: Input::from_fn(|i, _| p.servos[i].s_max),
+        };
+        let set = &prepared.gains.set;
+        let ts = set.sample_time_s;
+        let g = p.environment.g_m_s2;
+        let law = Lqi::new(set, limits, scenario.controller.feedback)?;
+        // The estimator starts from the measured states and the trim for the rest.
+        let mut x0_est: ReducedState = prepared.trim.x;
+        for i in 0..9 {
+            x0_est[i] = x0[i + REDUCED_OFFSET];
+        }
+        let c = &scenario.controller;
+        let sensed = || -> Result<_, ClosedLoopError> {
+            Ok((
+                Box::new(sensor_suite_at(&scenario.sensors, ts, g)?),
+                Box::new(navigation_filter_at(
+                    &scenario.sensors,
+                    &scenario.navigation,
+                    ts,
+                    g,
+                    x0,
+                )?),
+            ))
+        };
+        Ok(match (c.estimator, c.fusion) {
+            (true, true) => {
+                let (suite, navigation) = sensed()?;
+                let estimator = ThesisEstimator {
+                    navigation: *navigation,
+                    predictor: KalmanPredictor::new(set, &x0_est)?,
+                };
+                OnBoard::Thesis {
+                    suite,
+                    computer: Box::new(FlightComputer::new(estimator, law)),
+                }
+            }
+            (true, false) => OnBoard::IdealNavigation(Box::new(FlightComputer::new(
+                KalmanPredictor::new(set, &x0_est)?,
+                law,
+            ))),
+            (false, fusion) => OnBoard::Truth {
+                computer: Box::new(FlightComputer::new(TruthFeed, law)),
+                navigation: if fusion { Some(sensed()?) } else { None },
+            },
+        })
+    }
+
+    /// One control sample against the plant's true state; the sensor frame
+    /// and its truth are pushed to `record` when given.
+    fn step(
+        &mut self,
+        t_s: f64,
+        plant: &Plant<'_>,
+        reference: &Reference,
+        record: Option<&mut Vec<SensorLogRow>>,
+    ) -> Result<Telemetry, CoreError> {
+        let xr: ReducedState = reduce(&plant.x);
+        let sense = |suite: &mut SensorSuite| {
+            let truth = plant.truth(t_s);
+            let frame = suite.sample(&truth);
+            if let Some(rec) = record {
+                rec.push(SensorLogRow {
+                    frame,
+                    truth: LoggedTruth::from(&truth),
+                });
+            }
+            frame
+        };
+        match self {
+            OnBoard::Thesis { suite, computer } => {
+                let frame = sense(suite);
+                computer.step(&frame, reference)
+            }
+            OnBoard::IdealNavigation(computer) => {
+                let m = StateMeasurement {
+                    t_s,
+                    measured: SVector::from_fn(|i, _| xr[i]),
+                };
+                computer.step(&m, reference)
+            }
+            OnBoard::Truth {
+                computer,
+                navigation,
+            } => {
+                let nav = match navigation {
+                    Some((suite, filter)) => {
+                        let frame = sense(suite);
+                        Some((filter.step(&frame)?, filter.solution()))
+                    }
+                    None => None,
+                };
+                let mut tel = computer.step(&TruthMeasurement { t_s, state: xr }, reference)?;
+                if let Some((y, solution)) = nav {
+                    tel.measured = y;
+                    tel.navigation = Some(solution);
+                }
+                Ok(tel)
+            }
+        }
+    }
+}
+
+/// The flight-envelope checks after a plant step at `t_next_s`: the first
+/// limit crossed, as a termination kind and a sentence.
+fn check_limits(
+    scenario: &Scenario,
+    x: &State,
+    t_next_s: f64,
+    psi_ref_next: f64,
+) -> Option<(Termination, String)> {
+    let plant = &scenario.plant;
+    if !x.iter().all(|v| v.is_finite()) {
+        return Some((
+            Termination::NonFiniteState,
+            format!("non-finite state at t = {t_next_s:.3} s"),
+        ));
+    }
+    let lim = plant.max_attitude_rad;
+    if x[ix::PHI].abs() > lim || x[ix::THETA].abs() > lim {
+        return Some((
+            Termination::AttitudeLimit,
+            format!(
+                "attitude beyond {lim} rad at t = {t_next_s:.3} s (phi = {:.3}, theta = {:.3})",
+                x[ix::PHI],
+                x[ix::THETA]
+            ),
+        ));
+    }
+    let rate = x[ix::P].abs().max(x[ix::Q].abs()).max(x[ix::R].abs());
+    if rate > plant.max_rate_rad_s {
+        return Some((
+            Termination::RateLimit,
+            format!(
+                "body rate {rate:.2} rad/s beyond {} rad/s at t = {t_next_s:.3} s",
+                plant.max_rate_rad_s
+            ),
+        ));
+    }
+    let yaw_err = x[ix::PSI] - psi_ref_next;
+    if yaw_err.abs() > plant.max_yaw_error_rad {
+        return Some((
+            Termination::HeadingLost,
+            format!(
+                "heading {:.2} rad is {yaw_err:.2} rad from its reference at t = {t_next_s:.3} s: \
+                 the helicopter spins away",
+                x[ix::PSI]
+            ),
+        ));
+    }
+    None
+}
+
+/// Fly a prepared scenario: one loop per controller sample — sense, run the
+/// flight software, integrate the plant, log, check the envelope.
 pub fn fly(
     scenario: &Scenario,
     prepared: &Prepared,
     progress: Option<Progress<'_>>,
 ) -> Result<Flight, ClosedLoopError> {
     let mut progress = progress;
-    let model = &prepared.model;
-    let p = model.params();
-    let servos = &p.servos;
-    let u_min = [
-        servos[0].s_min,
-        servos[1].s_min,
-        servos[2].s_min,
-        servos[3].s_min,
-    ];
-    let u_max = [
-        servos[0].s_max,
-        servos[1].s_max,
-        servos[2].s_max,
-        servos[3].s_max,
-    ];
-    let sw = ControllerSwitches {
-        feedback: scenario.controller.feedback,
-        estimator: scenario.controller.estimator,
-    };
-    let mut ctrl = FlightController::new(&prepared.gains, u_min, u_max, sw)?;
-    let mut x = initial_state(scenario, &prepared.trim);
-    let x_trim27 = prepared.trim.x;
-    // The estimator starts from the measured states and the trim for the rest.
-    let mut x0_est = x_trim27;
-    for i in 0..9 {
-        x0_est[i] = x[i + REDUCED_OFFSET];
-    }
-    ctrl.reset(&x0_est);
+    let ts = prepared.gains.set.sample_time_s;
+    let mut plant = Plant::new(scenario, prepared, ts);
+    let mut onboard = OnBoard::new(scenario, prepared, &plant.x)?;
     let mut wind = Wind::from_config(&scenario.wind)?;
-    let ts = scenario.controller.design.sample_time_s;
     let n = (scenario.duration_s / ts).round() as usize;
-    let h = ts / f64::from(scenario.plant.substeps);
-    // The on-board software: the controller alone (ideal measurements), or the
-    // whole flight computer (navigation + controller) fed by the sensor models.
-    let mut onboard = if scenario.controller.fusion {
-        OnBoard::Computer {
-            suite: Box::new(sensor_suite_at(&scenario.sensors, ts)?),
-            computer: Box::new(FlightComputer {
-                navigation: navigation_filter_at(&scenario.sensors, &scenario.navigation, ts, &x)?,
-                controller: ctrl,
-            }),
-        }
-    } else {
-        OnBoard::Controller(Box::new(ctrl))
-    };
-    let mut lam = (prepared.trim.aux.lambda_mr, prepared.trim.aux.lambda_tr);
     let schedule = scenario.reference_schedule();
     let decimation = scenario.log.decimation.max(1) as usize;
     let mut log = Vec::new();
@@ -419,9 +672,15 @@ pub fn fly(
         .map_err(|_| ClosedLoopError::LogTooLarge {
             rows: n / decimation + 2,
         })?;
+    let record_sensors = scenario.log.sensors && scenario.controller.fusion;
+    let mut sensors = Vec::new();
+    if record_sensors {
+        sensors
+            .try_reserve(n + 1)
+            .map_err(|_| ClosedLoopError::LogTooLarge { rows: n + 1 })?;
+    }
     let mut reason: Option<(Termination, String)> = None;
     let mut t = 0.0;
-    let mut prev_xdot = State::zeros();
     for k in 0..=n {
         t = k as f64 * ts;
         let wind_ned = wind.step(t, ts);
@@ -430,163 +689,32 @@ pub fn fly(
             velocity_ned_m_s: Vector3::new(r[0], r[1], r[2]),
             yaw_rad: r[3],
         };
-        let xr: ReducedState = reduce(&x);
-        let fb_full = !scenario.controller.estimator;
-        let (out, measured9) = match &mut onboard {
-            OnBoard::Controller(c) => {
-                let y: SVector<f64, 9> = SVector::from_fn(|i, _| xr[i]);
-                let fb = if fb_full {
-                    Feedback::Full(&xr)
-                } else {
-                    Feedback::Measured(&y)
-                };
-                (c.step(fb, &reference), y)
-            }
-            OnBoard::Computer { suite, computer } => {
-                let ned_from_body =
-                    helicon_model::frames::EulerTrig::new(x[ix::PHI], x[ix::THETA], x[ix::PSI])
-                        .ned_from_body();
-                let v_body = Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
-                let omega = Vector3::new(x[ix::P], x[ix::Q], x[ix::R]);
-                // inertial acceleration from the previous sample's derivative (one sample old)
-                let acc_ned = ned_from_body
-                    * (Vector3::new(prev_xdot[ix::U], prev_xdot[ix::V], prev_xdot[ix::W])
-                        + omega.cross(&v_body));
-                let truth = TruthSample {
-                    t_s: t,
-                    pos_ned_m: Vector3::new(x[ix::X], x[ix::Y], x[ix::Z]),
-                    vel_ned_m_s: ned_from_body * v_body,
-                    acc_ned_m_s2: acc_ned,
-                    euler_rad: Vector3::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]),
-                    omega_body_rad_s: omega,
-                };
-                let sensor_frame = frame(&suite.sample(&truth));
-                let res = if fb_full {
-                    // analysis switch: navigation runs (and is logged) but the
-                    // controller is fed the true state
-                    computer
-                        .navigation
-                        .step(&sensor_frame, None)
-                        .map(|y| (computer.controller.step(Feedback::Full(&xr), &reference), y))
-                } else {
-                    computer.step(&sensor_frame, &reference)
-                };
-                match res {
-                    Ok(v) => v,
-                    Err(e) => {
-                        reason = Some((
-                            Termination::NavigationFailure,
-                            format!("navigation failed at t = {t:.3} s: {e}"),
-                        ));
-                        break;
-                    }
-                }
+        let record = record_sensors.then_some(&mut sensors);
+        let tel = match onboard.step(t, &plant, &reference, record) {
+            Ok(tel) => tel,
+            Err(e) => {
+                reason = Some((
+                    Termination::NavigationFailure,
+                    format!("navigation failed at t = {t:.3} s: {e}"),
+                ));
+                break;
             }
         };
-        let x_start = x;
-        let est = out.x_estimate;
-        let u = out.u;
-        // plant: RK4 sub-steps with u and wind held
-        let mut aux_first = None;
-        let mut step_err: Option<ModelError> = None;
-        for _ in 0..scenario.plant.substeps {
-            let res = rk4(&x, h, |s| {
-                let inflow = match scenario.plant.inflow {
-                    PlantInflow::Converged => InflowMode::ConvergedFrom {
-                        lambda_mr_hint: lam.0,
-                        lambda_tr_hint: lam.1,
-                    },
-                    PlantInflow::ThesisIteration => InflowMode::ThesisIteration {
-                        lambda_mr_in: lam.0,
-                        lambda_tr_in: lam.1,
-                        iterations: scenario.plant.inflow_iterations,
-                    },
-                };
-                let (d, a) = model.derivative_with(s, &u, &wind_ned, inflow)?;
-                // warm start (converged) or the thesis's recursion (iteration)
-                lam = (a.lambda_mr, a.lambda_tr);
-                if aux_first.is_none() {
-                    aux_first = Some((a, d));
-                }
-                Ok::<_, ModelError>(d)
-            });
-            match res {
-                Ok(next) => x = next,
-                Err(e) => {
-                    step_err = Some(e);
-                    break;
-                }
-            }
-        }
-        let (aux, xdot) = aux_first.unwrap_or_default();
-        prev_xdot = xdot;
+        let x_start = plant.x;
+        let step = plant.advance(&tel.command, &wind_ned);
         // the log keeps every `decimation`-th sample (and the last one)
-        let keep = k % decimation == 0 || k == n;
-        if keep {
-            log.push(LogRow {
-                t_s: t,
-                x: x_start,
-                u,
-                reference: r,
-                output: outputs(&x_start),
-                estimate9: std::array::from_fn(|i| est[i]),
-                measured9: std::array::from_fn(|i| measured9[i]),
-                wind_ned: [wind_ned.x, wind_ned.y, wind_ned.z],
-                lambda: [aux.lambda_mr, aux.lambda_tr],
-                thrust: [-aux.force_mr_hub_n.z, aux.force_tr_y_n],
-                inflow_residual: aux.inflow_residual,
-            });
+        if k % decimation == 0 || k == n {
+            log.push(LogRow::new(t, &x_start, &tel, r, &wind_ned, &step.aux));
         }
-        if let Some(e) = step_err {
+        if let Some(e) = step.error {
             reason = Some((
                 Termination::ModelFailure,
                 format!("model failed at t = {t:.3} s: {e}"),
             ));
             break;
         }
-        if !x.iter().all(|v| v.is_finite()) {
-            reason = Some((
-                Termination::NonFiniteState,
-                format!("non-finite state at t = {:.3} s", t + ts),
-            ));
-            break;
-        }
-        let lim = scenario.plant.max_attitude_rad;
-        if x[ix::PHI].abs() > lim || x[ix::THETA].abs() > lim {
-            reason = Some((
-                Termination::AttitudeLimit,
-                format!(
-                    "attitude beyond {lim} rad at t = {:.3} s (phi = {:.3}, theta = {:.3})",
-                    t + ts,
-                    x[ix::PHI],
-                    x[ix::THETA]
-                ),
-            ));
-            break;
-        }
-        let rate = x[ix::P].abs().max(x[ix::Q].abs()).max(x[ix::R].abs());
-        if rate > scenario.plant.max_rate_rad_s {
-            reason = Some((
-                Termination::RateLimit,
-                format!(
-                    "body rate {rate:.2} rad/s beyond {} rad/s at t = {:.3} s",
-                    scenario.plant.max_rate_rad_s,
-                    t + ts
-                ),
-            ));
-            break;
-        }
-        let r_next = schedule.at(t + ts);
-        let yaw_err = x[ix::PSI] - r_next[3];
-        if yaw_err.abs() > scenario.plant.max_yaw_error_rad {
-            reason = Some((
-                Termination::HeadingLost,
-                format!(
-                    "heading {:.2} rad is {yaw_err:.2} rad from its reference at t = {:.3} s: the helicopter spins away",
-                    x[ix::PSI],
-                    t + ts
-                ),
-            ));
+        if let Some(stop) = check_limits(scenario, &plant.x, t + ts, schedule.at(t + ts)[3]) {
+            reason = Some(stop);
             break;
         }
         if let Some(cb) = progress.as_mut()
@@ -599,7 +727,39 @@ pub fn fly(
         cb(1.0);
     }
     let summary = summarize(scenario, prepared, &log, reason, t);
-    Ok(Flight { log, summary })
+    Ok(Flight {
+        log,
+        sensors,
+        summary,
+    })
+}
+
+impl LogRow {
+    /// The row of one sample: the true state at its start, the flight
+    /// software's telemetry, the reference, the wind and the plant's
+    /// auxiliary outputs.
+    pub fn new(
+        t_s: f64,
+        x: &State,
+        tel: &Telemetry,
+        reference: [f64; 4],
+        wind_ned: &Vector3<f64>,
+        aux: &Aux,
+    ) -> Self {
+        LogRow {
+            t_s,
+            x: *x,
+            u: tel.command,
+            reference,
+            output: outputs(x),
+            estimate9: std::array::from_fn(|i| tel.estimate[i]),
+            measured9: std::array::from_fn(|i| tel.measured[i]),
+            wind_ned: [wind_ned.x, wind_ned.y, wind_ned.z],
+            lambda: [aux.lambda_mr, aux.lambda_tr],
+            thrust: [-aux.force_mr_hub_n.z, aux.force_tr_y_n],
+            inflow_residual: aux.inflow_residual,
+        }
+    }
 }
 
 /// Make a heading-error sequence continuous (no 2π jumps) and shift it by the
@@ -673,9 +833,9 @@ fn summarize(
         }
         metrics.insert((*name).to_string(), m);
     }
-    let u_trim = &prepared.gains.u_trim;
+    let u_trim = &prepared.gains.set.u_trim;
     let nrow = log.len().max(1) as f64;
-    let ts = scenario.controller.design.sample_time_s;
+    let ts = prepared.gains.set.sample_time_s;
     let servos = prepared.model.params().servos;
     let mut effort = [0.0; 4];
     let mut sat = [0.0; 4];
@@ -697,12 +857,7 @@ fn summarize(
             est[i] += d * d;
         }
     }
-    let rho = prepared
-        .gains
-        .closed_loop_poles
-        .iter()
-        .map(|z| (z[0] * z[0] + z[1] * z[1]).sqrt())
-        .fold(0.0, f64::max);
+    let rho = prepared.gains.spectral_radius();
     Summary {
         scenario: scenario.name.clone(),
         outcome: termination.outcome(),
@@ -718,8 +873,9 @@ fn summarize(
         sensor_seed: scenario.sensors.seed,
         parameter_hash: fnv1a_hex(&prepared.model.params().to_toml()),
         version: env!("CARGO_PKG_VERSION").to_string(),
+        sample_time_s: ts,
         design_spectral_radius: rho,
-        design_alpha: prepared.gains.alpha,
+        design_alpha: prepared.gains.set.alpha,
     }
 }
 

@@ -16,6 +16,7 @@ pub mod navigation;
 pub mod output;
 pub mod plot;
 pub mod scenario;
+pub mod sensor_log;
 pub mod sensors;
 pub mod spectral;
 pub mod trajectory;

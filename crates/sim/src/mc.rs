@@ -558,7 +558,7 @@ impl Campaign {
                 }
                 record.metrics = m;
                 if self.trace_rate_hz > 0.0 {
-                    let ts = scenario.controller.design.sample_time_s;
+                    let ts = s.sample_time_s;
                     let every = ((1.0 / (self.trace_rate_hz * ts)).round() as usize).max(1);
                     trace = flight
                         .log

@@ -1,33 +1,33 @@
-//! Sensors in the loop: the sensor models ([`SensorSuite`]) sample the true
-//! motion and the on-board [`NavigationFilter`] of `helicon_gnc` (q-method +
-//! fusion) turns the samples into the nine measured states of (15.2).
-//! [`Navigator`] pairs the two for analyses that want navigation without the
-//! controller; the closed loop flies `helicon_gnc::navigation::FlightComputer`.
+//! Sensors in the loop: the simulator's sensor models ([`SensorSuite`])
+//! sampled at the controller rate and the core's [`NavigationFilter`] set up
+//! from the same configuration. The navigation itself lives in
+//! `helicon_core`: the closed loop and `helicon fuse` run that one type.
 
-use crate::sensors::{SensorConfig, SensorSample, SensorSuite};
-use crate::trajectory::TruthSample;
-use helicon_gnc::fusion::FusionError;
-pub use helicon_gnc::navigation::NavigationConfig;
-use helicon_gnc::navigation::{NavigationFilter, SensorFrame, SensorNoise};
+use crate::sensors::{SensorConfig, SensorConfigError, SensorSuite};
+use helicon_core::fusion::FusionError;
+pub use helicon_core::navigation::NavigationConfig;
+use helicon_core::navigation::NavigationFilter;
+use helicon_core::sensor::SensorNoise;
 use helicon_model::State;
 use helicon_model::frames::EulerTrig;
 use helicon_model::state::ix;
 use nalgebra::{SVector, Vector3};
 
 /// The sensor suite of `config` sampled every `dt_s` (its IMU rate is set to
-/// 1/dt_s, the controller rate).
-pub fn sensor_suite_at(config: &SensorConfig, dt_s: f64) -> Result<SensorSuite, FusionError> {
+/// 1/dt_s, the controller rate) in local gravity `gravity_m_s2`.
+pub fn sensor_suite_at(
+    config: &SensorConfig,
+    dt_s: f64,
+    gravity_m_s2: f64,
+) -> Result<SensorSuite, SensorConfigError> {
     let mut cfg = *config;
     cfg.imu.rate_hz = 1.0 / dt_s;
-    SensorSuite::new(cfg).map_err(|_| FusionError::InvalidConfig {
-        field: "imu.rate_hz",
-        value: cfg.imu.rate_hz,
-        allowed: "a valid sensor configuration at the controller rate",
-    })
+    SensorSuite::new(cfg, gravity_m_s2)
 }
 
-/// The noise figures of a sensor configuration, as the fusion filter needs them.
-pub fn sensor_noise(config: &SensorConfig) -> SensorNoise {
+/// The noise figures of a sensor configuration, as the navigation needs
+/// them, in local gravity `gravity_m_s2`.
+pub fn sensor_noise(config: &SensorConfig, gravity_m_s2: f64) -> SensorNoise {
     let g = &config.gps;
     SensorNoise {
         gps_sigma_m: Vector3::new(
@@ -41,18 +41,13 @@ pub fn sensor_noise(config: &SensorConfig) -> SensorNoise {
             2.0 * g.velocity_sigma_m_s,
         ),
         mag_field_ned: Vector3::from(config.mag.field_ned),
-        gravity_m_s2: config.gravity_m_s2,
+        gravity_m_s2,
     }
 }
 
-/// A navigation filter initialised at the true full state `x0` (as after
-/// alignment on the ground).
-pub fn navigation_filter_at(
-    config: &SensorConfig,
-    nav: &NavigationConfig,
-    dt_s: f64,
-    x0: &State,
-) -> Result<NavigationFilter, FusionError> {
+/// The navigation's initial state `[x y z vn ve vd φ θ ψ]` and body rates
+/// from a full model state (as after alignment on the ground).
+pub fn navigation_initial(x0: &State) -> (SVector<f64, 9>, Vector3<f64>) {
     let trig = EulerTrig::new(x0[ix::PHI], x0[ix::THETA], x0[ix::PSI]);
     let v_ned = trig.ned_from_body() * Vector3::new(x0[ix::U], x0[ix::V], x0[ix::W]);
     let mut s0 = SVector::<f64, 9>::zeros();
@@ -61,60 +56,170 @@ pub fn navigation_filter_at(
         s0[3 + i] = v_ned[i];
         s0[6 + i] = x0[ix::PHI + i];
     }
-    NavigationFilter::new(
-        nav,
-        &sensor_noise(config),
-        dt_s,
-        &s0,
-        &Vector3::new(x0[ix::P], x0[ix::Q], x0[ix::R]),
-    )
+    (s0, Vector3::new(x0[ix::P], x0[ix::Q], x0[ix::R]))
 }
 
-/// The sensor frame the on-board software sees from one sensor sample.
-pub fn frame(sample: &SensorSample) -> SensorFrame {
-    SensorFrame {
-        specific_force_body_m_s2: sample.specific_force_body_m_s2,
-        gyro_body_rad_s: sample.gyro_body_rad_s,
-        mag_body: sample.mag_body,
-        gps_ned_m: sample.gps_ned_m,
-        gps_vel_ned_m_s: sample.gps_vel_ned_m_s,
+/// A navigation filter initialised at the true full state `x0`.
+pub fn navigation_filter_at(
+    config: &SensorConfig,
+    nav: &NavigationConfig,
+    dt_s: f64,
+    gravity_m_s2: f64,
+    x0: &State,
+) -> Result<NavigationFilter, FusionError> {
+    let (s0, omega0) = navigation_initial(x0);
+    NavigationFilter::new(nav, &sensor_noise(config, gravity_m_s2), dt_s, &s0, &omega0)
+}
+
+/// How a navigation replaying a sensor log is initialised.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ReplayInit {
+    /// From the log's truth columns of the first row (position, velocity,
+    /// attitude, rates), as the closed loop initialises its navigation
+    /// (alignment on the ground). Needs a simulated log.
+    Truth,
+    /// From the sensors: the first GPS fix (position, and velocity when
+    /// logged; else at rest), the first q-method attitude, the first gyro sample.
+    Sensors,
+}
+
+/// Errors replaying a sensor log.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    /// The log cannot serve the requested initialisation.
+    #[error("{file}: {message}")]
+    Init {
+        /// The log.
+        file: String,
+        /// What is missing.
+        message: String,
+    },
+    /// The navigation failed at a row.
+    #[error("{file}: at t = {t_s} s: {source}")]
+    Navigation {
+        /// The log.
+        file: String,
+        /// Time of the row.
+        t_s: f64,
+        /// Cause.
+        #[source]
+        source: FusionError,
+    },
+    /// The log's sampling.
+    #[error(transparent)]
+    Log(#[from] crate::sensor_log::SensorLogError),
+}
+
+/// The navigation's initial state `[x y z vn ve vd φ θ ψ]` and body rates for
+/// replaying `log`.
+pub fn replay_initial(
+    log: &crate::sensor_log::SensorLog,
+    init: ReplayInit,
+    noise: &SensorNoise,
+) -> Result<(SVector<f64, 9>, Vector3<f64>), ReplayError> {
+    let file = log.file.display().to_string();
+    let first = log.rows.first().ok_or_else(|| ReplayError::Init {
+        file: file.clone(),
+        message: "empty log".into(),
+    })?;
+    let mut s0 = SVector::<f64, 9>::zeros();
+    match init {
+        ReplayInit::Truth => {
+            let t = &first.truth;
+            let (Some(p), Some(v), Some(e), Some(w)) = (
+                t.position_ned_m,
+                t.velocity_ned_m_s,
+                t.euler_rad,
+                t.rates_body_rad_s,
+            ) else {
+                return Err(ReplayError::Init {
+                    file,
+                    message: "initialising from the truth needs the true position, velocity, \
+                              attitude and rate columns in the first row (a simulated log); \
+                              use the sensors instead"
+                        .into(),
+                });
+            };
+            for i in 0..3 {
+                s0[i] = p[i];
+                s0[3 + i] = v[i];
+                s0[6 + i] = e[i];
+            }
+            Ok((s0, w))
+        }
+        ReplayInit::Sensors => {
+            let fix = log.rows.iter().find_map(|r| r.frame.gps);
+            let attitude = log.rows.iter().find_map(|r| {
+                let m = r.frame.mag_body?;
+                let obs = [
+                    helicon_core::attitude::gravity_observation(
+                        1.0,
+                        &r.frame.imu.specific_force_body_m_s2,
+                        None,
+                    ),
+                    helicon_core::attitude::VectorObservation::new(1.0, m, noise.mag_field_ned),
+                ];
+                helicon_core::attitude::q_method(&obs)
+                    .ok()
+                    .map(|s| s.euler())
+            });
+            let Some(attitude) = attitude else {
+                return Err(ReplayError::Init {
+                    file,
+                    message: "no row gives a q-method attitude (magnetometer and accelerometer \
+                              needed) to initialise the navigation"
+                        .into(),
+                });
+            };
+            if let Some(g) = fix {
+                for i in 0..3 {
+                    s0[i] = g.position_ned_m[i];
+                    s0[3 + i] = g.velocity_ned_m_s.map_or(0.0, |v| v[i]);
+                }
+            }
+            for i in 0..3 {
+                s0[6 + i] = attitude[i];
+            }
+            Ok((s0, first.frame.imu.gyro_body_rad_s))
+        }
     }
 }
 
-/// Sensor models + on-board navigation.
-#[derive(Debug, Clone)]
-pub struct Navigator {
-    suite: SensorSuite,
-    filter: NavigationFilter,
-}
-
-impl Navigator {
-    /// A navigator sampling at `dt_s`, initialised at the true state `x0`.
-    pub fn new(
-        config: SensorConfig,
-        nav: &NavigationConfig,
-        dt_s: f64,
-        x0: &State,
-    ) -> Result<Self, FusionError> {
-        Ok(Navigator {
-            suite: sensor_suite_at(&config, dt_s)?,
-            filter: navigation_filter_at(&config, nav, dt_s, x0)?,
-        })
+/// Replay a sensor log through the navigation that flies: one
+/// [`NavigationFilter::step`] per row, calling `each(row, y, filter)` with the
+/// nine measured states it produced.
+pub fn replay_navigation<E>(
+    log: &crate::sensor_log::SensorLog,
+    nav: &NavigationConfig,
+    noise: &SensorNoise,
+    init: ReplayInit,
+    mut each: impl FnMut(
+        &crate::sensor_log::SensorLogRow,
+        &SVector<f64, 9>,
+        &NavigationFilter,
+    ) -> Result<(), E>,
+) -> Result<Result<(), E>, ReplayError> {
+    let dt = crate::sensor_log::uniform_step_s(log)?;
+    let (s0, omega0) = replay_initial(log, init, noise)?;
+    let file = log.file.display().to_string();
+    let mut filter = NavigationFilter::new(nav, noise, dt, &s0, &omega0).map_err(|source| {
+        ReplayError::Navigation {
+            file: file.clone(),
+            t_s: log.rows[0].frame.t_s,
+            source,
+        }
+    })?;
+    for row in &log.rows {
+        let y = filter
+            .step(&row.frame)
+            .map_err(|source| ReplayError::Navigation {
+                file: file.clone(),
+                t_s: row.frame.t_s,
+                source,
+            })?;
+        if let Err(e) = each(row, &y, &filter) {
+            return Ok(Err(e));
+        }
     }
-
-    /// One sample: sense the truth, determine attitude (subtracting
-    /// `own_accel_body`, m/s², if given), fuse; returns the nine measured states.
-    pub fn step(
-        &mut self,
-        truth: &TruthSample,
-        own_accel_body: Option<&Vector3<f64>>,
-    ) -> Result<SVector<f64, 9>, FusionError> {
-        let sample = self.suite.sample(truth);
-        self.filter.step(&frame(&sample), own_accel_body)
-    }
-
-    /// The navigation filter.
-    pub fn filter(&self) -> &NavigationFilter {
-        &self.filter
-    }
+    Ok(Ok(()))
 }

@@ -37,8 +37,8 @@
 use crate::closed_loop::{Flight, LogRow, Prepared, Summary};
 use crate::plot::{LinePlot, PlotError, Series};
 use crate::scenario::{OUTPUTS, Scenario};
+use helicon_core::frames::wrap_pi;
 use helicon_gnc::design::DesignError;
-use helicon_gnc::fusion::wrap_pi;
 use helicon_model::state::{INPUT_NAMES, REDUCED_OFFSET, STATE_NAMES};
 use std::fmt::Write as _;
 use std::io::{BufWriter, Write};
@@ -380,7 +380,7 @@ pub fn report_markdown(scenario: &Scenario, prepared: &Prepared, flight: &Flight
         "- preset `{}`, {} s planned at {} Hz, design trim {:?} m/s NED, yaw {} rad",
         s.preset,
         scenario.duration_s,
-        1.0 / scenario.controller.design.sample_time_s,
+        1.0 / s.sample_time_s,
         scenario.trim.velocity_ned_m_s,
         scenario.trim.yaw_rad
     );

@@ -199,11 +199,18 @@ pub struct LogSection {
     /// Keep every n-th sample (and the last) in the flight log and
     /// `log.csv`; the metrics are computed on the kept samples.
     pub decimation: u32,
+    /// Also keep every sensor frame the flight software was given, with the
+    /// truth it was sampled from (`sensors.csv`, the sensor-log format that
+    /// `helicon fuse` replays); needs `fusion = true`.
+    pub sensors: bool,
 }
 
 impl Default for LogSection {
     fn default() -> Self {
-        LogSection { decimation: 1 }
+        LogSection {
+            decimation: 1,
+            sensors: false,
+        }
     }
 }
 

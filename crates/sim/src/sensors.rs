@@ -15,6 +15,7 @@
 //! slowly correlated errors; not modelled).
 
 use crate::trajectory::TruthSample;
+use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame};
 use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -181,7 +182,6 @@ impl Default for GpsConfig {
 ///
 /// ```toml
 /// seed = 42
-/// gravity_m_s2 = 9.82
 /// [imu]
 /// rate_hz = 400.0
 /// [imu.accel]
@@ -195,8 +195,6 @@ impl Default for GpsConfig {
 pub struct SensorConfig {
     /// Seed of the sensor RNG streams.
     pub seed: u64,
-    /// Gravity (m/s²), thesis (13.13): 9.82.
-    pub gravity_m_s2: f64,
     /// IMU.
     pub imu: ImuConfig,
     /// Magnetometer.
@@ -209,7 +207,6 @@ impl Default for SensorConfig {
     fn default() -> Self {
         Self {
             seed: 0,
-            gravity_m_s2: 9.82,
             imu: ImuConfig::default(),
             mag: MagConfig::default(),
             gps: GpsConfig::default(),
@@ -262,9 +259,6 @@ impl SensorConfig {
                 Err(bad(field, v, "finite, >= 0"))
             }
         };
-        if !(self.gravity_m_s2.is_finite() && self.gravity_m_s2 > 0.0) {
-            return Err(bad("gravity_m_s2".into(), self.gravity_m_s2, "> 0"));
-        }
         if !(self.imu.rate_hz.is_finite()
             && self.imu.rate_hz >= 1.0
             && self.imu.rate_hz <= 10_000.0)
@@ -315,25 +309,6 @@ impl SensorConfig {
     }
 }
 
-/// One output sample of the sensor suite (all at `t_s`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SensorSample {
-    /// Time (s).
-    pub t_s: f64,
-    /// Accelerometer specific force, body (m/s²).
-    pub specific_force_body_m_s2: Vector3<f64>,
-    /// Gyro rates, body (rad/s).
-    pub gyro_body_rad_s: Vector3<f64>,
-    /// Magnetometer, body (field units), when sampled this step.
-    pub mag_body: Option<Vector3<f64>>,
-    /// GPS fix delivered this step: position NED (m).
-    pub gps_ned_m: Option<Vector3<f64>>,
-    /// GPS velocity NED (m/s) delivered with the fix (if the receiver gives it).
-    pub gps_vel_ned_m_s: Option<Vector3<f64>>,
-    /// Epoch (s) of the delivered GPS fix (`t_s − latency`).
-    pub gps_epoch_s: Option<f64>,
-}
-
 #[derive(Debug, Clone)]
 struct InertialState {
     cfg: InertialConfig,
@@ -373,6 +348,7 @@ impl InertialState {
 #[derive(Debug, Clone)]
 pub struct SensorSuite {
     config: SensorConfig,
+    gravity_m_s2: f64,
     accel: InertialState,
     gyro: InertialState,
     rng_imu: ChaCha8Rng,
@@ -386,9 +362,18 @@ pub struct SensorSuite {
 }
 
 impl SensorSuite {
-    /// A new suite (config validated; errors name the field).
-    pub fn new(config: SensorConfig) -> Result<Self, SensorConfigError> {
+    /// A new suite in local gravity `gravity_m_s2` (the helicopter's
+    /// `environment.g_m_s2`; config validated, errors name the field).
+    pub fn new(config: SensorConfig, gravity_m_s2: f64) -> Result<Self, SensorConfigError> {
         config.validate("<sensor config>")?;
+        if !(gravity_m_s2.is_finite() && gravity_m_s2 > 0.0) {
+            return Err(SensorConfigError::Invalid {
+                file: "<parameters>".into(),
+                field: "environment.g_m_s2".into(),
+                value: gravity_m_s2,
+                allowed: "finite and > 0",
+            });
+        }
         let stream = |s: u64| {
             let mut r = ChaCha8Rng::seed_from_u64(config.seed);
             r.set_stream(s);
@@ -399,6 +384,7 @@ impl SensorSuite {
         let gyro = InertialState::new(config.imu.gyro, &mut rng_imu);
         Ok(Self {
             config,
+            gravity_m_s2,
             accel,
             gyro,
             rng_imu,
@@ -421,6 +407,11 @@ impl SensorSuite {
         &self.config
     }
 
+    /// Local gravity the accelerometer senses (m/s²).
+    pub fn gravity_m_s2(&self) -> f64 {
+        self.gravity_m_s2
+    }
+
     /// IMU sample period (s).
     pub fn dt_s(&self) -> f64 {
         1.0 / self.config.imu.rate_hz
@@ -433,12 +424,12 @@ impl SensorSuite {
 
     /// Produce the sensor readings for the truth at `truth.t_s` (call at the
     /// IMU rate with increasing times).
-    pub fn sample(&mut self, truth: &TruthSample) -> SensorSample {
+    pub fn sample(&mut self, truth: &TruthSample) -> SensorFrame {
         let rate = self.config.imu.rate_hz;
         // one rotation per sample for the accelerometer and the magnetometer
         let body_from_ned = truth.body_from_ned();
         let f_true =
-            body_from_ned * (truth.acc_ned_m_s2 - Vector3::new(0.0, 0.0, self.config.gravity_m_s2));
+            body_from_ned * (truth.acc_ned_m_s2 - Vector3::new(0.0, 0.0, self.gravity_m_s2));
         let specific_force = self.accel.measure(&f_true, rate, &mut self.rng_imu);
         let gyro = self
             .gyro
@@ -487,18 +478,20 @@ impl SensorSuite {
             }
         }
         self.step_index += 1;
-        SensorSample {
+        let velocity_output = self.config.gps.velocity_output;
+        SensorFrame {
             t_s: truth.t_s,
-            specific_force_body_m_s2: specific_force,
-            gyro_body_rad_s: gyro,
-            mag_body,
-            gps_ned_m: gps.map(|g| g.1),
-            gps_vel_ned_m_s: if self.config.gps.velocity_output {
-                gps.map(|g| g.2)
-            } else {
-                None
+            imu: ImuSample {
+                specific_force_body_m_s2: specific_force,
+                gyro_body_rad_s: gyro,
             },
-            gps_epoch_s: gps.map(|g| g.0),
+            mag_body,
+            gps: gps.map(|(epoch_s, position_ned_m, velocity)| GpsFix {
+                epoch_s,
+                fix: GpsFixType::Fix3d,
+                position_ned_m,
+                velocity_ned_m_s: velocity_output.then_some(velocity),
+            }),
         }
     }
 }

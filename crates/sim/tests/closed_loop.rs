@@ -107,7 +107,7 @@ fn fig_14_8_tracking_in_the_thesis_wind() {
                 .map(|r| {
                     let d = r.reference[j] - r.output[j];
                     if j == 3 {
-                        helicon_gnc::fusion::wrap_pi(d)
+                        helicon_core::frames::wrap_pi(d)
                     } else {
                         d
                     }

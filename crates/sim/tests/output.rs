@@ -3,8 +3,8 @@
 //! saved gains reproduces the run bit for bit).
 #![allow(clippy::unwrap_used, missing_docs)] // tests: a failed unwrap is a failed test
 
+use helicon_core::frames::wrap_pi;
 use helicon_gnc::design::Gains;
-use helicon_gnc::fusion::wrap_pi;
 use helicon_model::state::{INPUT_NAMES, STATE_NAMES, ix};
 use helicon_sim::closed_loop::{Outcome, fly, prepare};
 use helicon_sim::output::{LOG_COLUMNS, MEASURED_NAMES, log_header, write_run};

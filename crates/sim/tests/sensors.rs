@@ -28,13 +28,13 @@ fn white_noise_matches_density_times_sqrt_rate() {
         c.scale_factor_sigma = 0.0;
         c.resolution = 0.0;
     }
-    let mut s = SensorSuite::new(cfg).unwrap();
+    let mut s = SensorSuite::new(cfg, 9.82).unwrap();
     let n = 100_000;
     let (mut sa, mut sg) = (0.0, 0.0);
     for k in 0..n {
         let y = s.sample(&at_rest(k as f64 / cfg.imu.rate_hz));
-        sa += (y.specific_force_body_m_s2.x).powi(2);
-        sg += (y.gyro_body_rad_s.y).powi(2);
+        sa += (y.imu.specific_force_body_m_s2.x).powi(2);
+        sg += (y.imu.gyro_body_rad_s.y).powi(2);
     }
     let sig_a = (sa / n as f64).sqrt();
     let sig_g = (sg / n as f64).sqrt();
@@ -55,7 +55,7 @@ fn bias_random_walk_variance_grows_linearly() {
     let mut var = 0.0;
     for seed in 0..runs {
         cfg.seed = seed;
-        let mut s = SensorSuite::new(cfg).unwrap();
+        let mut s = SensorSuite::new(cfg, 9.82).unwrap();
         let n = (t_end * cfg.imu.rate_hz) as usize;
         for k in 0..n {
             s.sample(&at_rest(k as f64 / cfg.imu.rate_hz));
@@ -72,17 +72,17 @@ fn bias_random_walk_variance_grows_linearly() {
 #[test]
 fn saturation_and_quantisation() {
     let cfg = SensorConfig::default();
-    let mut s = SensorSuite::new(cfg).unwrap();
+    let mut s = SensorSuite::new(cfg, 9.82).unwrap();
     // 30 g upwards acceleration: must clip at +/-10 g.
     let mut truth = at_rest(0.0);
     truth.acc_ned_m_s2 = Vector3::new(0.0, 0.0, -30.0 * G0_M_S2);
     let y = s.sample(&truth);
     let range = 10.0 * G0_M_S2;
-    assert!((y.specific_force_body_m_s2.z.abs() - range).abs() < 1e-12);
+    assert!((y.imu.specific_force_body_m_s2.z.abs() - range).abs() < 1e-12);
     // Quantised to the resolution (16 bit over +/-10 g).
     let res = cfg.imu.accel.resolution;
     let y = s.sample(&at_rest(0.0025));
-    for v in y.specific_force_body_m_s2.iter() {
+    for v in y.imu.specific_force_body_m_s2.iter() {
         let k = v / res;
         assert!((k - k.round()).abs() < 1e-6, "{v} not a multiple of {res}");
     }
@@ -94,7 +94,7 @@ fn gps_rate_latency_and_dropouts() {
     cfg.gps.rate_hz = 10.0;
     cfg.gps.latency_s = 0.2;
     cfg.gps.dropout_probability = 0.1;
-    let mut s = SensorSuite::new(cfg).unwrap();
+    let mut s = SensorSuite::new(cfg, 9.82).unwrap();
     let traj = ScriptedTrajectory::default();
     let n = (600.0 * cfg.imu.rate_hz) as usize;
     let mut fixes = 0;
@@ -102,7 +102,7 @@ fn gps_rate_latency_and_dropouts() {
     for k in 0..n {
         let t = k as f64 / cfg.imu.rate_hz;
         let y = s.sample(&traj.truth(t));
-        if let (Some(_), Some(epoch)) = (y.gps_ned_m, y.gps_epoch_s) {
+        if let Some(epoch) = y.gps.map(|g| g.epoch_s) {
             assert!((t - epoch - 0.2).abs() < 0.5 / cfg.imu.rate_hz + 1e-9);
             fixes += 1;
         }
@@ -123,10 +123,11 @@ fn same_seed_same_data_other_seed_differs() {
             seed,
             ..Default::default()
         };
-        let mut s = SensorSuite::new(cfg).unwrap();
+        let mut s = SensorSuite::new(cfg, 9.82).unwrap();
         (0..100)
             .map(|k| {
                 s.sample(&traj.truth(k as f64 * 0.0025))
+                    .imu
                     .specific_force_body_m_s2
             })
             .collect::<Vec<_>>()

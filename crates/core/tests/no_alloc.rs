@@ -3,8 +3,8 @@
 #![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
 #![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; we only forward to System
 
-use helicon_gnc::attitude::{VectorObservation, q_method, quaternion_from_euler};
-use helicon_gnc::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
+use helicon_core::attitude::{VectorObservation, q_method, quaternion_from_euler};
+use helicon_core::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
 use nalgebra::Vector3;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};

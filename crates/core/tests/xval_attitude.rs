@@ -3,7 +3,7 @@
 //! noise-free recovery and the predicted attitude covariance under noise.
 #![allow(clippy::unwrap_used)] // test/bench helpers: a failed unwrap is a failed test
 
-use helicon_gnc::attitude::{
+use helicon_core::attitude::{
     VectorObservation, euler_from_quaternion, predicted_attitude_covariance, q_method,
     quaternion_from_euler, wahba_loss,
 };

@@ -2,8 +2,8 @@
 #![allow(clippy::unwrap_used, missing_docs)] // bench: criterion macros generate undocumented items
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
-use helicon_gnc::attitude::{VectorObservation, q_method, quaternion_from_euler};
-use helicon_gnc::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
+use helicon_core::attitude::{VectorObservation, q_method, quaternion_from_euler};
+use helicon_core::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
 use nalgebra::Vector3;
 use std::hint::black_box;
 

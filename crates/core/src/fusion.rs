@@ -28,7 +28,7 @@
 //!
 //! Angles: the ψ innovation is wrapped to (−π, π] and ψ is kept in (−π, π].
 
-use helicon_model::frames::EulerTrig;
+use crate::frames::{EulerTrig, wrap_pi};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// 9×9 matrix of the fusion filter.
@@ -41,10 +41,9 @@ pub type Vector9 = SVector<f64, 9>;
 pub const MIN_COS_THETA: f64 = 1e-6;
 
 /// Error of the fusion filter.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum FusionError {
     /// A configuration value is out of range.
-    #[error("fusion config: {field} = {value} is invalid ({allowed})")]
     InvalidConfig {
         /// Field name.
         field: &'static str,
@@ -54,21 +53,45 @@ pub enum FusionError {
         allowed: &'static str,
     },
     /// An input is NaN or infinite.
-    #[error("fusion input: non-finite {what}")]
     NonFiniteInput {
         /// Which input.
         what: &'static str,
     },
     /// The attitude estimate reached θ = ±π/2 where (9.14) is singular.
-    #[error("fusion: pitch estimate {theta_rad} rad is at the 3-2-1 gimbal lock")]
     GimbalLock {
         /// Pitch estimate (rad).
         theta_rad: f64,
     },
     /// The innovation covariance was not invertible.
-    #[error("fusion: singular innovation covariance")]
     SingularInnovation,
 }
+
+impl std::fmt::Display for FusionError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FusionError::InvalidConfig {
+                field,
+                value,
+                allowed,
+            } => write!(
+                f,
+                "navigation setting `{field}` = {value} is invalid ({allowed})"
+            ),
+            FusionError::NonFiniteInput { what } => {
+                write!(f, "navigation input: non-finite {what}")
+            }
+            FusionError::GimbalLock { theta_rad } => write!(
+                f,
+                "navigation: pitch estimate {theta_rad} rad is at the 3-2-1 gimbal lock"
+            ),
+            FusionError::SingularInnovation => {
+                write!(f, "navigation: singular innovation covariance")
+            }
+        }
+    }
+}
+
+impl std::error::Error for FusionError {}
 
 /// Tuning of the fusion filter: the weighting matrices Q_f and R_f of §13.3.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -149,18 +172,6 @@ pub struct FusionInput {
     pub gps_vel_ned_m_s: Option<Vector3<f64>>,
     /// Attitude measurement (φ, θ, ψ) at k (rad) from the q-method, if any.
     pub attitude_rad: Option<Vector3<f64>>,
-}
-
-/// Wrap an angle to (−π, π].
-pub fn wrap_pi(a: f64) -> f64 {
-    let two_pi = 2.0 * std::f64::consts::PI;
-    let mut w = a % two_pi;
-    if w > std::f64::consts::PI {
-        w -= two_pi;
-    } else if w <= -std::f64::consts::PI {
-        w += two_pi;
-    }
-    w
 }
 
 /// The fusion Kalman filter of §13.3; all matrices fixed-size, `step()` does

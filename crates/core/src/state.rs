@@ -97,6 +97,21 @@ pub const STATE_UNITS: [&str; NX] = [
 /// Names of the 4 inputs, in order (dimensionless servo commands).
 pub const INPUT_NAMES: [&str; NU] = ["S_col", "S_lat", "S_lon", "S_tr"];
 
+/// Number of measured states (15.2): `[φ θ ψ u v w p q r]`, the first nine
+/// reduced states.
+pub const NM: usize = 9;
+/// The nine measured states (15.2), absolute values.
+pub type MeasuredStates = SVector<f64, NM>;
+/// Number of controlled outputs (14.4): ψ, u, v, w.
+pub const NY: usize = 4;
+/// Indices of the controlled outputs ψ, u, v, w in the reduced state (14.4).
+pub const OUTPUT_STATES: [usize; NY] = [
+    ix::PSI - REDUCED_OFFSET,
+    ix::U - REDUCED_OFFSET,
+    ix::V - REDUCED_OFFSET,
+    ix::W - REDUCED_OFFSET,
+];
+
 /// Index of each state in the full 30-vector. Subtract [`REDUCED_OFFSET`] for
 /// the reduced 27-vector.
 #[allow(missing_docs)]

@@ -1,20 +1,15 @@
-//! On-board navigation and the flight computer.
+//! On-board navigation: sensor frames to the nine measured states.
 //!
 //! [`NavigationFilter`]: sensor samples → q-method attitude determination
 //! (13.4)–(13.12) + the GPS/IMU fusion filter (13.15)–(13.29) → the nine
 //! measured states of (15.2) the state estimator expects:
 //! [φ θ ψ] from the fusion filter, [u v w] = R_be(Θ̂)·v̂_ned, [p q r] from the gyro.
 //!
-//! [`FlightComputer`]: the whole on-board chain of DESIGN.md — sensor samples
-//! → navigation → estimator → LQR with integral action → saturated servo
-//! commands — one allocation-free [`FlightComputer::step`] per sample. The
-//! same type flies in simulation (`helicon_sim`) and, later, on board.
-//!
-//! The helicopter's own acceleration needed by the gravity observation (13.2)
-//! is the flight controller's estimator prediction
-//! ([`FlightController::predicted_accel_body`]). Differencing the fused
-//! velocity instead is degenerate (the subtraction then returns the predicted
-//! attitude itself; docs/sensors.md).
+//! The gravity observation (13.2) assumes the helicopter is not accelerating,
+//! as the thesis's implementation did: the accelerometer's specific force is
+//! taken as gravity. (Differencing the fused velocity to subtract the own
+//! acceleration is degenerate: the subtraction then returns the predicted
+//! attitude itself.)
 //!
 //! The fusion filter has no bias states (nor has the thesis's); its process
 //! noise ([`NavigationConfig`]) absorbs the IMU biases. Beyond the thesis, the
@@ -25,14 +20,19 @@
 //! default tuning 0.5 m/s², 0.02 rad/s, 0.03 rad flies the scenario.
 
 use crate::attitude::{VectorObservation, gravity_observation, q_method};
-use crate::controller::{ControllerOutput, Feedback, FlightController, Reference};
+use crate::frames::EulerTrig;
 use crate::fusion::{FusionConfig, FusionError, FusionFilter, FusionInput};
-use helicon_model::frames::EulerTrig;
+use crate::sensor::{SensorFrame, SensorNoise};
+use crate::state::{MeasuredStates, NM};
 use nalgebra::{SMatrix, SVector, Vector3};
 
 /// Tuning of the navigation filter (TOML `[navigation]`).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields, default)
+)]
 pub struct NavigationConfig {
     /// Process noise of the NED acceleration input per sample (m/s²).
     pub accel_sigma_m_s2: f64,
@@ -79,34 +79,6 @@ impl NavigationConfig {
     }
 }
 
-/// What the sensors deliver in one sample (body axes FRD, NED).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SensorFrame {
-    /// Accelerometer specific force (m/s²).
-    pub specific_force_body_m_s2: Vector3<f64>,
-    /// Gyro rates (rad/s).
-    pub gyro_body_rad_s: Vector3<f64>,
-    /// Magnetometer reading, when sampled (field units of `field_ned`).
-    pub mag_body: Option<Vector3<f64>>,
-    /// GPS position fix NED (m), when delivered.
-    pub gps_ned_m: Option<Vector3<f64>>,
-    /// GPS velocity NED (m/s), when delivered.
-    pub gps_vel_ned_m_s: Option<Vector3<f64>>,
-}
-
-/// Sensor noise figures the fusion filter needs.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SensorNoise {
-    /// GPS position σ per NED axis (m).
-    pub gps_sigma_m: Vector3<f64>,
-    /// GPS velocity σ per NED axis (m/s).
-    pub gps_vel_sigma_m_s: Vector3<f64>,
-    /// The local magnetic field in NED (13.14), in the magnetometer's units.
-    pub mag_field_ned: Vector3<f64>,
-    /// Gravity (m/s²).
-    pub gravity_m_s2: f64,
-}
-
 /// Attitude determination + fusion filter (fixed-size, `step` does not allocate).
 #[derive(Debug, Clone)]
 pub struct NavigationFilter {
@@ -115,6 +87,25 @@ pub struct NavigationFilter {
     gravity_weight: f64,
     last_f: Vector3<f64>,
     last_w: Vector3<f64>,
+    attitude_fix: bool,
+    gps_fused: bool,
+}
+
+/// What the navigation knows after one sample (for telemetry and logs).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct NavigationSolution {
+    /// Fused position NED (m).
+    pub position_ned_m: Vector3<f64>,
+    /// Fused velocity NED (m/s).
+    pub velocity_ned_m_s: Vector3<f64>,
+    /// Fused attitude [φ θ ψ] (rad).
+    pub attitude_rad: Vector3<f64>,
+    /// 1σ of the fused position per NED axis (m).
+    pub position_sigma_m: Vector3<f64>,
+    /// A q-method attitude was determined and fused this sample.
+    pub attitude_fix: bool,
+    /// A GPS fix was fused this sample.
+    pub gps_fused: bool,
 }
 
 impl NavigationFilter {
@@ -126,7 +117,7 @@ impl NavigationFilter {
         config: &NavigationConfig,
         noise: &SensorNoise,
         dt_s: f64,
-        initial: &SVector<f64, 9>,
+        initial: &SVector<f64, NM>,
         omega0: &Vector3<f64>,
     ) -> Result<Self, FusionError> {
         config.validate()?;
@@ -150,75 +141,66 @@ impl NavigationFilter {
             gravity_weight: config.gravity_weight,
             last_f: trig.ned_from_body().transpose() * Vector3::new(0.0, 0.0, -noise.gravity_m_s2),
             last_w: *omega0,
+            attitude_fix: false,
+            gps_fused: false,
         })
     }
 
-    /// One sample: determine attitude (subtracting `own_accel_body`, m/s², if
-    /// given) when the magnetometer was sampled, fuse; returns the nine
-    /// measured states.
-    pub fn step(
-        &mut self,
-        frame: &SensorFrame,
-        own_accel_body: Option<&Vector3<f64>>,
-    ) -> Result<SVector<f64, 9>, FusionError> {
+    /// One sample: determine attitude by the q-method when the magnetometer
+    /// was sampled, fuse it with the IMU and a valid GPS fix; returns the nine
+    /// measured states (15.2) `[φ θ ψ u v w p q r]`.
+    pub fn step(&mut self, frame: &SensorFrame) -> Result<MeasuredStates, FusionError> {
+        if let Some(what) = frame.first_non_finite() {
+            return Err(FusionError::NonFiniteInput { what });
+        }
+        let imu = &frame.imu;
         let attitude = frame.mag_body.and_then(|m| {
             let obs = [
-                gravity_observation(
-                    self.gravity_weight,
-                    &frame.specific_force_body_m_s2,
-                    own_accel_body,
-                ),
+                gravity_observation(self.gravity_weight, &imu.specific_force_body_m_s2, None),
                 VectorObservation::new(1.0, m, self.field_ned),
             ];
             q_method(&obs).ok().map(|sol| sol.euler())
         });
+        let gps = frame.gps.filter(|g| g.is_valid());
         self.filter.step(&FusionInput {
             specific_force_body_m_s2: self.last_f,
             gyro_body_rad_s: self.last_w,
-            gps_ned_m: frame.gps_ned_m,
-            gps_vel_ned_m_s: frame.gps_vel_ned_m_s,
+            gps_ned_m: gps.map(|g| g.position_ned_m),
+            gps_vel_ned_m_s: gps.and_then(|g| g.velocity_ned_m_s),
             attitude_rad: attitude,
         })?;
-        self.last_f = frame.specific_force_body_m_s2;
-        self.last_w = frame.gyro_body_rad_s;
+        self.last_f = imu.specific_force_body_m_s2;
+        self.last_w = imu.gyro_body_rad_s;
+        self.attitude_fix = attitude.is_some();
+        self.gps_fused = gps.is_some();
         let s = *self.filter.state();
         let vel = Vector3::new(s[3], s[4], s[5]);
         let v_body = EulerTrig::new(s[6], s[7], s[8]).ned_from_body().transpose() * vel;
-        let mut y = SVector::<f64, 9>::zeros();
+        let mut y = MeasuredStates::zeros();
         for i in 0..3 {
             y[i] = s[6 + i];
             y[3 + i] = v_body[i];
-            y[6 + i] = frame.gyro_body_rad_s[i];
+            y[6 + i] = imu.gyro_body_rad_s[i];
         }
         Ok(y)
+    }
+
+    /// The navigation solution after the last [`NavigationFilter::step`].
+    pub fn solution(&self) -> NavigationSolution {
+        let s = self.filter.state();
+        let p = self.filter.covariance();
+        NavigationSolution {
+            position_ned_m: Vector3::new(s[0], s[1], s[2]),
+            velocity_ned_m_s: Vector3::new(s[3], s[4], s[5]),
+            attitude_rad: Vector3::new(s[6], s[7], s[8]),
+            position_sigma_m: Vector3::new(p[(0, 0)], p[(1, 1)], p[(2, 2)]).map(f64::sqrt),
+            attitude_fix: self.attitude_fix,
+            gps_fused: self.gps_fused,
+        }
     }
 
     /// The fusion filter (its state and covariance).
     pub fn filter(&self) -> &FusionFilter {
         &self.filter
-    }
-}
-
-/// The on-board chain: navigation + estimator + controller.
-#[derive(Debug, Clone)]
-pub struct FlightComputer {
-    /// Navigation (attitude determination + fusion).
-    pub navigation: NavigationFilter,
-    /// Estimator + LQR with integral action.
-    pub controller: FlightController,
-}
-
-impl FlightComputer {
-    /// One sample: sensor frame and reference in, saturated servo commands out.
-    /// Also returns the nine measured states the navigation produced.
-    pub fn step(
-        &mut self,
-        frame: &SensorFrame,
-        reference: &Reference,
-    ) -> Result<(ControllerOutput, SVector<f64, 9>), FusionError> {
-        let own = self.controller.predicted_accel_body();
-        let y = self.navigation.step(frame, Some(&own))?;
-        let out = self.controller.step(Feedback::Measured(&y), reference);
-        Ok((out, y))
     }
 }

@@ -8,6 +8,18 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+/// Wrap an angle to (−π, π].
+pub fn wrap_pi(a: f64) -> f64 {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let mut w = a % two_pi;
+    if w > std::f64::consts::PI {
+        w -= two_pi;
+    } else if w <= -std::f64::consts::PI {
+        w += two_pi;
+    }
+    w
+}
+
 /// Sines and cosines of a 3-2-1 Euler attitude, computed once and shared by
 /// the rotations, the gravity vector and the Euler-rate kinematics.
 #[derive(Debug, Clone, Copy, PartialEq)]

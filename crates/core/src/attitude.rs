@@ -48,25 +48,21 @@ pub const THESIS_MAG_FIELD_NED: [f64; 3] = [0.153, 0.008, -0.438];
 pub const MIN_RELATIVE_EIGEN_GAP: f64 = 1e-9;
 
 /// Error of the attitude determination.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum AttitudeError {
     /// Fewer than one observation was given.
-    #[error("no vector observations given")]
     NoObservations,
     /// A vector or weight is NaN or infinite.
-    #[error("observation {index}: non-finite value")]
     NonFinite {
         /// Index of the offending observation (0-based).
         index: usize,
     },
     /// A body or reference vector has zero length.
-    #[error("observation {index}: zero-length vector")]
     ZeroVector {
         /// Index of the offending observation (0-based).
         index: usize,
     },
     /// A weight is negative.
-    #[error("observation {index}: negative weight {weight}")]
     NegativeWeight {
         /// Index of the offending observation (0-based).
         index: usize,
@@ -74,20 +70,41 @@ pub enum AttitudeError {
         weight: f64,
     },
     /// All weights are zero.
-    #[error("all observation weights are zero")]
     ZeroWeights,
     /// The observations do not determine the attitude (parallel vectors).
-    #[error(
-        "degenerate geometry: eigenvalue gap {relative_gap:e} (relative) below {MIN_RELATIVE_EIGEN_GAP:e}; observations are (nearly) parallel"
-    )]
     Degenerate {
         /// `(λ₁ − λ₂) / Σ w_k`.
         relative_gap: f64,
     },
     /// The symmetric eigen-solver did not converge.
-    #[error("eigen-solver did not converge")]
     EigenFailure,
 }
+
+impl std::fmt::Display for AttitudeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            AttitudeError::NoObservations => write!(f, "no vector observations given"),
+            AttitudeError::NonFinite { index } => {
+                write!(f, "observation {index}: non-finite value")
+            }
+            AttitudeError::ZeroVector { index } => {
+                write!(f, "observation {index}: zero-length vector")
+            }
+            AttitudeError::NegativeWeight { index, weight } => {
+                write!(f, "observation {index}: negative weight {weight}")
+            }
+            AttitudeError::ZeroWeights => write!(f, "all observation weights are zero"),
+            AttitudeError::Degenerate { relative_gap } => write!(
+                f,
+                "degenerate geometry: eigenvalue gap {relative_gap:e} (relative) below \
+                 {MIN_RELATIVE_EIGEN_GAP:e}; observations are (nearly) parallel"
+            ),
+            AttitudeError::EigenFailure => write!(f, "eigen-solver did not converge"),
+        }
+    }
+}
+
+impl std::error::Error for AttitudeError {}
 
 /// One weighted vector observation for Wahba's problem (13.4).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -441,7 +458,7 @@ mod tests {
     fn euler_roundtrip_and_matches_model_rotation() {
         let (phi, theta, psi) = (0.3, -0.4, 2.1);
         let q = quaternion_from_euler(phi, theta, psi);
-        let r_be = helicon_model::frames::body_from_ned(phi, theta, psi);
+        let r_be = crate::frames::body_from_ned(phi, theta, psi);
         assert_relative_eq!(q.to_rotation_matrix().into_inner(), r_be, epsilon = 1e-15);
         let e = euler_from_quaternion(&q);
         assert_relative_eq!(e, Vector3::new(phi, theta, psi), epsilon = 1e-14);

@@ -3,7 +3,7 @@
 //! experiment with numbers.
 #![allow(clippy::unwrap_used)] // test/bench helpers: a failed unwrap is a failed test
 
-use helicon_gnc::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
+use helicon_core::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
 use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -1,0 +1,86 @@
+//! The flight computer: one estimator and one state-feedback law, stepped
+//! once per control sample. The very same type flies in the simulator and on
+//! board; [`FlightComputer::step`] allocates nothing and returns one
+//! [`Telemetry`] record from which the simulator's log, the on-board log and
+//! the ground-station messages are all filled.
+
+use crate::error::CoreError;
+use crate::estimator::{Estimator, Timestamped};
+use crate::lqi::{Reference, StateFeedback};
+use crate::navigation::NavigationSolution;
+use crate::state::{Input, MeasuredStates, NU, NY, ReducedState};
+use nalgebra::SVector;
+
+/// Everything the flight software decided and knew in one sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Telemetry {
+    /// Sample counter since the computer was built (0, 1, 2, …).
+    pub sample: u64,
+    /// Time of the measurement the sample was computed from (s).
+    pub t_s: f64,
+    /// The reference tracked.
+    pub reference: Reference,
+    /// Servo commands sent (after saturation).
+    pub command: Input,
+    /// Which commands were saturated.
+    pub saturated: [bool; NU],
+    /// Output errors [ψ (rad), vn, ve, vd (m/s)], reference − estimate.
+    pub tracking_error: SVector<f64, NY>,
+    /// Integral states after this sample.
+    pub integral: SVector<f64, NY>,
+    /// The absolute reduced-state estimate used by the law.
+    pub estimate: ReducedState,
+    /// The nine measured states the estimator was given.
+    pub measured: MeasuredStates,
+    /// The navigation solution, when the estimator runs one.
+    pub navigation: Option<NavigationSolution>,
+}
+
+/// Estimator + state feedback.
+#[derive(Debug, Clone)]
+pub struct FlightComputer<E, F> {
+    /// The state estimator.
+    pub estimator: E,
+    /// The control law.
+    pub feedback: F,
+    sample: u64,
+}
+
+impl<E: Estimator, F: StateFeedback> FlightComputer<E, F> {
+    /// A flight computer from its two parts.
+    pub fn new(estimator: E, feedback: F) -> Self {
+        FlightComputer {
+            estimator,
+            feedback,
+            sample: 0,
+        }
+    }
+
+    /// One control sample: measurement and reference in, servo commands and
+    /// telemetry out. An error (a navigation failure, a non-finite
+    /// measurement or estimate) leaves the commands of the previous sample to
+    /// the caller's failsafe.
+    pub fn step(
+        &mut self,
+        measurement: &E::Measurement,
+        reference: &Reference,
+    ) -> Result<Telemetry, CoreError> {
+        let estimate = self.estimator.update(measurement)?;
+        let cmd = self.feedback.command(&estimate.state, reference);
+        self.estimator.predict(&cmd.u)?;
+        let t = Telemetry {
+            sample: self.sample,
+            t_s: measurement.t_s(),
+            reference: *reference,
+            command: cmd.u,
+            saturated: cmd.saturated,
+            tracking_error: cmd.tracking_error,
+            integral: cmd.integral,
+            estimate: estimate.state,
+            measured: estimate.measured,
+            navigation: estimate.navigation,
+        };
+        self.sample += 1;
+        Ok(t)
+    }
+}

@@ -1,0 +1,53 @@
+//! # helicon-core
+//!
+//! The on-board flight software of the helicopter, as one core that the
+//! simulator, software-in-the-loop runs and the on-board runtime all fly. It
+//! depends on nalgebra only and allocates nothing per control sample.
+//!
+//! Data flow per sample (thesis Figure 3.5 and Figure 14.4):
+//!
+//! ```text
+//! SensorFrame ─► Estimator ─► Estimate ─► StateFeedback ─► Command ─► servos
+//!                   ▲                                         │
+//!                   └──────────── applied commands ◄──────────┘
+//! ```
+//!
+//! - [`state`], [`frames`]: the state layout and rotations shared with the model;
+//! - [`sensor`]: the one timestamped [`SensorFrame`];
+//! - [`attitude`] (q-method, §13.2), [`fusion`] (GPS/IMU filter, §13.3),
+//!   [`navigation`] (both, frames to the nine measured states);
+//! - [`estimator`]: the [`Estimator`] extension point; the thesis's chain,
+//!   the Kalman predictor alone, the truth feed;
+//! - [`lqi`]: the [`StateFeedback`] extension point; the LQR with integral action;
+//! - [`gains`]: the fixed-size [`GainSet`] a design produces;
+//! - [`computer`]: [`FlightComputer`] and its [`Telemetry`].
+//!
+//! To add a sensor: a field in [`SensorFrame`] and its use in an estimator.
+//! To add an estimator: implement [`Estimator`]. To add a control law:
+//! implement [`StateFeedback`]. [`FlightComputer`] composes any pair.
+
+pub mod attitude;
+pub mod computer;
+pub mod error;
+pub mod estimator;
+pub mod frames;
+pub mod fusion;
+pub mod gains;
+pub mod lqi;
+pub mod navigation;
+pub mod sensor;
+pub mod state;
+
+pub use computer::{FlightComputer, Telemetry};
+pub use error::CoreError;
+pub use estimator::{
+    Estimate, Estimator, KalmanPredictor, StateMeasurement, ThesisEstimator, Timestamped,
+    TruthFeed, TruthMeasurement,
+};
+pub use gains::{GainSet, LqiOptions, ServoLimits};
+pub use lqi::{Command, Lqi, Reference, StateFeedback};
+pub use navigation::{NavigationConfig, NavigationFilter, NavigationSolution};
+pub use sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
+
+/// The thesis's on-board chain: navigation + Kalman predictor + LQI.
+pub type ThesisFlightComputer = FlightComputer<ThesisEstimator, Lqi>;
