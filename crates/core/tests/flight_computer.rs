@@ -1,0 +1,177 @@
+//! The flight computer as the runtime will run it: the thesis chain
+//! (navigation + Kalman predictor + LQI) stepped on sensor frames, counted by
+//! a wrapping global allocator (this test binary only), and the layering
+//! rule that the core depends on nalgebra only.
+#![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
+#![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; we only forward to System
+
+use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
+use helicon_core::{
+    FlightComputer, GainSet, KalmanPredictor, Lqi, LqiOptions, NavigationConfig, NavigationFilter,
+    Reference, ServoLimits, ThesisEstimator,
+};
+use nalgebra::{SMatrix, SVector, Vector3};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+struct Counting;
+thread_local! {
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+// SAFETY: forwards every call unchanged to the system allocator.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCS.with(|c| c.set(c.get() + 1));
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+const TS: f64 = 0.0025;
+const G: f64 = 9.81;
+const FIELD: [f64; 3] = [0.153, 0.008, -0.438];
+
+/// A stable synthetic design: Φ = 0.99 I, small gains. The numbers do not
+/// matter here; the shapes and the code path do.
+fn gains() -> GainSet {
+    GainSet {
+        sample_time_s: TS,
+        alpha: 1.002,
+        x_trim: SVector::zeros(),
+        u_trim: SVector::from([0.1, 0.0, 0.0, 0.05]),
+        phi: SMatrix::identity() * 0.99,
+        gamma: SMatrix::from_fn(|i, j| if i % 4 == j { 1e-3 } else { 0.0 }),
+        ls: SMatrix::from_fn(|i, j| if j % 4 == i { 0.01 } else { 0.0 }),
+        li: SMatrix::identity() * 1e-4,
+        k: SMatrix::from_fn(|i, j| if i == j { 0.5 } else { 0.0 }),
+        options: LqiOptions {
+            integral_action: true,
+            reference_in_proportional: false,
+            anti_windup: true,
+        },
+    }
+}
+
+fn computer() -> FlightComputer<ThesisEstimator, Lqi> {
+    let g = gains();
+    let noise = SensorNoise {
+        gps_sigma_m: Vector3::new(1.5, 1.5, 3.0),
+        gps_vel_sigma_m_s: Vector3::new(0.05, 0.05, 0.1),
+        mag_field_ned: Vector3::from(FIELD),
+        gravity_m_s2: G,
+    };
+    let nav = NavigationFilter::new(
+        &NavigationConfig::default(),
+        &noise,
+        TS,
+        &SVector::zeros(),
+        &Vector3::zeros(),
+    )
+    .unwrap();
+    let limits = ServoLimits {
+        min: SVector::from([-0.1, -1.0, -1.0, -0.5]),
+        max: SVector::from([0.3, 1.0, 1.0, 0.5]),
+    };
+    let est = ThesisEstimator {
+        navigation: nav,
+        predictor: KalmanPredictor::new(&g, &g.x_trim).unwrap(),
+    };
+    FlightComputer::new(est, Lqi::new(&g, limits, true).unwrap())
+}
+
+/// The frame of sample k for a level helicopter at rest: magnetometer every
+/// 4th sample, a GPS fix with Doppler velocity every 80th.
+fn frame(k: u64) -> SensorFrame {
+    let t = k as f64 * TS;
+    let wobble = 1e-3 * (t * 7.0).sin();
+    SensorFrame {
+        t_s: t,
+        imu: ImuSample {
+            specific_force_body_m_s2: Vector3::new(wobble, -wobble, -G),
+            gyro_body_rad_s: Vector3::new(wobble, 0.0, -wobble),
+        },
+        mag_body: (k % 4 == 0).then(|| Vector3::from(FIELD)),
+        gps: (k % 80 == 0).then(|| GpsFix {
+            epoch_s: t - 0.1,
+            fix: GpsFixType::Fix3d,
+            position_ned_m: Vector3::new(wobble, 0.0, 0.0),
+            velocity_ned_m_s: Some(Vector3::zeros()),
+        }),
+    }
+}
+
+#[test]
+fn flight_computer_step_does_not_allocate() {
+    let mut c = computer();
+    let r = Reference {
+        velocity_ned_m_s: Vector3::new(1.0, 0.0, 0.0),
+        yaw_rad: 0.3,
+    };
+    let _ = c.step(&frame(0), &r).unwrap();
+    let before = ALLOCS.with(Cell::get);
+    let mut acc = 0.0;
+    let mut fixes = 0;
+    for k in 1..4000 {
+        let t = c.step(&frame(k), &r).unwrap();
+        acc += t.command.sum();
+        fixes += usize::from(t.navigation.is_some_and(|n| n.gps_fused));
+    }
+    let allocs = ALLOCS.with(Cell::get) - before;
+    assert!(acc.is_finite());
+    assert_eq!(fixes, 49, "GPS fixes fused");
+    assert_eq!(allocs, 0, "FlightComputer::step allocated {allocs} times");
+}
+
+#[test]
+fn telemetry_is_stamped_and_counted() {
+    let mut c = computer();
+    let r = Reference::default();
+    for k in 0..10 {
+        let t = c.step(&frame(k), &r).unwrap();
+        assert_eq!(t.sample, k);
+        assert_eq!(t.t_s, k as f64 * TS);
+        let n = t.navigation.unwrap();
+        assert_eq!(n.attitude_fix, k % 4 == 0);
+        assert_eq!(t.reference, r);
+    }
+}
+
+#[test]
+fn bad_frames_are_errors_not_nan() {
+    let mut c = computer();
+    let r = Reference::default();
+    let mut f = frame(0);
+    f.imu.gyro_body_rad_s.z = f64::NAN;
+    let e = c.step(&f, &r).unwrap_err().to_string();
+    assert!(e.contains("gyro"), "{e}");
+    // the computer keeps working after a rejected frame
+    assert!(c.step(&frame(1), &r).is_ok());
+}
+
+#[test]
+fn core_depends_on_nalgebra_only() {
+    // The layering rule: nothing but nalgebra (and serde behind an opt-in
+    // feature) among the core's normal dependencies.
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.toml")).unwrap();
+    let deps = text
+        .split("[dependencies]")
+        .nth(1)
+        .unwrap()
+        .split("\n[")
+        .next()
+        .unwrap();
+    let names: Vec<&str> = deps
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .map(|l| l.split(['=', '.', ' ']).next().unwrap())
+        .collect();
+    assert_eq!(names, ["nalgebra", "serde"], "{deps}");
+    assert!(deps.contains("optional = true"), "serde must stay optional");
+}
