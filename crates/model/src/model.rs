@@ -411,17 +411,23 @@ impl Model {
         }
 
         // Flapping (6.47)/(6.53) by harmonic balance (flapping module).
+        // The body normal torque (6.37)–(6.40), τbn = mb·(hz̈ − hẋ·q + hẏ·p), with
+        // the inertial hub velocities (D.4)–(D.5) without wind (MODEL.md §4). Its
+        // velocity-product part −hẋ·q + hẏ·p needs no acceleration and is in
+        // both presets; the hub normal acceleration hz̈ = ẇ + q̇·κh and the
+        // body angular-acceleration torques (6.36) only with `flap_accel`
+        // (the thesis implementation dropped exactly these: MODEL.md §11 item 3).
+        let hx_in = v_body.x - qr * geo.kappa_v_m;
+        let hy_in = v_body.y + pr * geo.kappa_v_m - rr * geo.kappa_h_m;
+        let velocity_product = -hx_in * qr + hy_in * pr;
         let body = if self.options.flap_accel {
-            // (6.40): hub inertial velocities and the hub normal acceleration.
-            let hx_in = v_body.x - qr * geo.kappa_v_m;
-            let hy_in = v_body.y + pr * geo.kappa_v_m - rr * geo.kappa_h_m;
             let hz_ddot = v_dot.z + w_dot.y * geo.kappa_h_m;
             FlapBody {
                 p_rad_s: pr,
                 q_rad_s: qr,
                 p_dot_rad_s2: w_dot.x,
                 q_dot_rad_s2: w_dot.y,
-                normal_accel_m_s2: hz_ddot - hx_in * qr + hy_in * pr,
+                normal_accel_m_s2: hz_ddot + velocity_product,
             }
         } else {
             FlapBody {
@@ -429,7 +435,7 @@ impl Model {
                 q_rad_s: qr,
                 p_dot_rad_s2: 0.0,
                 q_dot_rad_s2: 0.0,
-                normal_accel_m_s2: 0.0,
+                normal_accel_m_s2: velocity_product,
             }
         };
         let aero = [
