@@ -155,6 +155,36 @@ pub enum InflowMode {
     },
 }
 
+impl InflowMode {
+    /// [`InflowMode::ThesisIteration`], checked: at least one Newton–Raphson
+    /// step and finite starting ratios (the derivative rejects the same
+    /// values when the variant is built directly).
+    pub fn thesis_iteration(
+        lambda_mr_in: f64,
+        lambda_tr_in: f64,
+        iterations: u32,
+    ) -> Result<InflowMode, crate::model::ModelError> {
+        use crate::model::ModelError;
+        if iterations == 0 {
+            return Err(ModelError::ZeroInflowIterations);
+        }
+        for (name, value) in [("lambda_mr_in", lambda_mr_in), ("lambda_tr_in", lambda_tr_in)] {
+            if !value.is_finite() {
+                return Err(ModelError::NonFinite {
+                    what: "inflow",
+                    name,
+                    value,
+                });
+            }
+        }
+        Ok(InflowMode::ThesisIteration {
+            lambda_mr_in,
+            lambda_tr_in,
+            iterations,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -171,5 +201,19 @@ mod tests {
         assert_ne!(p.wind, t.wind);
         assert_ne!(p.sb_velocity, t.sb_velocity);
         assert_eq!(Preset::default(), Preset::Physical);
+    }
+
+    #[test]
+    fn zero_thesis_inflow_iterations_is_a_typed_error() {
+        use crate::model::ModelError;
+        assert!(matches!(
+            InflowMode::thesis_iteration(-0.04, -0.05, 0),
+            Err(ModelError::ZeroInflowIterations)
+        ));
+        assert!(matches!(
+            InflowMode::thesis_iteration(f64::NAN, -0.05, 7),
+            Err(ModelError::NonFinite { .. })
+        ));
+        assert!(InflowMode::thesis_iteration(-0.04, -0.05, 7).is_ok());
     }
 }
