@@ -196,7 +196,11 @@ fn trim_of_mass_x100_is_refused_naming_each_violation_unless_allowed() {
     assert_eq!(v["validity"]["violations"][0]["allowed"]["max"], 0.3);
     // mass x2: only S_col
     std::fs::write(&f, "[body]\nmass_kg = 28.0\n").unwrap();
-    let out = helicon().args(["trim", "--params"]).arg(&f).output().unwrap();
+    let out = helicon()
+        .args(["trim", "--params"])
+        .arg(&f)
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.matches("unphysical:").count(), 1, "{err}");
@@ -214,7 +218,9 @@ fn climb_sweep_reports_validity_per_point_and_the_jump() {
     // [-0.1, 0.3], no warning, the jump at -8.5 m/s unflagged.
     let dir = temp_dir("climb-sweep");
     let out = helicon()
-        .args(["trim", "--sweep", "climb", "--from", "-20", "--to", "20", "--out"])
+        .args([
+            "trim", "--sweep", "climb", "--from", "-20", "--to", "20", "--out",
+        ])
         .arg(&dir)
         .output()
         .unwrap();
@@ -239,8 +245,16 @@ fn climb_sweep_reports_validity_per_point_and_the_jump() {
         assert_eq!(cells.len(), header.len(), "{line}");
         let climb: f64 = cells[0].parse().unwrap();
         let physical = cells[cells.len() - 3] == "true";
-        assert_eq!(physical, climb > -11.0 && climb < 7.5 && !(-8.0..=-1.5).contains(&climb), "{line}");
-        assert_eq!(cells[cells.len() - 1].contains("lambda_mr"), climb == -8.0, "{line}");
+        assert_eq!(
+            physical,
+            climb > -11.0 && climb < 7.5 && !(-8.0..=-1.5).contains(&climb),
+            "{line}"
+        );
+        assert_eq!(
+            cells[cells.len() - 1].contains("lambda_mr"),
+            climb == -8.0,
+            "{line}"
+        );
     }
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("sweep.json")).unwrap()).unwrap();
@@ -249,19 +263,38 @@ fn climb_sweep_reports_validity_per_point_and_the_jump() {
     assert_eq!(json["jumps"][0]["from"], -8.5);
     // --allow-unphysical: same files, exit 0
     let out = helicon()
-        .args(["trim", "--sweep", "climb", "--from", "-20", "--to", "20", "--allow-unphysical", "--out"])
+        .args([
+            "trim",
+            "--sweep",
+            "climb",
+            "--from",
+            "-20",
+            "--to",
+            "20",
+            "--allow-unphysical",
+            "--out",
+        ])
         .arg(&dir)
         .output()
         .unwrap();
     assert!(out.status.success());
     // an envelope inside the limits passes
     let out = helicon()
-        .args(["trim", "--sweep", "forward", "--from", "0", "--to", "10", "--step", "1", "--out"])
+        .args([
+            "trim", "--sweep", "forward", "--from", "0", "--to", "10", "--step", "1", "--out",
+        ])
         .arg(&dir)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert!(String::from_utf8_lossy(&out.stdout).contains("11 converged, 0 failed, 0 unphysical; 0 jump(s)"));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        String::from_utf8_lossy(&out.stdout)
+            .contains("11 converged, 0 failed, 0 unphysical; 0 jump(s)")
+    );
 }
 
 #[test]
@@ -277,16 +310,28 @@ fn linearize_refuses_unphysical_points_and_non_equilibria_unless_allowed() {
         .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("refusing to linearize: the trim is not physical"), "{err}");
+    assert!(
+        err.contains("refusing to linearize: the trim is not physical"),
+        "{err}"
+    );
     assert!(!dir.join("lin").join("A.csv").exists());
     let out = helicon()
-        .args(["linearize", "--allow-unphysical", "--params", f.to_str().unwrap(), "--out"])
+        .args([
+            "linearize",
+            "--allow-unphysical",
+            "--params",
+            f.to_str().unwrap(),
+            "--out",
+        ])
         .arg(dir.join("lin"))
         .output()
         .unwrap();
     assert!(out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("warning: the operating point is not an equilibrium"), "{err}");
+    assert!(
+        err.contains("warning: the operating point is not an equilibrium"),
+        "{err}"
+    );
     let s: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.join("lin").join("summary.json")).unwrap(),
     )
@@ -302,13 +347,19 @@ fn absurd_parameters_and_non_finite_outputs_are_errors_not_null() {
     let dir = temp_dir("absurd");
     let f = dir.join("big.toml");
     std::fs::write(&f, "# absurd\n[body]\nmass_kg = 1e308\n").unwrap();
-    let line = format!("{{\"x\": {:?}, \"u\": [0.185, 0, 0, 0.159]}}", vec![0.0; 30]);
+    let line = format!(
+        "{{\"x\": {:?}, \"u\": [0.185, 0, 0, 0.159]}}",
+        vec![0.0; 30]
+    );
     let out = run_with_stdin(&["eval", "--params", f.to_str().unwrap()], &line);
     assert!(!out.status.success());
     assert!(out.stdout.is_empty());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains(&format!("{}:3: key `body.mass_kg` = 1e308 is invalid: must be within +-1e6", f.display())),
+        err.contains(&format!(
+            "{}:3: key `body.mass_kg` = 1e308 is invalid: must be within +-1e6",
+            f.display()
+        )),
         "{err}"
     );
     // a state whose derivative overflows: the error names the line and the quantity
@@ -334,9 +385,17 @@ fn absurd_parameters_and_non_finite_outputs_are_errors_not_null() {
 fn parameter_file_errors_name_file_line_and_key() {
     let dir = temp_dir("param-line");
     let f = dir.join("p.toml");
-    std::fs::write(&f, "[body]\nmass_kg = 12.0\n\n[main_rotor]\nradius_m = -1\n").unwrap();
+    std::fs::write(
+        &f,
+        "[body]\nmass_kg = 12.0\n\n[main_rotor]\nradius_m = -1\n",
+    )
+    .unwrap();
     let lin = dir.join("lin");
-    for extra in [&["trim"][..], &["eval"], &["linearize", "--out", lin.to_str().unwrap()]] {
+    for extra in [
+        &["trim"][..],
+        &["eval"],
+        &["linearize", "--out", lin.to_str().unwrap()],
+    ] {
         let cmd = extra[0];
         let mut args = extra.to_vec();
         args.extend(["--params", f.to_str().unwrap()]);
@@ -344,7 +403,10 @@ fn parameter_file_errors_name_file_line_and_key() {
         assert!(!out.status.success());
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(
-            err.contains(&format!("{}:5: key `main_rotor.radius_m` = -1.0 is invalid: must be > 0", f.display())),
+            err.contains(&format!(
+                "{}:5: key `main_rotor.radius_m` = -1.0 is invalid: must be > 0",
+                f.display()
+            )),
             "{cmd}: {err}"
         );
     }

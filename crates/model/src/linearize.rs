@@ -84,7 +84,11 @@ pub fn linearize(
         b.set_column(j, &col);
     }
     for (m, what, cols) in [
-        (a.as_slice(), "entry of A in column", &REDUCED_STATE_NAMES[..]),
+        (
+            a.as_slice(),
+            "entry of A in column",
+            &REDUCED_STATE_NAMES[..],
+        ),
         (b.as_slice(), "entry of B in column", &INPUT_NAMES[..]),
     ] {
         if let Some(k) = m.iter().position(|v| !v.is_finite()) {

@@ -168,7 +168,10 @@ impl InflowMode {
         if iterations == 0 {
             return Err(ModelError::ZeroInflowIterations);
         }
-        for (name, value) in [("lambda_mr_in", lambda_mr_in), ("lambda_tr_in", lambda_tr_in)] {
+        for (name, value) in [
+            ("lambda_mr_in", lambda_mr_in),
+            ("lambda_tr_in", lambda_tr_in),
+        ] {
             if !value.is_finite() {
                 return Err(ModelError::NonFinite {
                     what: "inflow",

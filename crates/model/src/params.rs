@@ -404,10 +404,7 @@ const fn mag(family: &'static str, min_positive: f64, max_abs: f64) -> Magnitude
 
 /// The magnitude range of the parameters with SI unit `unit`.
 pub fn magnitude(unit: &str) -> Option<Magnitude> {
-    MAGNITUDES
-        .iter()
-        .find(|(u, _)| *u == unit)
-        .map(|(_, m)| *m)
+    MAGNITUDES.iter().find(|(u, _)| *u == unit).map(|(_, m)| *m)
 }
 
 impl Rule {

@@ -36,7 +36,10 @@ fn mass_1e308_is_rejected_where_it_enters() {
     // one key per family, beyond its range
     for (text, key) in [
         ("[main_rotor]\nradius_m = 1e5\n", "main_rotor.radius_m"),
-        ("[main_rotor]\nomega_rad_s = 1e-9\n", "main_rotor.omega_rad_s"),
+        (
+            "[main_rotor]\nomega_rad_s = 1e-9\n",
+            "main_rotor.omega_rad_s",
+        ),
         ("[main_rotor]\nblades = 1e9\n", "main_rotor.blades"),
         ("[main_rotor]\ntwist_rad = 7.0\n", "main_rotor.twist_rad"),
         ("[body]\nixx_kg_m2 = 1e13\n", "body.ixx_kg_m2"),
@@ -120,25 +123,31 @@ fn parameter_errors_carry_the_line_of_the_key() {
         "{e}"
     );
     let e = Params::from_toml_str("\n[body]\n\nmass_kg = \"heavy\"\n", "h.toml").unwrap_err();
-    assert!(matches!(e, ParamError::WrongType { line: Some(4), .. }), "{e}");
-    assert!(e.to_string().starts_with("h.toml:4: key `body.mass_kg` must be a number"));
+    assert!(
+        matches!(e, ParamError::WrongType { line: Some(4), .. }),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .starts_with("h.toml:4: key `body.mass_kg` must be a number")
+    );
     // nested section, dotted key and inline table
-    let e = Params::from_toml_str("[servo.tail]\nzeta = 0.7\ngain_rad = 0\n", "h.toml")
-        .unwrap_err();
-    assert_eq!(e.line(), Some(3), "{e}");
-    let e = Params::from_toml_str("body.mass_kg = 2.0\nbody.ixx_kg_m2 = -3\n", "h.toml")
-        .unwrap_err();
-    assert_eq!(e.line(), Some(2), "{e}");
     let e =
-        Params::from_toml_str("x = 1\nbody = { mass_kg = 1.0 }\n", "h.toml").unwrap_err();
+        Params::from_toml_str("[servo.tail]\nzeta = 0.7\ngain_rad = 0\n", "h.toml").unwrap_err();
+    assert_eq!(e.line(), Some(3), "{e}");
+    let e =
+        Params::from_toml_str("body.mass_kg = 2.0\nbody.ixx_kg_m2 = -3\n", "h.toml").unwrap_err();
+    assert_eq!(e.line(), Some(2), "{e}");
+    let e = Params::from_toml_str("x = 1\nbody = { mass_kg = 1.0 }\n", "h.toml").unwrap_err();
     assert_eq!(e.line(), Some(1), "{e}");
     let e = Params::from_toml_str("\nbody = { mass_kg = 0.0 }\n", "h.toml").unwrap_err();
     assert_eq!(e.line(), Some(2), "{e}");
     // a cross-key rule names its key and the line of the key the file set
     let e = Params::from_toml_str("[servo.collective]\n\ns_max = -0.2\n", "h.toml").unwrap_err();
     assert!(
-        e.to_string()
-            .starts_with("h.toml:3: key `servo.collective.s_min` = -0.1 is invalid: must be < s_max"),
+        e.to_string().starts_with(
+            "h.toml:3: key `servo.collective.s_min` = -0.1 is invalid: must be < s_max"
+        ),
         "{e}"
     );
     // from a file: the path and the line
@@ -147,20 +156,27 @@ fn parameter_errors_carry_the_line_of_the_key() {
     let f = dir.join("p.toml");
     std::fs::write(&f, "[main_rotor]\nradius_m = 1.0\nhinge_offset_m = 2.0\n").unwrap();
     let e = Params::from_file(&f).unwrap_err().to_string();
-    assert!(e.starts_with(&format!("{}:3: key `main_rotor.hinge_offset_m`", f.display())), "{e}");
+    assert!(
+        e.starts_with(&format!(
+            "{}:3: key `main_rotor.hinge_offset_m`",
+            f.display()
+        )),
+        "{e}"
+    );
     // syntax errors keep the parser's line and column
     let e = Params::from_toml_str("[body\n", "h.toml").unwrap_err();
-    assert!(matches!(e, ParamError::Syntax { .. }) && e.to_string().contains("line 1"), "{e}");
+    assert!(
+        matches!(e, ParamError::Syntax { .. }) && e.to_string().contains("line 1"),
+        "{e}"
+    );
 }
 
 /// A TOML value: extreme and ordinary numbers, or other types.
 fn value_text() -> impl Strategy<Value = String> {
     prop_oneof![
         any::<f64>().prop_map(|v| format!("{v:?}")),
-        (-320i32..320, any::<bool>()).prop_map(|(e, neg)| format!(
-            "{}1e{e}",
-            if neg { "-" } else { "" }
-        )),
+        (-320i32..320, any::<bool>())
+            .prop_map(|(e, neg)| format!("{}1e{e}", if neg { "-" } else { "" })),
         (-10.0f64..10.0).prop_map(|v| format!("{v:?}")),
         any::<i64>().prop_map(|v| v.to_string()),
         Just("nan".to_string()),

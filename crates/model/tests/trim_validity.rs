@@ -60,17 +60,34 @@ fn mass_x100_converges_but_is_unphysical_naming_each_quantity() {
     assert!(t.residual_norm < 1e-9);
     let v = t.validity(&model);
     let names: Vec<&str> = v.violations.iter().map(|v| v.quantity).collect();
-    for q in ["S_col", "S_tr", "alpha75_mr", "alpha75_tr", "a0", "a1", "a1sb"] {
+    for q in [
+        "S_col",
+        "S_tr",
+        "alpha75_mr",
+        "alpha75_tr",
+        "a0",
+        "a1",
+        "a1sb",
+    ] {
         assert!(names.contains(&q), "{q} missing from {names:?}");
     }
     let s_col = &v.violations[0];
     assert_eq!(s_col.quantity, "S_col");
     assert!((s_col.value - 8.616).abs() < 1e-3, "{}", s_col.value);
-    assert_eq!(s_col.allowed, Allowed::Within { min: -0.1, max: 0.3 });
+    assert_eq!(
+        s_col.allowed,
+        Allowed::Within {
+            min: -0.1,
+            max: 0.3
+        }
+    );
     match t.require_physical(&model) {
         Err(e @ TrimError::Unphysical { .. }) => {
             let s = e.to_string();
-            assert!(s.contains("S_col = 8.6") && s.contains("[-0.1, 0.3]"), "{s}");
+            assert!(
+                s.contains("S_col = 8.6") && s.contains("[-0.1, 0.3]"),
+                "{s}"
+            );
         }
         other => panic!("{other:?}"),
     }
@@ -161,7 +178,9 @@ fn discontinuity_rule_on_synthetic_sweeps() {
     };
     assert!(discontinuities(&with(&flat_end)).is_empty());
     // a step of 0.05 on a ramp of 0.01 per point, between points 4 and 5
-    let d = discontinuities(&with(&|k| 0.01 * k as f64 + if k >= 5 { 0.05 } else { 0.0 }));
+    let d = discontinuities(&with(&|k| {
+        0.01 * k as f64 + if k >= 5 { 0.05 } else { 0.0 }
+    }));
     assert_eq!(d.len(), 1);
     assert_eq!(d[0].index, 5);
     assert_eq!(d[0].quantities.len(), 1);
