@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
+use helicon_model::model::check_output;
 use helicon_model::state::{NU, NX, STATE_NAMES};
 use helicon_model::{Aux, Input, Model, Params, Preset, State};
 use nalgebra::Vector3;
@@ -187,7 +188,12 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         if line.trim().is_empty() {
             continue;
         }
-        let result = parse_line(&line).and_then(|(x, u, w)| Ok(model.derivative(&x, &u, &w)?));
+        let result = parse_line(&line).and_then(|(x, u, w)| {
+            let (xd, aux) = model.derivative(&x, &u, &w)?;
+            // never print NaN/inf (JSON `null`) as a result
+            check_output(&xd, &aux)?;
+            Ok((xd, aux))
+        });
         match result {
             Ok((xd, aux)) => writeln!(out, "{}", eval_json(&xd, &aux))?,
             Err(e) => {

@@ -3,9 +3,11 @@
 use crate::model_cmd::ModelFlags;
 use anyhow::{Context, Result, bail};
 use clap::{Args, ValueEnum};
-use helicon_model::linearize::{LinearModel, linearize};
+use helicon_model::linearize::{EQUILIBRIUM_TOL, LinearModel, linearize};
 use helicon_model::state::{INPUT_NAMES, REDUCED_STATE_NAMES};
-use helicon_model::trim::{Trim, TrimOptions, TrimTarget, sweep, trim};
+use helicon_model::trim::{
+    Allowed, Trim, TrimOptions, TrimTarget, Validity, Violation, discontinuities, sweep, trim,
+};
 use helicon_model::{InflowMode, Model};
 use nalgebra::{DMatrix, Vector3};
 use serde_json::{Map, Value, json};
@@ -30,6 +32,12 @@ pub struct ConditionFlags {
     /// Print the residual norm of every Newton iteration (stderr).
     #[arg(long)]
     pub verbose: bool,
+    /// Accept a trim outside the physical ranges (servo ranges, blade stall,
+    /// small flapping, advance ratio, vortex-ring region) or, for
+    /// `linearize`, an operating point that is not an equilibrium: report it
+    /// and exit 0 instead of failing.
+    #[arg(long)]
+    pub allow_unphysical: bool,
 }
 
 fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
@@ -126,17 +134,41 @@ fn do_trim(model: &Model, cond: &ConditionFlags, initial: Option<&Trim>) -> Resu
             eprintln!("trim iteration {k:>2}: |residual|_inf = {r:.3e}");
         }
     }
-    for v in &t.beyond_saturation {
-        eprintln!(
-            "warning: this condition needs {} = {:.4} beyond its saturation [{}, {}]",
-            v.input, v.value, v.min, v.max
-        );
-    }
     Ok(t)
 }
 
-/// The trim as JSON: `{"state": {27 names}, "input": {4 names}, "lambda_mr", "lambda_tr", "residual_norm", ...}`.
-pub fn trim_json(t: &Trim) -> Value {
+/// Print the violations of a trim on stderr (`what` names the point).
+fn report_violations(what: &str, v: &Validity) {
+    for x in &v.violations {
+        eprintln!("{what}: unphysical: {x}");
+    }
+}
+
+/// A violation as JSON.
+fn violation_json(v: &Violation) -> Value {
+    let (kind, min, max) = match v.allowed {
+        Allowed::Within { min, max } => ("within", min, max),
+        Allowed::Outside { min, max } => ("outside", min, max),
+    };
+    json!({
+        "quantity": v.quantity,
+        "value": v.value,
+        "allowed": {"kind": kind, "min": min, "max": max},
+        "reason": v.reason,
+    })
+}
+
+/// The validity report as JSON: `{"physical": bool, "violations": [...]}`.
+pub fn validity_json(v: &Validity) -> Value {
+    json!({
+        "physical": v.is_physical(),
+        "violations": v.violations.iter().map(violation_json).collect::<Vec<_>>(),
+    })
+}
+
+/// The trim as JSON: `{"state": {27 names}, "input": {4 names}, "lambda_mr",
+/// "lambda_tr", "residual_norm", ..., "validity": {"physical", "violations"}}`.
+pub fn trim_json(t: &Trim, model: &Model) -> Value {
     let mut state = Map::new();
     for (i, n) in REDUCED_STATE_NAMES.iter().enumerate() {
         state.insert((*n).to_string(), json!(t.x[i]));
@@ -156,6 +188,7 @@ pub fn trim_json(t: &Trim) -> Value {
         "yaw_rad": t.target.yaw_rad,
         "wind_ned_m_s": [t.target.wind_ned_m_s.x, t.target.wind_ned_m_s.y, t.target.wind_ned_m_s.z],
         "beyond_saturation": t.beyond_saturation.iter().map(|v| v.input).collect::<Vec<_>>(),
+        "validity": validity_json(&t.validity(model)),
     })
 }
 
@@ -166,10 +199,23 @@ pub fn run_trim(args: &TrimArgs) -> Result<()> {
         return run_sweep(&model, args, axis);
     }
     let t = do_trim(&model, &args.cond, None)?;
+    let validity = t.validity(&model);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&trim_json(&t))?);
-        return Ok(());
+        println!("{}", serde_json::to_string_pretty(&trim_json(&t, &model))?);
+    } else {
+        print_trim(&t, args)?;
     }
+    report_violations("trim", &validity);
+    if !validity.is_physical() && !args.cond.allow_unphysical {
+        bail!(
+            "the trim is not physical ({} violation(s) above); --allow-unphysical accepts it",
+            validity.violations.len()
+        );
+    }
+    Ok(())
+}
+
+fn print_trim(t: &Trim, args: &TrimArgs) -> Result<()> {
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -236,21 +282,55 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let var = format!("{axis:?}").to_lowercase();
+    let unit = if matches!(axis, SweepAxis::Yaw) {
+        "rad"
+    } else {
+        "m/s"
+    };
+    let validity: Vec<Option<Validity>> = results
+        .iter()
+        .map(|r| r.as_ref().ok().map(|t| t.validity(model)))
+        .collect();
+    let jumps = discontinuities(&results);
+    // the quantities that jumped into each point from the previous one
+    let mut jumped: Vec<Vec<&str>> = vec![Vec::new(); values.len()];
+    for d in &jumps {
+        jumped[d.index] = d.quantities.iter().map(|q| q.0).collect();
+    }
     let mut csv = format!(
-        "{var},converged,residual_norm,{},{},lambda_mr,lambda_tr\n",
+        "{var},converged,residual_norm,{},{},lambda_mr,lambda_tr,physical,violations,jump_from_previous\n",
         INPUT_NAMES.join(","),
         REDUCED_STATE_NAMES.join(",")
     );
     let mut failed = 0;
     let mut series: Vec<Vec<(f64, f64)>> = vec![Vec::new(); 8];
-    for (s, r) in values.iter().zip(&results) {
+    let mut points = Vec::with_capacity(values.len());
+    for (k, (s, r)) in values.iter().zip(&results).enumerate() {
         match r {
             Ok(t) => {
+                let v = validity[k].clone().unwrap_or_default();
                 let _ = write!(csv, "{s},true,{:e}", t.residual_norm);
                 for v in t.u.iter().chain(t.x.iter()) {
                     let _ = write!(csv, ",{v:e}");
                 }
-                let _ = writeln!(csv, ",{:e},{:e}", t.aux.lambda_mr, t.aux.lambda_tr);
+                let _ = writeln!(
+                    csv,
+                    ",{:e},{:e},{},{},{}",
+                    t.aux.lambda_mr,
+                    t.aux.lambda_tr,
+                    v.is_physical(),
+                    v.violations
+                        .iter()
+                        .map(csv_violation)
+                        .collect::<Vec<_>>()
+                        .join(";"),
+                    jumped[k].join(";")
+                );
+                let mut p = trim_json(t, model);
+                p[var.as_str()] = json!(s);
+                p["converged"] = json!(true);
+                p["jump_from_previous"] = json!(jumped[k]);
+                points.push(p);
                 for k in 0..4 {
                     series[k].push((*s, t.u[k]));
                 }
@@ -262,18 +342,30 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
             Err(e) => {
                 failed += 1;
                 eprintln!("{var} = {s}: {e}");
-                let _ = writeln!(csv, "{s},false,{}", ",".repeat(4 + 27 + 2));
+                let _ = writeln!(csv, "{s},false,{}", ",".repeat(4 + 27 + 2 + 3));
+                points.push(json!({var.as_str(): s, "converged": false, "error": e.to_string()}));
             }
         }
     }
     let csv_path = args.out.join("sweep.csv");
     std::fs::write(&csv_path, csv)
         .with_context(|| format!("cannot write {}", csv_path.display()))?;
-    let unit = if matches!(axis, SweepAxis::Yaw) {
-        "rad"
-    } else {
-        "m/s"
-    };
+    let json_path = args.out.join("sweep.json");
+    std::fs::write(
+        &json_path,
+        serde_json::to_string_pretty(&json!({
+            "variable": var,
+            "unit": unit,
+            "preset": args.cond.model.preset.name(),
+            "points": points,
+            "jumps": jumps.iter().map(|d| json!({
+                "from": values[d.index - 1],
+                "to": values[d.index],
+                "quantities": d.quantities.iter().map(|(n, c)| json!({"quantity": n, "change": c})).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
+        }))?,
+    )
+    .with_context(|| format!("cannot write {}", json_path.display()))?;
     let xl = format!("{var} [{unit}]");
     use helicon_sim::plot::{LinePlot, Series};
     let mut p = LinePlot::new("Trim inputs", &xl, "servo command [-]");
@@ -295,16 +387,98 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
     for ext in ["png", "svg"] {
         p.write(&args.out.join(format!("inflow.{ext}")))?;
     }
-    println!(
-        "swept {var} over {} points: {} converged, {failed} failed; wrote {}/sweep.csv and inputs/attitude/inflow plots",
+    let unphysical = validity
+        .iter()
+        .flatten()
+        .filter(|v| !v.is_physical())
+        .count();
+    let mut summary = format!(
+        "swept {var} over {} points: {} converged, {failed} failed, {unphysical} unphysical",
         values.len(),
         values.len() - failed,
+    );
+    if unphysical > 0 {
+        let _ = write!(summary, ": {}", violation_summary(&values, &validity, unit));
+    }
+    let _ = write!(summary, "; {} jump(s)", jumps.len());
+    for d in &jumps {
+        let names: Vec<&str> = d.quantities.iter().map(|q| q.0).collect();
+        let _ = write!(
+            summary,
+            ", {} -> {} {unit} ({})",
+            values[d.index - 1],
+            values[d.index],
+            names.join(" ")
+        );
+    }
+    println!(
+        "{summary}; wrote {}/sweep.csv, sweep.json and inputs/attitude/inflow plots",
         args.out.display()
     );
     if failed > 0 {
         bail!("{failed} sweep point(s) did not trim");
     }
+    if unphysical > 0 && !args.cond.allow_unphysical {
+        bail!(
+            "{unphysical} sweep point(s) are not physical (see `violations` in sweep.csv); --allow-unphysical accepts them"
+        );
+    }
     Ok(())
+}
+
+/// A violation for a CSV cell (no commas): `S_col=3.5e-1 (allowed -0.1..0.3)`.
+fn csv_violation(v: &Violation) -> String {
+    let allowed = match v.allowed {
+        Allowed::Within { min, max } => format!("{min}..{max}"),
+        Allowed::Outside { min, max } => format!("<={min} or >={max}"),
+    };
+    format!("{}={:.6e} (allowed {allowed})", v.quantity, v.value)
+}
+
+/// "S_col beyond [-0.1, 0.3] at -20..-11 and 7.5..20 m/s; descent_ratio_mr
+/// not <= 0.25 or >= 2 at -8..-1.5 m/s": per quantity, the runs of
+/// consecutive sweep points where it is out of range.
+fn violation_summary(values: &[f64], validity: &[Option<Validity>], unit: &str) -> String {
+    let mut quantities: Vec<(&str, Allowed)> = Vec::new();
+    for v in validity.iter().flatten() {
+        for x in &v.violations {
+            if !quantities.iter().any(|q| q.0 == x.quantity) {
+                quantities.push((x.quantity, x.allowed));
+            }
+        }
+    }
+    let mut parts = Vec::new();
+    for (q, allowed) in quantities {
+        let bad: Vec<bool> = validity
+            .iter()
+            .map(|v| {
+                v.as_ref()
+                    .is_some_and(|v| v.violations.iter().any(|x| x.quantity == q))
+            })
+            .collect();
+        let mut runs = Vec::new();
+        let mut k = 0;
+        while k < bad.len() {
+            if bad[k] {
+                let start = k;
+                while k + 1 < bad.len() && bad[k + 1] {
+                    k += 1;
+                }
+                runs.push(if start == k {
+                    format!("{}", values[start])
+                } else {
+                    format!("{}..{}", values[start], values[k])
+                });
+            }
+            k += 1;
+        }
+        let range = match allowed {
+            Allowed::Within { .. } => format!("beyond {allowed}"),
+            Allowed::Outside { .. } => format!("not {allowed}"),
+        };
+        parts.push(format!("{q} {range} at {} {unit}", runs.join(" and ")));
+    }
+    parts.join("; ")
 }
 
 /// Write a matrix as CSV with a header row of column names and a first column of row names.
@@ -324,6 +498,14 @@ pub fn write_named_csv(path: &Path, m: &DMatrix<f64>, rows: &[&str], cols: &[&st
 pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
     let model = args.cond.model.model()?;
     let t = do_trim(&model, &args.cond, None)?;
+    let validity = t.validity(&model);
+    report_violations("trim", &validity);
+    if !validity.is_physical() && !args.cond.allow_unphysical {
+        bail!(
+            "refusing to linearize: the trim is not physical ({} violation(s) above); --allow-unphysical linearizes anyway",
+            validity.violations.len()
+        );
+    }
     let inflow = if args.thesis_inflow {
         InflowMode::ThesisIteration {
             lambda_mr_in: t.aux.lambda_mr,
@@ -334,6 +516,17 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
         InflowMode::Converged
     };
     let lm: LinearModel = linearize(&model, &t.x, &t.u, &args.cond.wind_ned, inflow)?;
+    if !lm.is_equilibrium() {
+        let (name, value) = lm.worst_residual();
+        let msg = format!(
+            "the operating point is not an equilibrium: affine residual |xdot0|_inf = {:.3e} (d{name}/dt = {value:.3e}) > {EQUILIBRIUM_TOL:e}",
+            lm.xdot0.amax()
+        );
+        if !args.cond.allow_unphysical {
+            bail!("refusing to linearize: {msg}; --allow-unphysical linearizes anyway");
+        }
+        eprintln!("warning: {msg}");
+    }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     write_named_csv(
@@ -369,8 +562,9 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
     let mut summary = json!({
         "preset": args.cond.model.preset.name(),
         "inflow": if args.thesis_inflow { "thesis-iteration-7" } else { "converged" },
-        "trim": trim_json(&t),
+        "trim": trim_json(&t, &model),
         "affine_residual_norm": lm.xdot0.amax(),
+        "equilibrium": lm.is_equilibrium(),
         "controllability_rank": reach.dimension,
         "observability_rank": obs.dimension,
         "observability_outputs": "C = [I9 0]: phi theta psi u v w p q r (15.2)",

@@ -53,7 +53,11 @@ fn main() {
     ];
     let mut o = thesis;
     o.flap_accel = true;
-    rows.push(("+ body-acceleration flap torques (6.36)/(6.40)", o, false));
+    rows.push((
+        "+ body-acceleration flap torques (6.36), hz̈ of (6.40)",
+        o,
+        false,
+    ));
     o.sb_velocity = SbVelocityScale::Physical;
     rows.push(("+ physical stabilizer-bar velocities (R, not Ro)", o, false));
     o.front_plane_q = FrontPlaneQ::Printed;

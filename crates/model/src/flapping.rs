@@ -33,8 +33,9 @@ pub struct FlapBody {
     pub p_dot_rad_s2: f64,
     /// Pitch acceleration (rad/s²).
     pub q_dot_rad_s2: f64,
-    /// a_n = hz̈ − hẋ q + hẏ p (m/s²), the hub normal acceleration of (6.40);
-    /// zero without body-acceleration torques.
+    /// a_n = hz̈ − hẋ q + hẏ p (m/s²), the hub normal acceleration of (6.40).
+    /// Without body-acceleration torques (the `thesis` preset) only the
+    /// velocity-product part −hẋ q + hẏ p (MODEL.md §11 item 3).
     pub normal_accel_m_s2: f64,
 }
 

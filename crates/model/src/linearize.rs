@@ -11,7 +11,9 @@
 
 use crate::model::{Model, ModelError};
 use crate::options::InflowMode;
-use crate::state::{Input, NU, NX_REDUCED, REDUCED_OFFSET, ReducedState, expand};
+use crate::state::{
+    INPUT_NAMES, Input, NU, NX_REDUCED, REDUCED_OFFSET, REDUCED_STATE_NAMES, ReducedState, expand,
+};
 use nalgebra::{SMatrix, Vector3};
 
 /// A 27-state linear model ẋ ≈ ẋ0 + A(x − x0) + B(u − u0).
@@ -28,6 +30,13 @@ pub struct LinearModel {
     /// The operating input.
     pub u0: Input,
 }
+
+/// The largest ‖ẋ(x0, u0)‖∞ (SI units) at which an operating point counts as
+/// an equilibrium: 1e4 × the trim tolerance (1e-10), leaving room for the
+/// round-off of the thesis inflow iteration at its fixed point, and far below
+/// any physical acceleration. A point beyond it (e.g. a trim whose input the
+/// servo saturation clips) makes the affine term ẋ0 part of the model.
+pub const EQUILIBRIUM_TOL: f64 = 1e-6;
 
 /// The reduced derivative f27(x27, u) (position does not enter the dynamics).
 pub fn reduced_derivative(
@@ -74,6 +83,29 @@ pub fn linearize(
         })?;
         b.set_column(j, &col);
     }
+    for (m, what, cols) in [
+        (
+            a.as_slice(),
+            "entry of A in column",
+            &REDUCED_STATE_NAMES[..],
+        ),
+        (b.as_slice(), "entry of B in column", &INPUT_NAMES[..]),
+    ] {
+        if let Some(k) = m.iter().position(|v| !v.is_finite()) {
+            return Err(ModelError::NonFiniteOutput {
+                what,
+                name: cols[k / NX_REDUCED],
+                value: m[k],
+            });
+        }
+    }
+    if let Some(i) = xdot0.iter().position(|v| !v.is_finite()) {
+        return Err(ModelError::NonFiniteOutput {
+            what: "derivative of",
+            name: REDUCED_STATE_NAMES[i],
+            value: xdot0[i],
+        });
+    }
     Ok(LinearModel {
         a,
         b,
@@ -84,6 +116,17 @@ pub fn linearize(
 }
 
 impl LinearModel {
+    /// The largest |ẋ0| component and its state name (the affine residual).
+    pub fn worst_residual(&self) -> (&'static str, f64) {
+        let i = self.xdot0.iamax();
+        (REDUCED_STATE_NAMES[i], self.xdot0[i])
+    }
+
+    /// Whether the operating point is an equilibrium: ‖ẋ0‖∞ ≤ [`EQUILIBRIUM_TOL`].
+    pub fn is_equilibrium(&self) -> bool {
+        self.xdot0.amax() <= EQUILIBRIUM_TOL
+    }
+
     /// A as a dynamic matrix (for the generic analysis of `helicon-lti`).
     pub fn a_dyn(&self) -> nalgebra::DMatrix<f64> {
         nalgebra::DMatrix::from_column_slice(NX_REDUCED, NX_REDUCED, self.a.as_slice())

@@ -30,7 +30,7 @@ pub enum ModelError {
     /// A state, input or wind component is NaN or infinite.
     #[error("non-finite {what} `{name}` = {value}")]
     NonFinite {
-        /// "state", "input" or "wind".
+        /// "state", "input", "wind" or "inflow" (a carried λ).
         what: &'static str,
         /// Component name.
         name: &'static str,
@@ -45,6 +45,22 @@ pub enum ModelError {
         /// θ (rad).
         theta_rad: f64,
     },
+    /// An output of the evaluation (a derivative or an [`Aux`] quantity) is
+    /// NaN or infinite although the inputs were finite: the state or the
+    /// parameters are beyond the range where the model's arithmetic holds.
+    #[error("non-finite {what} `{name}` = {value} (state or parameters out of range)")]
+    NonFiniteOutput {
+        /// "derivative of", "aux", or the matrix ("A", "B") it belongs to.
+        what: &'static str,
+        /// The state, input or [`Aux`] quantity.
+        name: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// [`InflowMode::ThesisIteration`] with `iterations = 0`: the forces would
+    /// use the carried λ unchanged, which is not the thesis scheme (7 steps).
+    #[error("thesis inflow iteration needs at least 1 Newton-Raphson step (iterations = 0)")]
+    ZeroInflowIterations,
     /// The inflow solver failed (non-finite intermediate values).
     #[error("{rotor} inflow: {source}")]
     Inflow {
@@ -320,6 +336,9 @@ impl Model {
                 lambda_tr_in,
                 iterations,
             } => {
+                if iterations == 0 {
+                    return Err(ModelError::ZeroInflowIterations);
+                }
                 let l = mr_problem.thesis_iterate(lambda_mr_in, iterations);
                 let lt = tr_problem.thesis_iterate(lambda_tr_in, iterations);
                 aux.inflow_iterations = [iterations, iterations];
@@ -411,17 +430,23 @@ impl Model {
         }
 
         // Flapping (6.47)/(6.53) by harmonic balance (flapping module).
+        // The body normal torque (6.37)–(6.40), τbn = mb·(hz̈ − hẋ·q + hẏ·p), with
+        // the inertial hub velocities (D.4)–(D.5) without wind (MODEL.md §4). Its
+        // velocity-product part −hẋ·q + hẏ·p needs no acceleration and is in
+        // both presets; the hub normal acceleration hz̈ = ẇ + q̇·κh and the
+        // body angular-acceleration torques (6.36) only with `flap_accel`
+        // (the thesis implementation dropped exactly these: MODEL.md §11 item 3).
+        let hx_in = v_body.x - qr * geo.kappa_v_m;
+        let hy_in = v_body.y + pr * geo.kappa_v_m - rr * geo.kappa_h_m;
+        let velocity_product = -hx_in * qr + hy_in * pr;
         let body = if self.options.flap_accel {
-            // (6.40): hub inertial velocities and the hub normal acceleration.
-            let hx_in = v_body.x - qr * geo.kappa_v_m;
-            let hy_in = v_body.y + pr * geo.kappa_v_m - rr * geo.kappa_h_m;
             let hz_ddot = v_dot.z + w_dot.y * geo.kappa_h_m;
             FlapBody {
                 p_rad_s: pr,
                 q_rad_s: qr,
                 p_dot_rad_s2: w_dot.x,
                 q_dot_rad_s2: w_dot.y,
-                normal_accel_m_s2: hz_ddot - hx_in * qr + hy_in * pr,
+                normal_accel_m_s2: hz_ddot + velocity_product,
             }
         } else {
             FlapBody {
@@ -429,7 +454,7 @@ impl Model {
                 q_rad_s: qr,
                 p_dot_rad_s2: 0.0,
                 q_dot_rad_s2: 0.0,
-                normal_accel_m_s2: 0.0,
+                normal_accel_m_s2: velocity_product,
             }
         };
         let aero = [
@@ -480,6 +505,63 @@ impl Model {
         xdot[ix::B1SB_DOT] = sb_ddot.y;
         Ok((xdot, aux))
     }
+}
+
+/// Check the outputs of a derivative evaluation for NaN and infinity: every
+/// component of ẋ and every [`Aux`] quantity. The derivative itself does not
+/// (it stays allocation- and branch-light for simulation loops); callers that
+/// hand results on (`helicon eval`, trim, linearization) call this and get a
+/// typed error naming the first non-finite quantity.
+pub fn check_output(xdot: &State, aux: &Aux) -> Result<(), ModelError> {
+    for i in 0..NX {
+        if !xdot[i].is_finite() {
+            return Err(ModelError::NonFiniteOutput {
+                what: "derivative of",
+                name: STATE_NAMES[i],
+                value: xdot[i],
+            });
+        }
+    }
+    let d = &aux.drag;
+    let scalars = [
+        ("lambda_mr", aux.lambda_mr),
+        ("lambda_tr", aux.lambda_tr),
+        ("lambda_mr_flap", aux.lambda_mr_flap),
+        ("vi_mr_m_s", aux.vi_mr_m_s),
+        ("vi_tr_m_s", aux.vi_tr_m_s),
+        ("ct_mr", aux.ct_mr),
+        ("ct_tr", aux.ct_tr),
+        ("force_tr_y_n", aux.force_tr_y_n),
+    ];
+    let vectors = [
+        ("mu_mr", aux.mu_mr),
+        ("mu_tr", aux.mu_tr),
+        ("force_mr_hub_n", aux.force_mr_hub_n),
+        ("torque_mr_hub_nm", aux.torque_mr_hub_nm),
+        ("torque_mr_body_nm", aux.torque_mr_body_nm),
+        ("torque_tr_body_nm", aux.torque_tr_body_nm),
+        ("force_drag_body_n", d.force_body_n),
+        ("torque_drag_body_nm", d.torque_body_nm),
+        ("force_gravity_body_n", aux.force_gravity_body_n),
+        ("force_total_body_n", aux.force_total_body_n),
+        ("torque_total_body_nm", aux.torque_total_body_nm),
+    ];
+    let bad = |name, value| ModelError::NonFiniteOutput {
+        what: "aux",
+        name,
+        value,
+    };
+    for (name, value) in scalars {
+        if !value.is_finite() {
+            return Err(bad(name, value));
+        }
+    }
+    for (name, v) in vectors {
+        if let Some(value) = v.iter().copied().find(|c| !c.is_finite()) {
+            return Err(bad(name, value));
+        }
+    }
+    Ok(())
 }
 
 fn check_finite(x: &State, u: &Input, wind: &Vector3<f64>) -> Result<(), ModelError> {

@@ -6,9 +6,10 @@
 //!   (7.62), drag torques per (7.64), physical wind sign
 //!   (`v_air = v_body − body_from_ned · wind_ned`), converged inflow.
 //! * [`Preset::Thesis`]: what the thesis implementation computed (MODEL.md
-//!   §11 items 3–5): no body-acceleration flap torques, stabilizer-bar
-//!   velocities scaled by Ro/R, front-plane `+q·κh,fp`, wind added to the body
-//!   velocity ((14.46)), converged inflow.
+//!   §11 items 3–5): no body-acceleration flap torques (6.36) and no hub
+//!   normal acceleration hz̈ in (6.40) (its velocity products −hẋ·q + hẏ·p
+//!   stay), stabilizer-bar velocities scaled by Ro/R, front-plane
+//!   `+q·κh,fp`, wind added to the body velocity ((14.46)), converged inflow.
 //!
 //! The thesis inflow *iteration* (items 1–2) is not a preset but an
 //! [`InflowMode`] chosen per derivative call, because it needs the inflow
@@ -58,8 +59,11 @@ impl FrontPlaneQ {
 /// The modelling choices that distinguish the presets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ModelOptions {
-    /// Include the body angular-acceleration (6.36) and body normal-acceleration
-    /// (6.40) torques in the flapping equations.
+    /// Include the body angular-acceleration torques (6.36) and the hub normal
+    /// acceleration hz̈ of the body normal torque (6.40) in the flapping
+    /// equations. The velocity-product part of (6.40), mb·(−hẋ·q + hẏ·p), is
+    /// included either way (MODEL.md §11 item 3: the thesis implementation
+    /// dropped only the acceleration terms).
     pub flap_accel: bool,
     /// Stabilizer-bar velocity normalisation.
     pub sb_velocity: SbVelocityScale,
@@ -151,6 +155,39 @@ pub enum InflowMode {
     },
 }
 
+impl InflowMode {
+    /// [`InflowMode::ThesisIteration`], checked: at least one Newton–Raphson
+    /// step and finite starting ratios (the derivative rejects the same
+    /// values when the variant is built directly).
+    pub fn thesis_iteration(
+        lambda_mr_in: f64,
+        lambda_tr_in: f64,
+        iterations: u32,
+    ) -> Result<InflowMode, crate::model::ModelError> {
+        use crate::model::ModelError;
+        if iterations == 0 {
+            return Err(ModelError::ZeroInflowIterations);
+        }
+        for (name, value) in [
+            ("lambda_mr_in", lambda_mr_in),
+            ("lambda_tr_in", lambda_tr_in),
+        ] {
+            if !value.is_finite() {
+                return Err(ModelError::NonFinite {
+                    what: "inflow",
+                    name,
+                    value,
+                });
+            }
+        }
+        Ok(InflowMode::ThesisIteration {
+            lambda_mr_in,
+            lambda_tr_in,
+            iterations,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -167,5 +204,19 @@ mod tests {
         assert_ne!(p.wind, t.wind);
         assert_ne!(p.sb_velocity, t.sb_velocity);
         assert_eq!(Preset::default(), Preset::Physical);
+    }
+
+    #[test]
+    fn zero_thesis_inflow_iterations_is_a_typed_error() {
+        use crate::model::ModelError;
+        assert!(matches!(
+            InflowMode::thesis_iteration(-0.04, -0.05, 0),
+            Err(ModelError::ZeroInflowIterations)
+        ));
+        assert!(matches!(
+            InflowMode::thesis_iteration(f64::NAN, -0.05, 7),
+            Err(ModelError::NonFinite { .. })
+        ));
+        assert!(InflowMode::thesis_iteration(-0.04, -0.05, 7).is_ok());
     }
 }

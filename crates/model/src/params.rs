@@ -19,7 +19,9 @@ use std::path::Path;
 pub const BERGEN_TWIN_TOML: &str = include_str!("../../../params/bergen_twin.toml");
 
 /// Errors from loading or validating parameters. Each names the file (or
-/// `<embedded>` / `<string>`), the key as `section.key`, and the rule broken.
+/// `<embedded>` / `<string>`), the 1-based line of the offending key when the
+/// error comes from a file's text (`file:LINE:`), the key as `section.key`,
+/// and the rule broken.
 #[derive(Debug, thiserror::Error)]
 pub enum ParamError {
     /// The file could not be read.
@@ -30,7 +32,7 @@ pub enum ParamError {
         /// Underlying error.
         source: std::io::Error,
     },
-    /// The file is not valid TOML.
+    /// The file is not valid TOML (the parser's message carries line and column).
     #[error("{file}: not valid TOML: {message}")]
     Syntax {
         /// File name.
@@ -39,28 +41,36 @@ pub enum ParamError {
         message: String,
     },
     /// A key that is not a model parameter.
-    #[error("{file}: unknown key `{key}` (run `helicon params` for the list of keys)")]
+    #[error("{}: unknown key `{key}` (run `helicon params` for the list of keys)", At(file, *line))]
     UnknownKey {
         /// File name.
         file: String,
+        /// 1-based line of the key in the file, when known.
+        line: Option<usize>,
         /// The offending key.
         key: String,
     },
     /// A value of the wrong type.
-    #[error("{file}: key `{key}` must be a number, found {found}")]
+    #[error("{}: key `{key}` must be a number, found {found}", At(file, *line))]
     WrongType {
         /// File name.
         file: String,
+        /// 1-based line of the key in the file, when known.
+        line: Option<usize>,
         /// The offending key.
         key: String,
         /// TOML type found.
         found: String,
     },
     /// A value that breaks its rule.
-    #[error("{file}: key `{key}` = {value} is invalid: {rule}")]
+    #[error("{}: key `{key}` = {value:?} is invalid: {rule}", At(file, *line))]
     Invalid {
         /// File name.
         file: String,
+        /// 1-based line of the key in the file, when known (`None` for
+        /// values that were not read from a file, e.g. validated in memory,
+        /// or a key missing from a complete file).
+        line: Option<usize>,
         /// The offending key.
         key: String,
         /// The value given.
@@ -68,6 +78,77 @@ pub enum ParamError {
         /// The rule broken.
         rule: String,
     },
+}
+
+/// `file` or `file:LINE` in error messages.
+struct At<'a>(&'a str, Option<usize>);
+
+impl std::fmt::Display for At<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.1 {
+            Some(line) => write!(f, "{}:{line}", self.0),
+            None => write!(f, "{}", self.0),
+        }
+    }
+}
+
+impl ParamError {
+    /// The 1-based line of the offending key, when known.
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            ParamError::UnknownKey { line, .. }
+            | ParamError::WrongType { line, .. }
+            | ParamError::Invalid { line, .. } => *line,
+            ParamError::Io { .. } | ParamError::Syntax { .. } => None,
+        }
+    }
+
+    /// Fill in the line of the offending key from the file's `text` (for a
+    /// cross-key rule whose key is not in the file, the line of its partner
+    /// key, e.g. `s_max` for "`s_min` must be < `s_max`").
+    fn located(mut self, text: &str) -> ParamError {
+        if let ParamError::UnknownKey { key, line, .. }
+        | ParamError::WrongType { key, line, .. }
+        | ParamError::Invalid { key, line, .. } = &mut self
+        {
+            if line.is_none() {
+                *line = key_line(text, key).or_else(|| {
+                    CROSS_KEY_PARTNERS.iter().find_map(|(a, b)| {
+                        key.strip_suffix(a)
+                            .and_then(|section| key_line(text, &format!("{section}{b}")))
+                    })
+                });
+            }
+        }
+        self
+    }
+}
+
+/// Keys of the cross-key rules and the key they are compared with.
+const CROSS_KEY_PARTNERS: [(&str, &str); 3] = [
+    ("s_min", "s_max"),
+    ("hinge_offset_m", "radius_m"),
+    ("inner_radius_m", "outer_radius_m"),
+];
+
+/// The 1-based line where the dotted `key` (e.g. `servo.tail.s_min`) is
+/// written in the TOML `text`, from the parser's spans.
+fn key_line(text: &str, key: &str) -> Option<usize> {
+    let doc = toml::de::DeTable::parse(text).ok()?;
+    let mut table = doc.get_ref();
+    let mut parts = key.split('.').peekable();
+    while let Some(part) = parts.next() {
+        let (k, v) = table.get_key_value(part)?;
+        if parts.peek().is_none() {
+            let start = k.span().start;
+            return Some(1 + text.get(..start)?.matches('\n').count());
+        }
+        match v.get_ref() {
+            toml::de::DeValue::Table(t) => table = t,
+            _ => return None,
+        }
+    }
+    None
 }
 
 /// Air and gravity.
@@ -273,17 +354,87 @@ pub enum Rule {
     Count,
 }
 
+/// The magnitude range of a family of parameters (the parameters with one
+/// SI unit): every value must satisfy |v| ≤ `max_abs`, and a value that must
+/// be positive ([`Rule::Positive`], the divisors and scales of the model)
+/// must be ≥ `min_positive`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Magnitude {
+    /// The family, for messages.
+    pub family: &'static str,
+    /// Smallest value of a positive parameter.
+    pub min_positive: f64,
+    /// Largest magnitude.
+    pub max_abs: f64,
+}
+
+/// The parameter families by unit, with their ranges. The ranges are wide
+/// enough for anything from a 1 g micro-rotorcraft to 50 times the largest
+/// helicopter built (Mi-26: 56 t, R = 16 m), and narrow enough that every
+/// product and quotient in the derivative stays finite: at the extremes the
+/// largest term (the blade-element flap torque, ∝ b·ρ·c·Cls·(ΩR)²·R⁴ / Ib)
+/// stays below ~1e70 and the smallest divisor (M, I, Ib, ΩR) above 1e-9, far
+/// from f64's 1.8e308 (test
+/// `parameters_at_the_ends_of_their_ranges_keep_the_derivative_finite`
+/// evaluates the model with every key at an end of its range). A value
+/// beyond them is a unit or typing mistake, not a helicopter.
+pub const MAGNITUDES: [(&str, Magnitude); 13] = [
+    ("m", mag("length", 1e-4, 1e3)),
+    ("m^2", mag("area", 1e-8, 1e6)),
+    ("kg", mag("mass", 1e-3, 1e6)),
+    ("kg*m^2", mag("inertia", 1e-9, 1e12)),
+    ("kg*m", mag("mass moment", 1e-9, 1e9)),
+    ("N*m/rad", mag("hinge spring", 1e-9, 1e9)),
+    ("rad", mag("angle", 1e-6, std::f64::consts::TAU)),
+    ("rad/s", mag("angular rate", 1e-3, 1e5)),
+    ("1/rad", mag("lift slope", 1e-6, 1e3)),
+    ("1", mag("dimensionless", 1e-9, 1e6)),
+    ("kg/m^3", mag("density", 1e-6, 1e4)),
+    ("m/s^2", mag("acceleration", 1e-3, 1e3)),
+    ("s", mag("time", 1e-6, 1e3)),
+];
+
+const fn mag(family: &'static str, min_positive: f64, max_abs: f64) -> Magnitude {
+    Magnitude {
+        family,
+        min_positive,
+        max_abs,
+    }
+}
+
+/// The magnitude range of the parameters with SI unit `unit`.
+pub fn magnitude(unit: &str) -> Option<Magnitude> {
+    MAGNITUDES.iter().find(|(u, _)| *u == unit).map(|(_, m)| *m)
+}
+
 impl Rule {
-    fn check(self, v: f64) -> Result<(), &'static str> {
+    fn check(self, v: f64, magnitude: Option<Magnitude>) -> Result<(), String> {
         if !v.is_finite() {
-            return Err("must be finite");
+            return Err("must be finite".into());
         }
         match self {
-            Rule::Positive if v <= 0.0 => Err("must be > 0"),
-            Rule::NonNegative if v < 0.0 => Err("must be >= 0"),
-            Rule::Count if v < 1.0 || v.fract() != 0.0 => Err("must be a whole number >= 1"),
-            _ => Ok(()),
+            Rule::Positive if v <= 0.0 => return Err("must be > 0".into()),
+            Rule::NonNegative if v < 0.0 => return Err("must be >= 0".into()),
+            Rule::Count if v < 1.0 || v.fract() != 0.0 => {
+                return Err("must be a whole number >= 1".into());
+            }
+            _ => {}
         }
+        if let Some(m) = magnitude {
+            if v.abs() > m.max_abs {
+                return Err(format!(
+                    "must be within +-{:e} ({} range; beyond it the model's products overflow)",
+                    m.max_abs, m.family
+                ));
+            }
+            if self == Rule::Positive && v < m.min_positive {
+                return Err(format!(
+                    "must be >= {:e} ({} range; smaller divisors make the model's quotients overflow)",
+                    m.min_positive, m.family
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -305,6 +456,14 @@ pub struct Descriptor {
     pub rule: Rule,
     /// Accessor.
     pub field: Field,
+}
+
+impl Descriptor {
+    /// Check `v` against this key's rule and its family's magnitude range
+    /// ([`MAGNITUDES`]); the error is the rule broken.
+    pub fn check(&self, v: f64) -> Result<(), String> {
+        self.rule.check(v, magnitude(self.unit))
+    }
 }
 
 macro_rules! d {
@@ -838,14 +997,16 @@ impl Params {
         if let Some(d) = descriptors().find(|d| lookup(&table, d.section, d.key).is_none()) {
             return Err(ParamError::Invalid {
                 file: file.to_string(),
+                line: None,
                 key: format!("{}.{}", d.section, d.key),
                 value: f64::NAN,
                 rule: "missing from a complete parameter file".into(),
             });
         }
         let mut p = Params::zeroed();
-        p.apply_table(&table, "", file, &mut 0)?;
-        p.validate(file)?;
+        p.apply_table(&table, "", file, &mut 0)
+            .map_err(|e| e.located(text))?;
+        p.validate(file).map_err(|e| e.located(text))?;
         Ok(p)
     }
 
@@ -853,8 +1014,8 @@ impl Params {
     /// overriding it (any subset). `file` names the source in errors.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Params, ParamError> {
         let mut p = Params::bergen_twin();
-        p.apply_toml(text, file)?;
-        p.validate(file)?;
+        p.apply_toml(text, file).map_err(|e| e.located(text))?;
+        p.validate(file).map_err(|e| e.located(text))?;
         Ok(p)
     }
 
@@ -899,6 +1060,7 @@ impl Params {
                 _ => {
                     let d = find(prefix, key).ok_or_else(|| ParamError::UnknownKey {
                         file: file.to_string(),
+                        line: None,
                         key: full.clone(),
                     })?;
                     let v = match value {
@@ -907,16 +1069,18 @@ impl Params {
                         other => {
                             return Err(ParamError::WrongType {
                                 file: file.to_string(),
+                                line: None,
                                 key: full,
                                 found: other.type_str().to_string(),
                             });
                         }
                     };
-                    d.rule.check(v).map_err(|rule| ParamError::Invalid {
+                    d.check(v).map_err(|rule| ParamError::Invalid {
                         file: file.to_string(),
+                        line: None,
                         key: full.clone(),
                         value: v,
-                        rule: rule.to_string(),
+                        rule,
                     })?;
                     *(d.field)(self) = v;
                     *count += 1;
@@ -932,15 +1096,17 @@ impl Params {
         let mut copy = *self;
         for d in descriptors() {
             let v = *(d.field)(&mut copy);
-            d.rule.check(v).map_err(|rule| ParamError::Invalid {
+            d.check(v).map_err(|rule| ParamError::Invalid {
                 file: file.to_string(),
+                line: None,
                 key: format!("{}.{}", d.section, d.key),
                 value: v,
-                rule: rule.to_string(),
+                rule,
             })?;
         }
         let invalid = |key: &str, value: f64, rule: &str| ParamError::Invalid {
             file: file.to_string(),
+            line: None,
             key: key.to_string(),
             value,
             rule: rule.to_string(),

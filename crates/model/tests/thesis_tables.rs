@@ -447,12 +447,17 @@ fn flapping_quadrature_matches_closed_forms_at_random_states() {
                     normal_accel_m_s2: xd[ix::W] + xd[ix::Q] * g.kappa_h_m - hx * qr + hy * pr,
                 }
             } else {
+                // thesis preset: (6.40) without hz̈, its velocity products kept
+                let (pr, qr, rr) = (x[ix::P], x[ix::Q], x[ix::R]);
+                let g = p.geometry;
+                let hx = x[ix::U] - qr * g.kappa_v_m;
+                let hy = x[ix::V] + pr * g.kappa_v_m - rr * g.kappa_h_m;
                 FlapBody {
-                    p_rad_s: x[ix::P],
-                    q_rad_s: x[ix::Q],
+                    p_rad_s: pr,
+                    q_rad_s: qr,
                     p_dot_rad_s2: 0.0,
                     q_dot_rad_s2: 0.0,
-                    normal_accel_m_s2: 0.0,
+                    normal_accel_m_s2: -hx * qr + hy * pr,
                 }
             };
             let consts = MainRotorConsts {
