@@ -2,9 +2,10 @@
 
 use super::McError;
 use crate::closed_loop::fnv1a_hex;
-use crate::scenario::Scenario;
+use crate::scenario::{Scenario, ScenarioError};
 use helicon_model::Params;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -124,8 +125,24 @@ pub struct Campaign {
     pub dispersions: Vec<Dispersion>,
     /// The campaign file's text (copied into the output folder).
     pub source: String,
-    /// Hash of everything that determines a run (not `runs`).
+    /// Hash of everything that determines a run (not `runs`); recomputed by
+    /// [`Campaign::with_overrides`].
     pub hash: String,
+    /// Command-line overrides applied after loading (`--seed 7`, …), as
+    /// recorded in `manifest.json`.
+    pub overrides: Vec<String>,
+}
+
+/// Overrides of a loaded campaign (`helicon mc --seed/--duration/--params`).
+#[derive(Debug, Clone, Default)]
+pub struct CampaignOverrides {
+    /// Campaign seed instead of the file's `seed`.
+    pub seed: Option<u64>,
+    /// Flight duration (s) instead of the scenario's `duration_s`.
+    pub duration_s: Option<f64>,
+    /// Nominal plant parameters (a `helicon params` TOML file) instead of
+    /// the scenario's `params` file or the Bergen Twin.
+    pub params: Option<PathBuf>,
 }
 
 /// Find a parameter by its `section.key`.
@@ -144,9 +161,10 @@ impl Campaign {
     /// Load a campaign file (the scenario path resolves against its folder).
     pub fn from_file(path: &Path) -> Result<Campaign, McError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| McError::Io {
+        let text = std::fs::read_to_string(path).map_err(|source| McError::Io {
             file: file.clone(),
-            message: format!("cannot read: {e}"),
+            action: "read",
+            source,
         })?;
         Self::from_toml_str(&text, &file, path.parent())
     }
@@ -158,11 +176,11 @@ impl Campaign {
         file: &str,
         base_dir: Option<&Path>,
     ) -> Result<Campaign, McError> {
-        let raw: CampaignFile = toml::from_str(text).map_err(|e| McError::Parse {
+        let raw: CampaignFile = toml::from_str(text).map_err(|e| ScenarioError::Parse {
             file: file.to_string(),
             message: e.to_string(),
         })?;
-        let bad = |field: &str, value: String, rule: &str| McError::Invalid {
+        let bad = |field: &str, value: String, rule: &str| ScenarioError::Invalid {
             file: file.to_string(),
             field: field.to_string(),
             value,
@@ -177,7 +195,7 @@ impl Campaign {
                 Scenario::from_file(&full)?
             }
             ScenarioRef::Inline(t) => {
-                let s = toml::to_string(t).map_err(|e| McError::Parse {
+                let s = toml::to_string(t).map_err(|e| ScenarioError::Parse {
                     file: file.to_string(),
                     message: format!("[scenario]: {e}"),
                 })?;
@@ -192,13 +210,18 @@ impl Campaign {
         };
         // the nominal parameters are what the runs use; make the scenario self-contained
         scenario.params = None;
+        if raw.runs == 0 {
+            return Err(bad("runs", "0".into(), "must be >= 1").into());
+        }
         if !(raw.trace_rate_hz.is_finite() && raw.trace_rate_hz >= 0.0) {
             return Err(bad(
                 "trace_rate_hz",
                 raw.trace_rate_hz.to_string(),
                 "must be finite and >= 0",
-            ));
+            )
+            .into());
         }
+        let mut first_of: BTreeMap<&str, usize> = BTreeMap::new();
         for (i, d) in raw.dispersion.iter().enumerate() {
             let at = |f: &str| format!("dispersion[{i}].{f}");
             if param_field(&d.param).is_none() {
@@ -206,7 +229,19 @@ impl Campaign {
                     &at("param"),
                     d.param.clone(),
                     "not a parameter key (run `helicon params` for the list)",
-                ));
+                )
+                .into());
+            }
+            if let Some(j) = first_of.insert(&d.param, i) {
+                // two runs.csv columns of one name could not be read back
+                return Err(bad(
+                    &at("param"),
+                    d.param.clone(),
+                    &format!(
+                        "already dispersed by dispersion[{j}]: a key is dispersed once (merge the two entries)"
+                    ),
+                )
+                .into());
             }
             let (width, wname, other) = match d.distribution {
                 DistributionKind::Normal => (d.sigma, "sigma", d.half_width.map(|_| "half_width")),
@@ -217,14 +252,15 @@ impl Campaign {
                     &at(o),
                     "given".into(),
                     &format!("not used by a {:?} distribution", d.distribution).to_lowercase(),
-                ));
+                )
+                .into());
             }
             match width {
                 None => {
-                    return Err(bad(&at(wname), "missing".into(), "required"));
+                    return Err(bad(&at(wname), "missing".into(), "required").into());
                 }
                 Some(w) if !(w.is_finite() && w >= 0.0) => {
-                    return Err(bad(&at(wname), w.to_string(), "must be finite and >= 0"));
+                    return Err(bad(&at(wname), w.to_string(), "must be finite and >= 0").into());
                 }
                 Some(_) => {}
             }
@@ -235,12 +271,12 @@ impl Campaign {
                     &at("truncate_sigma"),
                     d.truncate_sigma.to_string(),
                     "must be 0 (none) or >= 0.5",
-                ));
+                )
+                .into());
             }
         }
         let name = raw.name.clone().unwrap_or_else(|| scenario.name.clone());
-        let hash = campaign_hash(&raw, &scenario, &nominal);
-        Ok(Campaign {
+        let mut c = Campaign {
             name,
             runs: raw.runs,
             seed: raw.seed,
@@ -252,29 +288,60 @@ impl Campaign {
             trace_rate_hz: raw.trace_rate_hz,
             dispersions: raw.dispersion,
             source: text.to_string(),
-            hash,
-        })
+            hash: String::new(),
+            overrides: Vec::new(),
+        };
+        c.hash = c.compute_hash(file)?;
+        Ok(c)
     }
-}
 
-fn campaign_hash(raw: &CampaignFile, scenario: &Scenario, nominal: &Params) -> String {
-    let mut s = String::new();
-    let _ = writeln!(s, "seed={}", raw.seed);
-    let _ = writeln!(s, "design={:?}", raw.design);
-    let _ = writeln!(
-        s,
-        "seeds={} {}",
-        raw.disperse_wind_seed, raw.disperse_sensor_seed
-    );
-    let _ = writeln!(s, "trace={}", raw.trace_rate_hz);
-    for d in &raw.dispersion {
-        let _ = writeln!(s, "{d:?}");
+    /// Apply command-line overrides (validated like the fields they replace;
+    /// errors name the option) and recompute the hash: a campaign flown with
+    /// another seed, duration or parameter set is another campaign.
+    pub fn with_overrides(mut self, o: &CampaignOverrides) -> Result<Campaign, McError> {
+        if let Some(seed) = o.seed {
+            self.seed = seed;
+            self.overrides.push(format!("--seed {seed}"));
+        }
+        if let Some(d) = o.duration_s {
+            let mut sc = self.scenario.clone();
+            sc.duration_s = d;
+            sc.validate("--duration")?;
+            self.scenario = sc;
+            self.overrides.push(format!("--duration {d}"));
+        }
+        if let Some(p) = &o.params {
+            self.nominal = Params::from_file(p)?;
+            self.overrides.push(format!("--params {}", p.display()));
+        }
+        if !self.overrides.is_empty() {
+            self.hash = self.compute_hash("<overrides>")?;
+        }
+        Ok(self)
     }
-    let _ = writeln!(
-        s,
-        "{}",
-        toml::to_string(scenario).unwrap_or_else(|e| format!("{scenario:?} {e}"))
-    );
-    s.push_str(&nominal.to_toml());
-    fnv1a_hex(&s)
+
+    /// FNV-1a of everything that determines a run's result: seed, design,
+    /// seed flags, trace rate, dispersions, the effective scenario and the
+    /// full nominal parameter set (not `runs`, not the name).
+    fn compute_hash(&self, file: &str) -> Result<String, McError> {
+        let mut s = String::new();
+        let _ = writeln!(s, "seed={}", self.seed);
+        let _ = writeln!(s, "design={:?}", self.design);
+        let _ = writeln!(
+            s,
+            "seeds={} {}",
+            self.disperse_wind_seed, self.disperse_sensor_seed
+        );
+        let _ = writeln!(s, "trace={}", self.trace_rate_hz);
+        for d in &self.dispersions {
+            let _ = writeln!(s, "{d:?}");
+        }
+        let sc = toml::to_string(&self.scenario).map_err(|e| McError::Serialize {
+            file: format!("{file} [scenario]"),
+            message: e.to_string(),
+        })?;
+        let _ = writeln!(s, "{sc}");
+        s.push_str(&self.nominal.to_toml());
+        Ok(fnv1a_hex(&s))
+    }
 }

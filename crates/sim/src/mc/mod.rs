@@ -43,16 +43,22 @@
 //! inputs. With `design = "per-run"` each run trims, linearizes and designs on
 //! its own parameters (how the design itself varies).
 //!
-//! A draw that breaks a parameter rule ([`Params::validate`], e.g. a negative
-//! mass or `hinge_offset_m ≥ radius_m`) is **not redrawn**: the run is
-//! recorded with outcome `invalid` and the rule as its reason, so the
-//! reported distribution is the one written in the file. A trim or design
-//! failure is outcome `error`; a divergence in flight is `diverged`. All
-//! three count as failures.
+//! Every run ends with a typed [`RunTermination`] (its [`RunOutcome`] and
+//! class, see [`record`](RunRecord)). A draw that breaks a parameter rule
+//! ([`Params`](helicon_model::Params)`::validate`, e.g. a negative mass or
+//! `hinge_offset_m ≥ radius_m`) is **not redrawn**: the run is recorded
+//! `invalid`, classed by the parameter key, with the rule as its reason, so
+//! the reported distribution is the one written in the file. A trim, design
+//! or flight-setup failure is `error`, classed by the failing
+//! [`ErrorStage`]; a divergence in flight is `diverged`, classed by the
+//! flight's [`Termination`](crate::closed_loop::Termination). All three count
+//! as failures.
 //!
 //! # Outputs (one folder)
 //!
-//! `campaign.toml` (the file as given), `manifest.json` (name, hash, runs),
+//! `campaign.toml` (the file as given), `scenario.toml` and `params.toml`
+//! (the effective base scenario and nominal parameters), `manifest.json`
+//! (format version, name, hash, runs, command-line overrides),
 //! `runs.csv` (one row per run, by index), `traces.csv` (vn, ve, vd, ψ of
 //! every run at `trace_rate_hz`), `stats.json` / `stats.md` (p5/p50/p95 of
 //! each metric over completed runs, failure fraction with reasons),
@@ -88,56 +94,66 @@ use crate::plot::PlotError;
 use crate::scenario::ScenarioError;
 use helicon_model::ParamError;
 
+/// Version of the output-folder formats (`manifest.json`, `runs.csv`,
+/// `stats.json`). A folder of another version is refused by resume and merge.
+///
+/// * 1: `runs.csv` with `outcome, reason` as free text; `stats.json`
+///   `reasons` keyed by the reason text with numbers replaced by `#`.
+/// * 2: typed outcomes: `runs.csv` gains a `termination` column (after
+///   `outcome`: the flight's termination, the invalid parameter key or the
+///   failing stage); `stats.json` has `format_version` and `failures` (a list
+///   of `{outcome, termination, runs}`) instead of `reasons`; `manifest.json`
+///   has `format_version` and `overrides`; `params.toml` is written.
+pub const FORMAT_VERSION: u32 = 2;
+
 /// Errors of a campaign (its file, its output folder, merging). A run that
 /// fails is an outcome recorded in `runs.csv`, not an error.
 #[derive(Debug, thiserror::Error)]
 pub enum McError {
-    /// A file could not be read or written.
-    #[error("{file}: {message}")]
-    Io {
-        /// File.
-        file: String,
-        /// Message.
-        message: String,
-    },
-    /// Invalid TOML or a field of the wrong type / unknown field.
-    #[error("{file}: {message}")]
-    Parse {
-        /// File.
-        file: String,
-        /// Message (names the field).
-        message: String,
-    },
-    /// A field out of range.
-    #[error("{file}: `{field}` = {value}: {rule}")]
-    Invalid {
-        /// File.
-        file: String,
-        /// Field.
-        field: String,
-        /// Value as text.
-        value: String,
-        /// Rule.
-        rule: String,
-    },
-    /// The base scenario.
-    #[error("{0}")]
+    /// The campaign file or its scenario: invalid TOML, an unknown field or
+    /// a field out of range (the file and the field are named).
+    #[error(transparent)]
     Scenario(#[from] ScenarioError),
-    /// The base parameters.
-    #[error("{0}")]
+    /// The nominal parameters (the scenario's `params` file or `--params`).
+    #[error(transparent)]
     Params(#[from] ParamError),
     /// Preparing the nominal design.
     #[error("nominal design: {0}")]
     Prepare(#[from] ClosedLoopError),
-    /// A results CSV that cannot be read back.
+    /// A file (the campaign file, or one in the output folder) could not be
+    /// read or written.
+    #[error("{file}: cannot {action}")]
+    Io {
+        /// File or folder.
+        file: String,
+        /// What was attempted (`read`, `write`, `create the folder`, …).
+        action: &'static str,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A results file (`runs.csv`, `traces.csv`, `manifest.json`) that
+    /// cannot be read back.
     #[error("{file}: line {line}: {message}")]
     Csv {
         /// File.
         file: String,
-        /// Line (1-based).
+        /// Line (1-based; 0: the file as a whole).
         line: usize,
         /// Message.
         message: String,
+    },
+    /// A folder written in another format version (see [`FORMAT_VERSION`]).
+    #[error(
+        "{folder}: results in format version {found}, this helicon reads and writes version {expected}: use a new output folder (or rerun the campaign there)"
+    )]
+    Format {
+        /// Folder.
+        folder: String,
+        /// Version found (1: before versions were recorded).
+        found: u32,
+        /// Version of this build.
+        expected: u32,
     },
     /// Folders of different campaigns.
     #[error("{folder}: campaign hash {found} differs from {expected} (a different campaign)")]
@@ -158,6 +174,48 @@ pub enum McError {
         a: String,
         /// Second folder.
         b: String,
+    },
+    /// `merge` without a folder.
+    #[error("merge: give at least one shard folder")]
+    NoFolders,
+    /// More runs than the memory of this machine holds (the records and
+    /// traces of every run are kept until the statistics are written).
+    #[error(
+        "{runs} runs: at most {max_runs} fit in the memory this campaign may use ({budget_mib} MiB: {available}), at {bytes_per_run} bytes per run (its record and {trace_points}-point trace, kept until the statistics are written) after {working_mib} MiB for the flights in progress; use shards (--shard K/M on several machines, then `helicon mc merge`), fewer runs or a lower trace_rate_hz"
+    )]
+    TooManyRuns {
+        /// Runs asked for (in this shard).
+        runs: usize,
+        /// Runs that fit.
+        max_runs: usize,
+        /// Memory kept per run (bytes).
+        bytes_per_run: u64,
+        /// Trace samples kept per run.
+        trace_points: u64,
+        /// Memory of the flights in progress (MiB).
+        working_mib: u64,
+        /// Memory budget (MiB).
+        budget_mib: u64,
+        /// Where the budget comes from.
+        available: String,
+    },
+    /// A statistic that is not a finite number (never written as `null`).
+    #[error("{file}: `{field}` = {value} is not finite; nothing written")]
+    NonFinite {
+        /// File that would have held it.
+        file: String,
+        /// Field.
+        field: String,
+        /// Value.
+        value: f64,
+    },
+    /// Serialising a results file failed.
+    #[error("{file}: cannot serialise: {message}")]
+    Serialize {
+        /// File.
+        file: String,
+        /// Message.
+        message: String,
     },
     /// The thread pool could not be built.
     #[error("thread pool: {0}")]

@@ -1,7 +1,7 @@
 //! Writing the campaign outputs: runs.csv, traces.csv, statistics, plots.
 
 use super::store::{
-    Manifest, RUNS, TRACES, csv_header, csv_line, record_fields, trace_lines, write_file,
+    Manifest, RUNS, TRACES, write_file, write_json, write_runs_csv, write_traces_csv,
 };
 use super::{METRIC_NAMES, McError, RunRecord, Stats, TracePoint, percentile};
 use crate::plot::{LinePlot, Series};
@@ -16,22 +16,13 @@ pub(super) fn finish(
     traces: &BTreeMap<usize, Vec<TracePoint>>,
     out: &Path,
 ) -> Result<Stats, McError> {
-    let mut text = csv_line(&csv_header(&manifest.dispersed))?;
-    for r in records.values() {
-        text.push_str(&csv_line(&record_fields(r))?);
-    }
-    write_file(&out.join(RUNS), &text)?;
-    let mut t = String::from("index,t_s,vn,ve,vd,psi\n");
-    for (k, v) in traces {
-        t.push_str(&trace_lines(*k, v));
-    }
-    write_file(&out.join(TRACES), &t)?;
+    write_runs_csv(&out.join(RUNS), &manifest.dispersed, records.values())?;
+    write_traces_csv(&out.join(TRACES), traces)?;
     let recs: Vec<&RunRecord> = records.values().collect();
     let stats = Stats::from_records(&manifest.name, &manifest.hash, &recs);
-    write_file(
-        &out.join("stats.json"),
-        &serde_json::to_string_pretty(&stats).unwrap_or_default(),
-    )?;
+    let json = out.join("stats.json");
+    stats.check_finite(&json.display().to_string())?;
+    write_json(&json, &stats)?;
     write_file(&out.join("stats.md"), &stats.to_markdown())?;
     plots(&recs, traces, out)?;
     Ok(stats)
@@ -49,7 +40,7 @@ fn plots(
         }
         let v: Vec<f64> = records
             .iter()
-            .filter(|r| r.outcome == "completed")
+            .filter(|r| r.completed())
             .filter_map(|r| r.metrics.get(j).copied().flatten())
             .filter(|v| v.is_finite())
             .collect();

@@ -1,13 +1,20 @@
-//! Flying runs: one run, a whole campaign (threads, shards, resume).
+//! Flying runs: one run, a whole campaign (threads, shards, resume), and the
+//! memory bound on the number of runs.
 
 use super::report::finish;
 use super::store::{
-    MANIFEST, Manifest, RUNS, RUNS_PARTIAL, TRACES, TRACES_PARTIAL, check_manifest, csv_header,
-    csv_line, io_err, read_records, read_traces, record_fields, trace_lines, write_file,
+    CAMPAIGN, MANIFEST, Manifest, PARAMS, RUNS, RUNS_PARTIAL, SCENARIO, TRACES, TRACES_PARTIAL,
+    check_manifest, csv_line, io_err, read_records, read_traces_into, record_fields, trace_lines,
+    write_file, write_json, write_runs_csv, write_traces_csv,
 };
-use super::{Campaign, DesignMode, METRIC_NAMES, McError, RunOutput, RunRecord, Stats, TracePoint};
-use crate::closed_loop::{ClosedLoopError, Prepared, fly, prepare_with_params};
-use crate::scenario::OUTPUTS;
+use super::{
+    Campaign, DesignMode, ErrorStage, FORMAT_VERSION, METRIC_NAMES, McError, RunOutput, RunRecord,
+    RunTermination, Stats, TracePoint,
+};
+use crate::closed_loop::{
+    ClosedLoopError, LogRow, Prepared, Termination, fly, prepare_with_params,
+};
+use crate::scenario::{OUTPUTS, ScenarioError};
 use helicon_model::Model;
 use helicon_model::ParamError;
 use helicon_model::trim::{TrimOptions, TrimTarget, trim};
@@ -17,6 +24,19 @@ use std::collections::BTreeMap;
 use std::io::Write as _;
 use std::path::Path;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+/// Memory a campaign needs, from its scenario and trace rate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunMemory {
+    /// Trace samples kept per run.
+    pub trace_points: u64,
+    /// Bytes kept per run until the statistics are written: its record, its
+    /// trace, their map entries and its share of the statistics' buffers.
+    pub bytes_per_run: u64,
+    /// Bytes of one flight in progress (its full log).
+    pub bytes_per_flight: u64,
+}
 
 impl Campaign {
     /// Design (or not) on the nominal parameters: what every run shares.
@@ -24,29 +44,86 @@ impl Campaign {
         Ok(prepare_with_params(&self.scenario, self.nominal)?)
     }
 
+    /// Log rows between two kept trace samples (0: no trace). The flight log
+    /// holds every `[log] decimation`-th controller sample.
+    fn trace_every_rows(&self) -> usize {
+        if self.trace_rate_hz <= 0.0 {
+            return 0;
+        }
+        let ts = self.scenario.controller.design.sample_time_s;
+        let d = self.scenario.log.decimation.max(1) as f64;
+        let every = (1.0 / (self.trace_rate_hz * ts * d)).round();
+        // `as` saturates; an absurdly slow trace rate keeps the first sample only
+        (every as usize).max(1)
+    }
+
+    /// The memory of one run kept until the end, and of one flight in
+    /// progress (upper bounds, from the sizes of the types).
+    pub fn run_memory(&self) -> RunMemory {
+        let ts = self.scenario.controller.design.sample_time_s;
+        let samples = (self.scenario.duration_s / ts).round() + 1.0;
+        let d = self.scenario.log.decimation.max(1) as f64;
+        let rows = (samples / d).ceil() + 1.0;
+        let every = self.trace_every_rows();
+        let trace_points = if every == 0 {
+            0
+        } else {
+            (rows / every as f64).ceil() as u64
+        };
+        let map_node = 64; // a BTreeMap entry's share of its node, with slack
+        let record = std::mem::size_of::<RunRecord>()
+            + self.dispersions.len() * std::mem::size_of::<f64>()
+            + METRIC_NAMES.len() * std::mem::size_of::<Option<f64>>()
+            + 160 // the reason sentence of a failed run
+            + map_node;
+        let trace = std::mem::size_of::<Vec<TracePoint>>() + map_node;
+        // the statistics: a reference per run, one value per metric
+        let stats = std::mem::size_of::<usize>() + METRIC_NAMES.len() * std::mem::size_of::<f64>();
+        let bytes_per_run = (record + trace + stats) as u64
+            + trace_points * std::mem::size_of::<TracePoint>() as u64;
+        let bytes_per_flight = (rows as u64).saturating_mul(std::mem::size_of::<LogRow>() as u64);
+        RunMemory {
+            trace_points,
+            bytes_per_run,
+            bytes_per_flight,
+        }
+    }
+
     /// Fly run `index` (its draws, its flight, its record and trace).
+    ///
+    /// Never a non-finite number in the record: a metric that comes out NaN
+    /// or infinite is left empty and named in the reason; a completed flight
+    /// with one is recorded as an `error` at stage `metrics` (a value it
+    /// should have is missing). A trace stops before its first non-finite
+    /// sample.
     pub fn run_one(&self, nominal: &Prepared, index: usize) -> RunOutput {
         let draw = self.draw(index);
-        let mut record = RunRecord {
-            index,
-            wind_seed: draw.wind_seed,
-            sensor_seed: draw.sensor_seed,
-            values: draw.values.clone(),
-            outcome: String::new(),
-            reason: String::new(),
-            t_end_s: 0.0,
-            metrics: vec![None; METRIC_NAMES.len()],
+        let not_flown = |termination: RunTermination, reason: String| RunOutput {
+            record: RunRecord {
+                index,
+                wind_seed: draw.wind_seed,
+                sensor_seed: draw.sensor_seed,
+                values: draw.values.clone(),
+                termination,
+                reason,
+                t_end_s: 0.0,
+                metrics: vec![None; METRIC_NAMES.len()],
+            },
+            trace: Vec::new(),
         };
-        let mut trace = Vec::new();
         if let Err(e) = draw.params.validate(&format!("run {index}")) {
-            record.outcome = "invalid".into();
-            record.reason = match e {
+            return match e {
                 ParamError::Invalid {
                     key, value, rule, ..
-                } => format!("invalid draw: {key} = {value}: {rule}"),
-                other => format!("invalid draw: {other}"),
+                } => not_flown(
+                    RunTermination::InvalidDraw(key.clone()),
+                    format!("invalid draw: {key} = {value}: {rule}"),
+                ),
+                other => not_flown(
+                    RunTermination::Error(ErrorStage::Parameters),
+                    format!("checking the drawn parameters: {other}"),
+                ),
             };
-            return RunOutput { record, trace };
         }
         let mut scenario = self.scenario.clone();
         scenario.wind.seed = draw.wind_seed;
@@ -72,52 +149,82 @@ impl Campaign {
         let prepared = match prepared {
             Ok(p) => p,
             Err(e) => {
-                record.outcome = "error".into();
-                record.reason = e.to_string();
-                return RunOutput { record, trace };
+                let stage = match e {
+                    ClosedLoopError::Trim(_) => ErrorStage::Trim,
+                    _ => ErrorStage::Design,
+                };
+                return not_flown(RunTermination::Error(stage), e.to_string());
             }
         };
-        match fly(&scenario, &prepared, None) {
+        let flight = match fly(&scenario, &prepared, None) {
+            Ok(f) => f,
             Err(e) => {
-                record.outcome = "error".into();
-                record.reason = e.to_string();
+                return not_flown(
+                    RunTermination::Error(ErrorStage::FlightSetup),
+                    e.to_string(),
+                );
             }
-            Ok(flight) => {
-                let s = &flight.summary;
-                record.outcome = match s.outcome {
-                    crate::closed_loop::Outcome::Completed => "completed".into(),
-                    crate::closed_loop::Outcome::Diverged => "diverged".into(),
-                };
-                record.reason = s.reason.clone().unwrap_or_default();
-                record.t_end_s = s.t_end_s;
-                let mut m = Vec::with_capacity(METRIC_NAMES.len());
-                for o in OUTPUTS {
-                    let om = s.metrics.get(o);
-                    m.push(om.and_then(|v| v.settling_time_s));
-                    m.push(om.map(|v| v.overshoot_pct));
-                    m.push(om.map(|v| v.rms_error));
-                    m.push(om.map(|v| v.max_abs_error));
-                }
-                for e in s.control_effort_rms {
-                    m.push(Some(e));
-                }
-                record.metrics = m;
-                if self.trace_rate_hz > 0.0 {
-                    let ts = scenario.controller.design.sample_time_s;
-                    let every = ((1.0 / (self.trace_rate_hz * ts)).round() as usize).max(1);
-                    trace = flight
-                        .log
-                        .iter()
-                        .step_by(every)
-                        .map(|r| TracePoint {
-                            t_s: r.t_s,
-                            output: r.output,
-                        })
-                        .collect();
-                }
+        };
+        let s = &flight.summary;
+        let mut m = Vec::with_capacity(METRIC_NAMES.len());
+        for o in OUTPUTS {
+            let om = s.metrics.get(o);
+            m.push(om.and_then(|v| v.settling_time_s));
+            m.push(om.map(|v| v.overshoot_pct));
+            m.push(om.map(|v| v.rms_error));
+            m.push(om.map(|v| v.max_abs_error));
+        }
+        for e in s.control_effort_rms {
+            m.push(Some(e));
+        }
+        let mut termination = RunTermination::Flight(s.termination);
+        let mut reason = s.reason.clone().unwrap_or_default();
+        let mut bad = Vec::new();
+        for (v, name) in m.iter_mut().zip(METRIC_NAMES) {
+            if let Some(x) = *v
+                && !x.is_finite()
+            {
+                bad.push(format!("{name} = {x}"));
+                *v = None;
             }
         }
-        RunOutput { record, trace }
+        if !bad.is_empty() {
+            let note = format!("not finite, left empty: {}", bad.join(", "));
+            if s.termination == Termination::Completed {
+                termination = RunTermination::Error(ErrorStage::Metrics);
+                reason = format!("flight completed but metrics {note}");
+            } else {
+                reason = format!("{reason}; metrics {note}");
+            }
+        }
+        let every = self.trace_every_rows();
+        let trace = if every == 0 {
+            Vec::new()
+        } else {
+            flight
+                .log
+                .iter()
+                .step_by(every)
+                .map(|r| TracePoint {
+                    t_s: r.t_s,
+                    output: r.output,
+                })
+                .take_while(|p| p.t_s.is_finite() && p.output.iter().all(|v| v.is_finite()))
+                .collect()
+        };
+        RunOutput {
+            record: RunRecord {
+                index,
+                wind_seed: draw.wind_seed,
+                sensor_seed: draw.sensor_seed,
+                values: draw.values,
+                termination,
+                reason,
+                t_end_s: s.t_end_s,
+                metrics: m,
+            },
+            trace,
+        }
     }
 }
 
@@ -128,6 +235,22 @@ pub struct Shard {
     pub k: usize,
     /// M ≥ 1.
     pub m: usize,
+}
+
+impl Shard {
+    /// How many of the indices `0..runs` are in this shard.
+    pub fn count(self, runs: usize) -> usize {
+        if runs > self.k {
+            (runs - self.k - 1) / self.m + 1
+        } else {
+            0
+        }
+    }
+
+    /// The `j`-th index of the shard.
+    pub fn index(self, j: usize) -> usize {
+        self.k + j * self.m
+    }
 }
 
 impl std::str::FromStr for Shard {
@@ -154,18 +277,20 @@ impl std::str::FromStr for Shard {
 /// Options of [`run`].
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
-    /// Override the campaign's number of runs.
+    /// Override the campaign's number of runs (≥ 1).
     pub runs: Option<usize>,
     /// Worker threads (None: rayon's default, one per core).
     pub threads: Option<usize>,
     /// Only this shard.
     pub shard: Option<Shard>,
+    /// Memory the campaign may use (bytes); None: [`memory_budget`].
+    pub memory_budget_bytes: Option<u64>,
 }
 
 /// Progress callback: (runs done in this invocation, runs to do).
 pub type McProgress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 
-/// What [`run`] and [`merge`] report.
+/// What [`run`] and [`merge`](super::merge) report.
 #[derive(Debug, Clone)]
 pub struct McReport {
     /// Runs flown by this call.
@@ -176,8 +301,99 @@ pub struct McReport {
     pub stats: Stats,
 }
 
+/// A `kB` figure of `/proc/meminfo`.
+fn meminfo_kib(text: &str, key: &str) -> Option<u64> {
+    text.lines()
+        .find_map(|l| l.strip_prefix(key))
+        .and_then(|r| r.trim().trim_end_matches("kB").trim().parse().ok())
+}
+
+/// The memory a campaign may use (bytes) and where the figure comes from:
+/// half of what is available now, the lesser of the machine's
+/// `MemAvailable` (`/proc/meminfo`) and the room left under a cgroup v2
+/// limit (`memory.max − memory.current`); 1 GiB where neither can be read.
+pub fn memory_budget() -> (u64, String) {
+    let mut avail: Option<(u64, String)> = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| meminfo_kib(&t, "MemAvailable:"))
+        .map(|k| {
+            let b = k.saturating_mul(1024);
+            (b, format!("{} MiB available on this machine", b >> 20))
+        });
+    let read_u64 = |p: &str| {
+        std::fs::read_to_string(p)
+            .ok()
+            .and_then(|t| t.trim().parse::<u64>().ok())
+    };
+    if let (Some(max), Some(cur)) = (
+        read_u64("/sys/fs/cgroup/memory.max"),
+        read_u64("/sys/fs/cgroup/memory.current"),
+    ) {
+        let room = max.saturating_sub(cur);
+        if avail.as_ref().is_none_or(|(a, _)| room < *a) {
+            avail = Some((
+                room,
+                format!("{} MiB left under the cgroup limit", room >> 20),
+            ));
+        }
+    }
+    match avail {
+        Some((b, why)) => (b / 2, format!("half of the {why}")),
+        None => (
+            1 << 30,
+            "a default, the available memory being unreadable".into(),
+        ),
+    }
+}
+
+/// The runs of `shard` (or all) among `0..runs` must fit in the budget.
+fn check_memory(
+    campaign: &Campaign,
+    options: &RunOptions,
+    runs_here: usize,
+) -> Result<(), McError> {
+    let (budget, available) = match options.memory_budget_bytes {
+        Some(b) => (b, "the budget given".to_string()),
+        None => memory_budget(),
+    };
+    let mem = campaign.run_memory();
+    let threads = options
+        .threads
+        .unwrap_or_else(rayon::current_num_threads)
+        .max(1) as u64;
+    let working = mem.bytes_per_flight.saturating_mul(threads);
+    let max_runs = budget.saturating_sub(working) / mem.bytes_per_run.max(1);
+    if runs_here as u64 > max_runs {
+        return Err(McError::TooManyRuns {
+            runs: runs_here,
+            max_runs: usize::try_from(max_runs).unwrap_or(usize::MAX),
+            bytes_per_run: mem.bytes_per_run,
+            trace_points: mem.trace_points,
+            working_mib: working >> 20,
+            budget_mib: budget >> 20,
+            available,
+        });
+    }
+    Ok(())
+}
+
+/// The output of runs flown in this call, collected under one lock with
+/// the appenders of the partial files.
+struct Sink {
+    runs: std::io::BufWriter<std::fs::File>,
+    traces: std::io::BufWriter<std::fs::File>,
+    records: BTreeMap<usize, RunRecord>,
+    trace_map: BTreeMap<usize, Vec<TracePoint>>,
+}
+
 /// Run a campaign (or one shard of it) into `out`, skipping runs already
 /// recorded there; writes every output and returns the statistics.
+///
+/// Checked before anything is flown: the number of runs against the memory
+/// budget, the output folder (created, writable, of this campaign and
+/// format) and the nominal design. A write that fails during the campaign
+/// stops it: no further run is started, and the error is returned (the
+/// runs recorded so far stay in the partial files for a resume).
 pub fn run(
     campaign: &Campaign,
     options: &RunOptions,
@@ -185,9 +401,22 @@ pub fn run(
     progress: Option<McProgress<'_>>,
 ) -> Result<McReport, McError> {
     let runs = options.runs.unwrap_or(campaign.runs);
-    std::fs::create_dir_all(out).map_err(|e| io_err(out, e))?;
+    if runs == 0 {
+        return Err(ScenarioError::Invalid {
+            file: "run options".into(),
+            field: "runs".into(),
+            value: "0".into(),
+            rule: "must be >= 1".into(),
+        }
+        .into());
+    }
+    let shard = options.shard.unwrap_or(Shard { k: 0, m: 1 });
+    let runs_here = shard.count(runs);
+    check_memory(campaign, options, runs_here)?;
+    std::fs::create_dir_all(out).map_err(|e| io_err(out, "create the folder", e))?;
     check_manifest(out, &campaign.hash)?;
     let manifest = Manifest {
+        format_version: FORMAT_VERSION,
         name: campaign.name.clone(),
         hash: campaign.hash.clone(),
         runs,
@@ -198,83 +427,95 @@ pub fn run(
             .iter()
             .map(|d| d.param.clone())
             .collect(),
+        overrides: campaign.overrides.clone(),
     };
-    write_file(
-        &out.join(MANIFEST),
-        &serde_json::to_string_pretty(&manifest).unwrap_or_default(),
-    )?;
-    write_file(&out.join("campaign.toml"), &campaign.source)?;
-    write_file(
-        &out.join("scenario.toml"),
-        &toml::to_string(&campaign.scenario).map_err(|e| io_err(&out.join("scenario.toml"), e))?,
-    )?;
-    let nd = campaign.dispersions.len();
+    write_json(&out.join(MANIFEST), &manifest)?;
+    write_file(&out.join(CAMPAIGN), &campaign.source)?;
+    let scenario_toml = toml::to_string(&campaign.scenario).map_err(|e| McError::Serialize {
+        file: out.join(SCENARIO).display().to_string(),
+        message: e.to_string(),
+    })?;
+    write_file(&out.join(SCENARIO), &scenario_toml)?;
+    write_file(&out.join(PARAMS), &campaign.nominal.to_toml())?;
     // resume: what is already there
     let mut done: BTreeMap<usize, RunRecord> = BTreeMap::new();
     for f in [RUNS, RUNS_PARTIAL] {
-        for r in read_records(&out.join(f), nd)? {
+        for r in read_records(&out.join(f), &manifest.dispersed)? {
             done.insert(r.index, r);
         }
     }
-    let mut traces = read_traces(&out.join(TRACES))?;
-    for (k, v) in read_traces(&out.join(TRACES_PARTIAL))? {
-        traces.insert(k, v);
-    }
-    let todo: Vec<usize> = (0..runs)
-        .filter(|i| options.shard.is_none_or(|s| i % s.m == s.k))
-        .filter(|i| !done.contains_key(i))
-        .collect();
+    let mut traces = BTreeMap::new();
+    read_traces_into(&out.join(TRACES), &mut traces, true)?;
+    read_traces_into(&out.join(TRACES_PARTIAL), &mut traces, true)?;
     let skipped = done.len();
     // rewrite the partial files with everything known so far (drops torn lines)
-    let header = csv_line(&csv_header(&manifest.dispersed))?;
     let rp = out.join(RUNS_PARTIAL);
     let tp = out.join(TRACES_PARTIAL);
-    let mut rtext = header.clone();
-    for r in done.values() {
-        rtext.push_str(&csv_line(&record_fields(r))?);
-    }
-    write_file(&rp, &rtext)?;
-    let mut ttext = String::from("index,t_s,vn,ve,vd,psi\n");
-    for (k, v) in &traces {
-        ttext.push_str(&trace_lines(*k, v));
-    }
-    write_file(&tp, &ttext)?;
+    write_runs_csv(&rp, &manifest.dispersed, done.values())?;
+    write_traces_csv(&tp, &traces)?;
     let open = |p: &Path| {
         std::fs::OpenOptions::new()
             .append(true)
             .open(p)
             .map(std::io::BufWriter::new)
-            .map_err(|e| io_err(p, e))
+            .map_err(|e| io_err(p, "write", e))
     };
-    let writers = Mutex::new((open(&rp)?, open(&tp)?, Vec::<RunOutput>::new()));
+    let sink = Mutex::new(Sink {
+        runs: open(&rp)?,
+        traces: open(&tp)?,
+        records: BTreeMap::new(),
+        trace_map: BTreeMap::new(),
+    });
     let nominal = campaign.prepare_nominal()?;
-    let total = todo.len();
-    let count = std::sync::atomic::AtomicUsize::new(0);
+    let total = runs_here
+        - (0..runs_here)
+            .filter(|&j| done.contains_key(&shard.index(j)))
+            .count();
+    let count = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
     let write_err: Mutex<Option<McError>> = Mutex::new(None);
     let work = || {
-        todo.par_iter().for_each(|&i| {
-            let o = campaign.run_one(&nominal, i);
-            let lines = csv_line(&record_fields(&o.record)).map(|l| (l, trace_lines(i, &o.trace)));
-            if let Ok(mut w) = writers.lock() {
-                let res = lines.and_then(|(l, t)| {
-                    w.0.write_all(l.as_bytes()).map_err(|e| io_err(&rp, e))?;
-                    w.0.flush().map_err(|e| io_err(&rp, e))?;
-                    w.1.write_all(t.as_bytes()).map_err(|e| io_err(&tp, e))?;
-                    w.1.flush().map_err(|e| io_err(&tp, e))
-                });
-                if let Err(e) = res
-                    && let Ok(mut slot) = write_err.lock()
-                    && slot.is_none()
-                {
-                    *slot = Some(e);
+        (0..runs_here)
+            .into_par_iter()
+            .map(|j| shard.index(j))
+            .filter(|i| !done.contains_key(i))
+            .for_each(|i| {
+                if stop.load(Ordering::Relaxed) {
+                    return;
                 }
-                w.2.push(o);
-            }
-            let c = count.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if let Some(p) = progress {
-                p(c, total);
-            }
-        });
+                let o = campaign.run_one(&nominal, i);
+                let lines =
+                    csv_line(&record_fields(&o.record)).map(|l| (l, trace_lines(i, &o.trace)));
+                let res = match sink.lock() {
+                    Ok(mut s) => lines.and_then(|(l, t)| {
+                        s.runs
+                            .write_all(l.as_bytes())
+                            .and_then(|()| s.runs.flush())
+                            .map_err(|e| io_err(&rp, "write", e))?;
+                        s.traces
+                            .write_all(t.as_bytes())
+                            .and_then(|()| s.traces.flush())
+                            .map_err(|e| io_err(&tp, "write", e))?;
+                        s.records.insert(i, o.record);
+                        s.trace_map.insert(i, o.trace);
+                        Ok(())
+                    }),
+                    Err(_) => Err(McError::Threads("a worker panicked".into())),
+                };
+                if let Err(e) = res {
+                    stop.store(true, Ordering::Relaxed);
+                    if let Ok(mut slot) = write_err.lock()
+                        && slot.is_none()
+                    {
+                        *slot = Some(e);
+                    }
+                    return;
+                }
+                let c = count.fetch_add(1, Ordering::Relaxed) + 1;
+                if let Some(p) = progress {
+                    p(c, total);
+                }
+            });
     };
     match options.threads {
         Some(t) => rayon::ThreadPoolBuilder::new()
@@ -287,15 +528,13 @@ pub fn run(
     if let Some(e) = write_err.into_inner().ok().flatten() {
         return Err(e);
     }
-    let (rw, tw, outputs) = writers
+    let sink = sink
         .into_inner()
         .map_err(|_| McError::Threads("a worker panicked".into()))?;
-    drop((rw, tw));
-    let flown = outputs.len();
-    for o in outputs {
-        traces.insert(o.record.index, o.trace);
-        done.insert(o.record.index, o.record);
-    }
+    let flown = sink.records.len();
+    done.extend(sink.records);
+    traces.extend(sink.trace_map);
+    drop((sink.runs, sink.traces));
     let stats = finish(&manifest, &done, &traces, out)?;
     let _ = std::fs::remove_file(&rp);
     let _ = std::fs::remove_file(&tp);

@@ -1,6 +1,12 @@
-//! Statistics over the runs: percentiles, failure classes, Markdown.
+//! Statistics over the runs: percentiles, failures by typed class, Markdown.
+//!
+//! Every number written is finite: percentiles and means are taken over the
+//! finite values only (a record never holds a non-finite metric), in forms
+//! that cannot overflow, and [`Stats::check_finite`] refuses to write one
+//! that is not. A statistic without data (`n = 0`) is `null` in
+//! `stats.json` and `–` in `stats.md`.
 
-use super::{METRIC_NAMES, RunRecord};
+use super::{FORMAT_VERSION, METRIC_NAMES, McError, RunOutcome, RunRecord, RunTermination};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -10,7 +16,7 @@ use std::fmt::Write as _;
 pub struct MetricStats {
     /// Completed runs with a value (settling time: runs that settled).
     pub n: usize,
-    /// 5th percentile.
+    /// 5th percentile (`None` when n = 0).
     pub p5: Option<f64>,
     /// Median.
     pub p50: Option<f64>,
@@ -20,9 +26,27 @@ pub struct MetricStats {
     pub mean: Option<f64>,
 }
 
+/// The failed runs of one class.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FailureCount {
+    /// `diverged`, `invalid` or `error`.
+    pub outcome: RunOutcome,
+    /// The class: the flight's termination (`rate_limit`, …), the invalid
+    /// parameter key or the failing stage.
+    pub termination: RunTermination,
+    /// Number of runs.
+    pub runs: usize,
+    /// The lowest run index of the class.
+    pub first_run: usize,
+    /// That run's reason (an example with times and values).
+    pub example: String,
+}
+
 /// Campaign statistics.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Stats {
+    /// [`FORMAT_VERSION`] of the folder.
+    pub format_version: u32,
     /// Campaign name.
     pub campaign: String,
     /// Campaign hash.
@@ -31,17 +55,18 @@ pub struct Stats {
     pub runs: usize,
     /// Runs that flew the whole duration.
     pub completed: usize,
-    /// Runs that did not (diverged, invalid draw, trim/design error).
+    /// Runs that did not (diverged, invalid draw, error).
     pub failed: usize,
     /// failed / runs.
     pub failure_fraction: f64,
-    /// Failures by reason class (the reason without times and values).
-    pub reasons: BTreeMap<String, usize>,
+    /// Failures by typed class, ordered by outcome then class.
+    pub failures: Vec<FailureCount>,
     /// Per metric, over completed runs.
     pub metrics: BTreeMap<String, MetricStats>,
 }
 
-/// Percentile (linear interpolation between order statistics, "type 7") of sorted data.
+/// Percentile (linear interpolation between order statistics, "type 7") of
+/// sorted finite data; finite whenever the data are.
 pub fn percentile(sorted: &[f64], p: f64) -> Option<f64> {
     if sorted.is_empty() {
         return None;
@@ -49,54 +74,62 @@ pub fn percentile(sorted: &[f64], p: f64) -> Option<f64> {
     let h = (sorted.len() - 1) as f64 * p.clamp(0.0, 1.0);
     let lo = h.floor() as usize;
     let hi = h.ceil() as usize;
-    Some(sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo]))
+    let (a, b, f) = (sorted[lo], sorted[hi], h - lo as f64);
+    let v = a + f * (b - a);
+    // b − a overflows for values near ±f64::MAX: the convex form cannot; the
+    // clamp undoes rounding past the two order statistics
+    let v = if v.is_finite() {
+        v
+    } else {
+        (1.0 - f) * a + f * b
+    };
+    Some(v.max(a.min(b)).min(a.max(b)))
 }
 
-/// The class of a failure reason: the text before times and details, with
-/// numbers replaced by `#` (so "body rate 10.02 rad/s beyond 10 rad/s" and
-/// "body rate 10.04 …" count together).
-pub fn reason_class(outcome: &str, reason: &str) -> String {
-    let cut = [" at t = ", ": ", " ("]
+/// Mean of finite data; finite whenever the data are (`None` when empty).
+fn mean(v: &[f64]) -> Option<f64> {
+    let (lo, hi) = v
         .iter()
-        .filter_map(|p| reason.find(p))
-        .min()
-        .unwrap_or(reason.len());
-    let mut head = String::with_capacity(cut);
-    let mut in_number = false;
-    for c in reason[..cut].trim().chars() {
-        let numeric = c.is_ascii_digit() || (in_number && matches!(c, '.' | 'e' | '-' | '+'));
-        if numeric {
-            if !in_number {
-                head.push('#');
-            }
-            in_number = true;
-        } else {
-            in_number = false;
-            head.push(c);
-        }
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    if v.is_empty() {
+        return None;
     }
-    let head = head.replace("-#", "#").replace("+#", "#");
-    let head = head.trim();
-    if head.is_empty() {
-        outcome.to_string()
-    } else {
-        format!("{outcome}: {head}")
+    let n = v.len() as f64;
+    let mut m = v.iter().sum::<f64>() / n;
+    if !m.is_finite() {
+        // the sum overflowed: scale by the largest magnitude first
+        let s = lo.abs().max(hi.abs());
+        m = s * (v.iter().map(|x| x / s).sum::<f64>() / n);
     }
+    // the mean lies between the extremes; the clamp undoes rounding past them
+    Some(m.max(lo).min(hi))
 }
 
 impl Stats {
     /// Statistics of records.
     pub fn from_records(name: &str, hash: &str, records: &[&RunRecord]) -> Stats {
         let runs = records.len();
-        let completed: Vec<&&RunRecord> = records
-            .iter()
-            .filter(|r| r.outcome == "completed")
-            .collect();
-        let mut reasons = BTreeMap::new();
-        for r in records.iter().filter(|r| r.outcome != "completed") {
-            *reasons
-                .entry(reason_class(&r.outcome, &r.reason))
-                .or_insert(0) += 1;
+        let completed: Vec<&&RunRecord> = records.iter().filter(|r| r.completed()).collect();
+        let mut classes: BTreeMap<&RunTermination, FailureCount> = BTreeMap::new();
+        for r in records.iter().filter(|r| !r.completed()) {
+            classes
+                .entry(&r.termination)
+                .and_modify(|c| {
+                    c.runs += 1;
+                    if r.index < c.first_run {
+                        c.first_run = r.index;
+                        c.example.clone_from(&r.reason);
+                    }
+                })
+                .or_insert_with(|| FailureCount {
+                    outcome: r.outcome(),
+                    termination: r.termination.clone(),
+                    runs: 1,
+                    first_run: r.index,
+                    example: r.reason.clone(),
+                });
         }
         let mut metrics = BTreeMap::new();
         for (j, m) in METRIC_NAMES.iter().enumerate() {
@@ -106,11 +139,6 @@ impl Stats {
                 .filter(|v| v.is_finite())
                 .collect();
             v.sort_by(f64::total_cmp);
-            let mean = if v.is_empty() {
-                None
-            } else {
-                Some(v.iter().sum::<f64>() / v.len() as f64)
-            };
             metrics.insert(
                 (*m).to_string(),
                 MetricStats {
@@ -118,12 +146,13 @@ impl Stats {
                     p5: percentile(&v, 0.05),
                     p50: percentile(&v, 0.5),
                     p95: percentile(&v, 0.95),
-                    mean,
+                    mean: mean(&v),
                 },
             );
         }
         let failed = runs - completed.len();
         Stats {
+            format_version: FORMAT_VERSION,
             campaign: name.to_string(),
             hash: hash.to_string(),
             runs,
@@ -134,9 +163,37 @@ impl Stats {
             } else {
                 failed as f64 / runs as f64
             },
-            reasons,
+            failures: classes.into_values().collect(),
             metrics,
         }
+    }
+
+    /// Refuse a statistic that is not finite (JSON would write it as `null`,
+    /// indistinguishable from "no data"); `file` names the file in the error.
+    pub fn check_finite(&self, file: &str) -> Result<(), McError> {
+        let bad = |field: String, value: f64| McError::NonFinite {
+            file: file.to_string(),
+            field,
+            value,
+        };
+        if !self.failure_fraction.is_finite() {
+            return Err(bad("failure_fraction".into(), self.failure_fraction));
+        }
+        for (k, m) in &self.metrics {
+            for (f, v) in [
+                ("p5", m.p5),
+                ("p50", m.p50),
+                ("p95", m.p95),
+                ("mean", m.mean),
+            ] {
+                if let Some(x) = v
+                    && !x.is_finite()
+                {
+                    return Err(bad(format!("metrics.{k}.{f}"), x));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The statistics as a Markdown report.
@@ -148,10 +205,21 @@ impl Stats {
             "{} runs: {} completed, {} failed (failure fraction {:.3}).\n",
             self.runs, self.completed, self.failed, self.failure_fraction
         );
-        if !self.reasons.is_empty() {
-            let _ = writeln!(s, "| failure | runs |\n|---|---:|");
-            for (k, v) in &self.reasons {
-                let _ = writeln!(s, "| {k} | {v} |");
+        if !self.failures.is_empty() {
+            let _ = writeln!(
+                s,
+                "| outcome | termination | runs | first run | its reason |\n|---|---|---:|---:|---|"
+            );
+            for c in &self.failures {
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {} | {} |",
+                    c.outcome,
+                    c.termination.as_str(),
+                    c.runs,
+                    c.first_run,
+                    c.example.replace('|', "\\|")
+                );
             }
             s.push('\n');
         }
