@@ -43,8 +43,8 @@
 //! inputs. With `design = "per-run"` each run trims, linearizes and designs on
 //! its own parameters (how the design itself varies).
 //!
-//! Every run ends with a typed [`RunTermination`] (its [`RunOutcome`] and
-//! class, see [`record`](RunRecord)). A draw that breaks a parameter rule
+//! Every run ends with a typed [`RunTermination`]: its [`RunOutcome`] and
+//! its class, the `outcome` and `termination` columns of `runs.csv`. A draw that breaks a parameter rule
 //! ([`Params`](helicon_model::Params)`::validate`, e.g. a negative mass or
 //! `hinge_offset_m ≥ radius_m`) is **not redrawn**: the run is recorded
 //! `invalid`, classed by the parameter key, with the rule as its reason, so
@@ -61,11 +61,18 @@
 //! (format version, name, hash, runs, command-line overrides),
 //! `runs.csv` (one row per run, by index), `traces.csv` (vn, ve, vd, ψ of
 //! every run at `trace_rate_hz`), `stats.json` / `stats.md` (p5/p50/p95 of
-//! each metric over completed runs, failure fraction with reasons),
+//! each metric over completed runs, failures by typed class),
 //! `hist_*.png` (metric histograms) and `envelope_*.png` (p5/p50/p95 of each
 //! output over time). While running, finished runs are appended to
 //! `runs.partial.csv` / `traces.partial.csv`; a rerun into the same folder
-//! skips every run already recorded there (resume).
+//! skips every run already recorded there (resume). The formats are those of
+//! [`FORMAT_VERSION`].
+//!
+//! # Memory
+//!
+//! The records and traces of all runs stay in memory until the statistics
+//! are written; nothing else grows with the number of runs. [`run`] refuses
+//! more runs than [`memory_budget`] holds at [`Campaign::run_memory`] each.
 //!
 //! # Sharding
 //!

@@ -201,7 +201,7 @@ impl Campaign {
         let trace = if every == 0 {
             Vec::new()
         } else {
-            flight
+            let mut t: Vec<TracePoint> = flight
                 .log
                 .iter()
                 .step_by(every)
@@ -210,7 +210,10 @@ impl Campaign {
                     output: r.output,
                 })
                 .take_while(|p| p.t_s.is_finite() && p.output.iter().all(|v| v.is_finite()))
-                .collect()
+                .collect();
+            // kept until the end of the campaign: no spare capacity
+            t.shrink_to_fit();
+            t
         };
         RunOutput {
             record: RunRecord {
