@@ -6,7 +6,7 @@
 # 1. `helicon bench --json`: derivative, one closed-loop step, real-time factor.
 # 2. The campaign (default campaigns/robustness-10.toml: 20 s flights with
 #    sensors, q-method + fusion and the state estimator in the loop, thesis
-#    wind, 29 dispersed parameters) with RUNS runs (default 1000), on 1 thread
+#    wind, 25 dispersed parameters) with RUNS runs (default 1000), on 1 thread
 #    and on 2 threads: wall time of the whole command (flights, statistics,
 #    plots), simulated flight time actually flown (runs that diverge stop
 #    early), speed-up, and a check that both runs.csv files are identical.

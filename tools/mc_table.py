@@ -3,9 +3,10 @@
 
     tools/mc_table.py out/mc/robustness-10 out/mc/robustness-20 ...
 
-One row per folder: runs, failure fraction, failures by class, and for each
-output the RMS tracking error p50 [p5-p95] and the p95 of the largest error
-over the completed runs (docs/monte-carlo.md).
+One row per folder: runs, failure fraction, failures by typed class
+(outcome: termination), and for each output the RMS tracking error
+p50 [p5-p95] and the p95 of the largest error over the completed runs
+(docs/monte-carlo.md). Reads stats.json format version 2.
 """
 import json
 import sys
@@ -24,8 +25,12 @@ print(head)
 print("|---|---:|---:|---|---|---|---|---|---|")
 for d in sys.argv[1:]:
     s = json.loads((Path(d) / "stats.json").read_text())
+    if s.get("format_version") != 2:
+        sys.exit(f"{d}/stats.json: format version {s.get('format_version', 1)}, this script reads 2")
     m = s["metrics"]
-    reasons = "; ".join(f"{v} {k}" for k, v in sorted(s["reasons"].items(), key=lambda kv: -kv[1]))
+    reasons = "; ".join(
+        f"{f['runs']} {f['outcome']}: {f['termination']}" for f in sorted(s["failures"], key=lambda f: -f["runs"])
+    )
     p95max = " / ".join(
         "–" if m[f"{o}_max_abs"]["n"] == 0 else f"{m[f'{o}_max_abs']['p95']:.2f}" for o in ["vn", "ve", "vd", "psi"]
     )

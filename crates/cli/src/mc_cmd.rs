@@ -8,7 +8,7 @@ use helicon_model::state::expand;
 use helicon_model::trim::{TrimOptions, TrimTarget, trim};
 use helicon_model::{Input, Model, Preset, State};
 use helicon_sim::closed_loop::{fly, prepare};
-use helicon_sim::mc::{Campaign, RunOptions, Shard, merge, run};
+use helicon_sim::mc::{Campaign, CampaignOverrides, RunOptions, Shard, merge, run};
 use helicon_sim::scenario::Scenario;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::Vector3;
@@ -25,11 +25,24 @@ pub struct McArgs {
     /// Campaign file (TOML; see docs/monte-carlo.md and campaigns/).
     #[arg(required = true)]
     pub campaign: Option<PathBuf>,
-    /// Number of runs (overrides the campaign's `runs`).
-    #[arg(long)]
+    /// Number of runs (overrides the campaign's `runs`; ≥ 1). Bounded by the
+    /// memory of this machine: a campaign keeps each run's record and trace
+    /// until it writes its statistics (use --shard beyond that).
+    #[arg(long, value_parser = at_least_one, allow_negative_numbers = true)]
     pub runs: Option<usize>,
-    /// Worker threads (default: one per core).
-    #[arg(long)]
+    /// Campaign seed (overrides the campaign's `seed`; a new campaign hash).
+    #[arg(long, allow_negative_numbers = true)]
+    pub seed: Option<u64>,
+    /// Flight duration in seconds (overrides the scenario's `duration_s`;
+    /// finite, > 0 and <= 86400).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub duration: Option<f64>,
+    /// Nominal plant parameters: a TOML file of `helicon params` keys over the
+    /// Bergen Twin (overrides the scenario's `params`); dispersions apply around it.
+    #[arg(long, value_name = "FILE")]
+    pub params: Option<PathBuf>,
+    /// Worker threads (default: one per core; ≥ 1).
+    #[arg(long, value_parser = at_least_one)]
     pub threads: Option<usize>,
     /// Output folder (default `out/mc/<name>-seed<seed>[-shard<K>of<M>]`);
     /// runs already recorded there are skipped (resume).
@@ -39,6 +52,15 @@ pub struct McArgs {
     /// array index `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
     #[arg(long)]
     pub shard: Option<Shard>,
+}
+
+/// A whole number ≥ 1.
+fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(0) => Err("must be >= 1".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(format!("`{s}`: {e}")),
+    }
 }
 
 /// `helicon mc` subcommands.
@@ -77,7 +99,13 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
     let Some(path) = &args.campaign else {
         anyhow::bail!("give a campaign file (or `helicon mc merge DIR... --out DIR`)");
     };
-    let campaign = Campaign::from_file(path)?;
+    let campaign = Campaign::from_file(path)?
+        .with_overrides(&CampaignOverrides {
+            seed: args.seed,
+            duration_s: args.duration,
+            params: args.params.clone(),
+        })
+        .with_context(|| format!("campaign {}", path.display()))?;
     let out = args.out.clone().unwrap_or_else(|| {
         let mut n = format!("{}-seed{}", campaign.name, campaign.seed);
         if let Some(s) = args.shard {
@@ -89,6 +117,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
         runs: args.runs,
         threads: args.threads,
         shard: args.shard,
+        memory_budget_bytes: None,
     };
     let bar = ProgressBar::new(0);
     bar.set_style(
@@ -119,8 +148,15 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
         s.failed,
         100.0 * s.failure_fraction
     );
-    for (reason, n) in &s.reasons {
-        eprintln!("  {n:6} × {reason}");
+    for f in &s.failures {
+        eprintln!(
+            "  {:6} × {}: {} (first: run {}: {})",
+            f.runs,
+            f.outcome,
+            f.termination.as_str(),
+            f.first_run,
+            f.example
+        );
     }
     eprintln!("outputs in {}", out.display());
     Ok(())

@@ -2,7 +2,12 @@
 //! file errors, and the sampling of dispersions.
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
 
-use helicon_sim::mc::{Campaign, McError, RunOptions, Shard, merge, percentile, reason_class, run};
+use helicon_sim::closed_loop::Termination;
+use helicon_sim::mc::{
+    Campaign, CampaignOverrides, ErrorStage, FORMAT_VERSION, McError, RunOptions, RunOutcome,
+    RunTermination, Shard, Stats, merge, percentile, run,
+};
+use helicon_sim::scenario::ScenarioError;
 use std::path::{Path, PathBuf};
 
 /// 8 short runs with sensors, fusion and estimator in the loop, wind, and
@@ -313,44 +318,415 @@ fn a_draw_breaking_a_parameter_rule_is_recorded_invalid() {
     let d = tmp("invalid");
     let r = run(&c, &RunOptions::default(), &d, None).unwrap();
     let csv = read(&d.join("runs.csv"));
-    let invalid = csv.lines().filter(|l| l.contains(",invalid,")).count();
+    // typed: outcome `invalid`, termination the parameter key
+    let invalid = csv
+        .lines()
+        .filter(|l| l.contains(",invalid,body.mass_kg,"))
+        .count();
     let negative = (0..8).filter(|&i| c.draw(i).values[0] <= 0.0).count();
     assert!(negative > 0, "the seed should give some negative masses");
     assert_eq!(invalid, negative);
     assert!(csv.contains("invalid draw: body.mass_kg"), "{csv}");
     assert!(r.stats.failed >= invalid);
+    let f = r
+        .stats
+        .failures
+        .iter()
+        .find(|f| f.termination == RunTermination::InvalidDraw("body.mass_kg".into()))
+        .unwrap();
+    assert_eq!(f.outcome, RunOutcome::Invalid);
+    assert_eq!(f.runs, negative);
     assert!(
-        r.stats
-            .reasons
-            .keys()
-            .any(|k| k.starts_with("invalid: invalid draw")),
-        "{:?}",
-        r.stats.reasons
+        f.example.starts_with("invalid draw: body.mass_kg = -"),
+        "{f:?}"
+    );
+    // stats.json carries the typed class as words, and its format version
+    let json: serde_json::Value = serde_json::from_str(&read(&d.join("stats.json"))).unwrap();
+    assert_eq!(json["format_version"], FORMAT_VERSION);
+    assert!(
+        json["failures"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|f| f["outcome"] == "invalid" && f["termination"] == "body.mass_kg"),
+        "{json}"
+    );
+}
+
+/// A campaign where every run exceeds a tiny body-rate limit.
+fn diverging() -> Campaign {
+    let text = SMALL.replace(
+        "[scenario.controller]",
+        "[scenario.plant]\nmax_rate_rad_s = 0.02\n[scenario.controller]",
+    );
+    Campaign::from_toml_str(&text, "div.toml", None).unwrap()
+}
+
+#[test]
+fn failures_are_grouped_by_typed_termination_and_read_back_on_resume() {
+    let c = diverging();
+    let d = tmp("typed");
+    let r = run(&c, &RunOptions::default(), &d, None).unwrap();
+    let csv = read(&d.join("runs.csv"));
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let o = header.iter().position(|h| *h == "outcome").unwrap();
+    assert_eq!(header[o + 1..o + 4], ["termination", "reason", "t_end_s"]);
+    // every flown run diverges on the rate limit: one class, no `#` placeholders
+    let flown: usize = r
+        .stats
+        .failures
+        .iter()
+        .filter(|f| f.outcome == RunOutcome::Diverged)
+        .map(|f| f.runs)
+        .sum();
+    assert!(flown > 0, "{:?}", r.stats.failures);
+    for f in &r.stats.failures {
+        assert!(!f.termination.as_str().contains('#'), "{f:?}");
+        if f.outcome == RunOutcome::Diverged {
+            assert_eq!(
+                f.termination,
+                RunTermination::Flight(Termination::RateLimit)
+            );
+            assert!(f.example.starts_with("body rate"), "{f:?}");
+        }
+    }
+    let md = read(&d.join("stats.md"));
+    assert!(md.contains("| diverged | rate_limit |"), "{md}");
+    // resume reads the typed columns back: nothing flown, same statistics
+    let again = run(&c, &RunOptions::default(), &d, None).unwrap();
+    assert_eq!((again.flown, again.skipped), (0, 8));
+    assert_eq!(again.stats, r.stats);
+    assert_eq!(read(&d.join("runs.csv")), csv);
+}
+
+#[test]
+fn typed_outcomes_parse_and_refuse_inconsistent_words() {
+    for o in RunOutcome::ALL {
+        assert_eq!(o.as_str().parse::<RunOutcome>().unwrap(), o);
+    }
+    for t in Termination::ALL {
+        let rt = RunTermination::parse(t.outcome().into(), t.as_str()).unwrap();
+        assert_eq!(rt, RunTermination::Flight(t));
+    }
+    for s in ErrorStage::ALL {
+        let rt = RunTermination::parse(RunOutcome::Error, s.as_str()).unwrap();
+        assert_eq!(rt, RunTermination::Error(s));
+        assert_eq!(rt.to_string(), format!("error: {}", s.as_str()));
+    }
+    assert!(RunTermination::parse(RunOutcome::Invalid, "body.mass_kg").is_ok());
+    // a diverged run cannot have completed, nor name a parameter
+    assert!(RunTermination::parse(RunOutcome::Diverged, "completed").is_err());
+    assert!(RunTermination::parse(RunOutcome::Diverged, "body.mass_kg").is_err());
+    assert!(RunTermination::parse(RunOutcome::Completed, "rate_limit").is_err());
+    assert!(RunTermination::parse(RunOutcome::Invalid, "body.mas_kg").is_err());
+    assert!(RunTermination::parse(RunOutcome::Error, "nowhere").is_err());
+    assert!("crashed".parse::<RunOutcome>().is_err());
+}
+
+#[test]
+fn a_runs_csv_with_bad_typed_columns_or_header_is_refused() {
+    let c = small();
+    let d = tmp("badcsv");
+    run(
+        &c,
+        &RunOptions {
+            runs: Some(2),
+            ..Default::default()
+        },
+        &d,
+        None,
+    )
+    .unwrap();
+    let csv = read(&d.join("runs.csv"));
+    let row1 = csv
+        .lines()
+        .find(|l| l.contains(",completed,completed,"))
+        .unwrap()
+        .to_string();
+    // a completed row rewritten as diverged with termination `completed`
+    let bad = row1.replacen(",completed,completed,", ",diverged,completed,", 1);
+    assert_ne!(bad, row1);
+    std::fs::write(d.join("runs.partial.csv"), format!("{bad}\n")).unwrap();
+    let e = run(&c, &RunOptions::default(), &d, None).unwrap_err();
+    let msg = e.to_string();
+    assert!(matches!(e, McError::Csv { line: 1, .. }), "{msg}");
+    assert!(
+        msg.contains("runs.partial.csv") && msg.contains("termination"),
+        "{msg}"
+    );
+    // a non-finite metric is never read back as a number
+    let nan = format!("{},NaN", row1.rsplit_once(',').unwrap().0);
+    std::fs::write(d.join("runs.partial.csv"), format!("{nan}\n")).unwrap();
+    let msg = run(&c, &RunOptions::default(), &d, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("effort_rms_S_tr") && msg.contains("not a finite number"),
+        "{msg}"
+    );
+    // a header with a column twice names it and both positions
+    let header = csv.lines().next().unwrap().replace("wind_seed", "index");
+    std::fs::write(d.join("runs.partial.csv"), format!("{header}\n")).unwrap();
+    let msg = run(&c, &RunOptions::default(), &d, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("column `index` appears twice") && msg.contains("columns 1 and 2"),
+        "{msg}"
     );
 }
 
 #[test]
-fn percentiles_and_reason_classes() {
+fn a_key_dispersed_twice_is_an_error_naming_the_file_key_and_both_entries() {
+    let text = format!(
+        "{SMALL}\n[[dispersion]]\nparam = \"servo.tail.omega_n_rad_s\"\ndistribution = \"normal\"\nkind = \"relative\"\nsigma = 0.05\n"
+    );
+    let e = Campaign::from_toml_str(&text, "twice.toml", None).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        matches!(e, McError::Scenario(ScenarioError::Invalid { .. })),
+        "{msg}"
+    );
+    for part in [
+        "twice.toml",
+        "servo.tail.omega_n_rad_s",
+        "dispersion[3]",
+        "dispersion[1]",
+    ] {
+        assert!(msg.contains(part), "{part}: {msg}");
+    }
+}
+
+#[test]
+fn runs_beyond_the_memory_budget_are_refused_before_anything_is_written() {
+    let c = small();
+    let d = tmp("toomany");
+    // a billion runs: refused at once, from the machine's own figure
+    let e = run(
+        &c,
+        &RunOptions {
+            runs: Some(1_000_000_000),
+            ..Default::default()
+        },
+        &d,
+        None,
+    )
+    .unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        matches!(
+            e,
+            McError::TooManyRuns {
+                runs: 1_000_000_000,
+                ..
+            }
+        ),
+        "{msg}"
+    );
+    assert!(msg.contains("at most") && msg.contains("--shard"), "{msg}");
+    assert!(!d.exists(), "nothing written");
+    // a budget for exactly three runs with one thread: 3 fly, 4 do not
+    let mem = c.run_memory();
+    assert!(mem.trace_points >= 20, "1 s at 20 Hz: {mem:?}");
+    let budget = mem.bytes_per_flight + 3 * mem.bytes_per_run;
+    let opts = |runs| RunOptions {
+        runs: Some(runs),
+        threads: Some(1),
+        memory_budget_bytes: Some(budget),
+        ..Default::default()
+    };
+    let e = run(&c, &opts(4), &d, None).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            McError::TooManyRuns {
+                runs: 4,
+                max_runs: 3,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(!d.exists());
+    assert_eq!(run(&c, &opts(3), &d, None).unwrap().flown, 3);
+    // a shard counts only its own runs: 7 runs in shards of 2 → 4 and 3
+    let s1 = tmp("toomany-s1");
+    let o = RunOptions {
+        shard: Some(Shard { k: 1, m: 2 }),
+        ..opts(7)
+    };
+    assert_eq!(run(&c, &o, &s1, None).unwrap().flown, 3);
+}
+
+#[test]
+fn an_unwritable_output_folder_is_an_error_before_any_run_is_flown() {
+    let c = small();
+    let d = tmp("unwritable");
+    std::fs::create_dir_all(&*d).unwrap();
+    let file = d.join("a-file");
+    std::fs::write(&file, "not a folder").unwrap();
+    let flown = std::sync::atomic::AtomicUsize::new(0);
+    let progress = |_: usize, _: usize| {
+        flown.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    };
+    let e = run(
+        &c,
+        &RunOptions::default(),
+        &file.join("out"),
+        Some(&progress),
+    )
+    .unwrap_err();
+    assert!(matches!(e, McError::Io { .. }), "{e}");
+    assert!(e.to_string().contains("a-file/out"), "{e}");
+    // a file in the folder that cannot be written (a directory in its place)
+    let d2 = d.join("out2");
+    std::fs::create_dir_all(d2.join("runs.partial.csv")).unwrap();
+    let e = run(&c, &RunOptions::default(), &d2, Some(&progress)).unwrap_err();
+    assert!(e.to_string().contains("runs.partial.csv"), "{e}");
+    assert_eq!(flown.load(std::sync::atomic::Ordering::Relaxed), 0);
+}
+
+#[test]
+fn a_folder_of_another_format_version_is_refused() {
+    let c = small();
+    let d = tmp("format1");
+    run(
+        &c,
+        &RunOptions {
+            runs: Some(1),
+            ..Default::default()
+        },
+        &d,
+        None,
+    )
+    .unwrap();
+    // a version-1 manifest has no `format_version`
+    let m = read(&d.join("manifest.json"));
+    let v1 = m.replace(&format!("\"format_version\": {FORMAT_VERSION},"), "");
+    assert_ne!(m, v1);
+    std::fs::write(d.join("manifest.json"), v1).unwrap();
+    let e = run(&c, &RunOptions::default(), &d, None).unwrap_err();
+    assert!(matches!(e, McError::Format { found: 1, .. }), "{e}");
+    let e = merge(&[d.to_path_buf()], &tmp("format1-merged")).unwrap_err();
+    assert!(matches!(e, McError::Format { found: 1, .. }), "{e}");
+    assert!(matches!(merge(&[], &d).unwrap_err(), McError::NoFolders));
+}
+
+#[test]
+fn overrides_are_validated_and_make_another_campaign() {
+    let c = small();
+    let o = |seed, duration_s, params| CampaignOverrides {
+        seed,
+        duration_s,
+        params,
+    };
+    let s = c.clone().with_overrides(&o(Some(12), None, None)).unwrap();
+    assert_eq!(s.seed, 12);
+    assert_ne!(s.hash, c.hash);
+    assert_ne!(s.draw(0).values, c.draw(0).values);
+    assert_eq!(s.overrides, ["--seed 12"]);
+    // the same seed as the file's: same runs, and the hash of the file with that seed
+    let same = c.clone().with_overrides(&o(Some(11), None, None)).unwrap();
+    assert_eq!(same.hash, c.hash);
+    let twelve =
+        Campaign::from_toml_str(&SMALL.replace("seed = 11", "seed = 12"), "s.toml", None).unwrap();
+    assert_eq!(s.hash, twelve.hash);
+    let d = c.clone().with_overrides(&o(None, Some(0.5), None)).unwrap();
+    assert_eq!(d.scenario.duration_s, 0.5);
+    assert_ne!(d.hash, c.hash);
+    for bad in [-1.0, 0.0, f64::NAN, 1e6] {
+        let msg = c
+            .clone()
+            .with_overrides(&o(None, Some(bad), None))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("--duration") && msg.contains("duration_s"),
+            "{msg}"
+        );
+    }
+    let dir = tmp("params");
+    std::fs::create_dir_all(&*dir).unwrap();
+    let p = dir.join("heavy.toml");
+    std::fs::write(&p, "[body]\nmass_kg = 15.0\n").unwrap();
+    let h = c
+        .clone()
+        .with_overrides(&o(None, None, Some(p.clone())))
+        .unwrap();
+    assert_eq!(h.nominal.body.mass_kg, 15.0);
+    assert_ne!(h.hash, c.hash);
+    // the dispersion is around the new nominal: relative draws scale with it
+    assert!((h.draw(3).values[0] / c.draw(3).values[0] - 15.0 / 14.0).abs() < 1e-12);
+    let missing = dir.join("missing.toml");
+    let msg = format!(
+        "{:#}",
+        anyhow_like(
+            c.clone()
+                .with_overrides(&o(None, None, Some(missing)))
+                .unwrap_err()
+        )
+    );
+    assert!(msg.contains("missing.toml"), "{msg}");
+    std::fs::write(&p, "[body]\nmass_kg = -1.0\n").unwrap();
+    let msg = c
+        .with_overrides(&o(None, None, Some(p)))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("heavy.toml") && msg.contains("body.mass_kg"),
+        "{msg}"
+    );
+}
+
+/// The error and its sources, as `helicon` prints them.
+fn anyhow_like(e: McError) -> String {
+    let mut s = e.to_string();
+    let mut src = std::error::Error::source(&e);
+    while let Some(c) = src {
+        s.push_str(": ");
+        s.push_str(&c.to_string());
+        src = c.source();
+    }
+    s
+}
+
+#[test]
+fn statistics_are_finite_or_refused_never_null() {
+    // percentiles and means of finite data near the largest floats stay finite
+    let big = [-f64::MAX, f64::MAX];
+    assert_eq!(percentile(&big, 0.5), Some(0.0));
+    let v = [f64::MAX, f64::MAX];
+    assert_eq!(percentile(&v, 0.3), Some(f64::MAX));
+    let r = |i: usize, m: f64| helicon_sim::mc::RunRecord {
+        index: i,
+        wind_seed: 0,
+        sensor_seed: 0,
+        values: vec![],
+        termination: RunTermination::Flight(Termination::Completed),
+        reason: String::new(),
+        t_end_s: 1.0,
+        metrics: vec![Some(m); 20],
+    };
+    let recs = [r(0, f64::MAX), r(1, f64::MAX), r(2, f64::MAX)];
+    let refs: Vec<_> = recs.iter().collect();
+    let s = Stats::from_records("big", "h", &refs);
+    assert_eq!(s.metrics["vn_rms"].mean, Some(f64::MAX));
+    s.check_finite("stats.json").unwrap();
+    // a non-finite statistic is an error naming the file and the field
+    let mut bad = s.clone();
+    bad.metrics.get_mut("vd_rms").unwrap().p95 = Some(f64::NAN);
+    let e = bad.check_finite("out/stats.json").unwrap_err();
+    assert!(
+        matches!(e, McError::NonFinite { .. }) && e.to_string().contains("metrics.vd_rms.p95"),
+        "{e}"
+    );
+}
+
+#[test]
+fn percentiles() {
     let v = [1.0, 2.0, 3.0, 4.0, 5.0];
     assert_eq!(percentile(&v, 0.5), Some(3.0));
     assert_eq!(percentile(&v, 0.05), Some(1.2));
     assert_eq!(percentile(&v, 0.95), Some(4.8));
     assert_eq!(percentile(&[], 0.5), None);
-    assert_eq!(
-        reason_class(
-            "diverged",
-            "body rate 10.02 rad/s beyond 10 rad/s at t = 3.2 s"
-        ),
-        reason_class(
-            "diverged",
-            "body rate 11.5 rad/s beyond 10 rad/s at t = 1.0 s"
-        )
-    );
-    assert_eq!(
-        reason_class(
-            "diverged",
-            "attitude beyond 1.2 rad at t = 3.388 s (phi = -0.8)"
-        ),
-        "diverged: attitude beyond # rad"
-    );
 }

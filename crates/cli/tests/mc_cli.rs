@@ -1,0 +1,182 @@
+//! End-to-end tests of `helicon mc`: the options (`--params`, `--seed`,
+//! `--duration`, `--runs`) in `--help`, applied and validated, and a
+//! billion runs refused at once (never a panic, the file or option named).
+#![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+fn helicon_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("helicon_mc_cli_{name}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+fn no_panic(o: &Output) {
+    let err = text(&o.stderr);
+    assert!(!err.contains("panicked"), "panic: {err}");
+}
+
+/// Two short runs of the thesis controller in calm air, mass dispersed.
+const CAMPAIGN: &str = r#"
+name = "cli-mc"
+runs = 2
+seed = 5
+trace_rate_hz = 10.0
+
+[scenario]
+name = "cli-mc-scenario"
+duration_s = 0.3
+[[scenario.reference]]
+t_s = 0.1
+output = "vn"
+value = 0.2
+
+[[dispersion]]
+param = "body.mass_kg"
+distribution = "normal"
+kind = "relative"
+sigma = 0.02
+"#;
+
+fn setup(name: &str) -> PathBuf {
+    let d = tmpdir(name);
+    std::fs::write(d.join("c.toml"), CAMPAIGN).unwrap();
+    std::fs::write(d.join("heavy.toml"), "[body]\nmass_kg = 15.0\n").unwrap();
+    d
+}
+
+#[test]
+fn mc_help_lists_the_options() {
+    let o = helicon_in(&std::env::temp_dir(), &["mc", "--help"]);
+    assert!(o.status.success());
+    let help = text(&o.stdout);
+    for opt in [
+        "--params <FILE>",
+        "--seed <SEED>",
+        "--duration <S>",
+        "--runs <RUNS>",
+        "--threads",
+        "--shard",
+        "--out",
+    ] {
+        assert!(help.contains(opt), "{opt}: {help}");
+    }
+}
+
+#[test]
+fn mc_seed_duration_and_params_are_applied_and_recorded() {
+    let d = setup("overrides");
+    let o = helicon_in(
+        &d,
+        &[
+            "mc",
+            "c.toml",
+            "--seed",
+            "9",
+            "--duration",
+            "0.4",
+            "--params",
+            "heavy.toml",
+            "--out",
+            "r",
+        ],
+    );
+    no_panic(&o);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let r = d.join("r");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(r.join("manifest.json")).unwrap()).unwrap();
+    assert_eq!(manifest["seed"], 9);
+    assert_eq!(
+        manifest["overrides"],
+        serde_json::json!(["--seed 9", "--duration 0.4", "--params heavy.toml"])
+    );
+    let scenario = std::fs::read_to_string(r.join("scenario.toml")).unwrap();
+    assert!(scenario.contains("duration_s = 0.4"), "{scenario}");
+    let params = std::fs::read_to_string(r.join("params.toml")).unwrap();
+    assert!(params.contains("mass_kg = 15.0"), "{params}");
+    // the runs flew 0.4 s around 15 kg (σ 2 %, truncated at 3σ)
+    let csv = std::fs::read_to_string(r.join("runs.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    for row in csv.lines().skip(1) {
+        let f: Vec<&str> = row.split(',').collect();
+        let mass: f64 = f[col("body.mass_kg")].parse().unwrap();
+        assert!((mass - 15.0).abs() <= 15.0 * 0.06 + 1e-12, "{mass}");
+        assert_eq!(f[col("outcome")], "completed", "{row}");
+        let t: f64 = f[col("t_end_s")].parse().unwrap();
+        assert!((t - 0.4).abs() < 0.01, "{t}");
+    }
+    // the default folder carries the overridden seed
+    let o = helicon_in(&d, &["mc", "c.toml", "--seed", "9", "--runs", "1"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(d.join("out/mc/cli-mc-seed9/runs.csv").exists());
+}
+
+#[test]
+fn mc_bad_options_name_the_option_or_file() {
+    let d = setup("bad");
+    let cases: [(&[&str], &str); 7] = [
+        (&["--duration", "-1"], "--duration"),
+        (&["--duration", "nan"], "--duration"),
+        (&["--duration", "fast"], "--duration"),
+        (&["--params", "missing.toml"], "missing.toml"),
+        (&["--seed", "-3"], "--seed"),
+        (&["--runs", "0"], "--runs"),
+        (&["--threads", "0"], "--threads"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["mc", "c.toml", "--out", "never"];
+        args.extend_from_slice(extra);
+        let o = helicon_in(&d, &args);
+        no_panic(&o);
+        assert!(!o.status.success(), "{extra:?}");
+        let err = text(&o.stderr);
+        assert!(err.contains(needle), "{extra:?}: {err}");
+        assert!(!d.join("never").exists(), "{extra:?}: nothing written");
+    }
+    // a parameter file breaking a rule names the file and the key
+    std::fs::write(d.join("neg.toml"), "[body]\nmass_kg = -2.0\n").unwrap();
+    let o = helicon_in(&d, &["mc", "c.toml", "--params", "neg.toml"]);
+    no_panic(&o);
+    let err = text(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("neg.toml") && err.contains("body.mass_kg"),
+        "{err}"
+    );
+}
+
+#[test]
+fn mc_a_billion_runs_is_refused_at_once() {
+    let d = setup("billion");
+    let t0 = Instant::now();
+    let o = helicon_in(
+        &d,
+        &["mc", "c.toml", "--runs", "1000000000", "--out", "big"],
+    );
+    let dt = t0.elapsed();
+    no_panic(&o);
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert!(err.contains("1000000000 runs: at most"), "{err}");
+    assert!(err.contains("MiB") && err.contains("--shard"), "{err}");
+    assert!(!d.join("big").exists());
+    // refused before anything grows: well under the seconds a run would take
+    assert!(dt < Duration::from_secs(10), "{dt:?}");
+}
