@@ -3,8 +3,8 @@
 
 use helicon_core::state::MeasuredStates;
 use helicon_core::{
-    CoreError, Estimate, Estimator, FlightComputer, KalmanPredictor, Lqi, Reference,
-    ServoLimits, StateFeedback, StateMeasurement,
+    CoreError, Estimate, Estimator, FlightComputer, KalmanPredictor, Lqi, Reference, ServoLimits,
+    StateFeedback, StateMeasurement,
 };
 use helicon_gnc::design::{ControllerConfig, design};
 use helicon_model::linearize::linearize;

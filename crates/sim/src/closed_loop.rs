@@ -114,7 +114,9 @@ pub fn prepare_with_params(
         yaw_rad: scenario.trim.yaw_rad,
         wind_ned_m_s: Vector3::zeros(),
     };
-    let t = trim(&model, &target, &TrimOptions::default())?;
+    // the flight starts at this equilibrium: it must be one the helicopter
+    // can hold (inputs within the servo range, blades unstalled, …)
+    let t = trim(&model, &target, &TrimOptions::default())?.require_physical(&model)?;
     let ts = model.params().control.sample_time_s;
     let gains = match &scenario.controller.gains_file {
         Some(f) => {

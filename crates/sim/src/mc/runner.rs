@@ -138,6 +138,7 @@ impl Campaign {
                     wind_ned_m_s: Vector3::zeros(),
                 };
                 trim(&model, &target, &TrimOptions::default())
+                    .and_then(|t| t.require_physical(&model))
                     .map(|t| Prepared {
                         model,
                         trim: t,
