@@ -60,8 +60,8 @@ fn sim_writes_the_run_folder_default_and_explicit() {
         "gains.json",
         "scenario.toml",
         "report.md",
-        "output_psi.png",
-        "output_psi.svg",
+        "outputs.png",
+        "outputs.svg",
         "servos.png",
         "inflow.svg",
     ] {
@@ -171,7 +171,7 @@ fn demo_flies_closed_loop_and_writes_plots() {
     for f in [
         "log.csv",
         "summary.json",
-        "output_vn.png",
+        "outputs.png",
         "wind.png",
         "report.md",
     ] {
@@ -212,7 +212,7 @@ fn a_scenario_with_cases_flies_each_into_its_folder() {
             "summary.json",
             "gains.json",
             "report.md",
-            "output_psi.png",
+            "outputs.png",
         ] {
             assert!(run.join(case).join(f).exists(), "{case}/{f}");
         }

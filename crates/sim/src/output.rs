@@ -1,56 +1,48 @@
 //! Run outputs: one folder per closed-loop run.
 //!
-//! [`write_run`] writes
-//!
 //! | file | content |
 //! |---|---|
-//! | `log.csv` | the time series (columns below), every `log.decimation`-th sample from t = 0 |
+//! | `log.csv` | the time series, [`LOG_SCHEMA`] (see [`crate::log_csv`]), every `log.decimation`-th sample from t = 0 |
 //! | `summary.json` | the [`Summary`]: outcome, reason, end time, metrics per output, effort, saturation, estimator RMS, seeds, parameter hash, version |
 //! | `gains.json` | the flown gains ([`helicon_gnc::design::Gains::save`]); a scenario flies them again with `[controller] gains_file` |
 //! | `scenario.toml` | the scenario as flown (relative `params` / `gains_file` paths made absolute) |
-//! | `*.png`, `*.svg` | plots: each output against its reference, servo inputs, wind (when there is any), estimator errors of the nine measured states, inflow ratios |
-//! | `report.md` | a short human report linking the plots |
+//! | `outputs.png/svg` | vn, ve, vd, ψ each with its reference, stacked (thesis Figs 14.3, 14.5, 14.8) |
+//! | `servos.png/svg` | the four servo commands, saturation limits dashed |
+//! | `estimator.png/svg` | truth − estimate of the nine measured states: attitude, velocity, rates (thesis Fig. 15.4) |
+//! | `wind.png/svg` | air-mass velocity north, east, down (only when there is wind) |
+//! | `inflow.png/svg` | main- and tail-rotor inflow ratios |
+//! | `report.md` | a short human report with the tables and the figures |
 //!
-//! # `log.csv` columns (SI units: m, rad, m/s, rad/s; servo commands dimensionless)
+//! Two ways to write a run folder:
 //!
-//! 1. `t_s`: time (s);
-//! 2. the 30 true states, named as [`STATE_NAMES`] (`x y z` NED position,
-//!    `phi theta psi`, `u v w` body velocity, `p q r`, flapping, stabilizer
-//!    bar, servo states and their rates);
-//! 3. `S_col S_lat S_lon S_tr`: the servo commands sent to the plant (after
-//!    saturation), [`INPUT_NAMES`];
-//! 4. `ref_vn ref_ve ref_vd ref_psi`: the references (NED velocity, yaw);
-//! 5. `vn ve vd`: the true NED velocity;
-//! 6. `est_<m>` for the nine measured states `m` of (15.2), [`MEASURED_NAMES`]
-//!    (`phi theta psi u v w p q r`): the estimator's value (absolute);
-//! 7. `err_<m>`: truth − estimate (the yaw error wrapped to (−π, π]);
-//! 8. `meas_<m>`: the measurement given to the controller (ideal states, or
-//!    the output of attitude determination and fusion when `controller.fusion`);
-//! 9. `wind_n wind_e wind_d`: air-mass velocity NED (m/s);
-//! 10. `lambda_mr lambda_tr`: main- and tail-rotor inflow ratios;
-//! 11. `thrust_mr_n force_tr_y_n`: main-rotor thrust −hFz (N) and tail-rotor
-//!     side force tFy (N).
+//! - [`write_run`] from a [`Flight`] held in memory;
+//! - streaming: [`start_run`] before flying (creates the folder and
+//!   `log.csv`, so an unwritable folder fails before the flight), one
+//!   [`LogWriter::write`] per kept sample, then [`finish_run`] with the
+//!   summary. The figures are drawn from `log.csv` read back
+//!   ([`write_figures`]), decimated to a bounded number of points, so neither
+//!   flying nor plotting needs memory proportional to the duration.
 //!
-//! Numbers are written with the shortest representation that reads back to
-//! the same `f64`, so a log is an exact record of the run.
+//! `summary.json` never holds a silent `null` or `inf`: its only nulls are
+//! `reason` (the run completed) and `metrics.<output>.settling_time_s` (not
+//! settled); any other number that is not finite is an error naming the
+//! field ([`OutputError::NonFinite`]) and nothing is written.
 
-use crate::closed_loop::{Flight, LogRow, Prepared, Summary};
-use crate::plot::{LinePlot, PlotError, Series};
+pub use crate::log_csv::{
+    LOG_COLUMNS, LOG_FORMAT_VERSION, LOG_SCHEMA, LogCsvError, LogWriter, MEASURED_NAMES,
+    log_header, read_log_csv, write_log,
+};
+
+use crate::closed_loop::{Flight, Prepared, Summary};
+use crate::log_csv::LogReader;
+use crate::plot::{Decimator, Figure, HLine, Panel, PlotError, Series};
 use crate::scenario::{OUTPUTS, Scenario};
-use helicon_core::frames::wrap_pi;
 use helicon_gnc::design::DesignError;
-use helicon_model::state::{INPUT_NAMES, REDUCED_OFFSET, STATE_NAMES};
+use helicon_model::state::INPUT_NAMES;
 use std::fmt::Write as _;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// The nine measured states of the thesis (15.2), in order.
-pub const MEASURED_NAMES: [&str; 9] = ["phi", "theta", "psi", "u", "v", "w", "p", "q", "r"];
-
-/// Number of columns of `log.csv`.
-pub const LOG_COLUMNS: usize = 1 + 30 + 4 + 4 + 3 + 3 * 9 + 3 + 2 + 2;
-
-/// Errors writing the run outputs.
+/// Errors writing the run outputs; each names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
     /// Creating or writing a file failed.
@@ -69,10 +61,21 @@ pub enum OutputError {
         /// Message.
         message: String,
     },
+    /// A summary number is NaN or infinite (it would be written as `null`).
+    #[error("{path}: `{field}` is not a finite number: nothing written")]
+    NonFinite {
+        /// File.
+        path: String,
+        /// The JSON path of the field (`metrics.vn.rms_error`).
+        field: String,
+    },
+    /// Writing or reading `log.csv`.
+    #[error(transparent)]
+    Log(#[from] LogCsvError),
     /// Writing the gains failed.
     #[error(transparent)]
     Gains(#[from] DesignError),
-    /// Drawing a plot failed.
+    /// Drawing a figure failed.
     #[error(transparent)]
     Plot(#[from] PlotError),
 }
@@ -92,7 +95,7 @@ pub struct RunFiles {
     pub scenario: PathBuf,
     /// `report.md`.
     pub report: PathBuf,
-    /// Plots (PNG and SVG), in the order written.
+    /// Figures (PNG and SVG), in the order written.
     pub plots: Vec<PathBuf>,
     /// Number of data rows in `log.csv`.
     pub log_rows: usize,
@@ -105,104 +108,65 @@ fn io_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
     }
 }
 
-/// The `log.csv` header, in column order (see the module documentation).
-pub fn log_header() -> Vec<String> {
-    let mut h = Vec::with_capacity(LOG_COLUMNS);
-    h.push("t_s".to_string());
-    h.extend(STATE_NAMES.iter().map(|s| (*s).to_string()));
-    h.extend(INPUT_NAMES.iter().map(|s| (*s).to_string()));
-    h.extend(OUTPUTS.iter().map(|s| format!("ref_{s}")));
-    h.extend(["vn", "ve", "vd"].iter().map(|s| (*s).to_string()));
-    for prefix in ["est", "err", "meas"] {
-        h.extend(MEASURED_NAMES.iter().map(|s| format!("{prefix}_{s}")));
-    }
-    h.extend(
-        [
-            "wind_n",
-            "wind_e",
-            "wind_d",
-            "lambda_mr",
-            "lambda_tr",
-            "thrust_mr_n",
-            "force_tr_y_n",
-        ]
-        .iter()
-        .map(|s| (*s).to_string()),
-    );
-    h
-}
-
-/// truth − estimate of measured state `i` (yaw wrapped).
-fn estimator_error(r: &LogRow, i: usize) -> f64 {
-    let d = r.x[i + REDUCED_OFFSET] - r.estimate9[i];
-    if i == 2 { wrap_pi(d) } else { d }
-}
-
-/// Write one number: shortest round-trip text, plain notation for ordinary
-/// magnitudes and exponent notation for very small or large ones.
-fn put<W: Write>(w: &mut W, v: f64, first: bool) -> std::io::Result<()> {
-    if !first {
-        w.write_all(b",")?;
-    }
-    let a = v.abs();
-    if a == 0.0 || !a.is_finite() || (1e-4..1e9).contains(&a) {
-        write!(w, "{v}")
-    } else {
-        write!(w, "{v:e}")
-    }
-}
-
-fn write_row<W: Write>(w: &mut W, r: &LogRow) -> std::io::Result<()> {
-    put(w, r.t_s, true)?;
-    for v in r.x.iter() {
-        put(w, *v, false)?;
-    }
-    for v in r.u.iter() {
-        put(w, *v, false)?;
-    }
-    for v in r.reference {
-        put(w, v, false)?;
-    }
-    for v in &r.output[..3] {
-        put(w, *v, false)?;
-    }
-    for v in r.estimate9 {
-        put(w, v, false)?;
-    }
-    for i in 0..9 {
-        put(w, estimator_error(r, i), false)?;
-    }
-    for v in r.measured9 {
-        put(w, v, false)?;
-    }
-    for v in r.wind_ned.iter().chain(&r.lambda).chain(&r.thrust) {
-        put(w, *v, false)?;
-    }
-    w.write_all(b"\n")
-}
-
-/// Write `log.csv` (every `decimation`-th row from the first); returns the
-/// number of data rows.
-pub fn write_log(path: &Path, log: &[LogRow], decimation: u32) -> Result<usize, OutputError> {
-    let file = std::fs::File::create(path).map_err(|e| io_err(path, e))?;
-    let mut w = BufWriter::with_capacity(1 << 16, file);
-    let step = decimation.max(1) as usize;
-    let mut rows = 0;
-    let res = (|| -> std::io::Result<()> {
-        w.write_all(log_header().join(",").as_bytes())?;
-        w.write_all(b"\n")?;
-        for r in log.iter().step_by(step) {
-            write_row(&mut w, r)?;
-            rows += 1;
+/// Check that every number of a summary is finite. serde_json writes NaN
+/// and ±inf as `null`, so any `null` other than `reason` and
+/// `metrics.*.settling_time_s` names a non-finite field; a `Some(NaN)`
+/// settling time is caught directly. `path` names the file in the error.
+pub fn check_summary(path: &Path, summary: &Summary) -> Result<(), OutputError> {
+    let non_finite = |field: String| OutputError::NonFinite {
+        path: path.display().to_string(),
+        field,
+    };
+    for (name, m) in &summary.metrics {
+        if m.settling_time_s.is_some_and(|v| !v.is_finite()) {
+            return Err(non_finite(format!("metrics.{name}.settling_time_s")));
         }
-        w.flush()
-    })();
-    res.map_err(|e| io_err(path, e))?;
-    Ok(rows)
+    }
+    let v = serde_json::to_value(summary).map_err(|e| OutputError::Serialize {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    fn walk(v: &serde_json::Value, at: &str, bad: &mut Option<String>) {
+        if bad.is_some() {
+            return;
+        }
+        match v {
+            serde_json::Value::Null => {
+                let allowed = at == "reason"
+                    || (at.starts_with("metrics.") && at.ends_with(".settling_time_s"));
+                if !allowed {
+                    *bad = Some(at.to_string());
+                }
+            }
+            serde_json::Value::Array(a) => {
+                for (i, x) in a.iter().enumerate() {
+                    walk(x, &format!("{at}[{i}]"), bad);
+                }
+            }
+            serde_json::Value::Object(o) => {
+                for (k, x) in o {
+                    let p = if at.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{at}.{k}")
+                    };
+                    walk(x, &p, bad);
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut bad = None;
+    walk(&v, "", &mut bad);
+    match bad {
+        Some(field) => Err(non_finite(field)),
+        None => Ok(()),
+    }
 }
 
-/// Write `summary.json`.
+/// Write `summary.json` (checked with [`check_summary`] first).
 pub fn write_summary(path: &Path, summary: &Summary) -> Result<(), OutputError> {
+    check_summary(path, summary)?;
     let text = serde_json::to_string_pretty(summary).map_err(|e| OutputError::Serialize {
         path: path.display().to_string(),
         message: e.to_string(),
@@ -212,24 +176,22 @@ pub fn write_summary(path: &Path, summary: &Summary) -> Result<(), OutputError> 
 
 /// The scenario as flown, with relative file references made absolute so the
 /// copy in the run folder still points at the same files.
-fn scenario_as_flown(scenario: &Scenario) -> Scenario {
+fn scenario_as_flown(scenario: &Scenario) -> Result<Scenario, std::io::Error> {
+    let cwd = std::env::current_dir()?;
     let abs = |p: &Path| {
         let r = scenario.resolve(p);
-        if r.is_relative() {
-            std::env::current_dir().map_or(r.clone(), |d| d.join(&r))
-        } else {
-            r
-        }
+        if r.is_relative() { cwd.join(&r) } else { r }
     };
     let mut s = scenario.clone();
     s.params = s.params.as_deref().map(abs);
     s.controller.gains_file = s.controller.gains_file.as_deref().map(abs);
-    s
+    Ok(s)
 }
 
 /// Write `scenario.toml`.
 pub fn write_scenario(path: &Path, scenario: &Scenario) -> Result<(), OutputError> {
-    let s = scenario_as_flown(scenario);
+    let s = scenario_as_flown(scenario)
+        .map_err(|e| io_err(path, format!("current folder for absolute paths: {e}")))?;
     let body = toml::to_string(&s).map_err(|e| OutputError::Serialize {
         path: path.display().to_string(),
         message: e.to_string(),
@@ -242,137 +204,295 @@ pub fn write_scenario(path: &Path, scenario: &Scenario) -> Result<(), OutputErro
     std::fs::write(path, text).map_err(|e| io_err(path, e))
 }
 
-/// At most this many points per plotted line (a longer log is strided).
-const MAX_PLOT_POINTS: usize = 4000;
+// ---------------------------------------------------------------- figures
 
-struct PlotSpec {
-    stem: &'static str,
-    title: String,
-    y_label: &'static str,
-    lines: Vec<(String, Vec<(f64, f64)>)>,
+/// What the run figures are drawn with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FigureOptions {
+    /// Title prefix (the scenario name).
+    pub name: String,
+    /// Appended to every title, e.g. `diverged at t = 0.53 s`.
+    pub note: Option<String>,
+    /// Servo command limits `[min, max]` per input (dashed on the servo figure).
+    pub servo_limits: Option<[[f64; 2]; 4]>,
+    /// Buckets of the min/max decimation: at most twice this many points
+    /// per line, whatever the duration.
+    pub max_buckets: usize,
 }
 
-fn column(log: &[LogRow], stride: usize, f: impl Fn(&LogRow) -> f64) -> Vec<(f64, f64)> {
-    log.iter().step_by(stride).map(|r| (r.t_s, f(r))).collect()
-}
-
-fn plot_specs(log: &[LogRow]) -> Vec<PlotSpec> {
-    let stride = log.len().div_ceil(MAX_PLOT_POINTS).max(1);
-    let mut specs = Vec::new();
-    let outputs: [(&str, &str, &str); 4] = [
-        ("vn", "North velocity", "vn [m/s]"),
-        ("ve", "East velocity", "ve [m/s]"),
-        ("vd", "Down velocity", "vd [m/s]"),
-        ("psi", "Heading", "psi [rad]"),
-    ];
-    for (j, (name, what, unit)) in outputs.into_iter().enumerate() {
-        specs.push(PlotSpec {
-            stem: match j {
-                0 => "output_vn",
-                1 => "output_ve",
-                2 => "output_vd",
-                _ => "output_psi",
-            },
-            title: format!("{what} {name} and its reference"),
-            y_label: unit,
-            lines: vec![
-                (
-                    format!("{name} reference"),
-                    column(log, stride, |r| r.reference[j]),
-                ),
-                (name.to_string(), column(log, stride, |r| r.output[j])),
-            ],
-        });
-    }
-    specs.push(PlotSpec {
-        stem: "servos",
-        title: "Servo inputs (after saturation)".to_string(),
-        y_label: "servo command [-]",
-        lines: (0..4)
-            .map(|i| (INPUT_NAMES[i].to_string(), column(log, stride, |r| r.u[i])))
-            .collect(),
-    });
-    if log.iter().any(|r| r.wind_ned.iter().any(|w| *w != 0.0)) {
-        specs.push(PlotSpec {
-            stem: "wind",
-            title: "Wind (air-mass velocity, NED)".to_string(),
-            y_label: "wind [m/s]",
-            lines: ["north", "east", "down"]
-                .iter()
-                .enumerate()
-                .map(|(i, n)| ((*n).to_string(), column(log, stride, |r| r.wind_ned[i])))
-                .collect(),
-        });
-    }
-    for (stem, what, unit, first) in [
-        ("estimator_error_attitude", "attitude", "error [rad]", 0),
-        (
-            "estimator_error_velocity",
-            "body velocity",
-            "error [m/s]",
-            3,
-        ),
-        ("estimator_error_rates", "body rates", "error [rad/s]", 6),
-    ] {
-        specs.push(PlotSpec {
-            stem,
-            title: format!("Estimator error (truth - estimate): {what}"),
-            y_label: unit,
-            lines: (first..first + 3)
-                .map(|i| {
-                    (
-                        MEASURED_NAMES[i].to_string(),
-                        column(log, stride, |r| estimator_error(r, i)),
-                    )
-                })
-                .collect(),
-        });
-    }
-    specs.push(PlotSpec {
-        stem: "inflow",
-        title: "Inflow ratios".to_string(),
-        y_label: "inflow ratio [-]",
-        lines: vec![
-            (
-                "main rotor".to_string(),
-                column(log, stride, |r| r.lambda[0]),
-            ),
-            (
-                "tail rotor".to_string(),
-                column(log, stride, |r| r.lambda[1]),
-            ),
-        ],
-    });
-    specs
-}
-
-/// Draw the plots as PNG and SVG into `dir`; returns the files written.
-pub fn write_plots(dir: &Path, log: &[LogRow]) -> Result<Vec<PathBuf>, OutputError> {
-    let mut files = Vec::new();
-    if log.is_empty() {
-        return Ok(files);
-    }
-    for spec in plot_specs(log) {
-        let mut p = LinePlot::new(&spec.title, "time [s]", spec.y_label);
-        for (name, pts) in &spec.lines {
-            p = p.series(Series::new(name, pts));
+impl FigureOptions {
+    /// The options for a run: its name, the divergence (if any) and the
+    /// servo limits of the model flown.
+    pub fn for_run(prepared: &Prepared, summary: &Summary) -> Self {
+        let servos = &prepared.model.params().servos;
+        Self {
+            name: summary.scenario.clone(),
+            note: summary
+                .reason
+                .as_ref()
+                .map(|_| format!("diverged at t = {:.3} s", summary.t_end_s)),
+            servo_limits: Some(std::array::from_fn(|i| [servos[i].s_min, servos[i].s_max])),
+            max_buckets: DEFAULT_MAX_BUCKETS,
         }
+    }
+
+    fn title(&self, what: &str) -> String {
+        match &self.note {
+            Some(n) => format!("{}: {what} ({n})", self.name),
+            None => format!("{}: {what}", self.name),
+        }
+    }
+}
+
+/// Default decimation buckets: ≤ 4000 points per line.
+pub const DEFAULT_MAX_BUCKETS: usize = 2000;
+
+/// One figure of the run folder.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RunFigure {
+    /// File stem (`outputs` for `outputs.png` and `outputs.svg`).
+    pub stem: &'static str,
+    /// Its title.
+    pub title: String,
+    /// What it shows, for the report.
+    pub caption: &'static str,
+}
+
+/// The `log.csv` columns the figures use, in this order (the positions below).
+const FIG_COLUMNS: [&str; 27] = [
+    "t_s",
+    "ref_vn",
+    "ref_ve",
+    "ref_vd",
+    "ref_psi",
+    "vn",
+    "ve",
+    "vd",
+    "psi",
+    "S_col",
+    "S_lat",
+    "S_lon",
+    "S_tr",
+    "err_phi",
+    "err_theta",
+    "err_psi",
+    "err_u",
+    "err_v",
+    "err_w",
+    "err_p",
+    "err_q",
+    "err_r",
+    "wind_n",
+    "wind_e",
+    "wind_d",
+    "lambda_mr",
+    "lambda_tr",
+];
+// positions in FIG_COLUMNS (checked by a unit test)
+const REF0: usize = 1;
+const OUT0: usize = 5;
+const SERVO0: usize = 9;
+const ERR0: usize = 13;
+const WIND0: usize = 22;
+const LAMBDA0: usize = 25;
+
+const BLACK: [u8; 3] = [0, 0, 0];
+const BLUE: [u8; 3] = [31, 119, 180];
+const RED: [u8; 3] = [214, 39, 40];
+
+/// Draw the run figures (PNG and SVG) into `dir` from the log file `log_csv`
+/// (read back with [`LogReader`], min/max-decimated to at most
+/// `2 × max_buckets` points per line, so the time and memory are bounded by
+/// the file length and the bucket count, not the number of points drawn).
+/// Returns the figures written (none for a log without rows) and their files.
+pub fn write_figures(
+    dir: &Path,
+    log_csv: &Path,
+    opts: &FigureOptions,
+) -> Result<(Vec<RunFigure>, Vec<PathBuf>), OutputError> {
+    let mut reader = LogReader::open(log_csv, &FIG_COLUMNS)?;
+    let mut dec = Decimator::new(FIG_COLUMNS.len() - 1, opts.max_buckets);
+    let mut wind = false;
+    while let Some(row) = reader.next_row()? {
+        wind |= row[WIND0..WIND0 + 3].iter().any(|v| *v != 0.0);
+        dec.push(row[0], &row[1..]);
+    }
+    if dec.rows() == 0 {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    // decimated series by FIG_COLUMNS position
+    let pts: Vec<Vec<(f64, f64)>> = (1..FIG_COLUMNS.len()).map(|c| dec.series(c - 1)).collect();
+    let col = |c: usize| pts[c - 1].as_slice();
+    let pi = std::f64::consts::PI;
+
+    let mut figures: Vec<(RunFigure, Figure<'_>)> = Vec::new();
+
+    // outputs and references (thesis Fig. 14.5 layout)
+    let out_labels = ["vn [m/s]", "ve [m/s]", "vd [m/s]", "ψ [rad]"];
+    let out_names = ["vn", "ve", "vd", "ψ"];
+    let ref_names = [
+        "vn reference",
+        "ve reference",
+        "vd reference",
+        "ψ reference",
+    ];
+    let title = opts.title("outputs and references (NED velocity, heading)");
+    let mut fig = Figure::new(&title, "time [s]");
+    for j in 0..4 {
+        let mut y = Series::new(out_names[j], col(OUT0 + j)).color(BLUE);
+        let mut r = Series::new(ref_names[j], col(REF0 + j))
+            .color(BLACK)
+            .dashed();
+        if j == 3 {
+            y = y.break_jumps_over(pi);
+            r = r.break_jumps_over(pi);
+        }
+        fig = fig.panel(Panel::new(out_labels[j]).series(y).series(r));
+    }
+    figures.push((
+        RunFigure {
+            stem: "outputs",
+            title,
+            caption: "each controlled output (solid) with its reference (dashed)",
+        },
+        fig,
+    ));
+
+    // servos with their saturation limits
+    let title = opts.title("servo commands (after saturation)");
+    let mut fig = Figure::new(&title, "time [s]");
+    for i in 0..4 {
+        let data = col(SERVO0 + i);
+        let mut panel = Panel::new(&format!("{} [-]", INPUT_NAMES[i]))
+            .series(Series::new(INPUT_NAMES[i], data).color(BLUE));
+        if let Some(lim) = opts.servo_limits.map(|l| l[i]) {
+            let (lo, hi) = data
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |b, p| {
+                    (b.0.min(p.1), b.1.max(p.1))
+                });
+            // a limit is shown when it is within one data span (at least 5 %
+            // of the servo range) of the data; otherwise it is named in the
+            // legend, so a small signal is not flattened by a far limit
+            let reach = (hi - lo).max(0.05 * (lim[1] - lim[0]));
+            for (which, l) in [("max", lim[1]), ("min", lim[0])] {
+                if l >= lo - reach && l <= hi + reach {
+                    panel.y_include.push(l);
+                    panel.hlines.push(HLine {
+                        y: l,
+                        label: format!("{which} {l}"),
+                        color: RED,
+                    });
+                } else {
+                    panel.notes.push(format!("{which} {l} (off scale)"));
+                }
+            }
+        }
+        fig = fig.panel(panel);
+    }
+    figures.push((
+        RunFigure {
+            stem: "servos",
+            title,
+            caption: "the four servo commands sent to the plant, saturation limits dashed",
+        },
+        fig,
+    ));
+
+    // estimator errors of the nine measured states
+    let title = opts.title("estimator error (truth − estimate)");
+    let mut fig = Figure::new(&title, "time [s]");
+    let groups = [
+        ("attitude error [rad]", ["φ", "θ", "ψ"]),
+        ("velocity error [m/s]", ["u", "v", "w"]),
+        ("rate error [rad/s]", ["p", "q", "r"]),
+    ];
+    for (g, (label, names)) in groups.iter().enumerate() {
+        let mut panel = Panel::new(label);
+        for (k, name) in names.iter().enumerate() {
+            panel = panel.series(Series::new(name, col(ERR0 + 3 * g + k)));
+        }
+        fig = fig.panel(panel);
+    }
+    figures.push((
+        RunFigure {
+            stem: "estimator",
+            title,
+            caption: "truth − estimate of the nine measured states: attitude, body velocity, body rates",
+        },
+        fig,
+    ));
+
+    if wind {
+        let title = opts.title("wind (air-mass velocity, NED)");
+        let mut fig = Figure::new(&title, "time [s]");
+        for (i, (label, name)) in [
+            ("north [m/s]", "wind north"),
+            ("east [m/s]", "wind east"),
+            ("down [m/s]", "wind down"),
+        ]
+        .iter()
+        .enumerate()
+        {
+            fig =
+                fig.panel(Panel::new(label).series(Series::new(name, col(WIND0 + i)).color(BLUE)));
+        }
+        figures.push((
+            RunFigure {
+                stem: "wind",
+                title,
+                caption: "the air-mass velocity in NED axes",
+            },
+            fig,
+        ));
+    }
+
+    let title = opts.title("rotor inflow ratios");
+    let mut fig = Figure::new(&title, "time [s]");
+    fig.panel_height_px = 190;
+    for (i, (label, name)) in [("λ main rotor [-]", "λ_mr"), ("λ tail rotor [-]", "λ_tr")]
+        .iter()
+        .enumerate()
+    {
+        fig = fig.panel(Panel::new(label).series(Series::new(name, col(LAMBDA0 + i)).color(BLUE)));
+    }
+    figures.push((
+        RunFigure {
+            stem: "inflow",
+            title,
+            caption: "main- and tail-rotor inflow ratios",
+        },
+        fig,
+    ));
+
+    let mut files = Vec::with_capacity(2 * figures.len());
+    let mut written = Vec::with_capacity(figures.len());
+    for (info, fig) in figures {
         for ext in ["png", "svg"] {
-            let path = dir.join(format!("{}.{ext}", spec.stem));
-            p.write(&path)?;
+            let path = dir.join(format!("{}.{ext}", info.stem));
+            fig.write(&path)?;
             files.push(path);
         }
+        written.push(info);
     }
-    Ok(files)
+    Ok((written, files))
 }
+
+// ---------------------------------------------------------------- report
 
 fn fmt_opt(v: Option<f64>) -> String {
     v.map_or_else(|| "not settled".to_string(), |s| format!("{s:.2}"))
 }
 
-/// The text of `report.md`.
-pub fn report_markdown(scenario: &Scenario, prepared: &Prepared, flight: &Flight) -> String {
-    let s = &flight.summary;
+/// The text of `report.md`: the run, its outcome, tables of the metrics and
+/// the `figures` written (the summary is assumed checked, [`check_summary`]).
+pub fn report_markdown(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    summary: &Summary,
+    figures: &[RunFigure],
+) -> String {
+    let s = summary;
     let mut r = String::new();
     let _ = writeln!(r, "# helicon run: {}\n", s.scenario);
     let _ = writeln!(
@@ -463,18 +583,22 @@ pub fn report_markdown(scenario: &Scenario, prepared: &Prepared, flight: &Flight
         .map(|v| format!("{v:.2e}"))
         .collect();
     let _ = writeln!(r, "| {} |", cells.join(" | "));
-    let _ = writeln!(r, "\n## Plots\n");
-    for spec in plot_specs(&flight.log) {
+    let _ = writeln!(r, "\n## Figures\n");
+    if figures.is_empty() {
+        let _ = writeln!(r, "None: the log has no rows.\n");
+    }
+    for f in figures {
         let _ = writeln!(
             r,
-            "![{t}]({s}.png)  \n{t}: [PNG]({s}.png) · [SVG]({s}.svg)\n",
-            t = spec.title,
-            s = spec.stem
+            "![{t}]({s}.png)  \n{c}: [PNG]({s}.png) · [SVG]({s}.svg)\n",
+            t = f.title,
+            c = f.caption,
+            s = f.stem
         );
     }
     let _ = writeln!(
         r,
-        "## Files\n\n`log.csv` (time series, columns in docs/closed-loop.md), `summary.json`, `gains.json` (the flown gains), `scenario.toml` (the scenario as flown)."
+        "## Files\n\n`log.csv` (time series, format version {LOG_FORMAT_VERSION}, columns in docs/closed-loop.md), `summary.json`, `gains.json` (the flown gains), `scenario.toml` (the scenario as flown)."
     );
     r
 }
@@ -483,38 +607,68 @@ fn on(b: bool) -> &'static str {
     if b { "on" } else { "off" }
 }
 
-/// Write the run folder `dir` (created if needed): `log.csv`,
-/// `summary.json`, `gains.json`, `scenario.toml`, the plots and `report.md`.
-pub fn write_run(
+/// Start a run folder before flying: create `dir` and `log.csv` (its
+/// header written), so a folder that cannot be written fails before the
+/// flight. Write each kept sample with [`LogWriter::write`], then call
+/// [`finish_run`] with `LogWriter::finish`'s row count.
+pub fn start_run(dir: &Path) -> Result<LogWriter, OutputError> {
+    std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
+    Ok(LogWriter::create(&dir.join("log.csv"))?)
+}
+
+/// Finish a run folder whose `log.csv` is written ([`start_run`]):
+/// `summary.json`, `gains.json`, `scenario.toml`, the figures (drawn from
+/// `log.csv`) and `report.md`. The summary is checked first.
+pub fn finish_run(
     dir: &Path,
     scenario: &Scenario,
     prepared: &Prepared,
-    flight: &Flight,
+    summary: &Summary,
+    log_rows: usize,
 ) -> Result<RunFiles, OutputError> {
-    std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
+    let summary_path = dir.join("summary.json");
+    check_summary(&summary_path, summary)?;
     let log = dir.join("log.csv");
-    // the flight log is already decimated (`[log] decimation`) as it is flown
-    let log_rows = write_log(&log, &flight.log, 1)?;
-    let summary = dir.join("summary.json");
-    write_summary(&summary, &flight.summary)?;
+    let (figures, plots) = write_figures(dir, &log, &FigureOptions::for_run(prepared, summary))?;
+    write_summary(&summary_path, summary)?;
     let gains = dir.join("gains.json");
     prepared.gains.save(&gains)?;
     let scenario_path = dir.join("scenario.toml");
     write_scenario(&scenario_path, scenario)?;
-    let plots = write_plots(dir, &flight.log)?;
     let report = dir.join("report.md");
-    std::fs::write(&report, report_markdown(scenario, prepared, flight))
-        .map_err(|e| io_err(&report, e))?;
+    std::fs::write(
+        &report,
+        report_markdown(scenario, prepared, summary, &figures),
+    )
+    .map_err(|e| io_err(&report, e))?;
     Ok(RunFiles {
         dir: dir.to_path_buf(),
         log,
-        summary,
+        summary: summary_path,
         gains,
         scenario: scenario_path,
         report,
         plots,
         log_rows,
     })
+}
+
+/// Write the run folder `dir` (created if needed) of a flight held in
+/// memory: `log.csv` (its rows as flown; the flight applied `[log]
+/// decimation`), then as [`finish_run`].
+pub fn write_run(
+    dir: &Path,
+    scenario: &Scenario,
+    prepared: &Prepared,
+    flight: &Flight,
+) -> Result<RunFiles, OutputError> {
+    check_summary(&dir.join("summary.json"), &flight.summary)?;
+    let mut log = start_run(dir)?;
+    for r in &flight.log {
+        log.write(r)?;
+    }
+    let rows = log.finish()?;
+    finish_run(dir, scenario, prepared, &flight.summary, rows)
 }
 
 /// One flown case of a multi-case scenario (`[[case]]`), for
@@ -538,6 +692,9 @@ pub fn write_cases_index(
 ) -> Result<(PathBuf, PathBuf), OutputError> {
     std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
     let summary = dir.join("summary.json");
+    for c in cases {
+        check_summary(&summary, c.summary)?;
+    }
     let mut map = serde_json::Map::new();
     for c in cases {
         let v = serde_json::to_value(c.summary).map_err(|e| OutputError::Serialize {
@@ -596,4 +753,29 @@ pub fn write_cases_index(
     let report = dir.join("report.md");
     std::fs::write(&report, r).map_err(|e| io_err(&report, e))?;
     Ok((summary, report))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn figure_column_positions_match_the_names() {
+        for j in 0..4 {
+            assert_eq!(FIG_COLUMNS[REF0 + j], format!("ref_{}", OUTPUTS[j]));
+            assert_eq!(FIG_COLUMNS[OUT0 + j], OUTPUTS[j]);
+            assert_eq!(FIG_COLUMNS[SERVO0 + j], INPUT_NAMES[j]);
+        }
+        for (i, m) in MEASURED_NAMES.iter().enumerate() {
+            assert_eq!(FIG_COLUMNS[ERR0 + i], format!("err_{m}"));
+        }
+        assert_eq!(
+            &FIG_COLUMNS[WIND0..WIND0 + 3],
+            &["wind_n", "wind_e", "wind_d"]
+        );
+        assert_eq!(&FIG_COLUMNS[LAMBDA0..], &["lambda_mr", "lambda_tr"]);
+        for c in FIG_COLUMNS {
+            assert!(crate::log_csv::log_column(c).is_some(), "{c}");
+        }
+    }
 }

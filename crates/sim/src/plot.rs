@@ -1,4 +1,7 @@
-//! Time-series line plots to PNG and SVG (plotters, embedded DejaVu Sans).
+//! Time-series plots to PNG and SVG (plotters, embedded DejaVu Sans):
+//! [`LinePlot`], one panel; [`Figure`], stacked [`Panel`]s sharing the time
+//! axis with legends beside them; [`Decimator`], bounded min/max decimation
+//! of long series.
 //!
 //! ```no_run
 //! use helicon_sim::plot::{LinePlot, Series};
@@ -10,6 +13,7 @@
 //! ```
 
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use std::path::Path;
 use std::sync::OnceLock;
@@ -45,20 +49,52 @@ pub enum PlotError {
     },
 }
 
-/// One named line. Consecutive points whose y differs by more than half the
-/// plot's y-range are not connected (angle wrap-arounds).
+/// One named line. In a [`LinePlot`], consecutive points whose y differs by
+/// more than half the plot's y-range are not connected (angle wrap-arounds);
+/// in a [`Figure`] panel, only jumps beyond [`Series::break_jumps_over`].
 #[derive(Debug, Clone, Copy)]
 pub struct Series<'a> {
     /// Legend name.
     pub name: &'a str,
     /// Points `(x, y)`; non-finite points are skipped.
     pub points: &'a [(f64, f64)],
+    /// Drawn dashed (references, limits).
+    pub dashed: bool,
+    /// Colour `[r, g, b]`; `None` takes the next palette colour.
+    pub color: Option<[u8; 3]>,
+    /// In a [`Figure`]: do not connect points whose y jumps by more than
+    /// this (an angle wrapping through ±π: use π).
+    pub break_jumps_over: Option<f64>,
 }
 
 impl<'a> Series<'a> {
-    /// A named series.
+    /// A named solid series in the next palette colour.
     pub fn new(name: &'a str, points: &'a [(f64, f64)]) -> Self {
-        Self { name, points }
+        Self {
+            name,
+            points,
+            dashed: false,
+            color: None,
+            break_jumps_over: None,
+        }
+    }
+
+    /// Drawn dashed.
+    pub fn dashed(mut self) -> Self {
+        self.dashed = true;
+        self
+    }
+
+    /// In this colour.
+    pub fn color(mut self, rgb: [u8; 3]) -> Self {
+        self.color = Some(rgb);
+        self
+    }
+
+    /// Not connected across jumps larger than `jump` (angles: π).
+    pub fn break_jumps_over(mut self, jump: f64) -> Self {
+        self.break_jumps_over = Some(jump);
+        self
     }
 }
 
@@ -139,10 +175,12 @@ impl<'a> LinePlot<'a> {
         Some((b.0, b.1, b.2 - pad, b.3 + pad))
     }
 
+    /// Draw on `root`; `raster` for a bitmap backend.
     fn draw<DB: DrawingBackend>(
         &self,
         root: DrawingArea<DB, Shift>,
         path: &str,
+        raster: bool,
     ) -> Result<(), PlotError> {
         let err = |e: &dyn std::fmt::Display| PlotError::Draw {
             path: path.to_string(),
@@ -168,7 +206,7 @@ impl<'a> LinePlot<'a> {
             .map_err(|e| err(&e))?;
         let jump = 0.5 * (y1 - y0);
         for (i, s) in self.series.iter().enumerate() {
-            let color = PALETTE[i % PALETTE.len()];
+            let color = s.color.map_or(PALETTE[i % PALETTE.len()], rgb);
             // Split into runs at jumps larger than half the y-range (angle
             // wrap-arounds): no vertical connector, and no miter spike where
             // the wide polyline would reverse direction.
@@ -188,16 +226,16 @@ impl<'a> LinePlot<'a> {
                     run.push((x, y));
                 }
             }
-            for (r, run) in runs.into_iter().enumerate() {
-                let anno = chart
-                    .draw_series(LineSeries::new(run, color.stroke_width(2)))
-                    .map_err(|e| err(&e))?;
-                if r == 0 {
-                    anno.label(s.name).legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                    });
-                }
+            for run in runs {
+                draw_run(&mut chart, &root, run, color, s.dashed, raster).map_err(|e| err(&e))?;
             }
+            chart
+                .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
+                .map_err(|e| err(&e))?
+                .label(s.name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
         }
         chart
             .configure_series_labels()
@@ -218,14 +256,48 @@ impl<'a> LinePlot<'a> {
             Some("png") => self.draw(
                 BitMapBackend::new(path, self.size_px).into_drawing_area(),
                 &name,
+                true,
             ),
             Some("svg") => self.draw(
                 SVGBackend::new(path, self.size_px).into_drawing_area(),
                 &name,
+                false,
             ),
             _ => Err(PlotError::Format { path: name }),
         }
     }
+}
+
+/// A chart with f64 axes.
+type Chart2d<'c, DB> = ChartContext<'c, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Draw one connected run of points, 2 px wide. Solid on a bitmap: 1 px
+/// lines at three 1 px offsets, because plotters fills a wide polyline as one
+/// polygon whose joins spike far past the data and tear where noisy data
+/// reverse direction; SVG viewers draw wide polylines properly.
+fn draw_run<DB: DrawingBackend>(
+    chart: &mut Chart2d<'_, DB>,
+    root: &DrawingArea<DB, Shift>,
+    run: Vec<(f64, f64)>,
+    color: RGBColor,
+    dashed: bool,
+    raster: bool,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    if run.len() < 2 {
+        return Ok(());
+    }
+    if dashed {
+        chart.draw_series(DashedLineSeries::new(run, 9, 6, color.stroke_width(2)))?;
+    } else if raster {
+        let pix: Vec<(i32, i32)> = run.iter().map(|p| chart.backend_coord(p)).collect();
+        for (dx, dy) in [(0, 0), (1, 0), (0, 1)] {
+            let shifted: Vec<(i32, i32)> = pix.iter().map(|&(x, y)| (x + dx, y + dy)).collect();
+            root.draw(&PathElement::new(shifted, color.stroke_width(1)))?;
+        }
+    } else {
+        chart.draw_series(LineSeries::new(run, color.stroke_width(2)))?;
+    }
+    Ok(())
 }
 
 /// Convenience: one call for the common case (title, labels, series, path).
@@ -239,4 +311,582 @@ pub fn line_plot(
     let mut p = LinePlot::new(title, x_label, y_label);
     p.series.extend_from_slice(series);
     p.write(path)
+}
+
+/// The tick step plotters takes on an axis `[lo, hi]` with at most `n`
+/// labels: the smallest 1, 2 or 5 × 10^k giving at most `n` ticks.
+fn tick_step(lo: f64, hi: f64, n: usize) -> f64 {
+    let span = hi - lo;
+    if span.is_nan() || span <= 0.0 || span.is_infinite() {
+        return 1.0;
+    }
+    let mut step = 10f64.powf(span.log10().ceil());
+    for _ in 0..60 {
+        let mut next = None;
+        for f in [0.5, 0.2, 0.1] {
+            let s = step * f;
+            if ((span / s).floor() as usize) < n {
+                next = Some(s);
+            }
+        }
+        match next {
+            // 0.1 fitted: go down a decade; else stop at the finest that fitted
+            Some(s) if (s - step * 0.1).abs() <= 1e-12 * step => step = s,
+            Some(s) => return s,
+            None => return step,
+        }
+    }
+    step
+}
+
+/// Tick label for `v` on an axis `[lo, hi]` with at most `n` labels: the
+/// decimals the tick step needs; for an axis whose values are all below
+/// 1e-3 or reach 1e6, `m e k` with one exponent `k` per axis.
+fn tick_label(v: f64, lo: f64, hi: f64, n: usize) -> String {
+    let step = tick_step(lo, hi, n);
+    // a tick at zero computed as 1e-19 reads as zero
+    if v.abs() < 1e-6 * step {
+        return "0".to_string();
+    }
+    let decimals = |step: f64| (-(step.log10() + 1e-9).floor()).clamp(0.0, 8.0) as usize;
+    let big = lo.abs().max(hi.abs());
+    if (1e-3..1e6).contains(&big) {
+        let d = decimals(step);
+        return format!("{v:.d$}");
+    }
+    let e = big.log10().floor() as i32;
+    let scale = 10f64.powi(e);
+    let d = decimals(step / scale);
+    format!("{:.d$}e{e}", v / scale)
+}
+
+/// A dashed horizontal line of a [`Panel`] (a limit), labelled in the legend.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HLine {
+    /// Height.
+    pub y: f64,
+    /// Legend label.
+    pub label: String,
+    /// Colour `[r, g, b]`.
+    pub color: [u8; 3],
+}
+
+/// One panel of a [`Figure`]: its own y-axis, series, limits and legend.
+#[derive(Debug, Clone, Default)]
+pub struct Panel<'a> {
+    /// Y-axis label (with unit).
+    pub y_label: String,
+    /// Lines.
+    pub series: Vec<Series<'a>>,
+    /// Dashed horizontal lines; drawn when inside the y-range (put their
+    /// heights in `y_include` to force them in).
+    pub hlines: Vec<HLine>,
+    /// Values the y-axis must show besides the data.
+    pub y_include: Vec<f64>,
+    /// Extra legend lines (text only), e.g. a limit outside the view.
+    pub notes: Vec<String>,
+}
+
+impl<'a> Panel<'a> {
+    /// An empty panel with its y-axis label (with unit).
+    pub fn new(y_label: &str) -> Self {
+        Self {
+            y_label: y_label.to_string(),
+            ..Self::default()
+        }
+    }
+
+    /// Add a series.
+    pub fn series(mut self, s: Series<'a>) -> Self {
+        self.series.push(s);
+        self
+    }
+
+    fn y_bounds(&self) -> Option<(f64, f64)> {
+        let mut b = (f64::INFINITY, f64::NEG_INFINITY);
+        let ys = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().filter(|p| p.0.is_finite()).map(|p| p.1))
+            .chain(self.y_include.iter().copied())
+            .filter(|y| y.is_finite());
+        for y in ys {
+            b = (b.0.min(y), b.1.max(y));
+        }
+        if !b.0.is_finite() {
+            return None;
+        }
+        let span = b.1 - b.0;
+        let pad = if span > 0.0 {
+            0.06 * span
+        } else {
+            1.1 * (0.05 * b.0.abs()).max(1e-3)
+        };
+        Some((b.0 - pad, b.1 + pad))
+    }
+}
+
+/// Stacked panels sharing one x-axis (drawn under the bottom panel), one
+/// title, a legend at the right of each panel (never over the data).
+#[derive(Debug, Clone)]
+pub struct Figure<'a> {
+    /// Title.
+    pub title: String,
+    /// X-axis label (with unit).
+    pub x_label: String,
+    /// Panels, top to bottom.
+    pub panels: Vec<Panel<'a>>,
+    /// Width in pixels (legends included).
+    pub width_px: u32,
+    /// Height of each panel in pixels.
+    pub panel_height_px: u32,
+}
+
+const TITLE_H: u32 = 44;
+const X_AXIS_H: u32 = 48;
+const LEGEND_W: u32 = 190;
+const X_LABELS: usize = 12;
+const Y_LABELS: usize = 6;
+
+fn rgb(c: [u8; 3]) -> RGBColor {
+    RGBColor(c[0], c[1], c[2])
+}
+
+impl<'a> Figure<'a> {
+    /// An empty figure, 1200 px wide, 210 px per panel.
+    pub fn new(title: &str, x_label: &str) -> Self {
+        Self {
+            title: title.to_string(),
+            x_label: x_label.to_string(),
+            panels: Vec::new(),
+            width_px: 1200,
+            panel_height_px: 210,
+        }
+    }
+
+    /// Add a panel (below the others).
+    pub fn panel(mut self, p: Panel<'a>) -> Self {
+        self.panels.push(p);
+        self
+    }
+
+    /// Total size in pixels.
+    pub fn size_px(&self) -> (u32, u32) {
+        let n = self.panels.len().max(1) as u32;
+        (self.width_px, TITLE_H + n * self.panel_height_px + X_AXIS_H)
+    }
+
+    fn x_bounds(&self) -> Option<(f64, f64)> {
+        let mut b = (f64::INFINITY, f64::NEG_INFINITY);
+        for p in &self.panels {
+            for s in &p.series {
+                for &(x, y) in s.points {
+                    if x.is_finite() && y.is_finite() {
+                        b = (b.0.min(x), b.1.max(x));
+                    }
+                }
+            }
+        }
+        if !b.0.is_finite() {
+            return None;
+        }
+        if b.1 - b.0 <= 0.0 {
+            b = (b.0 - 0.5, b.1 + 0.5);
+        }
+        Some(b)
+    }
+
+    /// Draw on `root`; `raster` for a bitmap backend.
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, Shift>,
+        path: &str,
+        raster: bool,
+    ) -> Result<(), PlotError> {
+        let err = |e: &dyn std::fmt::Display| PlotError::Draw {
+            path: path.to_string(),
+            message: e.to_string(),
+        };
+        let empty = || PlotError::Empty {
+            title: self.title.clone(),
+        };
+        let (x0, x1) = self.x_bounds().ok_or_else(empty)?;
+        let mut ranges = Vec::with_capacity(self.panels.len());
+        for p in &self.panels {
+            ranges.push(p.y_bounds().ok_or_else(empty)?);
+        }
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let body = root
+            .titled(&self.title, ("sans-serif", 22))
+            .map_err(|e| err(&e))?;
+        let n = self.panels.len();
+        let breaks: Vec<i32> = (1..n)
+            .map(|i| (i as u32 * self.panel_height_px) as i32)
+            .collect();
+        let rows = body.split_by_breakpoints::<i32, i32, _, _>([], breaks);
+        let xf = move |v: &f64| tick_label(*v, x0, x1, X_LABELS);
+        let blank = |_: &f64| String::new();
+        for (i, ((panel, row), (y0, y1))) in self.panels.iter().zip(&rows).zip(ranges).enumerate() {
+            let last = i + 1 == n;
+            let legend_x = self.width_px.saturating_sub(LEGEND_W);
+            let (left, legend) = row.split_horizontally(legend_x);
+            let yf = move |v: &f64| tick_label(*v, y0, y1, Y_LABELS);
+            let mut chart = ChartBuilder::on(&left)
+                .margin_top(9)
+                .margin_bottom(if last { 0 } else { 9 })
+                .margin_right(12)
+                .margin_left(6)
+                .x_label_area_size(if last { X_AXIS_H } else { 0 })
+                .y_label_area_size(88)
+                .build_cartesian_2d(x0..x1, y0..y1)
+                .map_err(|e| err(&e))?;
+            let mut mesh = chart.configure_mesh();
+            mesh.y_desc(panel.y_label.as_str())
+                .label_style(("sans-serif", 14))
+                .axis_desc_style(("sans-serif", 15))
+                .max_light_lines(1)
+                .light_line_style(RGBColor(240, 240, 240))
+                .bold_line_style(RGBColor(212, 212, 212))
+                .x_labels(X_LABELS)
+                .y_labels(Y_LABELS)
+                .y_label_formatter(&yf);
+            if last {
+                mesh.x_desc(self.x_label.as_str()).x_label_formatter(&xf);
+            } else {
+                mesh.x_label_formatter(&blank);
+            }
+            mesh.draw().map_err(|e| err(&e))?;
+            // the limits inside the view, under the data
+            for h in &panel.hlines {
+                if h.y >= y0 && h.y <= y1 {
+                    chart
+                        .draw_series(DashedLineSeries::new(
+                            [(x0, h.y), (x1, h.y)],
+                            10,
+                            6,
+                            rgb(h.color).stroke_width(2),
+                        ))
+                        .map_err(|e| err(&e))?;
+                }
+            }
+            let mut colors = Vec::with_capacity(panel.series.len());
+            for (k, s) in panel.series.iter().enumerate() {
+                let color = s.color.map_or(PALETTE[k % PALETTE.len()], rgb);
+                colors.push(color);
+                let finite = s
+                    .points
+                    .iter()
+                    .copied()
+                    .filter(|(x, y)| x.is_finite() && y.is_finite());
+                let mut run: Vec<(f64, f64)> = Vec::new();
+                let mut flush = |run: &mut Vec<(f64, f64)>| {
+                    draw_run(
+                        &mut chart,
+                        &root,
+                        std::mem::take(run),
+                        color,
+                        s.dashed,
+                        raster,
+                    )
+                    .map_err(|e| err(&e))
+                };
+                for (x, y) in finite {
+                    if let (Some(jump), Some(&(_, yl))) = (s.break_jumps_over, run.last())
+                        && (y - yl).abs() > jump
+                    {
+                        flush(&mut run)?;
+                    }
+                    run.push((x, y));
+                }
+                flush(&mut run)?;
+            }
+            // legend at the right of the panel
+            let font = ("sans-serif", 15).into_font().color(&BLACK);
+            let note_font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
+            let mut y = 18;
+            for (s, color) in panel.series.iter().zip(&colors) {
+                legend_entry(&legend, y, s.name, color.stroke_width(2), s.dashed, &font)
+                    .map_err(|e| err(&e))?;
+                y += 22;
+            }
+            for h in &panel.hlines {
+                legend_entry(
+                    &legend,
+                    y,
+                    &h.label,
+                    rgb(h.color).stroke_width(2),
+                    true,
+                    &font,
+                )
+                .map_err(|e| err(&e))?;
+                y += 22;
+            }
+            for note in &panel.notes {
+                legend
+                    .draw(&Text::new(note.as_str(), (6, y - 8), note_font.clone()))
+                    .map_err(|e| err(&e))?;
+                y += 18;
+            }
+        }
+        root.present().map_err(|e| err(&e))?;
+        Ok(())
+    }
+
+    /// Write the figure; the format follows the extension (`.png` or `.svg`).
+    pub fn write(&self, path: &Path) -> Result<(), PlotError> {
+        register_font()?;
+        let name = path.display().to_string();
+        let size = self.size_px();
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("png") => self.draw(
+                BitMapBackend::new(path, size).into_drawing_area(),
+                &name,
+                true,
+            ),
+            Some("svg") => self.draw(
+                SVGBackend::new(path, size).into_drawing_area(),
+                &name,
+                false,
+            ),
+            _ => Err(PlotError::Format { path: name }),
+        }
+    }
+}
+
+/// One legend line: a 28 px sample of the line and its label.
+fn legend_entry<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    y: i32,
+    label: &str,
+    style: ShapeStyle,
+    dashed: bool,
+    font: &TextStyle<'_>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    if dashed {
+        area.draw(&plotters::element::DashedPathElement::new(
+            [(6, y), (34, y)],
+            8,
+            5,
+            style,
+        ))?;
+    } else {
+        area.draw(&PathElement::new([(6, y), (34, y)], style))?;
+    }
+    area.draw(&Text::new(label, (40, y - 8), font.clone()))
+}
+
+/// Min/max decimation of time series sharing one time axis: at most
+/// `2 * max_buckets + 2` points per series whatever the number of rows,
+/// keeping each bucket's smallest and largest value (so spikes and the
+/// envelope of noise survive) and the first and last rows. Memory is `O(max_buckets × series)`. A log with at most
+/// `max_buckets` rows is kept exactly.
+#[derive(Debug, Clone)]
+pub struct Decimator {
+    n_series: usize,
+    max_buckets: usize,
+    rows_per_bucket: usize,
+    filled: usize,
+    /// Per bucket and series (bucket-major): the (t, y) of the minimum.
+    mins: Vec<(f64, f64)>,
+    /// Per bucket and series: the (t, y) of the maximum.
+    maxs: Vec<(f64, f64)>,
+    rows: usize,
+    /// The first and the last row pushed: (t, values).
+    ends: [(f64, Vec<f64>); 2],
+}
+
+impl Decimator {
+    /// For `n_series` series and at most `max_buckets` buckets (rounded up
+    /// to an even number ≥ 2).
+    pub fn new(n_series: usize, max_buckets: usize) -> Self {
+        let max_buckets = max_buckets.max(2).next_multiple_of(2);
+        Self {
+            n_series,
+            max_buckets,
+            rows_per_bucket: 1,
+            filled: 0,
+            mins: Vec::with_capacity(max_buckets * n_series),
+            maxs: Vec::with_capacity(max_buckets * n_series),
+            rows: 0,
+            ends: [(f64::NAN, Vec::new()), (f64::NAN, Vec::new())],
+        }
+    }
+
+    /// Rows pushed.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    fn buckets(&self) -> usize {
+        self.mins.len().checked_div(self.n_series).unwrap_or(0)
+    }
+
+    /// Add one row: time `t` and one value per series (extra values are
+    /// ignored, missing ones taken as NaN, which no min/max picks).
+    pub fn push(&mut self, t: f64, ys: &[f64]) {
+        self.rows += 1;
+        let n = self.n_series;
+        let y = |s: usize| ys.get(s).copied().unwrap_or(f64::NAN);
+        let end = usize::from(self.rows > 1);
+        self.ends[end].0 = t;
+        self.ends[end].1.clear();
+        self.ends[end].1.extend((0..n).map(y));
+        if self.buckets() == 0 || self.filled == self.rows_per_bucket {
+            if self.buckets() == self.max_buckets {
+                self.merge_pairs();
+            }
+            for s in 0..n {
+                self.mins.push((t, y(s)));
+                self.maxs.push((t, y(s)));
+            }
+            self.filled = 1;
+            return;
+        }
+        let base = self.mins.len() - n;
+        for s in 0..n {
+            let v = y(s);
+            let lo = &mut self.mins[base + s];
+            if v < lo.1 || lo.1.is_nan() {
+                *lo = (t, v);
+            }
+            let hi = &mut self.maxs[base + s];
+            if v > hi.1 || hi.1.is_nan() {
+                *hi = (t, v);
+            }
+        }
+        self.filled += 1;
+    }
+
+    /// Halve the number of buckets (all full): bucket b takes 2b and 2b+1.
+    fn merge_pairs(&mut self) {
+        let n = self.n_series;
+        let half = self.buckets() / 2;
+        for b in 0..half {
+            for s in 0..n {
+                let (a, c) = ((2 * b) * n + s, (2 * b + 1) * n + s);
+                let lo = if self.mins[c].1 < self.mins[a].1 || self.mins[a].1.is_nan() {
+                    self.mins[c]
+                } else {
+                    self.mins[a]
+                };
+                let hi = if self.maxs[c].1 > self.maxs[a].1 || self.maxs[a].1.is_nan() {
+                    self.maxs[c]
+                } else {
+                    self.maxs[a]
+                };
+                self.mins[b * n + s] = lo;
+                self.maxs[b * n + s] = hi;
+            }
+        }
+        self.mins.truncate(half * n);
+        self.maxs.truncate(half * n);
+        self.rows_per_bucket *= 2;
+    }
+
+    /// The decimated points of series `s`, in time order (non-finite values
+    /// are left out).
+    pub fn series(&self, s: usize) -> Vec<(f64, f64)> {
+        let n = self.n_series;
+        let mut out = Vec::with_capacity(2 * self.buckets());
+        if s >= n {
+            return out;
+        }
+        let end = |e: usize| {
+            let (t, ref v) = self.ends[e];
+            v.get(s).map(|y| (t, *y))
+        };
+        let mut push = |p: (f64, f64)| {
+            let after = out.last().is_none_or(|q: &(f64, f64)| p.0 > q.0);
+            if p.1.is_finite() && after {
+                out.push(p);
+            }
+        };
+        if let Some(p) = end(0) {
+            push(p);
+        }
+        for b in 0..self.buckets() {
+            let (lo, hi) = (self.mins[b * n + s], self.maxs[b * n + s]);
+            let (first, second) = if lo.0 <= hi.0 { (lo, hi) } else { (hi, lo) };
+            push(first);
+            push(second);
+        }
+        if self.rows > 1
+            && let Some(p) = end(1)
+        {
+            push(p);
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn tick_labels_have_the_digits_the_step_needs() {
+        // the step plotters takes (1-2-5 × 10^k, at most n ticks)
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b;
+        assert!(close(tick_step(0.0, 1.0, 12), 0.1));
+        assert!(close(tick_step(0.0, 20.0, 12), 2.0));
+        assert!(close(tick_step(-0.05, 0.045, 6), 0.02));
+        assert!(close(tick_step(0.0, 86400.0, 12), 10000.0));
+        assert_eq!(tick_label(0.5, 0.0, 1.0, 12), "0.5");
+        assert_eq!(tick_label(2.0, 0.0, 20.0, 12), "2");
+        assert_eq!(tick_label(-0.04, -0.05, 0.045, 6), "-0.04");
+        // a float-noise tick at zero reads as zero
+        assert_eq!(tick_label(-1.08e-19, -4.2e-4, 2.4e-4, 6), "0");
+        // tiny axis: one exponent per axis
+        assert_eq!(tick_label(8e-5, -3.5e-5, 8.4e-5, 6), "8e-5");
+        assert_eq!(tick_label(-2e-5, -3.5e-5, 8.4e-5, 6), "-2e-5");
+        assert_eq!(tick_label(-2e-4, -4.2e-4, 2.4e-4, 6), "-2e-4");
+        assert_eq!(tick_label(86400.0, 0.0, 86400.0, 12), "86400");
+        assert_eq!(tick_label(2e7, 0.0, 5e7, 6), "2e7");
+    }
+
+    #[test]
+    fn decimator_bounds_the_points_and_keeps_the_extremes() {
+        let rows = 1_000_003usize;
+        let spike_row = 123_457usize;
+        let mut d = Decimator::new(2, 500);
+        for k in 0..rows {
+            let t = k as f64 * 1e-3;
+            let mut y = (t * 0.37).sin();
+            if k == spike_row {
+                y = 10.0;
+            }
+            let dip = if k == rows - 2 { -5.0 } else { 0.0 };
+            d.push(t, &[y, dip]);
+        }
+        assert_eq!(d.rows(), rows);
+        for s in 0..2 {
+            let p = d.series(s);
+            // between max/2 and max buckets, one or two points each, and the ends
+            assert!(p.len() <= 1002, "{} points", p.len());
+            assert!(p.len() >= 250, "{} points", p.len());
+            assert!(p.windows(2).all(|w| w[0].0 < w[1].0), "time order");
+        }
+        let p0 = d.series(0);
+        assert!(p0.contains(&(spike_row as f64 * 1e-3, 10.0)), "spike kept");
+        let min = p0.iter().fold(f64::INFINITY, |m, q| m.min(q.1));
+        assert!(min < -0.999_999, "{min}");
+        let p1 = d.series(1);
+        assert!(
+            p1.contains(&((rows - 2) as f64 * 1e-3, -5.0)),
+            "late dip kept"
+        );
+        // last sample present (a bucket's min or max holds the end)
+        assert_eq!(p1.last().unwrap().0, (rows - 1) as f64 * 1e-3);
+    }
+
+    #[test]
+    fn decimator_keeps_a_short_series_exactly() {
+        let mut d = Decimator::new(1, 100);
+        let pts: Vec<(f64, f64)> = (0..100).map(|k| (k as f64, (k as f64).cos())).collect();
+        for (t, y) in &pts {
+            d.push(*t, &[*y]);
+        }
+        assert_eq!(d.series(0), pts);
+    }
 }
