@@ -75,7 +75,10 @@ pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>> {
     let schur = schur.ok_or(LtiError::Decomposition { what: "Schur" })?;
     let ev = schur.complex_eigenvalues();
     let mut v: Vec<Complex<f64>> = ev.iter().map(|z| z / f).collect();
-    if let Some(z) = v.iter().find(|z| !(z.re.is_finite() && z.im.is_finite() && z.norm().is_finite())) {
+    if let Some(z) = v
+        .iter()
+        .find(|z| !(z.re.is_finite() && z.im.is_finite() && z.norm().is_finite()))
+    {
         return Err(LtiError::Overflow {
             what: "eigenvalues",
             detail: format!(

@@ -246,7 +246,17 @@ mod tests {
 
     #[test]
     fn pow2_scale_is_a_power_of_two_into_half_one() {
-        for &x in &[1e-310, 5e-324, 1e-300, 0.3, 1.0, 2.0, 1e100, 1e308, f64::MAX] {
+        for &x in &[
+            1e-310,
+            5e-324,
+            1e-300,
+            0.3,
+            1.0,
+            2.0,
+            1e100,
+            1e308,
+            f64::MAX,
+        ] {
             let f = pow2_scale(x);
             assert!(f.is_finite() && f > 0.0, "{x}");
             assert_eq!(f.log2().fract(), 0.0, "{x}");

@@ -20,7 +20,7 @@ pub enum LtiError {
         expected: String,
     },
     /// A matrix contains NaN or an infinity.
-    #[error("{what} contains a non-finite entry at ({row}, {col})")]
+    #[error("{what} contains a non-finite entry at 0-based ({row}, {col})")]
     NonFinite {
         /// Which argument.
         what: &'static str,
@@ -32,7 +32,7 @@ pub enum LtiError {
     /// A matrix entry is finite but larger in magnitude than the algorithm can handle
     /// without overflowing f64 (see [`MAX_ENTRY`](crate::MAX_ENTRY) for the bound and why).
     #[error(
-        "{what} has an entry of magnitude {value:.3e} at ({row}, {col}); entries must be at \
+        "{what} has an entry of magnitude {value:e} at 0-based ({row}, {col}); entries must be at \
          most {max:.0e} in magnitude (larger ones overflow f64 in the matrix products of the \
          algorithm: rescale states/inputs)"
     )]
@@ -147,7 +147,7 @@ pub enum LtiError {
         what: &'static str,
     },
     /// A scalar parameter is out of its allowed range.
-    #[error("parameter {what} = {value} is out of range: {allowed}")]
+    #[error("parameter {what} = {} is out of range: {allowed}", short(.value))]
     Parameter {
         /// Which parameter.
         what: &'static str,
@@ -174,6 +174,16 @@ impl LtiError {
             | Self::Parameter { what, .. } => Some(what),
             _ => None,
         }
+    }
+}
+
+/// A number as written by a person: plain for moderate magnitudes, else exponent notation
+/// (so 1e300 is not printed as 301 digits).
+fn short(v: &f64) -> String {
+    if *v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }
 

@@ -174,7 +174,10 @@ pub fn expm(a: &DMatrix<f64>) -> Result<DMatrix<f64>> {
             norm1(a)
         ),
     };
-    Err(LtiError::Overflow { what: "e^A", detail })
+    Err(LtiError::Overflow {
+        what: "e^A",
+        detail,
+    })
 }
 
 /// Zero-order-hold discretization of ẋ = A x + B u with sample time `ts_s` (seconds):

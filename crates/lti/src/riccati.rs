@@ -263,8 +263,14 @@ fn remove_cross(
     let at = a - b * &rinv_nt;
     let mut qt = q - nn * &rinv_nt;
     check::symmetrize(&mut qt);
-    check::output("A - B R^-1 N^T (cross-term removal; R nearly singular?)", &at)?;
-    check::output("Q - N R^-1 N^T (cross-term removal; R nearly singular?)", &qt)?;
+    check::output(
+        "A - B R^-1 N^T (cross-term removal; R nearly singular?)",
+        &at,
+    )?;
+    check::output(
+        "Q - N R^-1 N^T (cross-term removal; R nearly singular?)",
+        &qt,
+    )?;
     // The joint weight [[Q, N], [Nᵀ, R]] ⪰ 0 iff Q̃ ⪰ 0 (Schur complement, R ≻ 0).
     check::psd("Q - N R^-1 N^T (joint weight [[Q, N], [N^T, R]])", &qt)?;
     Ok((at, qt))
@@ -328,7 +334,10 @@ fn sda(
         if !(all_finite(&h) && all_finite(&g) && all_finite(&ak) && change.is_finite()) {
             return Err(LtiError::Overflow {
                 what: "SDA iterate (DARE)",
-                detail: format!("left the f64 range at doubling step {it}; {}", check::OVERFLOW_HINT),
+                detail: format!(
+                    "left the f64 range at doubling step {it}; {}",
+                    check::OVERFLOW_HINT
+                ),
             });
         }
         if change <= opts.tol {
