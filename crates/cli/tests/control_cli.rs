@@ -181,7 +181,6 @@ const FILES: &[(&str, &str)] = &[
     ("header.csv", "x,y\n"),
     ("semicolon.csv", "1;2\n3;4\n"),
     ("hex.csv", "0x10,0\n0,1\n"),
-    ("notutf8.csv", "1,\u{fffd}\n"),
     // Wrong shapes.
     ("B3.csv", "1\n1\n1\n"),
     ("A23.csv", "1,0,0\n0,1,0\n"),
@@ -288,7 +287,7 @@ const CORPUS: &[Case] = &[
     ),
     case(
         "kalman --a @Phi.csv --c @notutf8.csv --qn @Qn.csv --rn @Rn.csv",
-        &["notutf8.csv: line 1, column 2"],
+        &["cannot read matrix file", "notutf8.csv", "UTF-8"],
     ),
     // --- wrong shapes ---
     case(
@@ -491,6 +490,8 @@ fn corpus_dir() -> PathBuf {
     for (name, text) in FILES {
         write(&d, name, text);
     }
+    // Latin-1 bytes, not UTF-8.
+    std::fs::write(d.join("notutf8.csv"), b"1,\xb5\n").unwrap();
     d
 }
 
