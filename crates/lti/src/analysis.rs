@@ -28,8 +28,14 @@ const MAX_ITER: usize = 10_000;
 /// reflector P = I − 2vvᵀ (v ∝ (1, 2, …, n)); each first with tolerance ε, then 1e-14.
 /// All have the same eigenvalues; the first converging decomposition is used.
 ///
+/// Any finite matrix is accepted: it is first scaled by a power of two to max |a_ij| < 1
+/// (exact, so the digits are those of the unscaled computation), and the eigenvalues are
+/// scaled back.
+///
 /// # Errors
-/// Non-square or non-finite input; Schur iteration not converging in any variant.
+/// Non-square or non-finite input; Schur iteration not converging in any variant;
+/// [`LtiError::Overflow`] if an eigenvalue (or its modulus) exceeds the f64 range (entries
+/// near f64::MAX).
 pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>> {
     check::square("A", a)?;
     check::finite("A", a)?;
@@ -37,6 +43,8 @@ pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>> {
     if n == 0 {
         return Ok(Vec::new());
     }
+    let f = check::pow2_scale(a.amax());
+    let a = &(a * f);
     let reflected = || {
         let v = DMatrix::from_fn(n, 1, |i, _| (i + 1) as f64);
         let v = &v / v.norm();
@@ -66,7 +74,19 @@ pub fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>> {
     }
     let schur = schur.ok_or(LtiError::Decomposition { what: "Schur" })?;
     let ev = schur.complex_eigenvalues();
-    let mut v: Vec<Complex<f64>> = ev.iter().copied().collect();
+    let mut v: Vec<Complex<f64>> = ev.iter().map(|z| z / f).collect();
+    if let Some(z) = v
+        .iter()
+        .find(|z| !(z.re.is_finite() && z.im.is_finite() && z.norm().is_finite()))
+    {
+        return Err(LtiError::Overflow {
+            what: "eigenvalues",
+            detail: format!(
+                "eigenvalue {z} exceeds the f64 range (max |a_ij| = {:.3e})",
+                a.amax() / f
+            ),
+        });
+    }
     v.sort_by(|x, y| x.re.total_cmp(&y.re).then(x.im.total_cmp(&y.im)));
     Ok(v)
 }
@@ -103,7 +123,7 @@ fn damp_of(s: Complex<f64>) -> (f64, f64) {
 /// (MATLAB `damp`; the quantities of thesis Table 14.1).
 ///
 /// # Errors
-/// As [`eigenvalues`].
+/// As [`eigenvalues`] (which also guarantees finite |s|, so ω_n and ζ are finite).
 pub fn damp(a: &DMatrix<f64>) -> Result<Vec<Pole>> {
     Ok(eigenvalues(a)?
         .into_iter()
@@ -120,37 +140,44 @@ pub fn damp(a: &DMatrix<f64>) -> Result<Vec<Pole>> {
 
 /// Poles of a discrete-time system x⁺ = Φ x with sample time `ts_s`; frequency and damping
 /// are those of the equivalent continuous pole s = ln(z)/Ts (MATLAB `damp(sys)` for a
-/// discrete `sys`). A pole at z = 0 gets ω_n = ∞ and ζ = 1.
+/// discrete `sys`). A pole at z = 0 gets ω_n = ∞ and ζ = 1 (as MATLAB).
+/// Apart from that documented ∞, all returned numbers are finite.
 ///
 /// # Errors
-/// As [`eigenvalues`], or `ts_s` not finite and positive.
+/// As [`eigenvalues`]; `ts_s` not finite and positive, or so small that ln(z)/Ts overflows
+/// ([`LtiError::Parameter`] naming Ts with the smallest usable value).
 pub fn damp_discrete(phi: &DMatrix<f64>, ts_s: f64) -> Result<Vec<Pole>> {
-    if !(ts_s.is_finite() && ts_s > 0.0) {
-        return Err(LtiError::Parameter {
-            what: "Ts",
-            value: ts_s,
-            allowed: "finite and > 0",
+    check::positive("Ts", ts_s)?;
+    let mut out = Vec::with_capacity(phi.nrows());
+    for z in eigenvalues(phi)? {
+        if z.norm() == 0.0 {
+            out.push(Pole {
+                value: z,
+                natural_frequency_rad_s: f64::INFINITY,
+                damping: 1.0,
+            });
+            continue;
+        }
+        let ln_z = z.ln();
+        let s = ln_z / ts_s;
+        let (wn, d) = damp_of(s);
+        if !(wn.is_finite() && d.is_finite()) {
+            return Err(LtiError::Parameter {
+                what: "Ts",
+                value: ts_s,
+                allowed: format!(
+                    "at least {:.3e} s: ln(z)/Ts overflows f64 for the pole z = {z}",
+                    ln_z.norm() / f64::MAX
+                ),
+            });
+        }
+        out.push(Pole {
+            value: z,
+            natural_frequency_rad_s: wn,
+            damping: d,
         });
     }
-    Ok(eigenvalues(phi)?
-        .into_iter()
-        .map(|z| {
-            if z.norm() == 0.0 {
-                return Pole {
-                    value: z,
-                    natural_frequency_rad_s: f64::INFINITY,
-                    damping: 1.0,
-                };
-            }
-            let s = z.ln() / ts_s;
-            let (wn, d) = damp_of(s);
-            Pole {
-                value: z,
-                natural_frequency_rad_s: wn,
-                damping: d,
-            }
-        })
-        .collect())
+    Ok(out)
 }
 
 /// Result of a PBH (Popov–Belevitch–Hautus) test.
@@ -176,8 +203,42 @@ fn to_complex(m: &DMatrix<f64>) -> DMatrix<Complex<f64>> {
     m.map(|v| Complex::new(v, 0.0))
 }
 
+/// Singular values of a real matrix, guarded: nalgebra's SVD panics ("Singular value was
+/// NaN") on non-finite input and asserts on an empty matrix, so both are turned into
+/// [`LtiError::Decomposition`] here, as is a non-finite result.
+fn singular_values(m: DMatrix<f64>, what: &'static str) -> Result<nalgebra::DVector<f64>> {
+    if m.is_empty() || !m.iter().all(|v| v.is_finite()) {
+        return Err(LtiError::Decomposition { what });
+    }
+    let sv = nalgebra::SVD::try_new(m, false, false, f64::EPSILON, MAX_ITER)
+        .ok_or(LtiError::Decomposition { what })?
+        .singular_values;
+    if !sv.iter().all(|v| v.is_finite()) {
+        return Err(LtiError::Decomposition { what });
+    }
+    Ok(sv)
+}
+
+/// As [`singular_values`] for a complex matrix.
+fn singular_values_complex(
+    m: DMatrix<Complex<f64>>,
+    what: &'static str,
+) -> Result<nalgebra::DVector<f64>> {
+    if m.is_empty() || !m.iter().all(|v| v.re.is_finite() && v.im.is_finite()) {
+        return Err(LtiError::Decomposition { what });
+    }
+    let sv = nalgebra::SVD::try_new(m, false, false, f64::EPSILON, MAX_ITER)
+        .ok_or(LtiError::Decomposition { what })?
+        .singular_values;
+    if !sv.iter().all(|v| v.is_finite()) {
+        return Err(LtiError::Decomposition { what });
+    }
+    Ok(sv)
+}
+
 /// σ_min/σ_max of [A − λI, B] (or its transpose arrangement for observability). Real λ
-/// uses a real SVD (a quarter of the work of the complex one).
+/// uses a real SVD (a quarter of the work of the complex one). The caller scales A, B and λ
+/// to magnitudes ≲ 1 (see [`pbh_at`]), so forming A − λI cannot overflow.
 fn pbh_ratio(a: &DMatrix<f64>, b: &DMatrix<f64>, lambda: Complex<f64>) -> Result<f64> {
     let n = a.nrows();
     let m = b.ncols();
@@ -188,9 +249,7 @@ fn pbh_ratio(a: &DMatrix<f64>, b: &DMatrix<f64>, lambda: Complex<f64>) -> Result
             mat[(i, i)] -= lambda.re;
         }
         mat.view_mut((0, n), (n, m)).copy_from(b);
-        nalgebra::SVD::try_new(mat, false, false, f64::EPSILON, MAX_ITER)
-            .ok_or(LtiError::Decomposition { what: "SVD (PBH)" })?
-            .singular_values
+        singular_values(mat, "SVD (PBH)")?
     } else {
         let mut mat = DMatrix::<Complex<f64>>::zeros(n, n + m);
         mat.view_mut((0, 0), (n, n)).copy_from(&to_complex(a));
@@ -198,14 +257,25 @@ fn pbh_ratio(a: &DMatrix<f64>, b: &DMatrix<f64>, lambda: Complex<f64>) -> Result
             mat[(i, i)] -= lambda;
         }
         mat.view_mut((0, n), (n, m)).copy_from(&to_complex(b));
-        nalgebra::SVD::try_new(mat, false, false, f64::EPSILON, MAX_ITER)
-            .ok_or(LtiError::Decomposition { what: "SVD (PBH)" })?
-            .singular_values
+        singular_values_complex(mat, "SVD (PBH)")?
     };
     let smax = sv.iter().copied().fold(0.0, f64::max);
     // n singular values for an n×(n+m) matrix: the smallest is σ_min.
     let smin = sv.iter().copied().fold(f64::INFINITY, f64::min);
     Ok(if smax == 0.0 { 0.0 } else { smin / smax })
+}
+
+/// Fails with [`LtiError::Parameter`] unless a rank tolerance is finite and ≥ 0.
+fn tolerance(what: &'static str, tol: f64) -> Result<()> {
+    if tol.is_finite() && tol >= 0.0 {
+        Ok(())
+    } else {
+        Err(LtiError::Parameter {
+            what,
+            value: tol,
+            allowed: "finite and >= 0 (relative singular-value threshold)".to_string(),
+        })
+    }
 }
 
 fn pbh_generic(
@@ -221,6 +291,10 @@ fn pbh_generic(
 /// PBH test of (A, B) at the given eigenvalues of A. Conjugates give the same σ's, so only
 /// the upper member of a pair is tested; eigenvalues equal to within 1e-10·max(1, |λ|)
 /// (a repeated eigenvalue split by rounding) are tested once.
+///
+/// The ratio is invariant under a common scaling of A, B and λ, so all three are scaled by
+/// one power of two to magnitudes below 1 first: any finite data then gives a finite
+/// [A − λI, B] (no overflow into the SVD).
 pub(crate) fn pbh_at(
     a: &DMatrix<f64>,
     b: &DMatrix<f64>,
@@ -228,6 +302,18 @@ pub(crate) fn pbh_at(
     tol: f64,
     only: impl Fn(Complex<f64>) -> bool,
 ) -> Result<PbhReport> {
+    tolerance("PBH tolerance", tol)?;
+    check::finite("A", a)?;
+    check::finite("B", b)?;
+    let lam_max = eig.iter().map(|z| z.norm()).fold(0.0, f64::max);
+    if !lam_max.is_finite() {
+        return Err(LtiError::Overflow {
+            what: "eigenvalues",
+            detail: "an eigenvalue is not finite".to_string(),
+        });
+    }
+    let f = check::pow2_scale(a.amax().max(b.amax()).max(lam_max));
+    let (a, b) = (&(a * f), &(b * f));
     let mut rep = PbhReport {
         full_rank: true,
         min_ratio: f64::INFINITY,
@@ -246,7 +332,7 @@ pub(crate) fn pbh_at(
             continue;
         }
         tested.push(lam);
-        let r = pbh_ratio(a, b, lam)?;
+        let r = pbh_ratio(a, b, lam * f)?;
         if r < rep.min_ratio {
             rep.min_ratio = r;
             rep.worst_eigenvalue = Some(lam);
@@ -263,11 +349,13 @@ pub(crate) fn pbh_at(
 /// σ_min/σ_max > `tol` (use [`PBH_TOL`] by default).
 ///
 /// # Errors
-/// Dimension mismatch, non-finite input, decomposition failure.
+/// Dimension mismatch, non-finite input, `tol` not finite and ≥ 0, decomposition failure.
+/// Any finite A, B (C) is accepted (rescaled internally).
 pub fn pbh_controllability(a: &DMatrix<f64>, b: &DMatrix<f64>, tol: f64) -> Result<PbhReport> {
     let n = check::square("A", a)?;
     check::shape("B", b, n, b.ncols())?;
     check::finite("B", b)?;
+    tolerance("PBH tolerance", tol)?;
     pbh_generic(a, b, tol, |_| true)
 }
 
@@ -275,11 +363,13 @@ pub fn pbh_controllability(a: &DMatrix<f64>, b: &DMatrix<f64>, tol: f64) -> Resu
 /// controllability test of (Aᵀ, Cᵀ)).
 ///
 /// # Errors
-/// Dimension mismatch, non-finite input, decomposition failure.
+/// Dimension mismatch, non-finite input, `tol` not finite and ≥ 0, decomposition failure.
+/// Any finite A, B (C) is accepted (rescaled internally).
 pub fn pbh_observability(a: &DMatrix<f64>, c: &DMatrix<f64>, tol: f64) -> Result<PbhReport> {
     let n = check::square("A", a)?;
     check::shape("C", c, c.nrows(), n)?;
     check::finite("C", c)?;
+    tolerance("PBH tolerance", tol)?;
     pbh_generic(&a.transpose(), &c.transpose(), tol, |_| true)
 }
 
@@ -306,12 +396,19 @@ pub const STAIRCASE_TOL: f64 = 1e-10;
 /// Varga 1981 / Van Dooren 1981). (A, B) is controllable iff the dimension is n.
 ///
 /// # Errors
-/// Dimension mismatch, non-finite input, SVD failure.
+/// Dimension mismatch, non-finite input, `tol` not finite and ≥ 0, SVD failure.
+/// Any finite A, B is accepted (rescaled internally).
 pub fn reachable_dimension(a: &DMatrix<f64>, b: &DMatrix<f64>, tol: f64) -> Result<Reachable> {
     let n = check::square("A", a)?;
     check::shape("B", b, n, b.ncols())?;
     check::finite("A", a)?;
     check::finite("B", b)?;
+    tolerance("staircase tolerance", tol)?;
+    // The reachable subspace is invariant under a common scaling of A and B, and so are the
+    // relative rank decisions: scale both by one power of two (exact) to entries below 1,
+    // so that the norms and the SVD below cannot overflow for any finite input.
+    let f = check::pow2_scale(a.amax().max(b.amax()));
+    let (a, b) = (&(a * f), &(b * f));
     let scale = (a.norm_squared() + b.norm_squared())
         .sqrt()
         .max(f64::MIN_POSITIVE);
@@ -327,6 +424,12 @@ pub fn reachable_dimension(a: &DMatrix<f64>, b: &DMatrix<f64>, tol: f64) -> Resu
                 let proj = basis.transpose() * &block;
                 block -= &basis * proj;
             }
+        }
+        // nalgebra's SVD panics on non-finite input (see `singular_values`).
+        if !block.iter().all(|v| v.is_finite()) {
+            return Err(LtiError::Decomposition {
+                what: "SVD (staircase)",
+            });
         }
         let svd = nalgebra::SVD::try_new(block.clone(), true, false, f64::EPSILON, MAX_ITER)
             .ok_or(LtiError::Decomposition {
@@ -375,6 +478,7 @@ pub fn reachable_dimension(a: &DMatrix<f64>, b: &DMatrix<f64>, tol: f64) -> Resu
 pub fn observable_dimension(a: &DMatrix<f64>, c: &DMatrix<f64>, tol: f64) -> Result<Reachable> {
     let n = check::square("A", a)?;
     check::shape("C", c, c.nrows(), n)?;
+    check::finite("C", c)?;
     reachable_dimension(&a.transpose(), &c.transpose(), tol)
 }
 

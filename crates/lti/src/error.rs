@@ -20,7 +20,7 @@ pub enum LtiError {
         expected: String,
     },
     /// A matrix contains NaN or an infinity.
-    #[error("{what} contains a non-finite entry at ({row}, {col})")]
+    #[error("{what} contains a non-finite entry at 0-based ({row}, {col})")]
     NonFinite {
         /// Which argument.
         what: &'static str,
@@ -28,6 +28,34 @@ pub enum LtiError {
         row: usize,
         /// Column of the first bad entry (0-based).
         col: usize,
+    },
+    /// A matrix entry is finite but larger in magnitude than the algorithm can handle
+    /// without overflowing f64 (see [`MAX_ENTRY`](crate::MAX_ENTRY) for the bound and why).
+    #[error(
+        "{what} has an entry of magnitude {value:e} at 0-based ({row}, {col}); entries must be at \
+         most {max:.0e} in magnitude (larger ones overflow f64 in the matrix products of the \
+         algorithm: rescale states/inputs)"
+    )]
+    TooLarge {
+        /// Which argument.
+        what: &'static str,
+        /// Row of the first bad entry (0-based).
+        row: usize,
+        /// Column of the first bad entry (0-based).
+        col: usize,
+        /// Its magnitude.
+        value: f64,
+        /// The allowed maximum magnitude.
+        max: f64,
+    },
+    /// A quantity computed from finite, in-range inputs overflowed (or became NaN): the
+    /// problem is too badly scaled or too ill-conditioned for f64.
+    #[error("{what} is not finite: {detail}")]
+    Overflow {
+        /// Which computed quantity.
+        what: &'static str,
+        /// Why, and what to change.
+        detail: String,
     },
     /// A matrix that must be symmetric is not (relative tolerance stated in the message).
     #[error("{what} is not symmetric (relative asymmetry {asymmetry:.3e})")]
@@ -53,12 +81,16 @@ pub enum LtiError {
         /// Its smallest eigenvalue.
         min_eigenvalue: f64,
     },
-    /// (A, B) is not stabilizable: a mode with |λ| ≥ 1 cannot be reached from the input.
+    /// A pair is not stabilizable: a mode with |λ| ≥ 1 cannot be reached from the input.
+    /// For the DARE the pair is (A, B); for a Kalman filter it is (Φ, G Qn^½), the process
+    /// noise not exciting the mode.
     #[error(
-        "(A, B) is not stabilizable: mode {re:+.6e}{im:+.6e}i is uncontrollable \
+        "{pair} is not stabilizable: mode {re:+.6e}{im:+.6e}i (|λ| ≥ 1) is uncontrollable \
          (PBH sigma_min/sigma_max = {ratio:.3e})"
     )]
     NotStabilizable {
+        /// Which pair, e.g. "(A, B)".
+        pair: &'static str,
         /// Real part of the offending eigenvalue.
         re: f64,
         /// Imaginary part of the offending eigenvalue.
@@ -66,12 +98,16 @@ pub enum LtiError {
         /// σ_min/σ_max of [A − λI, B].
         ratio: f64,
     },
-    /// (Q, A) is not detectable: a mode with |λ| ≥ 1 is invisible in the cost.
+    /// A pair is not detectable: a mode with |λ| ≥ 1 is invisible. For the DARE the pair is
+    /// (Q, A) (the mode does not appear in the cost); for a Kalman filter it is (A, C) (the
+    /// measurements C do not see the mode).
     #[error(
-        "(Q, A) is not detectable: mode {re:+.6e}{im:+.6e}i is unobservable in the weight \
+        "{pair} is not detectable: mode {re:+.6e}{im:+.6e}i (|λ| ≥ 1) is unobservable \
          (PBH sigma_min/sigma_max = {ratio:.3e})"
     )]
     NotDetectable {
+        /// Which pair, e.g. "(Q, A)" or "(A, C)".
+        pair: &'static str,
         /// Real part of the offending eigenvalue.
         re: f64,
         /// Imaginary part of the offending eigenvalue.
@@ -111,15 +147,44 @@ pub enum LtiError {
         what: &'static str,
     },
     /// A scalar parameter is out of its allowed range.
-    #[error("parameter {what} = {value} is out of range: {allowed}")]
+    #[error("parameter {what} = {} is out of range: {allowed}", short(.value))]
     Parameter {
         /// Which parameter.
         what: &'static str,
         /// The given value.
         value: f64,
-        /// The allowed range.
-        allowed: &'static str,
+        /// The allowed range (may depend on the other arguments, e.g. α·max|Φ| ≤ 1e100).
+        allowed: String,
     },
+}
+
+impl LtiError {
+    /// The argument (matrix or scalar parameter) an input error is about, as named in the
+    /// message (e.g. "A", "Qn", "alpha", "sample time Ts"); `None` for errors about the
+    /// problem as a whole (structure, convergence, overflow of computed quantities).
+    /// Front ends use it to point at the file or option the value came from.
+    pub fn argument(&self) -> Option<&'static str> {
+        match self {
+            Self::Dimension { what, .. }
+            | Self::NonFinite { what, .. }
+            | Self::TooLarge { what, .. }
+            | Self::NotSymmetric { what, .. }
+            | Self::NotPositiveSemidefinite { what, .. }
+            | Self::NotPositiveDefinite { what, .. }
+            | Self::Parameter { what, .. } => Some(what),
+            _ => None,
+        }
+    }
+}
+
+/// A number as written by a person: plain for moderate magnitudes, else exponent notation
+/// (so 1e300 is not printed as 301 digits).
+fn short(v: &f64) -> String {
+    if *v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// Result alias for this crate.

@@ -108,20 +108,20 @@ fn pade13(a: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     pade_solve(u, v)
 }
 
-/// Matrix exponential e^A (Higham 2005, Algorithm 2.3: scaling and squaring with Padé
-/// approximants of degree 3, 5, 7, 9 or 13, chosen from the 1-norm).
-///
-/// # Errors
-/// [`LtiError::Dimension`] if `a` is not square, [`LtiError::NonFinite`] on NaN/∞ entries,
-/// [`LtiError::Singular`] if the Padé denominator is singular (cannot happen for finite
-/// input within the θ_m bounds, but is reported rather than panicking).
-pub fn expm(a: &DMatrix<f64>) -> Result<DMatrix<f64>> {
-    check::square("A", a)?;
-    check::finite("A", a)?;
-    let n = a.nrows();
-    if n == 0 {
-        return Ok(DMatrix::zeros(0, 0));
-    }
+/// ln(f64::MAX): e^x overflows f64 for x above this.
+const LN_MAX: f64 = 709.782712893384;
+
+/// Largest real part of the eigenvalues of `a` (spectral abscissa), if computable.
+fn abscissa(a: &DMatrix<f64>) -> Option<f64> {
+    crate::analysis::eigenvalues(a)
+        .ok()?
+        .iter()
+        .map(|z| z.re)
+        .reduce(f64::max)
+}
+
+/// e^A without the checks of [`expm`] (input already validated): scaling and squaring.
+fn expm_unchecked(a: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     let nrm = norm1(a);
     let low: [&[f64]; 4] = [&B3, &B5, &B7, &B9];
     for (i, b) in low.iter().enumerate() {
@@ -129,6 +129,7 @@ pub fn expm(a: &DMatrix<f64>) -> Result<DMatrix<f64>> {
             return pade_low(a, b);
         }
     }
+    // ‖A‖₁ ≤ n·MAX_ENTRY is finite (checked by the callers), so s < 350 + log₂ n.
     let s = if nrm > THETA[4] {
         (nrm / THETA[4]).log2().ceil().max(0.0) as i32
     } else {
@@ -142,15 +143,55 @@ pub fn expm(a: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     Ok(x)
 }
 
+/// Matrix exponential e^A (Higham 2005, Algorithm 2.3: scaling and squaring with Padé
+/// approximants of degree 3, 5, 7, 9 or 13, chosen from the 1-norm).
+///
+/// # Errors
+/// [`LtiError::Dimension`] if `a` is not square, [`LtiError::NonFinite`] on NaN/∞ entries,
+/// [`LtiError::TooLarge`] on entries above [`MAX_ENTRY`](crate::MAX_ENTRY) (which keeps
+/// the number of squarings bounded), [`LtiError::Overflow`] if e^A itself exceeds the f64
+/// range (a mode with Re λ > ln(f64::MAX) ≈ 709.78, or transient growth of a non-normal
+/// A), [`LtiError::Singular`] if the Padé denominator is singular (cannot happen for
+/// finite input within the θ_m bounds, but is reported rather than panicking).
+pub fn expm(a: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+    check::square("A", a)?;
+    check::bounded("A", a)?;
+    if a.nrows() == 0 {
+        return Ok(DMatrix::zeros(0, 0));
+    }
+    let e = expm_unchecked(a)?;
+    if e.iter().all(|v| v.is_finite()) {
+        return Ok(e);
+    }
+    let detail = match abscissa(a) {
+        Some(x) if x > LN_MAX => format!(
+            "A has an eigenvalue with real part {x:.6e} > ln(f64::MAX) = {LN_MAX:.2}, so \
+             e^A exceeds the f64 range"
+        ),
+        _ => format!(
+            "e^A exceeds the f64 range through transient growth of the non-normal A \
+             (‖A‖₁ = {:.3e})",
+            norm1(a)
+        ),
+    };
+    Err(LtiError::Overflow {
+        what: "e^A",
+        detail,
+    })
+}
+
 /// Zero-order-hold discretization of ẋ = A x + B u with sample time `ts_s` (seconds):
 /// Φ = e^{A Ts}, Γ = ∫₀^Ts e^{Aτ} dτ B, both read off the exponential of the augmented
 /// matrix [[A, B], [0, 0]]·Ts (Van Loan 1978; exponential by [`expm`]). This is the
 /// discretization of thesis §14.1, eq. (14.6).
 ///
-/// Returns `(Phi, Gamma)`.
+/// Returns `(Phi, Gamma)`, both finite.
 ///
 /// # Errors
-/// Dimension mismatch, non-finite entries, or `ts_s` not finite and positive.
+/// Dimension mismatch; non-finite entries; entries above
+/// [`MAX_ENTRY`](crate::MAX_ENTRY) in A, B, A·Ts or B·Ts; `ts_s` not finite and positive;
+/// [`LtiError::Parameter`] naming Ts with its usable range when e^{A Ts} or Γ overflows
+/// f64 (Ts·max Re λ(A) must stay below ln(f64::MAX) ≈ 709.78).
 pub fn c2d(a: &DMatrix<f64>, b: &DMatrix<f64>, ts_s: f64) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
     let n = check::square("A", a)?;
     if b.nrows() != n {
@@ -161,20 +202,47 @@ pub fn c2d(a: &DMatrix<f64>, b: &DMatrix<f64>, ts_s: f64) -> Result<(DMatrix<f64
             expected: format!("{n}xm (rows of A)"),
         });
     }
-    check::finite("A", a)?;
-    check::finite("B", b)?;
-    if !(ts_s.is_finite() && ts_s > 0.0) {
+    check::bounded("A", a)?;
+    check::bounded("B", b)?;
+    check::positive("sample time Ts", ts_s)?;
+    let amax = a.amax().max(b.amax());
+    if ts_s * amax > check::MAX_ENTRY {
         return Err(LtiError::Parameter {
             what: "sample time Ts",
             value: ts_s,
-            allowed: "finite and > 0",
+            allowed: format!(
+                "finite, > 0 and at most {:.3e} s here (Ts·max(|A|, |B|) must stay below {:.0e})",
+                check::MAX_ENTRY / amax,
+                check::MAX_ENTRY
+            ),
         });
     }
     let m = b.ncols();
     let mut aug = DMatrix::<f64>::zeros(n + m, n + m);
     aug.view_mut((0, 0), (n, n)).copy_from(&(a * ts_s));
     aug.view_mut((0, n), (n, m)).copy_from(&(b * ts_s));
-    let e = expm(&aug)?;
+    let e = if n + m == 0 {
+        aug
+    } else {
+        expm_unchecked(&aug)?
+    };
+    if !e.iter().all(|v| v.is_finite()) {
+        let allowed = match abscissa(a) {
+            Some(x) if x > 0.0 => format!(
+                "finite, > 0 and below about {:.3e} s here: A has a mode with real part \
+                 {x:.3e} 1/s and e^(A·Ts) overflows f64 once Ts·Re λ > ln(f64::MAX) = {LN_MAX:.2}",
+                LN_MAX / x
+            ),
+            _ => "finite, > 0 and smaller: e^(A·Ts) or its integral times B overflows f64 \
+                  (transient growth of a non-normal A, or a large B)"
+                .to_string(),
+        };
+        return Err(LtiError::Parameter {
+            what: "sample time Ts",
+            value: ts_s,
+            allowed,
+        });
+    }
     let phi = e.view((0, 0), (n, n)).into_owned();
     let gamma = e.view((0, n), (n, m)).into_owned();
     Ok((phi, gamma))

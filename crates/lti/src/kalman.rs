@@ -30,12 +30,17 @@ pub struct Kalman {
 
 /// Steady-state Kalman gain from (Φ, C, Qn, Rn[, G]) by duality: P solves the DARE for
 /// (Φᵀ, Cᵀ, G Qn Gᵀ, Rn) (the dual of thesis (14.11)–(14.12), see §15.2). `g` defaults
-/// to the identity (then Qn is n×n).
+/// to the identity (then Qn is n×n). All returned matrices are finite.
+///
+/// Errors name the arguments as "A" (= Φ), "C", "G", "Qn", "Rn".
 ///
 /// # Errors
-/// Dimension/finite/definiteness violations; non-detectable (Φ, C) appears as
-/// [`LtiError::NotStabilizable`] of the dual pair, non-stabilizable (Φ, G Qn^{1/2}) as
-/// [`LtiError::NotDetectable`]; as [`riccati::dare`] otherwise.
+/// Dimension/finite/definiteness violations (Qn ⪰ 0, Rn ≻ 0), entries above
+/// [`MAX_ENTRY`](crate::MAX_ENTRY); [`LtiError::NotDetectable`] with pair "(A, C)" when a
+/// mode with |λ| ≥ 1 is invisible to the measurements; [`LtiError::NotStabilizable`] with
+/// pair "(A, G Qn^1/2)" when such a mode is not excited by the process noise;
+/// [`LtiError::Overflow`] when a result leaves the f64 range; as [`riccati::dare`]
+/// otherwise.
 pub fn dlqe(
     phi: &DMatrix<f64>,
     g: Option<&DMatrix<f64>>,
@@ -43,31 +48,61 @@ pub fn dlqe(
     qn: &DMatrix<f64>,
     rn: &DMatrix<f64>,
 ) -> Result<Kalman> {
-    let n = check::square("Phi", phi)?;
+    let n = check::square("A", phi)?;
     let p_out = c.nrows();
     check::shape("C", c, p_out, n)?;
-    check::finite("C", c)?;
+    check::bounded("A", phi)?;
+    check::bounded("C", c)?;
     let w = match g {
         Some(gm) => {
             check::shape("G", gm, n, gm.ncols())?;
-            check::finite("G", gm)?;
+            check::bounded("G", gm)?;
             check::shape("Qn", qn, gm.ncols(), gm.ncols())?;
-            check::finite("Qn", qn)?;
+            check::bounded("Qn", qn)?;
             check::psd("Qn", qn)?;
             let mut w = gm * qn * gm.transpose();
             check::symmetrize(&mut w);
+            check::output("G Qn G^T", &w)?;
             w
         }
         None => {
             check::shape("Qn", qn, n, n)?;
+            check::bounded("Qn", qn)?;
+            check::psd("Qn", qn)?;
             qn.clone()
         }
     };
-    let sol = riccati::dare(&phi.transpose(), &c.transpose(), &w, rn, None)?;
+    check::shape("Rn", rn, p_out, p_out)?;
+    check::bounded("Rn", rn)?;
+    check::pd("Rn", rn)?;
+    // Structural failures of the dual DARE, restated for the filter: stabilizability of the
+    // dual (Φᵀ, Cᵀ) is detectability of (Φ, C); detectability of the dual (W, Φᵀ) is
+    // stabilizability of (Φ, G Qn^½).
+    let sol = match riccati::dare(&phi.transpose(), &c.transpose(), &w, rn, None) {
+        Ok(sol) => sol,
+        Err(LtiError::NotStabilizable { re, im, ratio, .. }) => {
+            return Err(LtiError::NotDetectable {
+                pair: "(A, C)",
+                re,
+                im,
+                ratio,
+            });
+        }
+        Err(LtiError::NotDetectable { re, im, ratio, .. }) => {
+            return Err(LtiError::NotStabilizable {
+                pair: "(A, G Qn^1/2)",
+                re,
+                im,
+                ratio,
+            });
+        }
+        Err(e) => return Err(e),
+    };
     let p = sol.x;
     let pct = &p * c.transpose();
     let mut s = c * &pct + rn;
     check::symmetrize(&mut s);
+    check::output("C P C^T + Rn", &s)?;
     // M = P Cᵀ S⁻¹ → Mᵀ = S⁻¹ C P.
     let mt = match s.clone().cholesky() {
         Some(ch) => ch.solve(&pct.transpose()),
@@ -79,7 +114,12 @@ pub fn dlqe(
     let l = phi * &m;
     let mut z = &p - &m * c * &p;
     check::symmetrize(&mut z);
-    let poles = analysis::eigenvalues(&(phi - &l * c))?;
+    check::output("Kalman filter gain M", &m)?;
+    check::output("Kalman predictor gain L", &l)?;
+    check::output("posterior covariance Z", &z)?;
+    let acl = phi - &l * c;
+    check::output("estimator error dynamics A - L C", &acl)?;
+    let poles = analysis::eigenvalues(&acl)?;
     Ok(Kalman {
         l,
         m,

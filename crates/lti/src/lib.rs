@@ -6,6 +6,13 @@
 //! All matrices are `nalgebra::DMatrix<f64>` (design-time code, not a per-step hot path).
 //! Bad input is reported through [`LtiError`]; nothing here panics on it.
 //!
+//! Every entry point checks its matrix arguments for NaN/∞ and, where the algorithm
+//! multiplies data matrices, for entries above [`MAX_ENTRY`] = 1e100 (the bound and its
+//! reason are documented there); errors name the argument ([`LtiError::argument`]) and the
+//! allowed range. Every returned number is finite (the one documented exception:
+//! [`damp_discrete`] gives ω_n = ∞ for a pole at z = 0, as MATLAB does); a computation that
+//! overflows ends in [`LtiError::Overflow`] instead of a NaN result.
+//!
 //! * [`expm()`] / [`c2d`]: matrix exponential (Higham 2005) and ZOH discretization.
 //! * [`analysis`]: poles, damping, PBH and staircase controllability/observability.
 //! * [`riccati`]: DARE by the structured doubling algorithm (Chu et al. 2004).
@@ -42,6 +49,7 @@ pub use analysis::{
     Pole, damp, damp_discrete, eigenvalues, observable_dimension, pbh_controllability,
     pbh_observability, reachable_dimension, spectral_radius,
 };
+pub use check::MAX_ENTRY;
 pub use error::{LtiError, Result};
 pub use expm::{c2d, c2d_fixed, expm};
 pub use kalman::{Kalman, dlqe};

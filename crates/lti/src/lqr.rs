@@ -22,6 +22,17 @@ pub struct Lqr {
     pub residual: f64,
 }
 
+/// eig(Φ − ΓK), with the closed-loop matrix checked for finiteness first.
+fn closed_loop_poles(
+    phi: &DMatrix<f64>,
+    gamma: &DMatrix<f64>,
+    k: &DMatrix<f64>,
+) -> Result<Vec<Complex<f64>>> {
+    let acl = phi - gamma * k;
+    check::output("closed loop Phi - Gamma K", &acl)?;
+    analysis::eigenvalues(&acl)
+}
+
 /// Discrete-time LQR, MATLAB/python-control `dlqr(Φ, Γ, Q, R[, N])`: minimizes
 /// Σ xᵀQx + uᵀRu + 2xᵀNu for x(k+1) = Φx(k) + Γu(k) (thesis (14.9)–(14.13)).
 ///
@@ -35,7 +46,7 @@ pub fn dlqr(
     n: Option<&DMatrix<f64>>,
 ) -> Result<Lqr> {
     let sol = riccati::dare_with(phi, gamma, q, r, n, &DareOptions::default())?;
-    let poles = analysis::eigenvalues(&(phi - gamma * &sol.k))?;
+    let poles = closed_loop_poles(phi, gamma, &sol.k)?;
     Ok(Lqr {
         k: sol.k,
         s: sol.x,
@@ -54,7 +65,9 @@ pub fn dlqr(
 /// printed in (14.26), which are α times larger).
 ///
 /// # Errors
-/// α not finite or < 1; otherwise as [`dlqr`] on (αΦ, αΓ) (stabilizability is then judged
+/// α not finite, < 1, or so large that α·max(|Φ|, |Γ|) exceeds
+/// [`MAX_ENTRY`](crate::MAX_ENTRY) ([`LtiError::Parameter`] naming alpha with the allowed
+/// range for this Φ, Γ); otherwise as [`dlqr`] on (αΦ, αΓ) (stabilizability is then judged
 /// at |λ| ≥ 1/α for the original Φ).
 pub fn dlqr_pincer(
     phi: &DMatrix<f64>,
@@ -68,11 +81,28 @@ pub fn dlqr_pincer(
         return Err(LtiError::Parameter {
             what: "alpha",
             value: alpha,
-            allowed: "finite and >= 1",
+            allowed: "finite and >= 1".to_string(),
+        });
+    }
+    // Judge Φ, Γ themselves first (so an error names them, not the scaled copies), then
+    // the scaled data against the same bound.
+    check::bounded("A", phi)?;
+    check::bounded("B", gamma)?;
+    let amax = phi.amax().max(gamma.amax());
+    if alpha * amax > check::MAX_ENTRY {
+        return Err(LtiError::Parameter {
+            what: "alpha",
+            value: alpha,
+            allowed: format!(
+                "finite, >= 1 and at most {:.3e} here (alpha·max(|Phi|, |Gamma|) must stay \
+                 below {:.0e})",
+                check::MAX_ENTRY / amax,
+                check::MAX_ENTRY
+            ),
         });
     }
     let sol = riccati::dare(&(phi * alpha), &(gamma * alpha), q, r, n)?;
-    let poles = analysis::eigenvalues(&(phi - gamma * &sol.k))?;
+    let poles = closed_loop_poles(phi, gamma, &sol.k)?;
     Ok(Lqr {
         k: sol.k,
         s: sol.x,
@@ -86,37 +116,41 @@ pub fn dlqr_pincer(
 /// Thesis values Ts = 1/400 s, ts = 5 s give α = 1.0023 (14.25).
 ///
 /// # Errors
-/// Non-finite or non-positive times.
+/// Non-finite or non-positive times; a settling time so much shorter than Ts that α
+/// overflows (Ts/ts > log₁₀(f64::MAX)/2 ≈ 154).
 pub fn alpha_from_settling_time(sample_time_s: f64, settling_time_s: f64) -> Result<f64> {
-    if !(sample_time_s.is_finite() && sample_time_s > 0.0) {
-        return Err(LtiError::Parameter {
-            what: "Ts",
-            value: sample_time_s,
-            allowed: "finite and > 0",
-        });
-    }
-    if !(settling_time_s.is_finite() && settling_time_s > 0.0) {
+    check::positive("Ts", sample_time_s)?;
+    check::positive("settling time", settling_time_s)?;
+    let alpha = 100f64.powf(sample_time_s / settling_time_s);
+    if !alpha.is_finite() {
         return Err(LtiError::Parameter {
             what: "settling time",
             value: settling_time_s,
-            allowed: "finite and > 0",
+            allowed: format!(
+                "finite, > 0 and at least Ts/154 = {:.3e} s (alpha = 100^(Ts/ts) must be finite)",
+                sample_time_s / 154.0
+            ),
         });
     }
-    Ok(100f64.powf(sample_time_s / settling_time_s))
+    Ok(alpha)
 }
 
 /// Bryson's rule, thesis (14.15)/(14.16): diag(1/y₁,max², …, 1/y_p,max²) from the maximum
 /// allowable deviations.
 ///
 /// # Errors
-/// A maximum that is not finite and positive.
+/// A maximum that is not finite and positive, or so small/large that 1/max² is not a finite
+/// normal number (max outside about [1.5e-154, 6.7e153]).
 pub fn bryson(max_deviation: &[f64]) -> Result<DMatrix<f64>> {
     for &v in max_deviation {
-        if !(v.is_finite() && v > 0.0) {
+        let w = 1.0 / (v * v);
+        if !(v.is_finite() && v > 0.0 && w.is_finite() && w >= f64::MIN_POSITIVE) {
             return Err(LtiError::Parameter {
                 what: "Bryson maximum deviation",
                 value: v,
-                allowed: "finite and > 0",
+                allowed: "finite, > 0 and within [1.5e-154, 6.7e153] (1/max^2 must be a \
+                          finite normal number)"
+                    .to_string(),
             });
         }
     }
@@ -128,26 +162,41 @@ pub fn bryson(max_deviation: &[f64]) -> Result<DMatrix<f64>> {
 /// (14.15), and R = ρ Q₂ with Q₂ = bryson(u_max) (14.16). Returns (Q₁, R).
 ///
 /// # Errors
-/// Bad maxima, ρ not finite and positive, or `hs` not having `y_max.len()` rows.
+/// Bad maxima, ρ not finite and positive, `hs` not having `y_max.len()` rows or with
+/// entries above [`MAX_ENTRY`](crate::MAX_ENTRY), or a weight that overflows
+/// ([`LtiError::Overflow`] for Q₁, [`LtiError::Parameter`] naming ρ for R).
 pub fn bryson_weights(
     hs: &DMatrix<f64>,
     y_max: &[f64],
     u_max: &[f64],
     rho: f64,
 ) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
-    if !(rho.is_finite() && rho > 0.0) {
-        return Err(LtiError::Parameter {
-            what: "rho",
-            value: rho,
-            allowed: "finite and > 0",
-        });
-    }
+    check::positive("rho", rho)?;
     check::shape("Hs", hs, y_max.len(), hs.ncols())?;
-    check::finite("Hs", hs)?;
+    check::bounded("Hs", hs)?;
     let qy = bryson(y_max)?;
     let mut q1 = hs.transpose() * qy * hs;
     check::symmetrize(&mut q1);
-    Ok((q1, bryson(u_max)? * rho))
+    check::output("Q1 = Hs^T Qy Hs (Bryson)", &q1)?;
+    let r = bryson(u_max)? * rho;
+    rho_times_finite(&r, rho)?;
+    Ok((q1, r))
+}
+
+/// Fails with [`LtiError::Parameter`] naming ρ if R = ρ·Q₂ has an entry above
+/// [`MAX_ENTRY`](crate::MAX_ENTRY) (or overflowed), i.e. would be rejected as input R.
+fn rho_times_finite(r: &DMatrix<f64>, rho: f64) -> Result<()> {
+    if r.iter().all(|v| v.abs() <= check::MAX_ENTRY) {
+        return Ok(());
+    }
+    Err(LtiError::Parameter {
+        what: "rho",
+        value: rho,
+        allowed: format!(
+            "finite, > 0 and small enough that rho·max|Q2| <= {:.0e}",
+            check::MAX_ENTRY
+        ),
+    })
 }
 
 /// The integral-action augmented system of thesis (14.28)–(14.31), before the pincer
@@ -175,7 +224,8 @@ pub struct IntegralAugmented {
 /// Builds the augmented system (14.31) from (Φs, Γs, Hs).
 ///
 /// # Errors
-/// Dimension mismatch or non-finite entries.
+/// Dimension mismatch, non-finite entries or entries above
+/// [`MAX_ENTRY`](crate::MAX_ENTRY).
 pub fn augment_integral(
     phi: &DMatrix<f64>,
     gamma: &DMatrix<f64>,
@@ -186,9 +236,9 @@ pub fn augment_integral(
     check::shape("Gamma", gamma, n, m)?;
     let p = hs.nrows();
     check::shape("Hs", hs, p, n)?;
-    check::finite("Phi", phi)?;
-    check::finite("Gamma", gamma)?;
-    check::finite("Hs", hs)?;
+    check::bounded("Phi", phi)?;
+    check::bounded("Gamma", gamma)?;
+    check::bounded("Hs", hs)?;
     let mut pa = DMatrix::<f64>::zeros(n + p, n + p);
     pa.view_mut((0, 0), (n, n)).copy_from(phi);
     pa.view_mut((n, 0), (p, n)).copy_from(&(-hs));
@@ -238,8 +288,10 @@ pub struct IntegralLqr {
 /// pincer guarantee |z| < 1/α requires (the integrators' unit poles are scaled too).
 ///
 /// # Errors
-/// Bad dimensions/weights, α < 1, ρ ≤ 0, or a DARE failure (e.g. an output whose
-/// integrator cannot be stabilized because the plant has a transmission zero at z = 1).
+/// Bad dimensions/weights (Qe, Qi p×p PSD, Q₂ m×m PD, entries within
+/// [`MAX_ENTRY`](crate::MAX_ENTRY)), α < 1, ρ ≤ 0 or ρ·Q₂ overflowing, or a DARE failure
+/// (e.g. an output whose integrator cannot be stabilized because the plant has a
+/// transmission zero at z = 1).
 pub fn dlqr_integral(
     phi: &DMatrix<f64>,
     gamma: &DMatrix<f64>,
@@ -250,27 +302,26 @@ pub fn dlqr_integral(
     rho: f64,
     alpha: f64,
 ) -> Result<IntegralLqr> {
-    if !(rho.is_finite() && rho > 0.0) {
-        return Err(LtiError::Parameter {
-            what: "rho",
-            value: rho,
-            allowed: "finite and > 0",
-        });
-    }
+    check::positive("rho", rho)?;
     let sys = augment_integral(phi, gamma, hs)?;
     let p = sys.n_integrators;
     let n = sys.n_states;
+    let m = sys.gamma.ncols();
     check::shape("Qe", qe, p, p)?;
     check::shape("Qi", qi, p, p)?;
-    check::finite("Qe", qe)?;
-    check::finite("Qi", qi)?;
+    check::shape("Q2", q2, m, m)?;
+    check::bounded("Qe", qe)?;
+    check::bounded("Qi", qi)?;
+    check::bounded("Q2", q2)?;
     check::psd("Qe", qe)?;
     check::psd("Qi", qi)?;
+    check::pd("Q2", q2)?;
     let mut q1 = sys.he.transpose() * qe * &sys.he + sys.hi.transpose() * qi * &sys.hi;
     check::symmetrize(&mut q1);
+    check::output("Q1 = He^T Qe He + Hi^T Qi Hi", &q1)?;
     let r = q2 * rho;
+    rho_times_finite(&r, rho)?;
     let lqr = dlqr_pincer(&sys.phi, &sys.gamma, &q1, &r, None, alpha)?;
-    let m = lqr.k.nrows();
     let ls = lqr.k.view((0, 0), (m, n)).into_owned();
     let li = lqr.k.view((0, n), (m, p)).into_owned();
     Ok(IntegralLqr {

@@ -90,11 +90,15 @@ pub struct DareSolution {
 
 /// Solves the DARE with default [`DareOptions`]. `n` is the optional cross weight N (n×m).
 ///
+/// On success X, K, the residual and the spectral radius are all finite.
+///
 /// # Errors
 /// Dimension/finite/symmetry/definiteness violations of the inputs (Q ⪰ 0, R ≻ 0, and the
-/// joint weight [[Q, N], [Nᵀ, R]] ⪰ 0 when N is given); [`LtiError::NotStabilizable`];
+/// joint weight [[Q, N], [Nᵀ, R]] ⪰ 0 when N is given); entries above
+/// [`MAX_ENTRY`](crate::MAX_ENTRY) ([`LtiError::TooLarge`]); [`LtiError::NotStabilizable`];
 /// [`LtiError::NotDetectable`]; [`LtiError::NoConvergence`];
-/// [`LtiError::NoStabilizingSolution`].
+/// [`LtiError::NoStabilizingSolution`]; [`LtiError::Overflow`] when an iterate or the
+/// result leaves the f64 range (badly scaled or nearly singular data, e.g. R ≈ 0).
 pub fn dare(
     a: &DMatrix<f64>,
     b: &DMatrix<f64>,
@@ -120,20 +124,20 @@ fn validate(
     check::shape("R", r, m, m)?;
     if let Some(nn) = n {
         check::shape("N", nn, nx, m)?;
-        check::finite("N", nn)?;
+        check::bounded("N", nn)?;
     }
-    check::finite("A", a)?;
-    check::finite("B", b)?;
-    check::finite("Q", q)?;
-    check::finite("R", r)?;
+    check::bounded("A", a)?;
+    check::bounded("B", b)?;
+    check::bounded("Q", q)?;
+    check::bounded("R", r)?;
     check::psd("Q", q)?;
     check::pd("R", r)?;
     Ok((nx, m))
 }
 
-/// Frobenius norm helper.
+/// Frobenius norm that does not overflow for large finite entries ([`check::fro`]).
 fn fro(m: &DMatrix<f64>) -> f64 {
-    m.norm()
+    check::fro(m)
 }
 
 /// Relative residual of X for the (cross-term-free) data, and the gain K.
@@ -189,6 +193,25 @@ fn scaled(m: &DMatrix<f64>, target: f64) -> DMatrix<f64> {
     }
 }
 
+/// Options must be usable numbers (a NaN tolerance would silently never stop).
+fn validate_options(opts: &DareOptions) -> Result<()> {
+    if opts.tol.is_nan() || opts.tol < 0.0 {
+        return Err(LtiError::Parameter {
+            what: "DareOptions::tol",
+            value: opts.tol,
+            allowed: ">= 0 (relative change of the iterate)".to_string(),
+        });
+    }
+    if opts.refine_above.is_nan() {
+        return Err(LtiError::Parameter {
+            what: "DareOptions::refine_above",
+            value: opts.refine_above,
+            allowed: "not NaN (relative residual)".to_string(),
+        });
+    }
+    Ok(())
+}
+
 /// Stabilizability of (A, B) and detectability of (Q, A) by PBH at |λ| ≥ 1 − 1e-8.
 /// B and Q are first scaled to the Frobenius norm of A (at least 1) so the σ ratio measures
 /// geometry, not units. Tolerance [`analysis::PBH_TOL`].
@@ -204,6 +227,7 @@ fn check_structure(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>) -> Resu
     let rep = analysis::pbh_at(a, &scaled(b, target), &eig, analysis::PBH_TOL, outside)?;
     if let Some(l) = rep.failing.first() {
         return Err(LtiError::NotStabilizable {
+            pair: "(A, B)",
             re: l.re,
             im: l.im,
             ratio: rep.min_ratio,
@@ -218,6 +242,7 @@ fn check_structure(a: &DMatrix<f64>, b: &DMatrix<f64>, q: &DMatrix<f64>) -> Resu
     )?;
     if let Some(l) = rep.failing.first() {
         return Err(LtiError::NotDetectable {
+            pair: "(Q, A)",
             re: l.re,
             im: l.im,
             ratio: rep.min_ratio,
@@ -238,6 +263,14 @@ fn remove_cross(
     let at = a - b * &rinv_nt;
     let mut qt = q - nn * &rinv_nt;
     check::symmetrize(&mut qt);
+    check::output(
+        "A - B R^-1 N^T (cross-term removal; R nearly singular?)",
+        &at,
+    )?;
+    check::output(
+        "Q - N R^-1 N^T (cross-term removal; R nearly singular?)",
+        &qt,
+    )?;
     // The joint weight [[Q, N], [Nᵀ, R]] ⪰ 0 iff Q̃ ⪰ 0 (Schur complement, R ≻ 0).
     check::psd("Q - N R^-1 N^T (joint weight [[Q, N], [N^T, R]])", &qt)?;
     Ok((at, qt))
@@ -264,6 +297,7 @@ fn sda(
             what: "Cholesky factor of R",
         })?;
     let mut g = bs_t.transpose() * &bs_t;
+    check::output("B R^-1 B^T (SDA start; R nearly singular?)", &g)?;
     let mut h = q.clone();
     let mut ak = a.clone();
     let ident = DMatrix::<f64>::identity(nx, nx);
@@ -294,11 +328,16 @@ fn sda(
         h = h_next;
         g = g_next;
         ak = a_next;
-        if !h.iter().all(|v| v.is_finite()) {
-            return Err(LtiError::NoConvergence {
-                what: "SDA (DARE)",
-                iterations: it,
-                last_change: change,
+        // Overflow of an iterate (an unstable mode that cannot be stabilized grows like
+        // λ^(2^k), or data too badly scaled) is reported, never iterated on as NaN. Checking
+        // H suffices: a non-finite A_k or G_k reaches H_{k+1} through W_k and the products.
+        if !(change.is_finite() && h.as_slice().iter().all(|v| v.is_finite())) {
+            return Err(LtiError::Overflow {
+                what: "SDA iterate (DARE)",
+                detail: format!(
+                    "left the f64 range at doubling step {it}; {}",
+                    check::OVERFLOW_HINT
+                ),
             });
         }
         if change <= opts.tol {
@@ -360,6 +399,7 @@ pub fn dare_with(
     opts: &DareOptions,
 ) -> Result<DareSolution> {
     validate(a, b, q, r, n)?;
+    validate_options(opts)?;
     let (at, qt) = match n {
         Some(nn) => remove_cross(a, b, q, r, nn)?,
         None => (a.clone(), q.clone()),
@@ -371,7 +411,8 @@ pub fn dare_with(
         Err(
             e @ (LtiError::NoConvergence { .. }
             | LtiError::NoStabilizingSolution { .. }
-            | LtiError::Singular { .. }),
+            | LtiError::Singular { .. }
+            | LtiError::Overflow { .. }),
         ) => {
             // Diagnose: a structural cause is the more useful error.
             check_structure(&at, b, &qt)?;
@@ -395,6 +436,8 @@ fn solve_checked(
     let (mut x, iterations) = sda(at, b, qt, r, opts)?;
     check::symmetrize(&mut x);
     let (mut rel, mut k, mut res) = residual_and_gain(at, b, qt, r, None, &x)?;
+    check::output("gain K (DARE)", &k)?;
+    check::output_scalar("DARE residual", rel)?;
     let mut accepted = 0;
     let max_newton = if rel > opts.refine_above {
         opts.newton_steps.max(3)
@@ -409,7 +452,8 @@ fn solve_checked(
         let mut xn = &x + delta;
         check::symmetrize(&mut xn);
         let (rn, kn, resn) = residual_and_gain(at, b, qt, r, None, &xn)?;
-        if rn < rel {
+        // A non-finite candidate fails `rn < rel` (NaN) or is caught here.
+        if rn < rel && kn.iter().all(|v| v.is_finite()) {
             x = xn;
             rel = rn;
             k = kn;
@@ -421,7 +465,11 @@ fn solve_checked(
     }
     // Report in terms of the original data (with N).
     let (rel_orig, k_orig, _) = residual_and_gain(a, b, q, r, n, &x)?;
+    check::output("Riccati solution X", &x)?;
+    check::output("gain K (DARE)", &k_orig)?;
+    check::output_scalar("DARE residual", rel_orig)?;
     let acl = a - b * &k_orig;
+    check::output("closed loop A - BK", &acl)?;
     let rho = analysis::spectral_radius(&acl)?;
     if rho.partial_cmp(&1.0) != Some(std::cmp::Ordering::Less) {
         return Err(LtiError::NoStabilizingSolution {
