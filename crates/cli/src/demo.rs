@@ -10,7 +10,7 @@
 //! as `helicon sim scenarios/demo.toml` writes.
 
 use crate::model_cmd::ModelFlags;
-use crate::sim_cmd::{RunReport, fly_step, prepare_step, print_run, write_step};
+use crate::sim_cmd::{RunReport, fly_and_write_step, prepare_step, print_run};
 use anyhow::{Context, Result};
 use clap::Args;
 use helicon_model::InflowMode;
@@ -194,8 +194,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             "ideal measurements of the nine measured states".to_string()
         }
     );
-    let (flight, fly_s) = fly_step(&scenario, &prepared)?;
-    let (files, write_s) = write_step(&args.out, &scenario, &prepared, &flight)?;
+    let (flight, files, fly_s, write_s) = fly_and_write_step(&args.out, &scenario, &prepared)?;
     let report = RunReport {
         flight,
         files,

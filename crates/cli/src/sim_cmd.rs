@@ -7,8 +7,8 @@
 
 use anyhow::{Context, Result};
 use clap::Args;
-use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly, prepare};
-use helicon_sim::output::{CaseRun, RunFiles, write_cases_index, write_run};
+use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly_to, prepare};
+use helicon_sim::output::{CaseRun, RunFiles, finish_run, start_run, write_cases_index};
 use helicon_sim::scenario::{OUTPUTS, Scenario};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -56,8 +56,17 @@ pub fn prepare_step(scenario: &Scenario) -> Result<(Prepared, f64)> {
     Ok((prepared, t0.elapsed().as_secs_f64()))
 }
 
-/// Fly with a progress bar on stderr; returns the flight and the wall time (s).
-pub fn fly_step(scenario: &Scenario, prepared: &Prepared) -> Result<(Flight, f64)> {
+/// Fly with a progress bar on stderr, streaming `log.csv` into the run
+/// folder `out` (created first, so an unwritable folder fails before the
+/// flight), then write the rest of the folder. Returns the flight (its
+/// in-memory log empty), the files, and the flying and writing wall times (s).
+pub fn fly_and_write_step(
+    out: &Path,
+    scenario: &Scenario,
+    prepared: &Prepared,
+) -> Result<(Flight, RunFiles, f64, f64)> {
+    let mut log =
+        start_run(out).with_context(|| format!("writing the run outputs to {}", out.display()))?;
     let bar = ProgressBar::new(1000);
     bar.set_style(
         ProgressStyle::with_template(
@@ -69,31 +78,24 @@ pub fn fly_step(scenario: &Scenario, prepared: &Prepared) -> Result<(Flight, f64
     bar.set_message(format!("flying {:.1} s", scenario.duration_s));
     let t1 = Instant::now();
     let mut cb = |f: f64| bar.set_position((f.clamp(0.0, 1.0) * 1000.0).round() as u64);
-    let flight = fly(scenario, prepared, Some(&mut cb));
+    let flight = fly_to(scenario, prepared, &mut log, Some(&mut cb));
     bar.finish_and_clear();
     let flight =
         flight.with_context(|| format!("scenario `{}`: setting up the flight", scenario.name))?;
-    Ok((flight, t1.elapsed().as_secs_f64()))
-}
-
-/// Write the run folder; returns the files and the wall time (s).
-pub fn write_step(
-    out: &Path,
-    scenario: &Scenario,
-    prepared: &Prepared,
-    flight: &Flight,
-) -> Result<(RunFiles, f64)> {
+    let fly_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
-    let files = write_run(out, scenario, prepared, flight)
+    let rows = log
+        .finish()
         .with_context(|| format!("writing the run outputs to {}", out.display()))?;
-    Ok((files, t2.elapsed().as_secs_f64()))
+    let files = finish_run(out, scenario, prepared, &flight.summary, rows)
+        .with_context(|| format!("writing the run outputs to {}", out.display()))?;
+    Ok((flight, files, fly_s, t2.elapsed().as_secs_f64()))
 }
 
 /// Prepare, fly (with a progress bar on stderr) and write a scenario.
 pub fn run_scenario(scenario: &Scenario, out: &Path) -> Result<RunReport> {
     let (prepared, prepare_s) = prepare_step(scenario)?;
-    let (flight, fly_s) = fly_step(scenario, &prepared)?;
-    let (files, write_s) = write_step(out, scenario, &prepared, &flight)?;
+    let (flight, files, fly_s, write_s) = fly_and_write_step(out, scenario, &prepared)?;
     Ok(RunReport {
         flight,
         files,

@@ -10,6 +10,7 @@
 //! estimator failure) stops the run cleanly with the reason, time and state,
 //! keeping the log so far.
 
+use crate::log_csv::LogWriter;
 use crate::metrics::{OutputMetrics, output_metrics};
 use crate::navigation::{navigation_filter_at, sensor_suite_at};
 use crate::scenario::{DesignInflow, OUTPUTS, PlantInflow, Scenario};
@@ -75,12 +76,26 @@ pub enum ClosedLoopError {
         /// The parameters' sample time (s).
         params_s: f64,
     },
-    /// The log would not fit in memory.
-    #[error("the flight log would need {rows} rows: raise [log] decimation or shorten duration_s")]
+    /// The log would not fit in the memory budget.
+    #[error(
+        "the flight log would need {rows} rows, {} MiB, beyond the {} MiB budget ({why}): \
+         raise [log] decimation, shorten duration_s, or write it to a file (`helicon sim` does)",
+        bytes >> 20,
+        budget >> 20
+    )]
     LogTooLarge {
         /// Rows needed.
         rows: usize,
+        /// Bytes needed.
+        bytes: u64,
+        /// The budget (bytes).
+        budget: u64,
+        /// Where the budget comes from.
+        why: String,
     },
+    /// Writing the streamed log failed.
+    #[error(transparent)]
+    Log(#[from] crate::log_csv::LogCsvError),
 }
 
 /// Everything prepared for flying a scenario.
@@ -311,6 +326,9 @@ pub struct Summary {
     pub version: String,
     /// The flight software's sample time (s): the helicopter's `control.sample_time_s`.
     pub sample_time_s: f64,
+    /// The settling metrics used every `metrics_stride`-th kept log row (1
+    /// unless the flight outgrew [`METRIC_TRACE_CAP`] rows).
+    pub metrics_stride: usize,
     /// Closed-loop poles of the design: largest |z|.
     pub design_spectral_radius: f64,
     /// Pincer α of the design.
@@ -654,32 +672,80 @@ fn check_limits(
     None
 }
 
-/// Fly a prepared scenario: one loop per controller sample — sense, run the
-/// flight software, integrate the plant, log, check the envelope.
+/// Fly a prepared scenario, keeping the log in memory ([`Flight::log`]):
+/// one loop per controller sample — sense, run the flight software,
+/// integrate the plant, log, check the envelope. A log that would not fit in
+/// the memory budget ([`crate::resources::memory_budget`]) is refused before
+/// the flight; [`fly_to`] streams it to a file instead.
 pub fn fly(
     scenario: &Scenario,
     prepared: &Prepared,
     progress: Option<Progress<'_>>,
 ) -> Result<Flight, ClosedLoopError> {
+    fly_with(scenario, prepared, None, progress)
+}
+
+/// As [`fly`], writing each kept log row to `log` as it is flown (memory
+/// independent of the duration; [`Flight::log`] stays empty).
+pub fn fly_to(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    log: &mut LogWriter,
+    progress: Option<Progress<'_>>,
+) -> Result<Flight, ClosedLoopError> {
+    fly_with(scenario, prepared, Some(log), progress)
+}
+
+/// The number of controller samples a flight of this scenario takes, and the
+/// kept log rows.
+fn sample_counts(scenario: &Scenario, ts: f64) -> (usize, usize) {
+    let n = (scenario.duration_s / ts).round() as usize;
+    let decimation = scenario.log.decimation.max(1) as usize;
+    (n, n / decimation + 2)
+}
+
+/// Refuse a memory reservation beyond the budget before flying.
+fn check_log_memory(rows: usize, row_bytes: usize) -> Result<(), ClosedLoopError> {
+    let (budget, why) = crate::resources::memory_budget();
+    let need = (rows as u64).saturating_mul(row_bytes as u64);
+    if need > budget {
+        return Err(ClosedLoopError::LogTooLarge {
+            rows,
+            bytes: need,
+            budget,
+            why,
+        });
+    }
+    Ok(())
+}
+
+fn fly_with(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    mut stream: Option<&mut LogWriter>,
+    progress: Option<Progress<'_>>,
+) -> Result<Flight, ClosedLoopError> {
     let mut progress = progress;
     let ts = prepared.gains.set.sample_time_s;
+    let (n, rows) = sample_counts(scenario, ts);
+    let decimation = scenario.log.decimation.max(1) as usize;
+    let mut log = Vec::new();
+    if stream.is_none() {
+        check_log_memory(rows, std::mem::size_of::<LogRow>())?;
+        log.reserve(rows);
+    }
+    let record_sensors = scenario.log.sensors && scenario.controller.fusion;
+    if record_sensors {
+        check_log_memory(n + 1, std::mem::size_of::<SensorLogRow>())?;
+    }
     let mut plant = Plant::new(scenario, prepared, ts);
     let mut onboard = OnBoard::new(scenario, prepared, &plant.x)?;
     let mut wind = Wind::from_config(&scenario.wind)?;
-    let n = (scenario.duration_s / ts).round() as usize;
     let schedule = scenario.reference_schedule();
-    let decimation = scenario.log.decimation.max(1) as usize;
-    let mut log = Vec::new();
-    log.try_reserve(n / decimation + 2)
-        .map_err(|_| ClosedLoopError::LogTooLarge {
-            rows: n / decimation + 2,
-        })?;
-    let record_sensors = scenario.log.sensors && scenario.controller.fusion;
+    let mut acc = SummaryAccumulator::new(prepared);
     let mut sensors = Vec::new();
     if record_sensors {
-        sensors
-            .try_reserve(n + 1)
-            .map_err(|_| ClosedLoopError::LogTooLarge { rows: n + 1 })?;
+        sensors.reserve(n + 1);
     }
     let mut reason: Option<(Termination, String)> = None;
     let mut t = 0.0;
@@ -706,7 +772,12 @@ pub fn fly(
         let step = plant.advance(&tel.command, &wind_ned);
         // the log keeps every `decimation`-th sample (and the last one)
         if k % decimation == 0 || k == n {
-            log.push(LogRow::new(t, &x_start, &tel, r, &wind_ned, &step.aux));
+            let row = LogRow::new(t, &x_start, &tel, r, &wind_ned, &step.aux);
+            acc.push(&row);
+            match stream.as_deref_mut() {
+                Some(w) => w.write(&row)?,
+                None => log.push(row),
+            }
         }
         if let Some(e) = step.error {
             reason = Some((
@@ -728,7 +799,7 @@ pub fn fly(
     if let Some(cb) = progress.as_mut() {
         cb(1.0);
     }
-    let summary = summarize(scenario, prepared, &log, reason, t);
+    let summary = summarize(scenario, prepared, &acc, reason, t);
     Ok(Flight {
         log,
         sensors,
@@ -786,20 +857,112 @@ fn unwrap_heading_error(e: &mut [f64]) {
     }
 }
 
+/// What the summary needs from the kept log rows, gathered as they are
+/// flown so that its memory does not grow with the duration: sums for the
+/// RMS figures (every row) and the output errors for the settling metrics,
+/// kept for every row up to [`METRIC_TRACE_CAP`] rows and thinned evenly
+/// beyond (every second row dropped, the stride doubled).
+#[derive(Debug, Clone)]
+pub struct SummaryAccumulator {
+    rows: usize,
+    effort: [f64; 4],
+    saturated_rows: [usize; 4],
+    estimator: [f64; 9],
+    u_trim: Input,
+    s_min: [f64; 4],
+    s_max: [f64; 4],
+    stride: usize,
+    cap: usize,
+    trace_t: Vec<f64>,
+    trace_e: [Vec<f64>; 4],
+}
+
+/// The number of rows of output errors the summary keeps in memory (each
+/// 40 bytes): 2¹⁹ rows, 21 MB, every row of a 1310 s flight at 400 Hz.
+pub const METRIC_TRACE_CAP: usize = 1 << 19;
+
+impl SummaryAccumulator {
+    fn new(prepared: &Prepared) -> Self {
+        let servos = prepared.model.params().servos;
+        SummaryAccumulator {
+            rows: 0,
+            effort: [0.0; 4],
+            saturated_rows: [0; 4],
+            estimator: [0.0; 9],
+            u_trim: prepared.gains.set.u_trim,
+            s_min: servos.map(|s| s.s_min),
+            s_max: servos.map(|s| s.s_max),
+            stride: 1,
+            cap: METRIC_TRACE_CAP,
+            trace_t: Vec::new(),
+            trace_e: Default::default(),
+        }
+    }
+
+    fn push(&mut self, r: &LogRow) {
+        for i in 0..4 {
+            self.effort[i] += (r.u[i] - self.u_trim[i]).powi(2);
+            if r.u[i] <= self.s_min[i] + 1e-12 || r.u[i] >= self.s_max[i] - 1e-12 {
+                self.saturated_rows[i] += 1;
+            }
+        }
+        for i in 0..9 {
+            let mut d = r.x[i + REDUCED_OFFSET] - r.estimate9[i];
+            if i == 2 {
+                d = wrap_pi(d);
+            }
+            self.estimator[i] += d * d;
+        }
+        if self.rows % self.stride == 0 {
+            if self.trace_t.len() == self.cap {
+                self.thin();
+            }
+            if self.rows % self.stride == 0 {
+                self.trace_t.push(r.t_s);
+                for j in 0..4 {
+                    self.trace_e[j].push(r.reference[j] - r.output[j]);
+                }
+            }
+        }
+        self.rows += 1;
+    }
+
+    /// Drop every second kept row and double the stride.
+    fn thin(&mut self) {
+        let keep = |v: &mut Vec<f64>| {
+            let mut i = 0;
+            v.retain(|_| {
+                i += 1;
+                (i - 1) % 2 == 0
+            });
+        };
+        keep(&mut self.trace_t);
+        for e in &mut self.trace_e {
+            keep(e);
+        }
+        self.stride *= 2;
+    }
+
+    /// The output errors kept: one every `stride()` rows.
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+}
+
 fn summarize(
     scenario: &Scenario,
     prepared: &Prepared,
-    log: &[LogRow],
+    acc: &SummaryAccumulator,
     reason: Option<(Termination, String)>,
     t_end: f64,
 ) -> Summary {
     let termination = reason.as_ref().map_or(Termination::Completed, |r| r.0);
     let reason = reason.map(|r| r.1);
-    let t: Vec<f64> = log.iter().map(|r| r.t_s).collect();
+    let t = &acc.trace_t;
     let mut metrics = std::collections::BTreeMap::new();
     let mut excitations = Vec::with_capacity(4);
     for (j, name) in OUTPUTS.iter().enumerate() {
-        let mut e: Vec<f64> = log.iter().map(|r| r.reference[j] - r.output[j]).collect();
+        let mut e: Vec<f64> = acc.trace_e[j].clone();
         if j == 3 {
             unwrap_heading_error(&mut e);
         }
@@ -823,9 +986,9 @@ fn summarize(
     }
     let band_scale = excitations.iter().fold(0.0f64, |m, x| m.max(x.2));
     for (name, (e, t_exc, size, wrapped)) in OUTPUTS.iter().zip(excitations) {
-        let mut m = output_metrics(&t, &e, t_exc, size, band_scale);
+        let mut m = output_metrics(t, &e, t_exc, size, band_scale);
         if let Some(w) = wrapped {
-            let stats = output_metrics(&t, &w, t_exc, size, band_scale);
+            let stats = output_metrics(t, &w, t_exc, size, band_scale);
             m.rms_error = stats.rms_error;
             m.max_abs_error = stats.max_abs_error;
         }
@@ -835,30 +998,12 @@ fn summarize(
         }
         metrics.insert((*name).to_string(), m);
     }
-    let u_trim = &prepared.gains.set.u_trim;
-    let nrow = log.len().max(1) as f64;
+    let nrow = acc.rows.max(1) as f64;
     let ts = prepared.gains.set.sample_time_s;
-    let servos = prepared.model.params().servos;
-    let mut effort = [0.0; 4];
-    let mut sat = [0.0; 4];
-    for r in log {
-        for i in 0..4 {
-            effort[i] += (r.u[i] - u_trim[i]).powi(2);
-            if r.u[i] <= servos[i].s_min + 1e-12 || r.u[i] >= servos[i].s_max - 1e-12 {
-                sat[i] += ts * scenario.log.decimation.max(1) as f64;
-            }
-        }
-    }
-    let mut est = [0.0; 9];
-    for r in log {
-        for i in 0..9 {
-            let mut d = r.x[i + REDUCED_OFFSET] - r.estimate9[i];
-            if i == 2 {
-                d = wrap_pi(d);
-            }
-            est[i] += d * d;
-        }
-    }
+    let row_s = ts * scenario.log.decimation.max(1) as f64;
+    let sat = acc.saturated_rows.map(|n| n as f64 * row_s);
+    let effort = acc.effort;
+    let est = acc.estimator;
     let rho = prepared.gains.spectral_radius();
     Summary {
         scenario: scenario.name.clone(),
@@ -876,6 +1021,7 @@ fn summarize(
         parameter_hash: fnv1a_hex(&prepared.model.params().to_toml()),
         version: env!("CARGO_PKG_VERSION").to_string(),
         sample_time_s: ts,
+        metrics_stride: acc.stride,
         design_spectral_radius: rho,
         design_alpha: prepared.gains.set.alpha,
     }
@@ -883,3 +1029,51 @@ fn summarize(
 
 /// Number of state columns logged.
 pub const LOG_STATES: usize = NX;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(k: usize) -> LogRow {
+        LogRow {
+            t_s: k as f64,
+            x: State::zeros(),
+            u: Input::zeros(),
+            reference: [k as f64, 0.0, 0.0, 0.0],
+            output: [0.0; 4],
+            estimate9: [0.0; 9],
+            measured9: [0.0; 9],
+            wind_ned: [0.0; 3],
+            lambda: [0.0; 2],
+            thrust: [0.0; 2],
+            inflow_residual: [0.0; 2],
+        }
+    }
+
+    #[test]
+    fn metric_trace_is_bounded_and_evenly_thinned() {
+        let mut acc = SummaryAccumulator {
+            rows: 0,
+            effort: [0.0; 4],
+            saturated_rows: [0; 4],
+            estimator: [0.0; 9],
+            u_trim: Input::zeros(),
+            s_min: [-1.0; 4],
+            s_max: [1.0; 4],
+            stride: 1,
+            cap: 8,
+            trace_t: Vec::new(),
+            trace_e: Default::default(),
+        };
+        for k in 0..100 {
+            acc.push(&row(k));
+            assert!(acc.trace_t.len() <= 8);
+        }
+        // 100 rows into 8 slots: stride 16, rows 0, 16, …, 96 kept
+        assert_eq!(acc.stride(), 16);
+        assert_eq!(acc.trace_t, [0.0, 16.0, 32.0, 48.0, 64.0, 80.0, 96.0]);
+        assert_eq!(acc.trace_e[0], acc.trace_t);
+        // the RMS sums still see every row
+        assert_eq!(acc.rows, 100);
+    }
+}

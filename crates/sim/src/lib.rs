@@ -18,6 +18,7 @@ pub mod metrics;
 pub mod navigation;
 pub mod output;
 pub mod plot;
+pub mod resources;
 pub mod scenario;
 pub mod sensor_log;
 pub mod sensors;

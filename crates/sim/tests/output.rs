@@ -864,3 +864,26 @@ fn figures_of_a_long_log_have_a_bounded_number_of_points() {
     assert!(svg.contains("max 0.75") && svg.contains("min -0.75"));
     assert!(svg.contains("max 0.3 (off scale)"));
 }
+
+#[test]
+fn streaming_flight_gives_the_same_summary_and_log_as_in_memory() {
+    use helicon_sim::closed_loop::{fly, fly_to, prepare};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/demo.toml");
+    let mut s = helicon_sim::scenario::Scenario::from_file(&path).unwrap();
+    s.duration_s = 3.0;
+    let p = prepare(&s).unwrap();
+    let mem = fly(&s, &p, None).unwrap();
+    let dir = std::env::temp_dir().join(format!("helicon-stream-{}", std::process::id()));
+    let mut w = helicon_sim::output::start_run(&dir).unwrap();
+    let streamed = fly_to(&s, &p, &mut w, None).unwrap();
+    let rows = w.finish().unwrap();
+    assert!(streamed.log.is_empty());
+    assert_eq!(rows, mem.log.len());
+    assert_eq!(streamed.summary, mem.summary);
+    assert_eq!(mem.summary.metrics_stride, 1);
+    let back = helicon_sim::log_csv::read_log_csv(&dir.join("log.csv")).unwrap();
+    assert_eq!(
+        back.time_s(),
+        mem.log.iter().map(|r| r.t_s).collect::<Vec<_>>()
+    );
+}
