@@ -332,6 +332,7 @@ const FUSED_COLUMNS: [&str; 30] = [
 ];
 
 /// Replay a sensor log through the navigation that flies.
+#[allow(clippy::too_many_lines)] // the replay, its CSV row and its plots in one pass over the log
 pub fn run_fuse(args: &FuseArgs) -> Result<()> {
     let (sensors, mut nav, params) = match &args.scenario {
         Some(p) => {

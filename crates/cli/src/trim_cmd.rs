@@ -244,6 +244,7 @@ fn print_trim(t: &Trim, args: &TrimArgs) -> Result<()> {
     Ok(())
 }
 
+#[allow(clippy::too_many_lines)] // the sweep: solve, classify, write CSV/JSON, plot, in order
 fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
     if !(args.step > 0.0 && args.step.is_finite() && args.from.is_finite() && args.to.is_finite()) {
         bail!("--step must be > 0 and --from/--to finite");

@@ -1,5 +1,6 @@
 //! End-to-end tests of `helicon attitude`, `helicon sensors simulate` and
 //! `helicon fuse`, including bad inputs (errors, never panics).
+#![allow(clippy::too_many_lines, clippy::panic, clippy::cast_possible_wrap)] // tests: long scenarios, panics are failures
 #![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
 
 use std::path::PathBuf;

@@ -439,7 +439,9 @@ impl Gains {
             Some(t) => alpha_from_settling_time(ts, t)?,
             None => 1.0,
         };
-        if !((f.alpha - expected_alpha).abs() <= 1e-12 * expected_alpha.abs()) {
+        // NaN compares false: written so that a NaN α is refused too
+        let alpha_matches = (f.alpha - expected_alpha).abs() <= 1e-12 * expected_alpha.abs();
+        if !alpha_matches {
             return Err(bad(format!(
                 "`alpha` = {} does not match the settling time {:?} s at sample time {ts} s \
                  (which gives {expected_alpha}): the file was edited",

@@ -8,7 +8,7 @@ use crate::error::{LtiError, Result};
 use crate::riccati;
 
 /// Steady-state Kalman estimator for x(k+1) = Φx + Γu + G w, y = Cx + v,
-/// E[wwᵀ] = Qn, E[vvᵀ] = Rn (w, v uncorrelated).
+/// E(w wᵀ) = Qn, E(v vᵀ) = Rn (w, v uncorrelated).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Kalman {
     /// Predictor gain L (n×p): x̂(k+1) = Φx̂(k) + Γu(k) + L(y(k) − Cx̂(k)), thesis (15.8)

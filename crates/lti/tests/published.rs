@@ -3,7 +3,7 @@
 //! examples for the numerical solution of algebraic Riccati equations II: discrete-time
 //! case", TU Chemnitz-Zwickau SPC 95_23, 1995; SLICOT BB02AD), where the exact solution is
 //! known in closed form. The data below is typed from the collection's definitions.
-
+#![allow(clippy::too_many_lines, clippy::panic, clippy::cast_possible_wrap)] // tests: long scenarios, panics are failures
 #![allow(clippy::unwrap_used)] // test helpers outside #[test] fns
 
 mod common;

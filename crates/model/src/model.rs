@@ -203,6 +203,7 @@ impl Model {
     }
 
     /// ẋ = f(x, u, wind_ned) with a chosen inflow mode.
+    #[allow(clippy::too_many_lines)] // the blocks of Figure 4.4 in data-flow order in one hot function (no call overhead, no allocation)
     pub fn derivative_with(
         &self,
         x: &State,

@@ -4,7 +4,7 @@
 //! The Bergen Industrial Twin ships as `params/bergen_twin.toml` and is
 //! embedded in the library ([`Params::bergen_twin`]). A user's file may
 //! override any subset of its keys ([`Params::from_toml_str`] applies a file on
-//! top of the embedded set). Every key is described once, in [`DESCRIPTORS`]:
+//! top of the embedded set). Every key is described once, in `DESCRIPTORS`:
 //! its TOML section and name, its unit, its thesis symbol and the rule it must
 //! obey; loading, validation and printing all walk that table.
 //!

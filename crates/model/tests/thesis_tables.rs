@@ -4,7 +4,7 @@
 //! Flapping responses are compared at *quasi-steady flapping*: all other
 //! states are frozen and the flapping states (main rotor and stabilizer bar)
 //! are integrated until they settle (time constants ≤ 0.1 s; 1 s is enough).
-
+#![allow(clippy::too_many_lines, clippy::panic, clippy::cast_possible_wrap)] // tests: long scenarios, panics are failures
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 mod common;

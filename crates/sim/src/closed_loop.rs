@@ -1,6 +1,6 @@
 //! The closed loop: the thesis's Simulink environment (Appendix E figure)
 //! rebuilt as software. World (nonlinear model + wind [+ sensor models]) and
-//! the on-board [`FlightController`] exchange servo commands and measurements
+//! the on-board flight software (`helicon_core::FlightComputer`) exchange servo commands and measurements
 //! once per controller sample; the plant is integrated with RK4 in between
 //! (inputs held, optional sub-steps).
 //!

@@ -305,6 +305,7 @@ const RED: [u8; 3] = [214, 39, 40];
 /// `2 × max_buckets` points per line, so the time and memory are bounded by
 /// the file length and the bucket count, not the number of points drawn).
 /// Returns the figures written (none for a log without rows) and their files.
+#[allow(clippy::too_many_lines)] // the run report, one section after another
 pub fn write_figures(
     dir: &Path,
     log_csv: &Path,

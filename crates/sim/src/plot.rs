@@ -497,6 +497,7 @@ impl<'a> Figure<'a> {
     }
 
     /// Draw on `root`; `raster` for a bitmap backend.
+    #[allow(clippy::too_many_lines)] // one figure's layout, panel by panel
     fn draw<DB: DrawingBackend>(
         &self,
         root: DrawingArea<DB, Shift>,
@@ -521,7 +522,7 @@ impl<'a> Figure<'a> {
             .map_err(|e| err(&e))?;
         let n = self.panels.len();
         let breaks: Vec<i32> = (1..n)
-            .map(|i| (i as u32 * self.panel_height_px) as i32)
+            .map(|i| i32::try_from(i as u64 * u64::from(self.panel_height_px)).unwrap_or(i32::MAX))
             .collect();
         let rows = body.split_by_breakpoints::<i32, i32, _, _>([], breaks);
         let xf = move |v: &f64| tick_label(*v, x0, x1, X_LABELS);

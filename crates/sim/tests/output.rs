@@ -1,6 +1,7 @@
 //! Run outputs: the files of a run folder, the `log.csv` layout and
 //! decimation, the `summary.json` keys, and the gains round trip (flying the
 //! saved gains reproduces the run bit for bit).
+#![allow(clippy::too_many_lines, clippy::panic, clippy::cast_possible_wrap)] // tests: long scenarios, panics are failures
 #![allow(clippy::unwrap_used, missing_docs)] // tests: a failed unwrap is a failed test
 
 use helicon_core::frames::wrap_pi;
