@@ -98,6 +98,7 @@ impl StateFeedback for Lqi {
     // `&self.ls * x`: by reference on purpose, the by-value `Mul` copies the
     // matrix each call.
     #[allow(clippy::op_ref)]
+    #[inline]
     fn command(&mut self, estimate: &ReducedState, reference: &Reference) -> Command {
         let trig = EulerTrig::new(estimate[0], estimate[1], estimate[2]);
         let ned_from_body = trig.ned_from_body();

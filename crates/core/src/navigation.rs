@@ -186,6 +186,7 @@ impl NavigationFilter {
     }
 
     /// The navigation solution after the last [`NavigationFilter::step`].
+    #[inline]
     pub fn solution(&self) -> NavigationSolution {
         let s = self.filter.state();
         let p = self.filter.covariance();
