@@ -24,6 +24,7 @@
 //! ```
 
 pub mod actuators;
+pub mod config_error;
 pub mod drag;
 pub mod flapping;
 pub mod inflow;
@@ -42,6 +43,7 @@ pub use helicon_core::frames;
 /// The state layout (thesis (4.7), (12.2)), shared with the flight software core.
 pub use helicon_core::state;
 
+pub use config_error::ConfigError;
 pub use model::{Aux, Model, ModelError};
 pub use options::{InflowMode, ModelOptions, Preset};
 pub use params::{ParamError, Params};

@@ -51,12 +51,9 @@ pub enum ClosedLoopError {
     /// Controller design or gains file.
     #[error(transparent)]
     Design(#[from] helicon_gnc::design::DesignError),
-    /// Wind configuration.
+    /// Wind or sensor configuration (the one configuration error shape).
     #[error(transparent)]
-    Wind(#[from] crate::wind::WindError),
-    /// Sensor configuration.
-    #[error(transparent)]
-    Sensors(#[from] crate::sensors::SensorConfigError),
+    Config(#[from] helicon_model::ConfigError),
     /// Navigation (fusion) setup.
     #[error(transparent)]
     Fusion(#[from] helicon_core::fusion::FusionError),

@@ -27,38 +27,9 @@ use std::path::Path;
 /// Standard gravity for unit conversions of datasheet values (m/s²).
 pub const G0_M_S2: f64 = 9.80665;
 
-/// Error loading or validating a sensor configuration.
-#[derive(Debug, thiserror::Error)]
-pub enum SensorConfigError {
-    /// The file could not be read.
-    #[error("{file}: {source}")]
-    Io {
-        /// File name.
-        file: String,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// TOML syntax or unknown/mistyped field (the message names the key).
-    #[error("{file}: {message}")]
-    Parse {
-        /// File name.
-        file: String,
-        /// Parser message naming the field and position.
-        message: String,
-    },
-    /// A field is out of its allowed range.
-    #[error("{file}: field `{field}` = {value} is invalid (allowed: {allowed})")]
-    Invalid {
-        /// File name.
-        file: String,
-        /// Dotted field name.
-        field: String,
-        /// Value given.
-        value: f64,
-        /// Allowed range.
-        allowed: &'static str,
-    },
-}
+/// Error loading or validating a sensor configuration: the toolkit's one
+/// configuration error shape.
+pub type SensorConfigError = helicon_model::ConfigError;
 
 /// One inertial sensor axis triad (accelerometer or gyro). Units: the
 /// sensor's unit `u` (m/s² or rad/s).
@@ -228,6 +199,7 @@ impl SensorConfig {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|source| SensorConfigError::Io {
             file: file.clone(),
+            action: "read",
             source,
         })?;
         Self::from_toml_str(&text, &file)
@@ -235,11 +207,8 @@ impl SensorConfig {
 
     /// Check every field's range; `file` names the source in errors.
     pub fn validate(&self, file: &str) -> Result<(), SensorConfigError> {
-        let bad = |field: String, value: f64, allowed: &'static str| SensorConfigError::Invalid {
-            file: file.to_string(),
-            field,
-            value,
-            allowed,
+        let bad = |field: String, value: f64, allowed: &'static str| {
+            SensorConfigError::invalid(file, field, value, format!("allowed {allowed}"))
         };
         let nonneg = |field: String, v: f64| {
             if v.is_finite() && v >= 0.0 {
@@ -356,12 +325,12 @@ impl SensorSuite {
     pub fn new(config: SensorConfig, gravity_m_s2: f64) -> Result<Self, SensorConfigError> {
         config.validate("<sensor config>")?;
         if !(gravity_m_s2.is_finite() && gravity_m_s2 > 0.0) {
-            return Err(SensorConfigError::Invalid {
-                file: "<parameters>".into(),
-                field: "environment.g_m_s2".into(),
-                value: gravity_m_s2,
-                allowed: "finite and > 0",
-            });
+            return Err(SensorConfigError::invalid(
+                "<parameters>",
+                "environment.g_m_s2",
+                gravity_m_s2,
+                "must be finite and > 0",
+            ));
         }
         let stream = |s: u64| {
             let mut r = ChaCha8Rng::seed_from_u64(config.seed);

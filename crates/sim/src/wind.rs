@@ -17,20 +17,10 @@ use std::f64::consts::PI;
 /// Feet per metre conversion used by the MIL-F-8785C forms (1 ft = 0.3048 m).
 const FT: f64 = 0.3048;
 
-/// Error in a wind configuration.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum WindError {
-    /// A field is out of its allowed range.
-    #[error("wind config: {field} = {value} is invalid (allowed: {allowed})")]
-    InvalidField {
-        /// Dotted field name, e.g. `dryden.airspeed_m_s`.
-        field: &'static str,
-        /// Value given.
-        value: f64,
-        /// Allowed range.
-        allowed: &'static str,
-    },
-}
+/// A wind configuration out of range: the toolkit's one configuration error
+/// shape (the file is `[wind]` until the caller places it in its own file
+/// with [`helicon_model::ConfigError::within`]).
+pub type WindError = helicon_model::ConfigError;
 
 fn check(
     field: &'static str,
@@ -41,11 +31,12 @@ fn check(
     if value.is_finite() && ok {
         Ok(())
     } else {
-        Err(WindError::InvalidField {
+        Err(WindError::invalid(
+            "[wind]",
             field,
             value,
-            allowed,
-        })
+            format!("allowed {allowed}"),
+        ))
     }
 }
 
@@ -562,44 +553,24 @@ impl WindConfig {
             message: e.to_string(),
         })?;
         // Validate by building once (same checks as `Wind::from_config`).
-        Wind::from_config(&cfg).map_err(|source| WindConfigError::Invalid {
-            file: file.to_string(),
-            source,
-        })?;
+        Wind::from_config(&cfg).map_err(|e| e.within(file, ""))?;
         Ok(cfg)
     }
 
     /// Load and validate a TOML file.
     pub fn from_file(path: &std::path::Path) -> Result<Self, WindConfigError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| WindConfigError::Parse {
+        let text = std::fs::read_to_string(path).map_err(|source| WindConfigError::Io {
             file: file.clone(),
-            message: e.to_string(),
+            action: "read",
+            source,
         })?;
         Self::from_toml_str(&text, &file)
     }
 }
 
-/// Error loading a wind configuration file.
-#[derive(Debug, thiserror::Error)]
-pub enum WindConfigError {
-    /// Unreadable file, TOML syntax, or unknown/mistyped key.
-    #[error("{file}: {message}")]
-    Parse {
-        /// File name.
-        file: String,
-        /// Message naming the key and position.
-        message: String,
-    },
-    /// A value is out of range.
-    #[error("{file}: {source}")]
-    Invalid {
-        /// File name.
-        file: String,
-        /// The range error (names the field).
-        source: WindError,
-    },
-}
+/// Error loading a wind configuration file (the one configuration error shape).
+pub type WindConfigError = helicon_model::ConfigError;
 
 /// The sum of the configured wind components.
 #[derive(Debug, Clone)]

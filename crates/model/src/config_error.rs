@@ -1,0 +1,117 @@
+//! One error shape for the files and configurations the toolkit reads
+//! (sensor, wind and scenario configurations; the parameter file has its own
+//! [`crate::ParamError`] with the same content plus the file line): the file,
+//! the field, what was wrong and the allowed range, and the `io::Error`
+//! source kept when a file could not be read.
+
+/// An error reading or checking a configuration.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// The file could not be read (or written).
+    #[error("{file}: cannot {action}")]
+    Io {
+        /// File.
+        file: String,
+        /// What was being done: `read`, `write`, `create`.
+        action: &'static str,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Not valid TOML, an unknown field or a field of the wrong type (the
+    /// parser's message names the field and its position).
+    #[error("{file}: {message}")]
+    Parse {
+        /// File.
+        file: String,
+        /// What was wrong.
+        message: String,
+    },
+    /// A field out of its allowed range.
+    #[error("{file}: `{field}` = {value}: {rule}")]
+    Invalid {
+        /// File.
+        file: String,
+        /// Dotted field name, e.g. `gps.rate_hz`.
+        field: String,
+        /// The value given, as text.
+        value: String,
+        /// The rule broken: the allowed range.
+        rule: String,
+    },
+}
+
+impl ConfigError {
+    /// An out-of-range number (`value` printed in its shortest round-trip
+    /// form, so 1e-300 stays 1e-300).
+    pub fn invalid(
+        file: &str,
+        field: impl Into<String>,
+        value: f64,
+        rule: impl Into<String>,
+    ) -> Self {
+        ConfigError::Invalid {
+            file: file.to_string(),
+            field: field.into(),
+            value: format_number(value),
+            rule: rule.into(),
+        }
+    }
+
+    /// The same error attributed to another file, its field under `prefix`
+    /// (a section checked on its own, then reported as part of the file that
+    /// holds it).
+    #[must_use]
+    pub fn within(self, file: &str, prefix: &str) -> Self {
+        let join = |f: String| {
+            if prefix.is_empty() {
+                f
+            } else {
+                format!("{prefix}.{f}")
+            }
+        };
+        match self {
+            ConfigError::Io { .. } => self,
+            ConfigError::Parse { message, .. } => ConfigError::Parse {
+                file: file.to_string(),
+                message: format!("[{prefix}]: {message}"),
+            },
+            ConfigError::Invalid {
+                field, value, rule, ..
+            } => ConfigError::Invalid {
+                file: file.to_string(),
+                field: join(field),
+                value,
+                rule,
+            },
+        }
+    }
+}
+
+/// A number for an error message: Rust's shortest round-trip form, which
+/// switches to exponent notation for very large or small magnitudes.
+pub fn format_number(v: f64) -> String {
+    if v != 0.0 && (v.abs() >= 1e9 || v.abs() < 1e-4) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_name_file_field_value_and_rule_once() {
+        let e = ConfigError::invalid("s.toml", "gps.rate_hz", 1e-300, "in (0, 100]");
+        assert_eq!(e.to_string(), "s.toml: `gps.rate_hz` = 1e-300: in (0, 100]");
+        let e = e.within("scenario.toml", "sensors");
+        assert_eq!(
+            e.to_string(),
+            "scenario.toml: `sensors.gps.rate_hz` = 1e-300: in (0, 100]"
+        );
+        assert_eq!(format_number(2.5), "2.5");
+        assert_eq!(format_number(1e308), "1e308");
+    }
+}
