@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 
+mod console;
 mod control;
 mod demo;
 mod mc_cmd;
@@ -46,6 +47,10 @@ enum Command {
     Sim(sim_cmd::SimArgs),
 }
 
+/// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
+/// reader asked for no more, and the command's files are complete (see
+/// [`console::Console`]). A shell pipeline therefore succeeds, as with
+/// `set -o pipefail` users expect of a producer they cut short on purpose.
 fn main() -> std::process::ExitCode {
     match run() {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -59,11 +64,30 @@ fn main() -> std::process::ExitCode {
             std::process::ExitCode::SUCCESS
         }
         Err(e) => {
-            // One line per cause, no backtrace: errors here are the user's input.
-            eprintln!("error: {e:#}");
+            // One line, each cause once, no backtrace: errors here are the
+            // user's input. (A closed stderr is ignored: nowhere to say it.)
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "error: {}", error_text(&e));
             std::process::ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes joined by `: `, each said once: a cause whose
+/// text the message so far already ends with (a `#[error("…: {0}")]` layer
+/// that also exposes the cause as its `source`) is not repeated.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if text.is_empty() {
+            text = c;
+        } else if !text.ends_with(c.as_str()) {
+            text.push_str(": ");
+            text.push_str(&c);
+        }
+    }
+    text
 }
 
 fn run() -> anyhow::Result<()> {

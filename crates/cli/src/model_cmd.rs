@@ -64,8 +64,9 @@ pub fn run_params(args: &ParamsArgs) -> Result<()> {
         Some(path) => Params::from_file(path)?,
         None => Params::bergen_twin(),
     };
-    print!("{}", p.to_toml());
-    Ok(())
+    let mut con = crate::console::Console::stdout();
+    con.write_str(&p.to_toml());
+    con.finish().context("writing to stdout")
 }
 
 fn vector<const N: usize>(v: &Value, field: &str) -> Result<[f64; N]> {

@@ -163,8 +163,9 @@ pub enum SensorsCommand {
 
 /// Print the default sensor configuration (TOML) to stdout.
 pub fn run_sensors_config() -> Result<()> {
-    print!("{}", SensorConfig::default().to_toml()?);
-    Ok(())
+    let mut con = crate::console::Console::stdout();
+    con.write_str(&SensorConfig::default().to_toml()?);
+    con.finish().context("writing to stdout")
 }
 
 /// Arguments of `helicon sensors simulate`.

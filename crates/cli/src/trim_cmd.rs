@@ -201,7 +201,12 @@ pub fn run_trim(args: &TrimArgs) -> Result<()> {
     let t = do_trim(&model, &args.cond, None)?;
     let validity = t.validity(&model);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&trim_json(&t, &model))?);
+        let mut out = std::io::stdout().lock();
+        writeln!(
+            out,
+            "{}",
+            serde_json::to_string_pretty(&trim_json(&t, &model))?
+        )?;
     } else {
         print_trim(&t, args)?;
     }
@@ -411,10 +416,11 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
             names.join(" ")
         );
     }
-    println!(
+    writeln!(
+        std::io::stdout().lock(),
         "{summary}; wrote {}/sweep.csv, sweep.json and inputs/attitude/inflow plots",
         args.out.display()
-    );
+    )?;
     if failed > 0 {
         bail!("{failed} sweep point(s) did not trim");
     }
@@ -593,7 +599,9 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
         args.out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
-    println!(
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
         "linearized at the trim ({} preset, {} inflow): wrote A.csv, B.csv, poles.csv{} and summary.json to {}",
         args.cond.model.preset.name(),
         if args.thesis_inflow {
@@ -607,12 +615,13 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
             ""
         },
         args.out.display()
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "{} unstable pole(s); controllable subspace {} of 27; affine residual {:.1e}",
         summary["unstable_poles"],
         reach.dimension,
         lm.xdot0.amax()
-    );
+    )?;
     Ok(())
 }
