@@ -11,13 +11,15 @@
 
 use crate::console::Console;
 use crate::model_cmd::ModelFlags;
-use crate::sim_cmd::{RunReport, fly_step, prepare_step, print_run, write_step};
+use crate::sim_cmd::{
+    RunReport, fly_step, overrides_label, prepare_step, print_run, write_step,
+};
 use anyhow::{Context, Result};
 use clap::Args;
 use helicon_model::InflowMode;
 use helicon_model::linearize::linearize;
 use helicon_model::state::ix;
-use helicon_sim::scenario::Scenario;
+use helicon_sim::scenario::{Scenario, ScenarioOverrides};
 use nalgebra::Vector3;
 use std::path::PathBuf;
 
@@ -44,20 +46,20 @@ pub struct DemoArgs {
 pub fn demo_scenario(args: &DemoArgs) -> Result<Scenario> {
     let mut s = Scenario::from_toml_str(DEMO_SCENARIO, "scenarios/demo.toml (embedded)")?;
     s.preset = args.model.preset;
-    if let Some(p) = &args.model.params {
-        let abs = std::path::absolute(p)
-            .with_context(|| format!("--params {}: cannot resolve the path", p.display()))?;
-        s.params = Some(abs);
-    }
-    if let Some(d) = args.duration {
-        s.duration_s = d;
-    }
-    if let Some(seed) = args.seed {
-        s.wind.seed = seed;
-        s.sensors.seed = seed;
-    }
-    s.validate("helicon demo (command line)")?;
-    Ok(s)
+    let params = match &args.model.params {
+        Some(p) => Some(
+            std::path::absolute(p)
+                .with_context(|| format!("--params {}: cannot resolve the path", p.display()))?,
+        ),
+        None => None,
+    };
+    let overrides = ScenarioOverrides {
+        params,
+        seed: args.seed,
+        duration_s: args.duration,
+    };
+    let origin = format!("helicon demo{}", overrides_label(&overrides));
+    Ok(s.with_overrides(&overrides, &origin)?)
 }
 
 fn describe_references(s: &Scenario) -> String {
@@ -202,7 +204,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             "ideal measurements of the nine measured states".to_string()
         }
     );
-    let (flight, fly_s) = fly_step(&scenario, &prepared, "helicon demo (command line)")?;
+    let (flight, fly_s) = fly_step(&scenario, &prepared, "helicon demo")?;
     let (files, write_s) = write_step(&args.out, &scenario, &prepared, &flight)?;
     let report = RunReport {
         flight,

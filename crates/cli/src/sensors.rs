@@ -208,7 +208,7 @@ pub fn run_simulate(args: &SimulateArgs) -> Result<()> {
     if !(args.duration_s.is_finite() && args.duration_s > 0.0 && args.duration_s <= 86_400.0) {
         bail!(
             "--duration-s {} is invalid (allowed: 0 < d <= 86400)",
-            args.duration_s
+            helicon_sim::scenario::num(args.duration_s)
         );
     }
     let g = params_from(&args.params)?.environment.g_m_s2;

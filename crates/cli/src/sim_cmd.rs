@@ -8,7 +8,8 @@
 use crate::console::Console;
 use anyhow::{Context, Result};
 use clap::Args;
-use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly, prepare};
+use helicon_model::Params;
+use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly, prepare, prepare_with_params};
 use helicon_sim::output::{CaseRun, RunFiles, write_cases_index, write_run};
 use helicon_sim::scenario::{OUTPUTS, Scenario, ScenarioOverrides, num};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -55,19 +56,49 @@ pub struct RunReport {
 /// Trim, linearize and design (or load the gains), with a spinner on
 /// stderr; returns the prepared scenario and the wall time (s).
 pub fn prepare_step(scenario: &Scenario) -> Result<(Prepared, f64)> {
+    // the parameter file first: its errors name it (file:line: key)
+    let params = match &scenario.params {
+        Some(p) => Some((Params::from_file(&scenario.resolve(p))?, scenario.resolve(p))),
+        None => None,
+    };
     let spinner = ProgressBar::new_spinner();
     spinner.set_message("trim, linearize, design");
     spinner.enable_steady_tick(Duration::from_millis(100));
     let t0 = Instant::now();
-    let prepared = prepare(scenario);
+    let (prepared, with) = match params {
+        Some((p, path)) => (
+            prepare_with_params(scenario, p),
+            format!(" with the parameters of {}", path.display()),
+        ),
+        None => (prepare(scenario), String::new()),
+    };
     spinner.finish_and_clear();
     let prepared = prepared.with_context(|| {
         format!(
-            "scenario `{}`: preparing the design point and gains",
+            "scenario `{}`{with}: preparing the design point and gains",
             scenario.name
         )
     })?;
     Ok((prepared, t0.elapsed().as_secs_f64()))
+}
+
+/// How command-line overrides are named in errors: ` (with --duration 0)`.
+pub fn overrides_label(o: &ScenarioOverrides) -> String {
+    let mut given = Vec::new();
+    if let Some(p) = &o.params {
+        given.push(format!("--params {}", p.display()));
+    }
+    if let Some(s) = o.seed {
+        given.push(format!("--seed {s}"));
+    }
+    if let Some(d) = o.duration_s {
+        given.push(format!("--duration {}", num(d)));
+    }
+    if given.is_empty() {
+        String::new()
+    } else {
+        format!(" (with {})", given.join(" "))
+    }
 }
 
 /// Fly with a progress bar on stderr; returns the flight and the wall time (s).
@@ -227,10 +258,7 @@ pub fn run(args: &SimArgs) -> Result<()> {
         seed: args.seed,
         duration_s: args.duration,
     };
-    let source = format!(
-        "{} (with the command-line options)",
-        args.scenario.display()
-    );
+    let source = format!("{}{}", args.scenario.display(), overrides_label(&overrides));
     let scenario = Scenario::from_file(&args.scenario)?.with_overrides(&overrides, &source)?;
     let out = args
         .out

@@ -2,6 +2,7 @@
 
 use crate::model_cmd::ModelFlags;
 use anyhow::{Context, Result, bail};
+use helicon_sim::scenario::{MAX_HEADING_RAD, MAX_SPEED_M_S};
 use clap::{Args, ValueEnum};
 use helicon_model::linearize::{EQUILIBRIUM_TOL, LinearModel, linearize};
 use helicon_model::state::{INPUT_NAMES, REDUCED_STATE_NAMES};
@@ -24,7 +25,7 @@ pub struct ConditionFlags {
     #[arg(long, value_parser = parse_vec3, default_value = "0,0,0", allow_hyphen_values = true)]
     pub velocity_ned: Vector3<f64>,
     /// Heading ψ in rad.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, value_parser = parse_heading, default_value_t = 0.0, allow_hyphen_values = true)]
     pub yaw: f64,
     /// Air-mass velocity in NED, m/s: `N,E,D`.
     #[arg(long, value_parser = parse_vec3, default_value = "0,0,0", allow_hyphen_values = true)]
@@ -53,6 +54,29 @@ fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
         if !v[i].is_finite() {
             return Err(format!("`{p}` is not finite"));
         }
+        if v[i].abs() > MAX_SPEED_M_S {
+            return Err(format!(
+                "`{p}` m/s is beyond +-100 m/s (a miniature helicopter flies far inside)"
+            ));
+        }
+    }
+    Ok(v)
+}
+
+/// A heading (rad): finite, within +-100 rad (as a scenario's).
+fn parse_heading(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|e| format!("`{s}`: {e}"))?;
+    if !(v.is_finite() && v.abs() <= MAX_HEADING_RAD) {
+        return Err(format!("`{s}` must be finite and within +-100 rad"));
+    }
+    Ok(v)
+}
+
+/// A sample time (s): finite and > 0.
+fn parse_sample_time(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|e| format!("`{s}`: {e}"))?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("`{s}` must be finite and > 0 s"));
     }
     Ok(v)
 }
@@ -116,7 +140,7 @@ pub struct LinearizeArgs {
     #[arg(long)]
     thesis_inflow: bool,
     /// Also write the ZOH discretization Phi.csv, Gamma.csv at this sample time (s).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_sample_time, allow_hyphen_values = true)]
     discrete: Option<f64>,
     /// Output folder.
     #[arg(long)]
