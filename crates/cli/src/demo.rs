@@ -11,9 +11,7 @@
 
 use crate::console::Console;
 use crate::model_cmd::ModelFlags;
-use crate::sim_cmd::{
-    RunReport, fly_step, overrides_label, prepare_step, print_run, write_step,
-};
+use crate::sim_cmd::{RunReport, fly_step, overrides_label, prepare_step, print_run, write_step};
 use anyhow::{Context, Result};
 use clap::Args;
 use helicon_model::InflowMode;

@@ -58,7 +58,10 @@ pub struct RunReport {
 pub fn prepare_step(scenario: &Scenario) -> Result<(Prepared, f64)> {
     // the parameter file first: its errors name it (file:line: key)
     let params = match &scenario.params {
-        Some(p) => Some((Params::from_file(&scenario.resolve(p))?, scenario.resolve(p))),
+        Some(p) => Some((
+            Params::from_file(&scenario.resolve(p))?,
+            scenario.resolve(p),
+        )),
         None => None,
     };
     let spinner = ProgressBar::new_spinner();

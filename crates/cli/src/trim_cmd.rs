@@ -2,7 +2,6 @@
 
 use crate::model_cmd::ModelFlags;
 use anyhow::{Context, Result, bail};
-use helicon_sim::scenario::{MAX_HEADING_RAD, MAX_SPEED_M_S};
 use clap::{Args, ValueEnum};
 use helicon_model::linearize::{EQUILIBRIUM_TOL, LinearModel, linearize};
 use helicon_model::state::{INPUT_NAMES, REDUCED_STATE_NAMES};
@@ -10,6 +9,7 @@ use helicon_model::trim::{
     Allowed, Trim, TrimOptions, TrimTarget, Validity, Violation, discontinuities, sweep, trim,
 };
 use helicon_model::{InflowMode, Model};
+use helicon_sim::scenario::{MAX_HEADING_RAD, MAX_SPEED_M_S};
 use nalgebra::{DMatrix, Vector3};
 use serde_json::{Map, Value, json};
 use std::fmt::Write as _;

@@ -49,8 +49,18 @@ fn finish(mut child: Child) -> Run {
             String::from_utf8_lossy(&s).into_owned()
         })
     };
-    let out = drain(child.stdout.take().map(|s| Box::new(s) as Box<dyn Read + Send>));
-    let err = drain(child.stderr.take().map(|s| Box::new(s) as Box<dyn Read + Send>));
+    let out = drain(
+        child
+            .stdout
+            .take()
+            .map(|s| Box::new(s) as Box<dyn Read + Send>),
+    );
+    let err = drain(
+        child
+            .stderr
+            .take()
+            .map(|s| Box::new(s) as Box<dyn Read + Send>),
+    );
     let code = loop {
         if let Some(status) = child.try_wait().unwrap() {
             break status.code();
@@ -255,8 +265,14 @@ const FILES: &[(&str, &str)] = &[
         "controller_rho.toml",
         "duration_s = 1.0\n[controller]\nrho = 0.0\n",
     ),
-    ("trim_speed.toml", "duration_s = 1.0\n[trim]\nvelocity_ned_m_s = [1e9, 0.0, 0.0]\n"),
-    ("initial_big.toml", "duration_s = 1.0\n[initial]\np = 1e200\n"),
+    (
+        "trim_speed.toml",
+        "duration_s = 1.0\n[trim]\nvelocity_ned_m_s = [1e9, 0.0, 0.0]\n",
+    ),
+    (
+        "initial_big.toml",
+        "duration_s = 1.0\n[initial]\np = 1e200\n",
+    ),
     ("duration_tiny.toml", "duration_s = 1e-300\n"),
     ("duration_long.toml", "duration_s = 86401.0\n"),
     (
@@ -318,119 +334,612 @@ const FILES: &[(&str, &str)] = &[
     ),
 ];
 
-const EVAL_HOVER_ZEROS: &str = "{\"x\":[0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0],\"u\":[0,0,0,0]}\n";
+const EVAL_HOVER_ZEROS: &str =
+    "{\"x\":[0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0],\"u\":[0,0,0,0]}\n";
 
 /// The corpus. Names are the regressions of the reliability issue.
 const CORPUS: &[Case] = &[
     // --- demo
-    fail("demo", "demo duration 0", "demo --duration 0 --out o/demo", &["--duration", "duration_s", "> 0"]),
-    fail("demo", "demo duration NaN", "demo --duration nan --out o/demo", &["duration_s", "NaN"]),
-    fail("demo", "demo duration below one sample", "demo --duration 1e-5 --out o/demo", &["duration_s", "1e-5", "one controller sample"]),
-    fail("demo", "demo duration beyond a day", "demo --duration 86401 --out o/demo", &["duration_s", "86400"]),
-    fail("demo", "demo params missing", "demo --params missing.toml --out o/demo", &["missing.toml", "cannot read"]),
-    fail("demo", "demo params mass x100 (trim saturates)", "demo --params mass100.toml --out o/demo", &["mass100.toml", "trim is not physical", "S_col"]),
-    fail("demo", "demo seed not a number", "demo --seed x", &["--seed"]),
-    ok("demo", "demo short flight", "demo --duration 0.3 --seed 3 --out o/demo", &["o/demo/summary.json", "o/demo/log.csv"]),
+    fail(
+        "demo",
+        "demo duration 0",
+        "demo --duration 0 --out o/demo",
+        &["--duration", "duration_s", "> 0"],
+    ),
+    fail(
+        "demo",
+        "demo duration NaN",
+        "demo --duration nan --out o/demo",
+        &["duration_s", "NaN"],
+    ),
+    fail(
+        "demo",
+        "demo duration below one sample",
+        "demo --duration 1e-5 --out o/demo",
+        &["duration_s", "1e-5", "one controller sample"],
+    ),
+    fail(
+        "demo",
+        "demo duration beyond a day",
+        "demo --duration 86401 --out o/demo",
+        &["duration_s", "86400"],
+    ),
+    fail(
+        "demo",
+        "demo params missing",
+        "demo --params missing.toml --out o/demo",
+        &["missing.toml", "cannot read"],
+    ),
+    fail(
+        "demo",
+        "demo params mass x100 (trim saturates)",
+        "demo --params mass100.toml --out o/demo",
+        &["mass100.toml", "trim is not physical", "S_col"],
+    ),
+    fail(
+        "demo",
+        "demo seed not a number",
+        "demo --seed x",
+        &["--seed"],
+    ),
+    ok(
+        "demo",
+        "demo short flight",
+        "demo --duration 0.3 --seed 3 --out o/demo",
+        &["o/demo/summary.json", "o/demo/log.csv"],
+    ),
     // --- eval
-    with_stdin(fail("eval", "eval --params mass_kg = 1e308", "eval --params heavy.toml", &["heavy.toml:2", "body.mass_kg", "1e308"]), EVAL_HOVER_ZEROS),
-    with_stdin(fail("eval", "eval not JSON", "eval", &["<stdin>: line 1", "not valid JSON"]), "{x\n"),
-    with_stdin(fail("eval", "eval x too short", "eval", &["line 1", "`x`", "30"]), "{\"x\":[0,0],\"u\":[0,0,0,0]}\n"),
-    with_stdin(fail("eval", "eval number beyond f64", "eval", &["line 1", "out of range"]), "{\"x\":[1e999],\"u\":[0,0,0,0]}\n"),
-    with_stdin(fail("eval", "eval unknown field", "eval", &["line 2", "unknown field `v`"]), "\n{\"v\":1}\n"),
-    fail("eval", "eval input missing", "eval --input missing.json", &["missing.json"]),
-    with_stdin(fail("eval", "eval keep-going reports and fails", "eval --keep-going", &["1 line(s) failed"]), "{\"u\":[0,0,0,0]}\n"),
+    with_stdin(
+        fail(
+            "eval",
+            "eval --params mass_kg = 1e308",
+            "eval --params heavy.toml",
+            &["heavy.toml:2", "body.mass_kg", "1e308"],
+        ),
+        EVAL_HOVER_ZEROS,
+    ),
+    with_stdin(
+        fail(
+            "eval",
+            "eval not JSON",
+            "eval",
+            &["<stdin>: line 1", "not valid JSON"],
+        ),
+        "{x\n",
+    ),
+    with_stdin(
+        fail("eval", "eval x too short", "eval", &["line 1", "`x`", "30"]),
+        "{\"x\":[0,0],\"u\":[0,0,0,0]}\n",
+    ),
+    with_stdin(
+        fail(
+            "eval",
+            "eval number beyond f64",
+            "eval",
+            &["line 1", "out of range"],
+        ),
+        "{\"x\":[1e999],\"u\":[0,0,0,0]}\n",
+    ),
+    with_stdin(
+        fail(
+            "eval",
+            "eval unknown field",
+            "eval",
+            &["line 2", "unknown field `v`"],
+        ),
+        "\n{\"v\":1}\n",
+    ),
+    fail(
+        "eval",
+        "eval input missing",
+        "eval --input missing.json",
+        &["missing.json"],
+    ),
+    with_stdin(
+        fail(
+            "eval",
+            "eval keep-going reports and fails",
+            "eval --keep-going",
+            &["1 line(s) failed"],
+        ),
+        "{\"u\":[0,0,0,0]}\n",
+    ),
     with_stdin(ok("eval", "eval zeros", "eval", &[]), EVAL_HOVER_ZEROS),
     // --- params
-    fail("params", "params mass_kg = 1e308", "params --params heavy.toml", &["heavy.toml:2", "body.mass_kg"]),
-    fail("params", "params unknown key", "params --params unknown_key.toml", &["unknown_key.toml:2", "body.mas_kg"]),
-    fail("params", "params NaN", "params --params nan_param.toml", &["nan_param.toml:3", "body.mass_kg"]),
-    fail("params", "params wrong type", "params --params string_param.toml", &["string_param.toml", "body.mass_kg"]),
-    fail("params", "params TOML syntax", "params --params syntax.toml", &["syntax.toml", "TOML"]),
-    fail("params", "params missing", "params --params missing.toml", &["missing.toml", "cannot read"]),
+    fail(
+        "params",
+        "params mass_kg = 1e308",
+        "params --params heavy.toml",
+        &["heavy.toml:2", "body.mass_kg"],
+    ),
+    fail(
+        "params",
+        "params unknown key",
+        "params --params unknown_key.toml",
+        &["unknown_key.toml:2", "body.mas_kg"],
+    ),
+    fail(
+        "params",
+        "params NaN",
+        "params --params nan_param.toml",
+        &["nan_param.toml:3", "body.mass_kg"],
+    ),
+    fail(
+        "params",
+        "params wrong type",
+        "params --params string_param.toml",
+        &["string_param.toml", "body.mass_kg"],
+    ),
+    fail(
+        "params",
+        "params TOML syntax",
+        "params --params syntax.toml",
+        &["syntax.toml", "TOML"],
+    ),
+    fail(
+        "params",
+        "params missing",
+        "params --params missing.toml",
+        &["missing.toml", "cannot read"],
+    ),
     ok("params", "params defaults", "params", &[]),
-    ok("params", "params empty file", "params --params empty.toml", &[]),
+    ok(
+        "params",
+        "params empty file",
+        "params --params empty.toml",
+        &[],
+    ),
     // --- trim
-    fail("trim", "trim mass x100", "trim --params mass100.toml", &["not physical", "S_col"]),
-    fail("trim", "trim velocity NaN", "trim --velocity-ned nan,0,0", &["--velocity-ned"]),
+    fail(
+        "trim",
+        "trim mass x100",
+        "trim --params mass100.toml",
+        &["not physical", "S_col"],
+    ),
+    fail(
+        "trim",
+        "trim velocity NaN",
+        "trim --velocity-ned nan,0,0",
+        &["--velocity-ned"],
+    ),
     fail("trim", "trim yaw inf", "trim --yaw inf", &["--yaw"]),
-    fail("trim", "trim wind 1e308", "trim --wind-ned 1e308,0,0", &["--wind-ned"]),
-    fail("trim", "trim sweep of 1e18 points", "trim --sweep forward --from 0 --to 1e9 --step 1e-9 --out o/sw", &["sweep points", "100000"]),
-    fail("trim", "trim params missing", "trim --params missing.toml", &["missing.toml"]),
+    fail(
+        "trim",
+        "trim wind 1e308",
+        "trim --wind-ned 1e308,0,0",
+        &["--wind-ned"],
+    ),
+    fail(
+        "trim",
+        "trim sweep of 1e18 points",
+        "trim --sweep forward --from 0 --to 1e9 --step 1e-9 --out o/sw",
+        &["sweep points", "100000"],
+    ),
+    fail(
+        "trim",
+        "trim params missing",
+        "trim --params missing.toml",
+        &["missing.toml"],
+    ),
     ok("trim", "trim json", "trim --json", &[]),
     // --- linearize
-    fail("linearize", "linearize discrete 0", "linearize --discrete 0 --out o/lin", &["--discrete"]),
-    fail("linearize", "linearize discrete NaN", "linearize --discrete nan --out o/lin", &["--discrete"]),
-    fail("linearize", "linearize mass x100", "linearize --params mass100.toml --out o/lin", &["not physical"]),
-    fail("linearize", "linearize velocity 1e6", "linearize --velocity-ned 1e6,0,0 --out o/lin", &["--velocity-ned"]),
-    ok("linearize", "linearize discrete", "linearize --discrete 0.0025 --out o/lin", &["o/lin/A.csv", "o/lin/Phi.csv", "o/lin/summary.json", "o/lin/poles.csv"]),
+    fail(
+        "linearize",
+        "linearize discrete 0",
+        "linearize --discrete 0 --out o/lin",
+        &["--discrete"],
+    ),
+    fail(
+        "linearize",
+        "linearize discrete NaN",
+        "linearize --discrete nan --out o/lin",
+        &["--discrete"],
+    ),
+    fail(
+        "linearize",
+        "linearize mass x100",
+        "linearize --params mass100.toml --out o/lin",
+        &["not physical"],
+    ),
+    fail(
+        "linearize",
+        "linearize velocity 1e6",
+        "linearize --velocity-ned 1e6,0,0 --out o/lin",
+        &["--velocity-ned"],
+    ),
+    ok(
+        "linearize",
+        "linearize discrete",
+        "linearize --discrete 0.0025 --out o/lin",
+        &[
+            "o/lin/A.csv",
+            "o/lin/Phi.csv",
+            "o/lin/summary.json",
+            "o/lin/poles.csv",
+        ],
+    ),
     // --- attitude
-    fail("attitude", "attitude input missing", "attitude --input missing.csv", &["missing.csv"]),
-    fail("attitude", "attitude text cell", "attitude --input att_text.csv", &["att_text.csv", "row 1"]),
-    fail("attitude", "attitude 1e308 cell", "attitude --input att_huge.csv", &["att_huge.csv", "row 1"]),
-    fail("attitude", "attitude NaN cell", "attitude --input att_nan.csv", &["att_nan.csv", "row 1"]),
-    fail("attitude", "attitude empty file", "attitude --input att_empty.csv", &["att_empty.csv"]),
-    ok("attitude", "attitude two vectors", "attitude --input att_ok.csv --out o/att.csv", &["o/att.csv"]),
+    fail(
+        "attitude",
+        "attitude input missing",
+        "attitude --input missing.csv",
+        &["missing.csv"],
+    ),
+    fail(
+        "attitude",
+        "attitude text cell",
+        "attitude --input att_text.csv",
+        &["att_text.csv", "row 1"],
+    ),
+    fail(
+        "attitude",
+        "attitude 1e308 cell",
+        "attitude --input att_huge.csv",
+        &["att_huge.csv", "row 1"],
+    ),
+    fail(
+        "attitude",
+        "attitude NaN cell",
+        "attitude --input att_nan.csv",
+        &["att_nan.csv", "row 1"],
+    ),
+    fail(
+        "attitude",
+        "attitude empty file",
+        "attitude --input att_empty.csv",
+        &["att_empty.csv"],
+    ),
+    ok(
+        "attitude",
+        "attitude two vectors",
+        "attitude --input att_ok.csv --out o/att.csv",
+        &["o/att.csv"],
+    ),
     // --- sensors
-    fail("sensors", "simulate duration 0", "sensors simulate --duration-s 0", &["--duration-s"]),
-    fail("sensors", "simulate duration 1e300 (printed short)", "sensors simulate --duration-s 1e300", &["--duration-s 1e300 ", "86400"]),
-    fail("sensors", "simulate config rate 0", "sensors simulate --config sensors_bad.toml --duration-s 1", &["sensors_bad.toml", "imu.rate_hz"]),
-    fail("sensors", "simulate config unknown key", "sensors simulate --config sensors_unknown.toml --duration-s 1", &["sensors_unknown.toml", "rat_hz"]),
-    fail("sensors", "simulate config missing", "sensors simulate --config missing.toml --duration-s 1", &["missing.toml"]),
-    fail("sensors", "simulate params mass_kg = 1e308", "sensors simulate --params heavy.toml --duration-s 1", &["heavy.toml:2", "body.mass_kg"]),
-    fail("sensors", "config takes no argument", "sensors config extra", &["extra"]),
-    ok("sensors", "simulate short", "sensors simulate --duration-s 0.5 --seed 2 --out o/s.csv", &["o/s.csv"]),
+    fail(
+        "sensors",
+        "simulate duration 0",
+        "sensors simulate --duration-s 0",
+        &["--duration-s"],
+    ),
+    fail(
+        "sensors",
+        "simulate duration 1e300 (printed short)",
+        "sensors simulate --duration-s 1e300",
+        &["--duration-s 1e300 ", "86400"],
+    ),
+    fail(
+        "sensors",
+        "simulate config rate 0",
+        "sensors simulate --config sensors_bad.toml --duration-s 1",
+        &["sensors_bad.toml", "imu.rate_hz"],
+    ),
+    fail(
+        "sensors",
+        "simulate config unknown key",
+        "sensors simulate --config sensors_unknown.toml --duration-s 1",
+        &["sensors_unknown.toml", "rat_hz"],
+    ),
+    fail(
+        "sensors",
+        "simulate config missing",
+        "sensors simulate --config missing.toml --duration-s 1",
+        &["missing.toml"],
+    ),
+    fail(
+        "sensors",
+        "simulate params mass_kg = 1e308",
+        "sensors simulate --params heavy.toml --duration-s 1",
+        &["heavy.toml:2", "body.mass_kg"],
+    ),
+    fail(
+        "sensors",
+        "config takes no argument",
+        "sensors config extra",
+        &["extra"],
+    ),
+    ok(
+        "sensors",
+        "simulate short",
+        "sensors simulate --duration-s 0.5 --seed 2 --out o/s.csv",
+        &["o/s.csv"],
+    ),
     ok("sensors", "config", "sensors config", &[]),
     // --- fuse
-    fail("fuse", "fuse --mag-field-ned nan 0 0", "fuse log.csv --out o/f --mag-field-ned nan 0 0", &["--mag-field-ned"]),
-    fail("fuse", "fuse text cell", "fuse log_text.csv --out o/f", &["log_text.csv", "fx_m_s2"]),
-    fail("fuse", "fuse 1e308 cell", "fuse log_huge.csv --out o/f", &["log_huge.csv", "`fx_m_s2` = 1e308: beyond"]),
-    fail("fuse", "fuse time 0. repeated", "fuse log_zero.csv --out o/f", &["log_zero.csv", "t_s"]),
-    fail("fuse", "fuse log missing", "fuse missing.csv --out o/f", &["missing.csv"]),
-    fail("fuse", "fuse sensors config bad", "fuse log.csv --out o/f --sensors sensors_bad.toml", &["sensors_bad.toml", "imu.rate_hz"]),
-    fail("fuse", "fuse accel sigma negative", "fuse log.csv --out o/f --accel-sigma-m-s2=-1", &["accel"]),
-    ok("fuse", "fuse simulated log", "fuse log.csv --out o/f", &["o/f/fused.csv", "o/f/summary.json"]),
+    fail(
+        "fuse",
+        "fuse --mag-field-ned nan 0 0",
+        "fuse log.csv --out o/f --mag-field-ned nan 0 0",
+        &["--mag-field-ned"],
+    ),
+    fail(
+        "fuse",
+        "fuse text cell",
+        "fuse log_text.csv --out o/f",
+        &["log_text.csv", "fx_m_s2"],
+    ),
+    fail(
+        "fuse",
+        "fuse 1e308 cell",
+        "fuse log_huge.csv --out o/f",
+        &["log_huge.csv", "`fx_m_s2` = 1e308: beyond"],
+    ),
+    fail(
+        "fuse",
+        "fuse time 0. repeated",
+        "fuse log_zero.csv --out o/f",
+        &["log_zero.csv", "t_s"],
+    ),
+    fail(
+        "fuse",
+        "fuse log missing",
+        "fuse missing.csv --out o/f",
+        &["missing.csv"],
+    ),
+    fail(
+        "fuse",
+        "fuse sensors config bad",
+        "fuse log.csv --out o/f --sensors sensors_bad.toml",
+        &["sensors_bad.toml", "imu.rate_hz"],
+    ),
+    fail(
+        "fuse",
+        "fuse accel sigma negative",
+        "fuse log.csv --out o/f --accel-sigma-m-s2=-1",
+        &["accel"],
+    ),
+    ok(
+        "fuse",
+        "fuse simulated log",
+        "fuse log.csv --out o/f",
+        &["o/f/fused.csv", "o/f/summary.json"],
+    ),
     // --- sim
-    fail("sim", "sim substeps 1e9", "sim substeps_1e9.toml --out o/x", &["substeps_1e9.toml", "plant.substeps", "1000000000", "1..=1000"]),
-    fail("sim", "sim a day at 1000 substeps (total work)", "sim work_day.toml --out o/x", &["work_day.toml", "duration_s", "plant steps", "1e8"]),
-    fail("sim", "sim inflow_iterations = 0", "sim inflow0.toml --out o/x", &["inflow0.toml", "plant.inflow_iterations"]),
-    fail("sim", "sim [[reference]] value = 1e300", "sim ref1e300.toml --out o/x", &["ref1e300.toml", "reference[0].value", "1e300", "100 m/s"]),
-    fail("sim", "sim psi reference -1e6", "sim psi_ref.toml --out o/x", &["psi_ref.toml", "reference[0].value", "100 rad"]),
-    fail("sim", "sim reference t_s NaN", "sim ref_t_nan.toml --out o/x", &["ref_t_nan.toml", "reference[0].t_s"]),
-    fail("sim", "sim wind.dryden.w20_m_s = -1 (nested, said once)", "sim wind_neg.toml --out o/x", &["wind_neg.toml: `wind.dryden.w20_m_s` = -1: allowed: >= 0"]),
-    fail("sim", "sim sensors.imu.rate_hz = 0", "sim sensors_rate.toml --out o/x", &["sensors_rate.toml: `sensors.imu.rate_hz` = 0"]),
-    fail("sim", "sim navigation sigma", "sim nav_sigma.toml --out o/x", &["nav_sigma.toml: `navigation.accel_sigma_m_s2` = -1"]),
-    fail("sim", "sim controller rho 0", "sim controller_rho.toml --out o/x", &["controller_rho.toml: `controller.rho` = 0"]),
-    fail("sim", "sim trim speed 1e9", "sim trim_speed.toml --out o/x", &["trim_speed.toml", "trim.velocity_ned_m_s[0]", "1000000000"]),
-    fail("sim", "sim initial rate 1e200", "sim initial_big.toml --out o/x", &["initial_big.toml", "initial.p", "1e200"]),
-    fail("sim", "sim duration 1e-300 (printed short)", "sim duration_tiny.toml --out o/x", &["duration_tiny.toml", "`duration_s` = 1e-300", "one controller sample"]),
-    fail("sim", "sim duration beyond a day", "sim duration_long.toml --out o/x", &["duration_long.toml", "duration_s", "86400"]),
-    fail("sim", "sim a bad case", "sim case_bad.toml --out o/x", &["case_bad.toml", "case `b`", "plant.substeps"]),
-    fail("sim", "sim scenario params mass_kg = 1e308", "sim params_heavy.toml --out o/x", &["heavy.toml:2", "body.mass_kg"]),
-    fail("sim", "sim --params mass x100 (trim saturates, said once)", "sim ok.toml --params mass100.toml --out o/x", &["mass100.toml", "trim is not physical", "S_col"]),
-    fail("sim", "sim --params missing", "sim ok.toml --params missing.toml --out o/x", &["missing.toml", "cannot read"]),
-    fail("sim", "sim --duration NaN", "sim ok.toml --duration nan --out o/x", &["ok.toml", "--duration", "duration_s", "NaN"]),
-    fail("sim", "sim --duration 0", "sim ok.toml --duration 0 --out o/x", &["duration_s", "> 0"]),
-    fail("sim", "sim --seed negative", "sim ok.toml --seed -1 --out o/x", &["--seed"]),
-    fail("sim", "sim gains file alpha edited", "sim gains_alpha.toml --out o/x", &["gains_alpha.json", "`alpha`", "edited"]),
-    fail("sim", "sim gains file sample_time_s edited", "sim gains_ts.toml --out o/x", &["gains_ts.json", "`sample_time_s` = 0.005"]),
-    fail("sim", "sim gains file duplicated key", "sim gains_dup.toml --out o/x", &["gains_dup.json", "duplicate key `config.rho`"]),
-    fail("sim", "sim gains file missing", "sim gains_alpha.toml --out o/x --params missing.toml", &["missing.toml"]),
-    fail("sim", "sim scenario missing", "sim missing.toml", &["missing.toml", "cannot read"]),
-    fail("sim", "sim scenario TOML syntax", "sim syntax.toml", &["syntax.toml"]),
-    ok("sim", "sim --params --seed --duration", "sim ok.toml --params light.toml --seed 7 --duration 0.1 --out o/sim", &["o/sim/summary.json", "o/sim/log.csv"]),
-    ok("sim", "sim unedited gains file", "sim gains_ok.toml --out o/sim_gains", &["o/sim_gains/summary.json"]),
+    fail(
+        "sim",
+        "sim substeps 1e9",
+        "sim substeps_1e9.toml --out o/x",
+        &[
+            "substeps_1e9.toml",
+            "plant.substeps",
+            "1000000000",
+            "1..=1000",
+        ],
+    ),
+    fail(
+        "sim",
+        "sim a day at 1000 substeps (total work)",
+        "sim work_day.toml --out o/x",
+        &["work_day.toml", "duration_s", "plant steps", "1e8"],
+    ),
+    fail(
+        "sim",
+        "sim inflow_iterations = 0",
+        "sim inflow0.toml --out o/x",
+        &["inflow0.toml", "plant.inflow_iterations"],
+    ),
+    fail(
+        "sim",
+        "sim [[reference]] value = 1e300",
+        "sim ref1e300.toml --out o/x",
+        &["ref1e300.toml", "reference[0].value", "1e300", "100 m/s"],
+    ),
+    fail(
+        "sim",
+        "sim psi reference -1e6",
+        "sim psi_ref.toml --out o/x",
+        &["psi_ref.toml", "reference[0].value", "100 rad"],
+    ),
+    fail(
+        "sim",
+        "sim reference t_s NaN",
+        "sim ref_t_nan.toml --out o/x",
+        &["ref_t_nan.toml", "reference[0].t_s"],
+    ),
+    fail(
+        "sim",
+        "sim wind.dryden.w20_m_s = -1 (nested, said once)",
+        "sim wind_neg.toml --out o/x",
+        &["wind_neg.toml: `wind.dryden.w20_m_s` = -1: allowed: >= 0"],
+    ),
+    fail(
+        "sim",
+        "sim sensors.imu.rate_hz = 0",
+        "sim sensors_rate.toml --out o/x",
+        &["sensors_rate.toml: `sensors.imu.rate_hz` = 0"],
+    ),
+    fail(
+        "sim",
+        "sim navigation sigma",
+        "sim nav_sigma.toml --out o/x",
+        &["nav_sigma.toml: `navigation.accel_sigma_m_s2` = -1"],
+    ),
+    fail(
+        "sim",
+        "sim controller rho 0",
+        "sim controller_rho.toml --out o/x",
+        &["controller_rho.toml: `controller.rho` = 0"],
+    ),
+    fail(
+        "sim",
+        "sim trim speed 1e9",
+        "sim trim_speed.toml --out o/x",
+        &["trim_speed.toml", "trim.velocity_ned_m_s[0]", "1000000000"],
+    ),
+    fail(
+        "sim",
+        "sim initial rate 1e200",
+        "sim initial_big.toml --out o/x",
+        &["initial_big.toml", "initial.p", "1e200"],
+    ),
+    fail(
+        "sim",
+        "sim duration 1e-300 (printed short)",
+        "sim duration_tiny.toml --out o/x",
+        &[
+            "duration_tiny.toml",
+            "`duration_s` = 1e-300",
+            "one controller sample",
+        ],
+    ),
+    fail(
+        "sim",
+        "sim duration beyond a day",
+        "sim duration_long.toml --out o/x",
+        &["duration_long.toml", "duration_s", "86400"],
+    ),
+    fail(
+        "sim",
+        "sim a bad case",
+        "sim case_bad.toml --out o/x",
+        &["case_bad.toml", "case `b`", "plant.substeps"],
+    ),
+    fail(
+        "sim",
+        "sim scenario params mass_kg = 1e308",
+        "sim params_heavy.toml --out o/x",
+        &["heavy.toml:2", "body.mass_kg"],
+    ),
+    fail(
+        "sim",
+        "sim --params mass x100 (trim saturates, said once)",
+        "sim ok.toml --params mass100.toml --out o/x",
+        &["mass100.toml", "trim is not physical", "S_col"],
+    ),
+    fail(
+        "sim",
+        "sim --params missing",
+        "sim ok.toml --params missing.toml --out o/x",
+        &["missing.toml", "cannot read"],
+    ),
+    fail(
+        "sim",
+        "sim --duration NaN",
+        "sim ok.toml --duration nan --out o/x",
+        &["ok.toml", "--duration", "duration_s", "NaN"],
+    ),
+    fail(
+        "sim",
+        "sim --duration 0",
+        "sim ok.toml --duration 0 --out o/x",
+        &["duration_s", "> 0"],
+    ),
+    fail(
+        "sim",
+        "sim --seed negative",
+        "sim ok.toml --seed -1 --out o/x",
+        &["--seed"],
+    ),
+    fail(
+        "sim",
+        "sim gains file alpha edited",
+        "sim gains_alpha.toml --out o/x",
+        &["gains_alpha.json", "`alpha`", "edited"],
+    ),
+    fail(
+        "sim",
+        "sim gains file sample_time_s edited",
+        "sim gains_ts.toml --out o/x",
+        &["gains_ts.json", "`sample_time_s` = 0.005"],
+    ),
+    fail(
+        "sim",
+        "sim gains file duplicated key",
+        "sim gains_dup.toml --out o/x",
+        &["gains_dup.json", "duplicate key `config.rho`"],
+    ),
+    fail(
+        "sim",
+        "sim gains file missing",
+        "sim gains_alpha.toml --out o/x --params missing.toml",
+        &["missing.toml"],
+    ),
+    fail(
+        "sim",
+        "sim scenario missing",
+        "sim missing.toml",
+        &["missing.toml", "cannot read"],
+    ),
+    fail(
+        "sim",
+        "sim scenario TOML syntax",
+        "sim syntax.toml",
+        &["syntax.toml"],
+    ),
+    ok(
+        "sim",
+        "sim --params --seed --duration",
+        "sim ok.toml --params light.toml --seed 7 --duration 0.1 --out o/sim",
+        &["o/sim/summary.json", "o/sim/log.csv"],
+    ),
+    ok(
+        "sim",
+        "sim unedited gains file",
+        "sim gains_ok.toml --out o/sim_gains",
+        &["o/sim_gains/summary.json"],
+    ),
     // --- mc
-    fail("mc", "mc campaign missing", "mc missing.toml", &["missing.toml"]),
-    fail("mc", "mc campaign syntax", "mc campaign_syntax.toml", &["campaign_syntax.toml"]),
-    fail("mc", "mc negative sigma", "mc campaign_disp.toml --out o/mc", &["campaign_disp.toml", "sigma"]),
+    fail(
+        "mc",
+        "mc campaign missing",
+        "mc missing.toml",
+        &["missing.toml"],
+    ),
+    fail(
+        "mc",
+        "mc campaign syntax",
+        "mc campaign_syntax.toml",
+        &["campaign_syntax.toml"],
+    ),
+    fail(
+        "mc",
+        "mc negative sigma",
+        "mc campaign_disp.toml --out o/mc",
+        &["campaign_disp.toml", "sigma"],
+    ),
     fail("mc", "mc runs 0", "mc campaign.toml --runs 0", &["--runs"]),
-    fail("mc", "mc threads 0", "mc campaign.toml --threads 0", &["--threads"]),
-    fail("mc", "mc duration NaN", "mc campaign.toml --duration nan --out o/mc", &["duration_s"]),
-    fail("mc", "mc params mass_kg = 1e308", "mc campaign.toml --params heavy.toml --out o/mc", &["heavy.toml:2", "body.mass_kg"]),
-    fail("mc", "mc shard 3/2", "mc campaign.toml --shard 3/2", &["--shard"]),
-    fail("mc", "mc scenario substeps 1e9", "mc campaign_work.toml --out o/mc", &["plant.substeps"]),
-    fail("mc", "mc merge nothing", "mc merge missing_dir --out o/merged", &["missing_dir"]),
-    ok("mc", "mc two runs", "mc campaign.toml --out o/mc_ok --threads 1", &["o/mc_ok/stats.json", "o/mc_ok/runs.csv"]),
+    fail(
+        "mc",
+        "mc threads 0",
+        "mc campaign.toml --threads 0",
+        &["--threads"],
+    ),
+    fail(
+        "mc",
+        "mc duration NaN",
+        "mc campaign.toml --duration nan --out o/mc",
+        &["duration_s"],
+    ),
+    fail(
+        "mc",
+        "mc params mass_kg = 1e308",
+        "mc campaign.toml --params heavy.toml --out o/mc",
+        &["heavy.toml:2", "body.mass_kg"],
+    ),
+    fail(
+        "mc",
+        "mc shard 3/2",
+        "mc campaign.toml --shard 3/2",
+        &["--shard"],
+    ),
+    fail(
+        "mc",
+        "mc scenario substeps 1e9",
+        "mc campaign_work.toml --out o/mc",
+        &["plant.substeps"],
+    ),
+    fail(
+        "mc",
+        "mc merge nothing",
+        "mc merge missing_dir --out o/merged",
+        &["missing_dir"],
+    ),
+    ok(
+        "mc",
+        "mc two runs",
+        "mc campaign.toml --out o/mc_ok --threads 1",
+        &["o/mc_ok/stats.json", "o/mc_ok/runs.csv"],
+    ),
     // --- bench
     fail("bench", "bench unknown flag", "bench --fast", &["--fast"]),
     ok("bench", "bench json", "bench --json", &[]),
@@ -461,8 +970,16 @@ fn corpus() -> PathBuf {
         .unwrap()
         .to_string();
     edit(&alpha, "  \"alpha\": 1.01,", "gains_alpha.json");
-    edit("\"sample_time_s\": 0.0025", "\"sample_time_s\": 0.005", "gains_ts.json");
-    edit("\"rho\": 10.0,", "\"rho\": 10.0, \"rho\": 1.0,", "gains_dup.json");
+    edit(
+        "\"sample_time_s\": 0.0025",
+        "\"sample_time_s\": 0.005",
+        "gains_ts.json",
+    );
+    edit(
+        "\"rho\": 10.0,",
+        "\"rho\": 10.0, \"rho\": 1.0,",
+        "gains_dup.json",
+    );
     // a simulated sensor log, then edited copies (row 5's fx cell / its time)
     let r = helicon(
         &d,
@@ -612,8 +1129,7 @@ fn sim_overrides_seed_and_duration() {
     let r = helicon(&d, &args, None);
     assert_eq!(r.code, Some(0), "{}", r.stderr);
     let v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(d.join("r/summary.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(d.join("r/summary.json")).unwrap()).unwrap();
     assert_eq!(v["wind_seed"], 42, "{v}");
     assert_eq!(v["sensor_seed"], 42, "{v}");
     let t_end = v["t_end_s"].as_f64().unwrap();
