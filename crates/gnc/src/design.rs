@@ -504,7 +504,8 @@ impl Gains {
             Some(t) => alpha_from_settling_time(ts, t)?,
             None => 1.0,
         };
-        if !((f.alpha - expected_alpha).abs() <= 1e-12 * expected_alpha.abs()) {
+        let alpha_matches = (f.alpha - expected_alpha).abs() <= 1e-12 * expected_alpha.abs();
+        if !alpha_matches {
             return Err(bad(format!(
                 "`alpha` = {} does not match `settling_time_s` = {} at `sample_time_s` = {ts} s \
                  (which gives {expected_alpha}): the file was edited",

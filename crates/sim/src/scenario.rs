@@ -665,7 +665,8 @@ impl Scenario {
             value: num(self.duration_s),
             rule,
         };
-        if !(self.duration_s >= sample_time_s) {
+        let one_sample = self.duration_s >= sample_time_s;
+        if !one_sample {
             return Err(bad(format!(
                 "must be at least one controller sample (sample_time_s = {})",
                 num(sample_time_s)

@@ -190,7 +190,7 @@ impl Default for GpsConfig {
 /// [gps]
 /// rate_hz = 5.0
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SensorConfig {
     /// Seed of the sensor RNG streams.
@@ -201,17 +201,6 @@ pub struct SensorConfig {
     pub mag: MagConfig,
     /// GPS.
     pub gps: GpsConfig,
-}
-
-impl Default for SensorConfig {
-    fn default() -> Self {
-        Self {
-            seed: 0,
-            imu: ImuConfig::default(),
-            mag: MagConfig::default(),
-            gps: GpsConfig::default(),
-        }
-    }
 }
 
 impl SensorConfig {
