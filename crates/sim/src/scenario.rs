@@ -719,3 +719,115 @@ impl Scenario {
         self.reference_schedule().at(t_s)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scenario, String> {
+        Scenario::from_toml_str(text, "s.toml").map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn bounds_name_the_field_once_with_short_numbers() {
+        for (text, want) in [
+            (
+                "duration_s = 1.0\n[plant]\nsubsteps = 1000000000\n",
+                "s.toml: `plant.substeps` = 1000000000: must be 1..=1000",
+            ),
+            (
+                "duration_s = 1.0\n[plant]\ninflow_iterations = 0\n",
+                "s.toml: `plant.inflow_iterations` = 0: must be 1..=100",
+            ),
+            (
+                "duration_s = 1.0\n[[reference]]\nt_s = 0.1\noutput = \"vn\"\nvalue = 1e300\n",
+                "s.toml: `reference[0].value` = 1e300: must be finite and within +-100 m/s",
+            ),
+            (
+                "duration_s = 1.0\n[[reference]]\nt_s = 0.1\noutput = \"psi\"\nvalue = 101.0\n",
+                "s.toml: `reference[0].value` = 101: must be finite and within +-100 rad",
+            ),
+            (
+                "duration_s = 1e-300\n[[reference]]\nt_s = 0.1\noutput = \"psi\"\nvalue = 1.0\n",
+                "",
+            ),
+            (
+                "duration_s = 1.0\n[wind.dryden]\nw20_m_s = -1.0\n",
+                "s.toml: `wind.dryden.w20_m_s` = -1: allowed: >= 0",
+            ),
+            (
+                "duration_s = 1.0\n[sensors.gps]\nrate_hz = 50.0\n",
+                "s.toml: `sensors.gps.rate_hz` = 50: allowed: 1..=10",
+            ),
+        ] {
+            match parse(text) {
+                Ok(_) => assert!(want.is_empty(), "accepted: {text}"),
+                Err(e) => assert!(!want.is_empty() && e.starts_with(want), "{e}"),
+            }
+        }
+        // the edges are accepted
+        assert!(
+            parse("duration_s = 1.0\n[plant]\nsubsteps = 1000\ninflow_iterations = 100\n").is_ok()
+        );
+    }
+
+    #[test]
+    fn work_needs_one_sample_and_at_most_1e8_steps() {
+        let s = parse("duration_s = 86400.0\n[plant]\nsubsteps = 2\n").unwrap();
+        // 86400 s at 400 Hz with 2 sub-steps: 6.9e7 steps
+        assert!(s.check_work("s.toml", 0.0025).is_ok());
+        let s = parse("duration_s = 86400.0\n[plant]\nsubsteps = 3\n").unwrap();
+        let e = s.check_work("s.toml", 0.0025).unwrap_err().to_string();
+        assert!(
+            e.contains("1.0368e8 plant steps exceeds the limit of 1e8"),
+            "{e}"
+        );
+        let s = parse("duration_s = 1e-300\n").unwrap();
+        let e = s.check_work("s.toml", 0.0025).unwrap_err().to_string();
+        assert!(
+            e.starts_with("s.toml: `duration_s` = 1e-300: must be at least one controller sample"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn overrides_apply_to_every_case_and_are_validated() {
+        let s = parse(
+            "duration_s = 1.0\n[wind]\nseed = 1\n[sensors]\nseed = 2\n[[case]]\nname = \"a\"\n[[case]]\nname = \"b\"\n",
+        )
+        .unwrap();
+        let o = ScenarioOverrides {
+            params: Some(PathBuf::from("/p.toml")),
+            seed: Some(9),
+            duration_s: Some(0.5),
+        };
+        let s = s.with_overrides(&o, "s.toml (with …)").unwrap();
+        for c in std::iter::once(&s).chain(&s.variants) {
+            assert_eq!((c.wind.seed, c.sensors.seed), (9, 9));
+            assert_eq!(c.duration_s, 0.5);
+            assert_eq!(c.params.as_deref(), Some(Path::new("/p.toml")));
+        }
+        let bad = ScenarioOverrides {
+            duration_s: Some(f64::NAN),
+            ..ScenarioOverrides::default()
+        };
+        let e = s
+            .with_overrides(&bad, "s.toml (with --duration NaN)")
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("s.toml (with --duration NaN): `duration_s` = NaN"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn numbers_print_short() {
+        assert_eq!(num(1e-300), "1e-300");
+        assert_eq!(num(1e308), "1e308");
+        assert_eq!(num(86400.0), "86400");
+        assert_eq!(num(0.0025), "0.0025");
+        assert_eq!(num(-1.0), "-1");
+        assert_eq!(num(f64::NAN), "NaN");
+    }
+}
