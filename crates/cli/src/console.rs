@@ -49,3 +49,13 @@ impl Console {
         self.out.flush()
     }
 }
+
+/// `eprintln!` without the panic when stderr is a closed pipe
+/// (`helicon … 2>&1 | head -1`): a note that cannot be shown is dropped.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+pub(crate) use note;

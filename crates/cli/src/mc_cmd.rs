@@ -86,7 +86,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
     if let Some(McCommand::Merge(m)) = &args.command {
         let report = merge(&m.dirs, &m.out).context("merging shard folders")?;
         let s = &report.stats;
-        eprintln!(
+        crate::console::note!(
             "merged {} runs into {}: {} completed, {} failed ({:.1} %)",
             s.runs,
             m.out.display(),
@@ -137,7 +137,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
         .with_context(|| format!("campaign {}", path.display()))?;
     bar.finish_and_clear();
     let s = &report.stats;
-    eprintln!(
+    crate::console::note!(
         "{}: {} runs flown in {:.1} s ({} already done), {} recorded: {} completed, {} failed ({:.1} %)",
         campaign.name,
         report.flown,
@@ -149,7 +149,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
         100.0 * s.failure_fraction
     );
     for f in &s.failures {
-        eprintln!(
+        crate::console::note!(
             "  {:6} × {}: {} (first: run {}: {})",
             f.runs,
             f.outcome,
@@ -158,7 +158,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
             f.example
         );
     }
-    eprintln!("outputs in {}", out.display());
+    crate::console::note!("outputs in {}", out.display());
     Ok(())
 }
 

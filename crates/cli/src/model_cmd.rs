@@ -200,7 +200,9 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
             Err(e) => {
                 let msg = format!("{source}: line {lineno}: {e:#}");
                 if !args.keep_going {
-                    out.flush()?;
+                    // the bad line is the error to report, even when the
+                    // reader of stdout has gone
+                    let _ = out.flush();
                     bail!(msg);
                 }
                 failures += 1;

@@ -535,7 +535,7 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
         }
         att.write(&args.out.join(format!("attitude.{ext}")))?;
     }
-    eprintln!(
+    crate::console::note!(
         "fused {} rows ({} GPS fixes, {} attitude solutions, initialised from the {}); wrote {}",
         log.rows.len(),
         n_gps,

@@ -155,7 +155,7 @@ fn do_trim(model: &Model, cond: &ConditionFlags, initial: Option<&Trim>) -> Resu
     let t = trim(model, &cond.target(), &opts)?;
     if cond.verbose {
         for (k, r) in t.history.iter().enumerate() {
-            eprintln!("trim iteration {k:>2}: |residual|_inf = {r:.3e}");
+            crate::console::note!("trim iteration {k:>2}: |residual|_inf = {r:.3e}");
         }
     }
     Ok(t)
@@ -164,7 +164,7 @@ fn do_trim(model: &Model, cond: &ConditionFlags, initial: Option<&Trim>) -> Resu
 /// Print the violations of a trim on stderr (`what` names the point).
 fn report_violations(what: &str, v: &Validity) {
     for x in &v.violations {
-        eprintln!("{what}: unphysical: {x}");
+        crate::console::note!("{what}: unphysical: {x}");
     }
 }
 
@@ -224,16 +224,15 @@ pub fn run_trim(args: &TrimArgs) -> Result<()> {
     }
     let t = do_trim(&model, &args.cond, None)?;
     let validity = t.validity(&model);
-    if args.json {
-        let mut out = std::io::stdout().lock();
-        writeln!(
-            out,
-            "{}",
-            serde_json::to_string_pretty(&trim_json(&t, &model))?
-        )?;
+    // a failed write to stdout (a closed pipe) is returned after the
+    // validity verdict, so `helicon trim … | head -1` still fails on an
+    // unphysical trim
+    let printed = if args.json {
+        let text = serde_json::to_string_pretty(&trim_json(&t, &model))?;
+        writeln!(std::io::stdout().lock(), "{text}").map_err(anyhow::Error::from)
     } else {
-        print_trim(&t, args)?;
-    }
+        print_trim(&t, args)
+    };
     report_violations("trim", &validity);
     if !validity.is_physical() && !args.cond.allow_unphysical {
         bail!(
@@ -241,7 +240,7 @@ pub fn run_trim(args: &TrimArgs) -> Result<()> {
             validity.violations.len()
         );
     }
-    Ok(())
+    printed
 }
 
 fn print_trim(t: &Trim, args: &TrimArgs) -> Result<()> {
@@ -370,7 +369,7 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
             }
             Err(e) => {
                 failed += 1;
-                eprintln!("{var} = {s}: {e}");
+                crate::console::note!("{var} = {s}: {e}");
                 let _ = writeln!(csv, "{s},false,{}", ",".repeat(4 + 27 + 2 + 3));
                 points.push(json!({var.as_str(): s, "converged": false, "error": e.to_string()}));
             }
@@ -440,11 +439,12 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
             names.join(" ")
         );
     }
-    writeln!(
+    // a closed stdout is reported after the verdicts below
+    let printed = writeln!(
         std::io::stdout().lock(),
         "{summary}; wrote {}/sweep.csv, sweep.json and inputs/attitude/inflow plots",
         args.out.display()
-    )?;
+    );
     if failed > 0 {
         bail!("{failed} sweep point(s) did not trim");
     }
@@ -453,7 +453,7 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
             "{unphysical} sweep point(s) are not physical (see `violations` in sweep.csv); --allow-unphysical accepts them"
         );
     }
-    Ok(())
+    Ok(printed?)
 }
 
 /// A violation for a CSV cell (no commas): `S_col=3.5e-1 (allowed -0.1..0.3)`.
@@ -555,7 +555,7 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
         if !args.cond.allow_unphysical {
             bail!("refusing to linearize: {msg}; --allow-unphysical linearizes anyway");
         }
-        eprintln!("warning: {msg}");
+        crate::console::note!("warning: {msg}");
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;

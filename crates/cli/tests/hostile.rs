@@ -1219,3 +1219,39 @@ fn closed_stdout_is_a_quiet_exit_everywhere() {
         }
     }
 }
+
+/// `helicon … 2>&1 | head -1` with both pipes gone: notes and the error line
+/// on stderr are dropped, never a panic (exit status 101): an error still
+/// exits 1, a run 0 with its files written.
+#[test]
+fn closed_stderr_is_not_a_panic() {
+    let d = tmpdir("pipe_err");
+    std::fs::write(d.join("mass100.toml"), "[body]\nmass_kg = 1400.0\n").unwrap();
+    std::fs::write(
+        d.join("c.toml"),
+        "name = \"c\"\nruns = 2\nseed = 1\n[scenario]\nduration_s = 0.2\n",
+    )
+    .unwrap();
+    for (args, code, file) in [
+        ("trim --params mass100.toml", 1, None),
+        ("sim missing.toml", 1, None),
+        ("mc c.toml --out mc --threads 1", 0, Some("mc/stats.json")),
+        ("params", 0, None),
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_helicon"))
+            .current_dir(&d)
+            .args(expand(args))
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        drop(child.stderr.take());
+        let r = finish(child);
+        assert_eq!(r.code, Some(code), "{args}");
+        if let Some(f) = file {
+            assert!(d.join(f).exists(), "{args}: {f}");
+        }
+    }
+}
