@@ -110,3 +110,48 @@ fn run() -> anyhow::Result<()> {
         Command::Sim(a) => sim_cmd::run(&a),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::error_text;
+    use std::fmt;
+
+    #[derive(Debug)]
+    struct Inner;
+    impl fmt::Display for Inner {
+        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str("trim is not physical: S_col = 8.6")
+        }
+    }
+    impl std::error::Error for Inner {}
+
+    /// A `#[error("design point: {0}")]` layer with `#[from]`: its Display
+    /// already holds the cause, which is also its `source`.
+    #[derive(Debug)]
+    struct Outer(Inner);
+    impl fmt::Display for Outer {
+        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            write!(f, "design point: {}", self.0)
+        }
+    }
+    impl std::error::Error for Outer {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    #[test]
+    fn each_cause_is_said_once() {
+        let e = anyhow::Error::new(Outer(Inner)).context("scenario `x`: preparing");
+        assert_eq!(
+            error_text(&e),
+            "scenario `x`: preparing: design point: trim is not physical: S_col = 8.6"
+        );
+        // a cause not already said is appended
+        let e = anyhow::Error::new(Inner).context("scenario `x`");
+        assert_eq!(
+            error_text(&e),
+            "scenario `x`: trim is not physical: S_col = 8.6"
+        );
+    }
+}
