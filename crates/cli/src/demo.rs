@@ -9,14 +9,15 @@
 //! `scenarios/demo.toml`, embedded in the binary; the run folder is the same
 //! as `helicon sim scenarios/demo.toml` writes.
 
+use crate::console::Console;
 use crate::model_cmd::ModelFlags;
-use crate::sim_cmd::{RunReport, fly_and_write_step, prepare_step, print_run};
+use crate::sim_cmd::{RunReport, fly_and_write_step, overrides_label, prepare_step, print_run};
 use anyhow::{Context, Result};
 use clap::Args;
 use helicon_model::InflowMode;
 use helicon_model::linearize::linearize;
 use helicon_model::state::ix;
-use helicon_sim::scenario::Scenario;
+use helicon_sim::scenario::{Scenario, ScenarioOverrides};
 use nalgebra::Vector3;
 use std::path::PathBuf;
 
@@ -43,20 +44,20 @@ pub struct DemoArgs {
 pub fn demo_scenario(args: &DemoArgs) -> Result<Scenario> {
     let mut s = Scenario::from_toml_str(DEMO_SCENARIO, "scenarios/demo.toml (embedded)")?;
     s.preset = args.model.preset;
-    if let Some(p) = &args.model.params {
-        let abs = std::path::absolute(p)
-            .with_context(|| format!("--params {}: cannot resolve the path", p.display()))?;
-        s.params = Some(abs);
-    }
-    if let Some(d) = args.duration {
-        s.duration_s = d;
-    }
-    if let Some(seed) = args.seed {
-        s.wind.seed = seed;
-        s.sensors.seed = seed;
-    }
-    s.validate("helicon demo (command line)")?;
-    Ok(s)
+    let params = match &args.model.params {
+        Some(p) => Some(
+            std::path::absolute(p)
+                .with_context(|| format!("--params {}: cannot resolve the path", p.display()))?,
+        ),
+        None => None,
+    };
+    let overrides = ScenarioOverrides {
+        params,
+        seed: args.seed,
+        duration_s: args.duration,
+    };
+    let origin = format!("helicon demo{}", overrides_label(&overrides));
+    Ok(s.with_overrides(&overrides, &origin)?)
 }
 
 fn describe_references(s: &Scenario) -> String {
@@ -111,7 +112,10 @@ fn describe_wind(s: &Scenario) -> String {
 pub fn run(args: &DemoArgs) -> Result<()> {
     let started = std::time::Instant::now();
     let scenario = demo_scenario(args)?;
-    println!(
+    // the run folder is written whatever happens to stdout (`| head`)
+    let mut con = Console::stdout();
+    writeln!(
+        con,
         "helicon demo: Bergen Industrial Twin, {} preset, closed loop",
         scenario.preset.name()
     );
@@ -119,7 +123,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     // 1–3. Trim, linearize, design.
     let (prepared, prepare_s) = prepare_step(&scenario)?;
     let t = &prepared.trim;
-    println!(
+    writeln!(
+        con,
         "1. hover trim: {} Newton iterations, |residual| = {:.1e}; S = [{:.4}, {:.2e}, {:.2e}, {:.4}], roll {:.2} deg, lambda_mr = {:.5}",
         t.iterations,
         t.residual_norm,
@@ -149,7 +154,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             }
         })
         .collect();
-    println!(
+    writeln!(
+        con,
         "2. linearized (27 states, 4 inputs): unstable open-loop poles s = {} (1/s)",
         if unstable.is_empty() {
             "none".to_string()
@@ -164,7 +170,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         .map(|z| z[0].hypot(z[1]))
         .fold(0.0, f64::max);
     let cl_radius = g.spectral_radius();
-    println!(
+    writeln!(
+        con,
         "3. designed at {:.0} Hz: LQR + integral action (Bryson, rho = {}, pincer alpha = {:.5}), closed-loop |z|max = {:.5}; Kalman predictor |z|max = {:.5} ({:.2} s)",
         1.0 / g.set.sample_time_s,
         g.config.rho,
@@ -175,9 +182,10 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     );
 
     // 4. Fly.
-    println!(
+    writeln!(
+        con,
         "4. closed-loop flight, {} s: {}; wind: {}; estimator {}, {}",
-        scenario.duration_s,
+        helicon_sim::scenario::num(scenario.duration_s),
         describe_references(&scenario),
         describe_wind(&scenario),
         if scenario.controller.estimator {
@@ -194,7 +202,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             "ideal measurements of the nine measured states".to_string()
         }
     );
-    let (flight, files, fly_s, write_s) = fly_and_write_step(&args.out, &scenario, &prepared)?;
+    let (flight, files, fly_s, write_s) =
+        fly_and_write_step(&args.out, &scenario, &prepared, "helicon demo")?;
     let report = RunReport {
         flight,
         files,
@@ -202,9 +211,10 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         fly_s,
         write_s,
     };
-    print_run(&report);
+    print_run(&mut con, &report);
     if scenario.wind.dryden.is_some() || scenario.wind.thesis.is_some() {
-        println!(
+        writeln!(
+            con,
             "  (in turbulence the error rarely stays inside the 1 % band to the end: the RMS errors are the figures of merit)"
         );
     }
@@ -215,15 +225,17 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         .filter(|p| p.extension().is_some_and(|e| e == "png"))
         .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
         .collect();
-    println!(
+    writeln!(
+        con,
         "plots (PNG, and SVG alongside) in {}: {}",
         report.files.dir.display(),
         pngs.join(", ")
     );
-    println!("report: {}", report.files.report.display());
-    println!(
+    writeln!(con, "report: {}", report.files.report.display());
+    writeln!(
+        con,
         "demo done in {:.2} s. Fly your own: helicon sim scenarios/demo.toml --out out/mine",
         started.elapsed().as_secs_f64()
     );
-    Ok(())
+    con.finish().context("writing to stdout")
 }

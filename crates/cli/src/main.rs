@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 
+mod console;
 mod control;
 mod demo;
 mod mc_cmd;
@@ -46,6 +47,10 @@ enum Command {
     Sim(sim_cmd::SimArgs),
 }
 
+/// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
+/// reader asked for no more, and the command's files are complete (see
+/// [`console::Console`]). A shell pipeline therefore succeeds, as with
+/// `set -o pipefail` users expect of a producer they cut short on purpose.
 fn main() -> std::process::ExitCode {
     match run() {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -59,11 +64,30 @@ fn main() -> std::process::ExitCode {
             std::process::ExitCode::SUCCESS
         }
         Err(e) => {
-            // One line per cause, no backtrace: errors here are the user's input.
-            eprintln!("error: {e:#}");
+            // One line, each cause once, no backtrace: errors here are the
+            // user's input. (A closed stderr is ignored: nowhere to say it.)
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "error: {}", error_text(&e));
             std::process::ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes joined by `: `, each said once: a cause whose
+/// text the message so far already ends with (a `#[error("…: {0}")]` layer
+/// that also exposes the cause as its `source`) is not repeated.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        if text.is_empty() {
+            text = c;
+        } else if !text.ends_with(c.as_str()) {
+            text.push_str(": ");
+            text.push_str(&c);
+        }
+    }
+    text
 }
 
 fn run() -> anyhow::Result<()> {
@@ -84,5 +108,50 @@ fn run() -> anyhow::Result<()> {
         Command::Mc(a) => mc_cmd::run_mc(&a),
         Command::Bench(a) => mc_cmd::run_bench(&a),
         Command::Sim(a) => sim_cmd::run(&a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::error_text;
+    use std::fmt;
+
+    #[derive(Debug)]
+    struct Inner;
+    impl fmt::Display for Inner {
+        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str("trim is not physical: S_col = 8.6")
+        }
+    }
+    impl std::error::Error for Inner {}
+
+    /// A `#[error("design point: {0}")]` layer with `#[from]`: its Display
+    /// already holds the cause, which is also its `source`.
+    #[derive(Debug)]
+    struct Outer(Inner);
+    impl fmt::Display for Outer {
+        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            write!(f, "design point: {}", self.0)
+        }
+    }
+    impl std::error::Error for Outer {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
+    }
+
+    #[test]
+    fn each_cause_is_said_once() {
+        let e = anyhow::Error::new(Outer(Inner)).context("scenario `x`: preparing");
+        assert_eq!(
+            error_text(&e),
+            "scenario `x`: preparing: design point: trim is not physical: S_col = 8.6"
+        );
+        // a cause not already said is appended
+        let e = anyhow::Error::new(Inner).context("scenario `x`");
+        assert_eq!(
+            error_text(&e),
+            "scenario `x`: trim is not physical: S_col = 8.6"
+        );
     }
 }

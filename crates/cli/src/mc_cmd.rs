@@ -86,7 +86,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
     if let Some(McCommand::Merge(m)) = &args.command {
         let report = merge(&m.dirs, &m.out).context("merging shard folders")?;
         let s = &report.stats;
-        eprintln!(
+        crate::console::note!(
             "merged {} runs into {}: {} completed, {} failed ({:.1} %)",
             s.runs,
             m.out.display(),
@@ -137,7 +137,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
         .with_context(|| format!("campaign {}", path.display()))?;
     bar.finish_and_clear();
     let s = &report.stats;
-    eprintln!(
+    crate::console::note!(
         "{}: {} runs flown in {:.1} s ({} already done), {} recorded: {} completed, {} failed ({:.1} %)",
         campaign.name,
         report.flown,
@@ -149,7 +149,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
         100.0 * s.failure_fraction
     );
     for f in &s.failures {
-        eprintln!(
+        crate::console::note!(
             "  {:6} × {}: {} (first: run {}: {})",
             f.runs,
             f.outcome,
@@ -158,7 +158,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
             f.example
         );
     }
-    eprintln!("outputs in {}", out.display());
+    crate::console::note!("outputs in {}", out.display());
     Ok(())
 }
 
@@ -244,8 +244,10 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
     let step_ns = median(per);
     let ts = prepared.gains.set.sample_time_s;
     let rtf = ts * 1e9 / step_ns;
+    let mut con = crate::console::Console::stdout();
     if args.json {
-        println!(
+        writeln!(
+            con,
             "{}",
             serde_json::json!({
                 "derivative_ns": derivative_ns,
@@ -254,18 +256,21 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
             })
         );
     } else {
-        println!(
+        writeln!(
+            con,
             "derivative f(x, u, wind)        {derivative_ns:10.0} ns (median of 15 batches of {batch})"
         );
-        println!("RK4 step (4 derivatives)         {rk4_ns:10.0} ns");
-        println!(
+        writeln!(con, "RK4 step (4 derivatives)         {rk4_ns:10.0} ns");
+        writeln!(
+            con,
             "closed-loop step (sensors, fusion, estimator, controller, RK4, log) {step_ns:10.0} ns (median of 15 flights of {} s)",
             scenario.duration_s
         );
-        println!(
+        writeln!(
+            con,
             "closed-loop real-time factor     {rtf:10.0} × (one thread, Ts = {} ms)",
             ts * 1e3
         );
     }
-    Ok(())
+    con.finish().context("writing to stdout")
 }

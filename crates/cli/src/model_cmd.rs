@@ -64,8 +64,9 @@ pub fn run_params(args: &ParamsArgs) -> Result<()> {
         Some(path) => Params::from_file(path)?,
         None => Params::bergen_twin(),
     };
-    print!("{}", p.to_toml());
-    Ok(())
+    let mut con = crate::console::Console::stdout();
+    con.write_str(&p.to_toml());
+    con.finish().context("writing to stdout")
 }
 
 fn vector<const N: usize>(v: &Value, field: &str) -> Result<[f64; N]> {
@@ -199,7 +200,9 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
             Err(e) => {
                 let msg = format!("{source}: line {lineno}: {e:#}");
                 if !args.keep_going {
-                    out.flush()?;
+                    // the bad line is the error to report, even when the
+                    // reader of stdout has gone
+                    let _ = out.flush();
                     bail!(msg);
                 }
                 failures += 1;

@@ -163,8 +163,9 @@ pub enum SensorsCommand {
 
 /// Print the default sensor configuration (TOML) to stdout.
 pub fn run_sensors_config() -> Result<()> {
-    print!("{}", SensorConfig::default().to_toml()?);
-    Ok(())
+    let mut con = crate::console::Console::stdout();
+    con.write_str(&SensorConfig::default().to_toml()?);
+    con.finish().context("writing to stdout")
 }
 
 /// Arguments of `helicon sensors simulate`.
@@ -207,7 +208,7 @@ pub fn run_simulate(args: &SimulateArgs) -> Result<()> {
     if !(args.duration_s.is_finite() && args.duration_s > 0.0 && args.duration_s <= 86_400.0) {
         bail!(
             "--duration-s {} is invalid (allowed: 0 < d <= 86400)",
-            args.duration_s
+            helicon_sim::scenario::num(args.duration_s)
         );
     }
     let g = params_from(&args.params)?.environment.g_m_s2;
@@ -535,7 +536,7 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
         }
         att.write(&args.out.join(format!("attitude.{ext}")))?;
     }
-    eprintln!(
+    crate::console::note!(
         "fused {} rows ({} GPS fixes, {} attitude solutions, initialised from the {}); wrote {}",
         log.rows.len(),
         n_gps,

@@ -5,11 +5,13 @@
 //! status is 0. Only bad input (scenario, parameter or gains files) or a
 //! failure to write the outputs exits non-zero.
 
+use crate::console::Console;
 use anyhow::{Context, Result};
 use clap::Args;
-use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly_to, prepare};
+use helicon_model::Params;
+use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly_to, prepare, prepare_with_params};
 use helicon_sim::output::{CaseRun, RunFiles, finish_run, start_run, write_cases_index};
-use helicon_sim::scenario::{OUTPUTS, Scenario};
+use helicon_sim::scenario::{OUTPUTS, Scenario, ScenarioOverrides, num};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -22,6 +24,19 @@ pub struct SimArgs {
     /// Output folder (default `out/<scenario name>`).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Plant parameters: a TOML file of `helicon params` keys over the
+    /// Bergen Twin (overrides the scenario's `params`; a relative path is
+    /// relative to the working directory).
+    #[arg(long, value_name = "FILE")]
+    pub params: Option<PathBuf>,
+    /// Seed of both the wind and the sensor random streams (overrides the
+    /// scenario's `wind.seed` and `sensors.seed`, in every case).
+    #[arg(long, allow_negative_numbers = true)]
+    pub seed: Option<u64>,
+    /// Flight duration in seconds (overrides the scenario's `duration_s`;
+    /// finite, > 0 and <= 86400).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub duration: Option<f64>,
 }
 
 /// What a run did and how long each part took.
@@ -41,30 +56,66 @@ pub struct RunReport {
 /// Trim, linearize and design (or load the gains), with a spinner on
 /// stderr; returns the prepared scenario and the wall time (s).
 pub fn prepare_step(scenario: &Scenario) -> Result<(Prepared, f64)> {
+    // the parameter file first: its errors name it (file:line: key)
+    let params = match &scenario.params {
+        Some(p) => Some((
+            Params::from_file(&scenario.resolve(p))?,
+            scenario.resolve(p),
+        )),
+        None => None,
+    };
     let spinner = ProgressBar::new_spinner();
     spinner.set_message("trim, linearize, design");
     spinner.enable_steady_tick(Duration::from_millis(100));
     let t0 = Instant::now();
-    let prepared = prepare(scenario);
+    let (prepared, with) = match params {
+        Some((p, path)) => (
+            prepare_with_params(scenario, p),
+            format!(" with the parameters of {}", path.display()),
+        ),
+        None => (prepare(scenario), String::new()),
+    };
     spinner.finish_and_clear();
     let prepared = prepared.with_context(|| {
         format!(
-            "scenario `{}`: preparing the design point and gains",
+            "scenario `{}`{with}: preparing the design point and gains",
             scenario.name
         )
     })?;
     Ok((prepared, t0.elapsed().as_secs_f64()))
 }
 
+/// How command-line overrides are named in errors: ` (with --duration 0)`.
+pub fn overrides_label(o: &ScenarioOverrides) -> String {
+    let mut given = Vec::new();
+    if let Some(p) = &o.params {
+        given.push(format!("--params {}", p.display()));
+    }
+    if let Some(s) = o.seed {
+        given.push(format!("--seed {s}"));
+    }
+    if let Some(d) = o.duration_s {
+        given.push(format!("--duration {}", num(d)));
+    }
+    if given.is_empty() {
+        String::new()
+    } else {
+        format!(" (with {})", given.join(" "))
+    }
+}
+
 /// Fly with a progress bar on stderr, streaming `log.csv` into the run
 /// folder `out` (created first, so an unwritable folder fails before the
 /// flight), then write the rest of the folder. Returns the flight (its
 /// in-memory log empty), the files, and the flying and writing wall times (s).
+/// `source` names the scenario's origin in an error (its file).
 pub fn fly_and_write_step(
     out: &Path,
     scenario: &Scenario,
     prepared: &Prepared,
+    source: &str,
 ) -> Result<(Flight, RunFiles, f64, f64)> {
+    scenario.check_work(source, prepared.gains.set.sample_time_s)?;
     let mut log =
         start_run(out).with_context(|| format!("writing the run outputs to {}", out.display()))?;
     let bar = ProgressBar::new(1000);
@@ -75,7 +126,7 @@ pub fn fly_and_write_step(
         .context("progress bar template")?
         .progress_chars("=> "),
     );
-    bar.set_message(format!("flying {:.1} s", scenario.duration_s));
+    bar.set_message(format!("flying {} s", num(scenario.duration_s)));
     let t1 = Instant::now();
     let mut cb = |f: f64| bar.set_position((f.clamp(0.0, 1.0) * 1000.0).round() as u64);
     let flight = fly_to(scenario, prepared, &mut log, Some(&mut cb));
@@ -92,10 +143,11 @@ pub fn fly_and_write_step(
     Ok((flight, files, fly_s, t2.elapsed().as_secs_f64()))
 }
 
-/// Prepare, fly (with a progress bar on stderr) and write a scenario.
-pub fn run_scenario(scenario: &Scenario, out: &Path) -> Result<RunReport> {
+/// Prepare, fly (with a progress bar on stderr) and write a scenario;
+/// `source` names its origin (file) in errors.
+pub fn run_scenario(scenario: &Scenario, out: &Path, source: &str) -> Result<RunReport> {
     let (prepared, prepare_s) = prepare_step(scenario)?;
-    let (flight, files, fly_s, write_s) = fly_and_write_step(out, scenario, &prepared)?;
+    let (flight, files, fly_s, write_s) = fly_and_write_step(out, scenario, &prepared, source)?;
     Ok(RunReport {
         flight,
         files,
@@ -126,20 +178,23 @@ pub fn folder_name(name: &str) -> String {
 }
 
 /// Print the outcome, the key metrics and where the files are.
-pub fn print_run(report: &RunReport) {
+pub fn print_run(con: &mut Console, report: &RunReport) {
     let s = &report.flight.summary;
     match s.outcome {
-        Outcome::Completed => println!(
+        Outcome::Completed => writeln!(
+            con,
             "outcome: COMPLETED, {:.2} s flown (preset {}, wind seed {}, sensor seed {})",
             s.t_end_s, s.preset, s.wind_seed, s.sensor_seed
         ),
-        Outcome::Diverged => println!(
+        Outcome::Diverged => writeln!(
+            con,
             "outcome: DIVERGED at t = {:.3} s: {}",
             s.t_end_s,
             s.reason.as_deref().unwrap_or("unknown reason")
         ),
     }
-    println!(
+    writeln!(
+        con,
         "  {:<4} {:>10} {:>8} {:>13} {:>10} {:>10} {:>10}",
         "out", "excitation", "at [s]", "settle 1% [s]", "overshoot", "RMS err", "max err"
     );
@@ -148,7 +203,8 @@ pub fn print_run(report: &RunReport) {
             let settle = m
                 .settling_time_s
                 .map_or_else(|| "not settled".to_string(), |v| format!("{v:.2}"));
-            println!(
+            writeln!(
+                con,
                 "  {:<4} {:>10.3} {:>8.2} {:>13} {:>9.1}% {:>10.4} {:>10.4}",
                 name,
                 m.excitation,
@@ -160,7 +216,8 @@ pub fn print_run(report: &RunReport) {
             );
         }
     }
-    println!(
+    writeln!(
+        con,
         "  (velocities in m/s, psi in rad; RMS of u - u_trim [{:.4}, {:.4}, {:.4}, {:.4}], saturated [{:.2}, {:.2}, {:.2}, {:.2}] s)",
         s.control_effort_rms[0],
         s.control_effort_rms[1],
@@ -172,7 +229,8 @@ pub fn print_run(report: &RunReport) {
         s.saturation_time_s[3]
     );
     let f = &report.files;
-    println!(
+    writeln!(
+        con,
         "wrote {} ({} rows), summary.json, gains.json, scenario.toml, report.md and {} plots to {}",
         f.log
             .file_name()
@@ -181,7 +239,8 @@ pub fn print_run(report: &RunReport) {
         f.plots.len(),
         f.dir.display()
     );
-    println!(
+    writeln!(
+        con,
         "  times: prepare {:.3} s, flight {:.3} s ({:.0}x real time), outputs {:.3} s",
         report.prepare_s,
         report.fly_s,
@@ -193,18 +252,35 @@ pub fn print_run(report: &RunReport) {
 /// Run `helicon sim`: one run folder, or for a scenario with `[[case]]`
 /// entries one sub-folder per case plus a `summary.json`/`report.md` index.
 pub fn run(args: &SimArgs) -> Result<()> {
-    let scenario = Scenario::from_file(&args.scenario)?;
+    let params = match &args.params {
+        Some(p) => Some(
+            std::path::absolute(p)
+                .with_context(|| format!("--params {}: cannot resolve the path", p.display()))?,
+        ),
+        None => None,
+    };
+    let overrides = ScenarioOverrides {
+        params,
+        seed: args.seed,
+        duration_s: args.duration,
+    };
+    let source = format!("{}{}", args.scenario.display(), overrides_label(&overrides));
+    let scenario = Scenario::from_file(&args.scenario)?.with_overrides(&overrides, &source)?;
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(folder_name(&scenario.name)));
     let cases = scenario.cases();
-    println!(
+    // stdout may close at any time (`| head -1`): every case is still flown
+    // and written, the write error is returned at the end.
+    let mut con = Console::stdout();
+    writeln!(
+        con,
         "helicon sim: scenario `{}` ({}), preset {}, {} s{}",
         scenario.name,
         args.scenario.display(),
         scenario.preset.name(),
-        scenario.duration_s,
+        num(scenario.duration_s),
         if scenario.variants.is_empty() {
             String::new()
         } else {
@@ -212,9 +288,9 @@ pub fn run(args: &SimArgs) -> Result<()> {
         }
     );
     if scenario.variants.is_empty() {
-        let report = run_scenario(&scenario, &out)?;
-        print_run(&report);
-        return Ok(());
+        let report = run_scenario(&scenario, &out, &source)?;
+        print_run(&mut con, &report);
+        return con.finish().context("writing to stdout");
     }
     let prefix = format!("{}-", scenario.name);
     let mut flown = Vec::with_capacity(cases.len());
@@ -225,9 +301,9 @@ pub fn run(args: &SimArgs) -> Result<()> {
             .unwrap_or(&case.name)
             .to_string();
         let dir = out.join(folder_name(&label));
-        println!("\ncase `{label}` ({})", case.name);
-        let report = run_scenario(case, &dir)?;
-        print_run(&report);
+        writeln!(con, "\ncase `{label}` ({})", case.name);
+        let report = run_scenario(case, &dir, &format!("{source}, case `{label}`"))?;
+        print_run(&mut con, &report);
         flown.push((label, report.flight.summary));
     }
     let index: Vec<CaseRun<'_>> = flown
@@ -240,12 +316,13 @@ pub fn run(args: &SimArgs) -> Result<()> {
     let (summary, report) = write_cases_index(&out, &scenario.name, &index)
         .with_context(|| format!("writing the case index to {}", out.display()))?;
     let diverged = flown.iter().filter(|(_, s)| s.reason.is_some()).count();
-    println!(
+    writeln!(
+        con,
         "\n{} cases flown, {} completed, {diverged} diverged; index: {} and {}",
         flown.len(),
         flown.len() - diverged,
         summary.display(),
         report.display()
     );
-    Ok(())
+    con.finish().context("writing to stdout")
 }

@@ -9,6 +9,7 @@ use helicon_model::trim::{
     Allowed, Trim, TrimOptions, TrimTarget, Validity, Violation, discontinuities, sweep, trim,
 };
 use helicon_model::{InflowMode, Model};
+use helicon_sim::scenario::{MAX_HEADING_RAD, MAX_SPEED_M_S};
 use nalgebra::{DMatrix, Vector3};
 use serde_json::{Map, Value, json};
 use std::fmt::Write as _;
@@ -24,7 +25,7 @@ pub struct ConditionFlags {
     #[arg(long, value_parser = parse_vec3, default_value = "0,0,0", allow_hyphen_values = true)]
     pub velocity_ned: Vector3<f64>,
     /// Heading ψ in rad.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, value_parser = parse_heading, default_value_t = 0.0, allow_hyphen_values = true)]
     pub yaw: f64,
     /// Air-mass velocity in NED, m/s: `N,E,D`.
     #[arg(long, value_parser = parse_vec3, default_value = "0,0,0", allow_hyphen_values = true)]
@@ -53,6 +54,29 @@ fn parse_vec3(s: &str) -> Result<Vector3<f64>, String> {
         if !v[i].is_finite() {
             return Err(format!("`{p}` is not finite"));
         }
+        if v[i].abs() > MAX_SPEED_M_S {
+            return Err(format!(
+                "`{p}` m/s is beyond +-100 m/s (a miniature helicopter flies far inside)"
+            ));
+        }
+    }
+    Ok(v)
+}
+
+/// A heading (rad): finite, within +-100 rad (as a scenario's).
+fn parse_heading(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|e| format!("`{s}`: {e}"))?;
+    if !(v.is_finite() && v.abs() <= MAX_HEADING_RAD) {
+        return Err(format!("`{s}` must be finite and within +-100 rad"));
+    }
+    Ok(v)
+}
+
+/// A sample time (s): finite and > 0.
+fn parse_sample_time(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|e| format!("`{s}`: {e}"))?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("`{s}` must be finite and > 0 s"));
     }
     Ok(v)
 }
@@ -116,7 +140,7 @@ pub struct LinearizeArgs {
     #[arg(long)]
     thesis_inflow: bool,
     /// Also write the ZOH discretization Phi.csv, Gamma.csv at this sample time (s).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_sample_time, allow_hyphen_values = true)]
     discrete: Option<f64>,
     /// Output folder.
     #[arg(long)]
@@ -131,7 +155,7 @@ fn do_trim(model: &Model, cond: &ConditionFlags, initial: Option<&Trim>) -> Resu
     let t = trim(model, &cond.target(), &opts)?;
     if cond.verbose {
         for (k, r) in t.history.iter().enumerate() {
-            eprintln!("trim iteration {k:>2}: |residual|_inf = {r:.3e}");
+            crate::console::note!("trim iteration {k:>2}: |residual|_inf = {r:.3e}");
         }
     }
     Ok(t)
@@ -140,7 +164,7 @@ fn do_trim(model: &Model, cond: &ConditionFlags, initial: Option<&Trim>) -> Resu
 /// Print the violations of a trim on stderr (`what` names the point).
 fn report_violations(what: &str, v: &Validity) {
     for x in &v.violations {
-        eprintln!("{what}: unphysical: {x}");
+        crate::console::note!("{what}: unphysical: {x}");
     }
 }
 
@@ -200,11 +224,15 @@ pub fn run_trim(args: &TrimArgs) -> Result<()> {
     }
     let t = do_trim(&model, &args.cond, None)?;
     let validity = t.validity(&model);
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&trim_json(&t, &model))?);
+    // a failed write to stdout (a closed pipe) is returned after the
+    // validity verdict, so `helicon trim … | head -1` still fails on an
+    // unphysical trim
+    let printed = if args.json {
+        let text = serde_json::to_string_pretty(&trim_json(&t, &model))?;
+        writeln!(std::io::stdout().lock(), "{text}").map_err(anyhow::Error::from)
     } else {
-        print_trim(&t, args)?;
-    }
+        print_trim(&t, args)
+    };
     report_violations("trim", &validity);
     if !validity.is_physical() && !args.cond.allow_unphysical {
         bail!(
@@ -212,7 +240,7 @@ pub fn run_trim(args: &TrimArgs) -> Result<()> {
             validity.violations.len()
         );
     }
-    Ok(())
+    printed
 }
 
 fn print_trim(t: &Trim, args: &TrimArgs) -> Result<()> {
@@ -342,7 +370,7 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
             }
             Err(e) => {
                 failed += 1;
-                eprintln!("{var} = {s}: {e}");
+                crate::console::note!("{var} = {s}: {e}");
                 let _ = writeln!(csv, "{s},false,{}", ",".repeat(4 + 27 + 2 + 3));
                 points.push(json!({var.as_str(): s, "converged": false, "error": e.to_string()}));
             }
@@ -412,7 +440,9 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
             names.join(" ")
         );
     }
-    println!(
+    // a closed stdout is reported after the verdicts below
+    let printed = writeln!(
+        std::io::stdout().lock(),
         "{summary}; wrote {}/sweep.csv, sweep.json and inputs/attitude/inflow plots",
         args.out.display()
     );
@@ -424,7 +454,7 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
             "{unphysical} sweep point(s) are not physical (see `violations` in sweep.csv); --allow-unphysical accepts them"
         );
     }
-    Ok(())
+    Ok(printed?)
 }
 
 /// A violation for a CSV cell (no commas): `S_col=3.5e-1 (allowed -0.1..0.3)`.
@@ -526,7 +556,7 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
         if !args.cond.allow_unphysical {
             bail!("refusing to linearize: {msg}; --allow-unphysical linearizes anyway");
         }
-        eprintln!("warning: {msg}");
+        crate::console::note!("warning: {msg}");
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
@@ -594,7 +624,9 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
         args.out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?,
     )?;
-    println!(
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
         "linearized at the trim ({} preset, {} inflow): wrote A.csv, B.csv, poles.csv{} and summary.json to {}",
         args.cond.model.preset.name(),
         if args.thesis_inflow {
@@ -608,12 +640,13 @@ pub fn run_linearize(args: &LinearizeArgs) -> Result<()> {
             ""
         },
         args.out.display()
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "{} unstable pole(s); controllable subspace {} of 27; affine residual {:.1e}",
         summary["unstable_poles"],
         reach.dimension,
         lm.xdot0.amax()
-    );
+    )?;
     Ok(())
 }

@@ -419,6 +419,71 @@ impl Gains {
         };
         let value: serde_json::Value =
             serde_json::from_str(text).map_err(|e| bad(format!("not valid JSON: {e}")))?;
+        // serde_json keeps the last of duplicated keys silently: a key given
+        // twice (an edit gone wrong) is refused, naming it.
+        struct NoDuplicateKeys(String);
+        impl<'de> serde::de::DeserializeSeed<'de> for NoDuplicateKeys {
+            type Value = ();
+            fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+                d.deserialize_any(self)
+            }
+        }
+        impl<'de> serde::de::Visitor<'de> for NoDuplicateKeys {
+            type Value = ();
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("any JSON value")
+            }
+            fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+                Ok(())
+            }
+            fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+                Ok(())
+            }
+            fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+                Ok(())
+            }
+            fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+                Ok(())
+            }
+            fn visit_str<E>(self, _: &str) -> Result<(), E> {
+                Ok(())
+            }
+            fn visit_unit<E>(self) -> Result<(), E> {
+                Ok(())
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<(), A::Error> {
+                let mut i = 0usize;
+                while a
+                    .next_element_seed(NoDuplicateKeys(format!("{}[{i}]", self.0)))?
+                    .is_some()
+                {
+                    i += 1;
+                }
+                Ok(())
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut m: A) -> Result<(), A::Error> {
+                let mut seen = std::collections::BTreeSet::new();
+                while let Some(k) = m.next_key::<String>()? {
+                    let path = if self.0.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{}.{k}", self.0)
+                    };
+                    if !seen.insert(k) {
+                        return Err(serde::de::Error::custom(format!(
+                            "duplicate key `{path}` (a key given twice is ambiguous)"
+                        )));
+                    }
+                    m.next_value_seed(NoDuplicateKeys(path))?;
+                }
+                Ok(())
+            }
+        }
+        serde::de::DeserializeSeed::deserialize(
+            NoDuplicateKeys(String::new()),
+            &mut serde_json::Deserializer::from_str(text),
+        )
+        .map_err(|e| bad(e.to_string()))?;
         let version = value.get("version").and_then(serde_json::Value::as_u64);
         if version != Some(u64::from(GAINS_FORMAT_VERSION)) {
             return Err(bad(format!(
@@ -443,9 +508,12 @@ impl Gains {
         let alpha_matches = (f.alpha - expected_alpha).abs() <= 1e-12 * expected_alpha.abs();
         if !alpha_matches {
             return Err(bad(format!(
-                "`alpha` = {} does not match the settling time {:?} s at sample time {ts} s \
+                "`alpha` = {} does not match `settling_time_s` = {} at `sample_time_s` = {ts} s \
                  (which gives {expected_alpha}): the file was edited",
-                f.alpha, f.config.settling_time_s
+                f.alpha,
+                f.config
+                    .settling_time_s
+                    .map_or_else(|| "none".to_string(), |t| format!("{t} s"))
             )));
         }
         let x_trim = from_rows::<1, NX_REDUCED>("x_trim", std::slice::from_ref(&f.x_trim))?;

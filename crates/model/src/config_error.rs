@@ -91,10 +91,10 @@ impl ConfigError {
 /// A number for an error message: Rust's shortest round-trip form, which
 /// switches to exponent notation for very large or small magnitudes.
 pub fn format_number(v: f64) -> String {
-    if v != 0.0 && (v.abs() >= 1e9 || v.abs() < 1e-4) {
-        format!("{v:e}")
-    } else {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e15).contains(&v.abs()) {
         format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }
 
@@ -113,5 +113,6 @@ mod tests {
         );
         assert_eq!(format_number(2.5), "2.5");
         assert_eq!(format_number(1e308), "1e308");
+        assert_eq!(format_number(86400.0), "86400");
     }
 }

@@ -28,38 +28,9 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// Errors reading a scenario.
-#[derive(Debug, thiserror::Error)]
-pub enum ScenarioError {
-    /// The file could not be read.
-    #[error("{file}: cannot read: {message}")]
-    Io {
-        /// File.
-        file: String,
-        /// Message.
-        message: String,
-    },
-    /// Invalid TOML or a field of the wrong type / unknown field.
-    #[error("{file}: {message}")]
-    Parse {
-        /// File.
-        file: String,
-        /// Message (names the field).
-        message: String,
-    },
-    /// A field out of range.
-    #[error("{file}: `{field}` = {value}: {rule}")]
-    Invalid {
-        /// File.
-        file: String,
-        /// Field.
-        field: String,
-        /// Value as text.
-        value: String,
-        /// Rule.
-        rule: String,
-    },
-}
+/// Errors reading or checking a scenario: the toolkit's one configuration
+/// error shape (file, field, value, rule; the `io::Error` kept as source).
+pub type ScenarioError = helicon_model::ConfigError;
 
 /// The trim the controller is designed at (and the initial condition's base).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -309,6 +280,20 @@ impl ReferenceSchedule {
     }
 }
 
+/// Command-line overrides of a scenario (`helicon sim --params --seed
+/// --duration`), applied to the scenario and each of its `[[case]]`s.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ScenarioOverrides {
+    /// Plant parameter file instead of the scenario's `params` (an absolute
+    /// path, or relative to the working directory: not the scenario's folder).
+    pub params: Option<PathBuf>,
+    /// Seed of both the wind (`wind.seed`) and the sensor (`sensors.seed`)
+    /// random streams.
+    pub seed: Option<u64>,
+    /// Flight time (s) instead of `duration_s`.
+    pub duration_s: Option<f64>,
+}
+
 /// Merge `over` into `base`: tables key by key (recursively), other values replace.
 fn deep_merge(base: &mut toml::Table, over: toml::Table) {
     for (k, v) in over {
@@ -323,6 +308,45 @@ fn deep_merge(base: &mut toml::Table, over: toml::Table) {
 
 /// Output names of the metrics, in order.
 pub const OUTPUTS: [&str; 4] = ["vn", "ve", "vd", "psi"];
+
+/// Longest flight (s): one day.
+pub const MAX_DURATION_S: f64 = 86_400.0;
+
+/// Largest `plant.substeps`: RK4 at the 400 Hz control rate is already
+/// accurate for this model (its fastest modes are the ~20 rad/s flapping
+/// and servo dynamics, h·|λ| ≈ 0.05), so more sub-steps only multiply the
+/// run time; 1000 leaves room for convergence studies.
+pub const MAX_SUBSTEPS: u32 = 1000;
+
+/// Largest `plant.inflow_iterations`: the thesis's Newton–Raphson inflow
+/// (Appendix F) is run a fixed few steps per derivative; 100 is far beyond
+/// convergence and keeps one derivative evaluation bounded.
+pub const MAX_INFLOW_ITERATIONS: u32 = 100;
+
+/// Largest total of plant RK4 steps in one flight ([`Scenario::check_work`]).
+pub const MAX_PLANT_STEPS: f64 = 1e8;
+
+/// Largest |velocity| of a trim or reference (m/s): a miniature helicopter
+/// flies well below 50 m/s; 100 m/s leaves room for hostile-but-finite
+/// studies while every metric (squared errors over a day) stays finite.
+pub const MAX_SPEED_M_S: f64 = 100.0;
+
+/// Largest |heading| of a trim or reference (rad): about 16 turns, room for
+/// multi-turn heading ramps (the heading is unwrapped) while the yaw error
+/// metrics stay finite.
+pub const MAX_HEADING_RAD: f64 = 100.0;
+
+/// Largest |initial deviation| (rad, rad/s or m/s).
+const MAX_INITIAL_DEVIATION: f64 = 100.0;
+
+const SPEED_RULE: &str = "must be finite and within +-100 m/s (MAX_SPEED_M_S)";
+const HEADING_RULE: &str = "must be finite and within +-100 rad (about 16 turns)";
+
+/// A number for a message: shortest round-trip text, in exponent form when
+/// extreme (`1e-300`, not 300 digits; `2.5`, `86400`).
+pub fn num(v: f64) -> String {
+    helicon_model::config_error::format_number(v)
+}
 
 impl Scenario {
     /// Parse and validate TOML text; `file` names the source in errors.
@@ -378,9 +402,10 @@ impl Scenario {
     /// Load a scenario file (relative paths inside resolve against its folder).
     pub fn from_file(path: &Path) -> Result<Scenario, ScenarioError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError::Io {
+        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
             file: file.clone(),
-            message: e.to_string(),
+            action: "read",
+            source,
         })?;
         let mut s = Self::from_toml_str(&text, &file)?;
         s.base_dir = path.parent().map(Path::to_path_buf);
@@ -388,6 +413,33 @@ impl Scenario {
             v.base_dir = s.base_dir.clone();
         }
         Ok(s)
+    }
+
+    /// Apply command-line overrides to the scenario and its cases and
+    /// validate the result; errors name `origin` (e.g. `s.toml (--duration)`).
+    pub fn with_overrides(
+        mut self,
+        o: &ScenarioOverrides,
+        origin: &str,
+    ) -> Result<Scenario, ScenarioError> {
+        let apply = |s: &mut Scenario| -> Result<(), ScenarioError> {
+            if let Some(p) = &o.params {
+                s.params = Some(p.clone());
+            }
+            if let Some(seed) = o.seed {
+                s.wind.seed = seed;
+                s.sensors.seed = seed;
+            }
+            if let Some(d) = o.duration_s {
+                s.duration_s = d;
+            }
+            s.validate(origin)
+        };
+        apply(&mut self)?;
+        for v in &mut self.variants {
+            apply(v)?;
+        }
+        Ok(self)
     }
 
     /// The concrete scenarios to fly: one per `[[case]]` (named
@@ -408,7 +460,8 @@ impl Scenario {
         }
     }
 
-    /// Check ranges and names.
+    /// Check ranges and names. Every error names the file and the field
+    /// (`file: \`wind.dryden.w20_m_s\` = -1.0: finite, >= 0`), once.
     pub fn validate(&self, file: &str) -> Result<(), ScenarioError> {
         let bad = |field: &str, value: String, rule: &str| ScenarioError::Invalid {
             file: file.to_string(),
@@ -416,22 +469,31 @@ impl Scenario {
             value,
             rule: rule.to_string(),
         };
-        if !(self.duration_s.is_finite() && self.duration_s > 0.0 && self.duration_s <= 86_400.0) {
+        let section = |message: String| ScenarioError::Parse {
+            file: file.to_string(),
+            message,
+        };
+        if !(self.duration_s.is_finite()
+            && self.duration_s > 0.0
+            && self.duration_s <= MAX_DURATION_S)
+        {
             return Err(bad(
                 "duration_s",
-                self.duration_s.to_string(),
-                "must be finite, > 0 and <= 86400 s",
+                num(self.duration_s),
+                "must be finite, > 0 and <= 86400 s (one day)",
             ));
         }
-        for v in self
-            .trim
-            .velocity_ned_m_s
-            .iter()
-            .chain([&self.trim.yaw_rad])
-        {
-            if !v.is_finite() {
-                return Err(bad("trim", v.to_string(), "must be finite"));
+        for (i, v) in self.trim.velocity_ned_m_s.iter().enumerate() {
+            if !(v.is_finite() && v.abs() <= MAX_SPEED_M_S) {
+                return Err(bad(
+                    &format!("trim.velocity_ned_m_s[{i}]"),
+                    num(*v),
+                    SPEED_RULE,
+                ));
             }
+        }
+        if !(self.trim.yaw_rad.is_finite() && self.trim.yaw_rad.abs() <= MAX_HEADING_RAD) {
+            return Err(bad("trim.yaw_rad", num(self.trim.yaw_rad), HEADING_RULE));
         }
         for (k, v) in &self.initial {
             let known = helicon_model::REDUCED_STATE_NAMES.contains(&k.as_str())
@@ -439,45 +501,70 @@ impl Scenario {
             if !known {
                 return Err(bad(
                     &format!("initial.{k}"),
-                    v.to_string(),
+                    num(*v),
                     "not a state name (reduced states, or vn/ve/vd)",
                 ));
             }
-            if !v.is_finite() {
+            if !(v.is_finite() && v.abs() <= MAX_INITIAL_DEVIATION) {
                 return Err(bad(
                     &format!("initial.{k}"),
-                    v.to_string(),
-                    "must be finite",
+                    num(*v),
+                    "must be finite and within +-100 (rad, rad/s or m/s: far beyond \
+                     the divergence limits of [plant])",
                 ));
             }
         }
         for (i, r) in self.reference.iter().enumerate() {
+            let field = |f: &str| format!("reference[{i}].{f}");
             if !OUTPUTS.contains(&r.output.as_str()) {
                 return Err(bad(
-                    &format!("reference[{i}].output"),
-                    r.output.clone(),
+                    &field("output"),
+                    format!("{:?}", r.output),
                     "must be vn, ve, vd or psi",
                 ));
             }
-            if !(r.t_s.is_finite()
-                && r.t_s >= 0.0
-                && r.value.is_finite()
-                && r.ramp_s.is_finite()
-                && r.ramp_s >= 0.0)
-            {
+            if !(r.t_s.is_finite() && r.t_s >= 0.0) {
+                return Err(bad(&field("t_s"), num(r.t_s), "must be finite and >= 0 s"));
+            }
+            if !(r.ramp_s.is_finite() && r.ramp_s >= 0.0) {
                 return Err(bad(
-                    &format!("reference[{i}]"),
-                    format!("t_s={}, value={}, ramp_s={}", r.t_s, r.value, r.ramp_s),
-                    "times >= 0 and finite values",
+                    &field("ramp_s"),
+                    num(r.ramp_s),
+                    "must be finite and >= 0 s",
                 ));
             }
+            let (limit, rule) = if r.output == "psi" {
+                (MAX_HEADING_RAD, HEADING_RULE)
+            } else {
+                (MAX_SPEED_M_S, SPEED_RULE)
+            };
+            if !(r.value.is_finite() && r.value.abs() <= limit) {
+                return Err(bad(&field("value"), num(r.value), rule));
+            }
         }
-        self.controller
-            .design
-            .validate()
-            .map_err(|e| bad("controller", String::new(), &e.to_string()))?;
-        if self.plant.substeps == 0 {
-            return Err(bad("plant.substeps", "0".into(), "must be >= 1"));
+        if let Err(e) = self.controller.design.validate() {
+            return Err(match e {
+                helicon_gnc::design::DesignError::Config { field, value, rule } => {
+                    bad(&format!("controller.{field}"), num(value), rule)
+                }
+                other => section(format!("[controller]: {other}")),
+            });
+        }
+        if !(1..=MAX_SUBSTEPS).contains(&self.plant.substeps) {
+            return Err(bad(
+                "plant.substeps",
+                self.plant.substeps.to_string(),
+                "must be 1..=1000 (RK4 at the 400 Hz control rate is already \
+                 accurate; more sub-steps only multiply the run time)",
+            ));
+        }
+        if !(1..=MAX_INFLOW_ITERATIONS).contains(&self.plant.inflow_iterations) {
+            return Err(bad(
+                "plant.inflow_iterations",
+                self.plant.inflow_iterations.to_string(),
+                "must be 1..=100 (the thesis inflow iteration needs at least one \
+                 Newton-Raphson step; it converges in a handful)",
+            ));
         }
         for (f, v) in [
             ("plant.max_attitude_rad", self.plant.max_attitude_rad),
@@ -485,20 +572,62 @@ impl Scenario {
             ("plant.max_yaw_error_rad", self.plant.max_yaw_error_rad),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(bad(f, v.to_string(), "must be finite and > 0"));
+                return Err(bad(f, num(v), "must be finite and > 0"));
             }
         }
         if self.log.decimation == 0 {
             return Err(bad("log.decimation", "0".into(), "must be >= 1"));
         }
-        self.navigation
-            .validate()
-            .map_err(|e| bad("navigation", String::new(), &e.to_string()))?;
+        if let Err(e) = self.navigation.validate() {
+            return Err(match e {
+                helicon_core::fusion::FusionError::InvalidConfig {
+                    field,
+                    value,
+                    allowed,
+                } => bad(field, num(value), &format!("allowed: {allowed}")),
+                other => section(format!("[navigation]: {other}")),
+            });
+        }
         self.sensors
             .validate(file)
-            .map_err(|e| bad("sensors", String::new(), &e.to_string()))?;
-        crate::wind::Wind::from_config(&self.wind)
-            .map_err(|e| bad("wind", String::new(), &e.to_string()))?;
+            .map_err(|e| e.within(file, "sensors"))?;
+        crate::wind::Wind::from_config(&self.wind).map_err(|e| e.within(file, "wind"))?;
+        Ok(())
+    }
+
+    /// Bound the work of a flight: at least one controller sample
+    /// (`duration_s >= sample_time_s`), and at most [`MAX_PLANT_STEPS`] (1e8)
+    /// plant RK4 steps `duration_s / sample_time_s x substeps`: about 5
+    /// minutes of RK4 alone at 2.6 µs a step on the reference machine
+    /// (`helicon bench`); the documented longest flight, 86400 s at 400 Hz,
+    /// fits with up to 2 sub-steps. `sample_time_s` is the controller's, from
+    /// the parameters (known only once they are loaded); `file` names the
+    /// scenario in the error.
+    pub fn check_work(&self, file: &str, sample_time_s: f64) -> Result<(), ScenarioError> {
+        let bad = |rule: String| ScenarioError::Invalid {
+            file: file.to_string(),
+            field: "duration_s".to_string(),
+            value: num(self.duration_s),
+            rule,
+        };
+        let one_sample = self.duration_s >= sample_time_s;
+        if !one_sample {
+            return Err(bad(format!(
+                "must be at least one controller sample (sample_time_s = {})",
+                num(sample_time_s)
+            )));
+        }
+        let steps = (self.duration_s / sample_time_s).ceil() * f64::from(self.plant.substeps);
+        if !(steps.is_finite() && steps <= MAX_PLANT_STEPS) {
+            return Err(bad(format!(
+                "duration_s / sample_time_s x plant.substeps = {} / {} x {} = {steps:e} \
+                 plant steps exceeds the limit of {MAX_PLANT_STEPS:e} (about 5 minutes of \
+                 computing); shorten the flight or lower plant.substeps",
+                num(self.duration_s),
+                num(sample_time_s),
+                self.plant.substeps
+            )));
+        }
         Ok(())
     }
 
@@ -533,5 +662,117 @@ impl Scenario {
     /// The reference at time t: (vn, ve, vd, psi), starting from the trim.
     pub fn reference_at(&self, t_s: f64) -> [f64; 4] {
         self.reference_schedule().at(t_s)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scenario, String> {
+        Scenario::from_toml_str(text, "s.toml").map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn bounds_name_the_field_once_with_short_numbers() {
+        for (text, want) in [
+            (
+                "duration_s = 1.0\n[plant]\nsubsteps = 1000000000\n",
+                "s.toml: `plant.substeps` = 1000000000: must be 1..=1000",
+            ),
+            (
+                "duration_s = 1.0\n[plant]\ninflow_iterations = 0\n",
+                "s.toml: `plant.inflow_iterations` = 0: must be 1..=100",
+            ),
+            (
+                "duration_s = 1.0\n[[reference]]\nt_s = 0.1\noutput = \"vn\"\nvalue = 1e300\n",
+                "s.toml: `reference[0].value` = 1e300: must be finite and within +-100 m/s",
+            ),
+            (
+                "duration_s = 1.0\n[[reference]]\nt_s = 0.1\noutput = \"psi\"\nvalue = 101.0\n",
+                "s.toml: `reference[0].value` = 101: must be finite and within +-100 rad",
+            ),
+            (
+                "duration_s = 1e-300\n[[reference]]\nt_s = 0.1\noutput = \"psi\"\nvalue = 1.0\n",
+                "",
+            ),
+            (
+                "duration_s = 1.0\n[wind.dryden]\nw20_m_s = -1.0\n",
+                "s.toml: `wind.dryden.w20_m_s` = -1: allowed: >= 0",
+            ),
+            (
+                "duration_s = 1.0\n[sensors.gps]\nrate_hz = 50.0\n",
+                "s.toml: `sensors.gps.rate_hz` = 50: allowed: 1..=10",
+            ),
+        ] {
+            match parse(text) {
+                Ok(_) => assert!(want.is_empty(), "accepted: {text}"),
+                Err(e) => assert!(!want.is_empty() && e.starts_with(want), "{e}"),
+            }
+        }
+        // the edges are accepted
+        assert!(
+            parse("duration_s = 1.0\n[plant]\nsubsteps = 1000\ninflow_iterations = 100\n").is_ok()
+        );
+    }
+
+    #[test]
+    fn work_needs_one_sample_and_at_most_1e8_steps() {
+        let s = parse("duration_s = 86400.0\n[plant]\nsubsteps = 2\n").unwrap();
+        // 86400 s at 400 Hz with 2 sub-steps: 6.9e7 steps
+        assert!(s.check_work("s.toml", 0.0025).is_ok());
+        let s = parse("duration_s = 86400.0\n[plant]\nsubsteps = 3\n").unwrap();
+        let e = s.check_work("s.toml", 0.0025).unwrap_err().to_string();
+        assert!(
+            e.contains("1.0368e8 plant steps exceeds the limit of 1e8"),
+            "{e}"
+        );
+        let s = parse("duration_s = 1e-300\n").unwrap();
+        let e = s.check_work("s.toml", 0.0025).unwrap_err().to_string();
+        assert!(
+            e.starts_with("s.toml: `duration_s` = 1e-300: must be at least one controller sample"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn overrides_apply_to_every_case_and_are_validated() {
+        let s = parse(
+            "duration_s = 1.0\n[wind]\nseed = 1\n[sensors]\nseed = 2\n[[case]]\nname = \"a\"\n[[case]]\nname = \"b\"\n",
+        )
+        .unwrap();
+        let o = ScenarioOverrides {
+            params: Some(PathBuf::from("/p.toml")),
+            seed: Some(9),
+            duration_s: Some(0.5),
+        };
+        let s = s.with_overrides(&o, "s.toml (with …)").unwrap();
+        for c in std::iter::once(&s).chain(&s.variants) {
+            assert_eq!((c.wind.seed, c.sensors.seed), (9, 9));
+            assert_eq!(c.duration_s, 0.5);
+            assert_eq!(c.params.as_deref(), Some(Path::new("/p.toml")));
+        }
+        let bad = ScenarioOverrides {
+            duration_s: Some(f64::NAN),
+            ..ScenarioOverrides::default()
+        };
+        let e = s
+            .with_overrides(&bad, "s.toml (with --duration NaN)")
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("s.toml (with --duration NaN): `duration_s` = NaN"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn numbers_print_short() {
+        assert_eq!(num(1e-300), "1e-300");
+        assert_eq!(num(1e308), "1e308");
+        assert_eq!(num(86400.0), "86400");
+        assert_eq!(num(0.0025), "0.0025");
+        assert_eq!(num(-1.0), "-1");
+        assert_eq!(num(f64::NAN), "NaN");
     }
 }

@@ -511,8 +511,10 @@ pub fn read_sensor_log(path: &Path) -> Result<SensorLog, SensorLogError> {
                     return Err(content(
                         line,
                         format!(
-                            "`{}` = {x}: beyond the physical bound ±{bound} {}",
-                            g.columns[j], g.unit
+                            "`{}` = {}: beyond the physical bound ±{bound} {}",
+                            g.columns[j],
+                            crate::scenario::num(x),
+                            g.unit
                         ),
                     ));
                 }

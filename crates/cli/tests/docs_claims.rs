@@ -1,0 +1,208 @@
+//! Claims of the documentation that must hold, checked against the built
+//! binary: the project stands alone (no citation of files outside the
+//! repository), `--params` where the README says, the demo printout of
+//! docs/closed-loop.md, the plot files docs/sensors.md names, the
+//! divergence time in the Appendix F scenario's comment.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn read(rel: &str) -> String {
+    std::fs::read_to_string(root().join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("helicon_docs_{name}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn helicon(dir: &Path, args: &[&str]) -> Output {
+    let o = Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "helicon {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+/// README, the model, closed-loop and sensors pages and the scenarios cite
+/// no file outside the repository (the specification notes the project was
+/// written from are not shipped).
+#[test]
+fn docs_cite_no_file_outside_the_repository() {
+    let mut files = vec![
+        "README.md".to_string(),
+        "docs/model.md".to_string(),
+        "docs/closed-loop.md".to_string(),
+        "docs/sensors.md".to_string(),
+    ];
+    for e in std::fs::read_dir(root().join("scenarios")).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "toml") {
+            files.push(format!(
+                "scenarios/{}",
+                p.file_name().unwrap().to_string_lossy()
+            ));
+        }
+    }
+    for f in &files {
+        let text = read(f);
+        for needle in ["shared/", "MODEL.md", "DESIGN.md", "../shared"] {
+            assert!(!text.contains(needle), "{f} cites `{needle}`");
+        }
+    }
+}
+
+/// The README lists the subcommands that take `--params`, and that
+/// `helicon sim` takes `--params`, `--seed` and `--duration`: each `--help`
+/// must say so.
+#[test]
+fn readme_params_list_holds() {
+    let readme = read("README.md");
+    let marker = "--params my_heli.toml: ";
+    let start = readme
+        .find(marker)
+        .expect("README lists the --params subcommands")
+        + marker.len();
+    let list = &readme[start..start + readme[start..].find(')').unwrap()];
+    let cmds: Vec<&str> = list.split(", ").collect();
+    assert!(cmds.len() >= 8, "{cmds:?}");
+    let d = tmpdir("params");
+    for cmd in cmds {
+        let mut args: Vec<&str> = cmd.split_whitespace().collect();
+        args.push("--help");
+        let help = String::from_utf8(helicon(&d, &args).stdout).unwrap();
+        assert!(
+            help.contains("--params"),
+            "`helicon {cmd} --help` lacks --params"
+        );
+    }
+    assert!(readme.contains("`helicon sim` takes `--params FILE`, `--seed N`"));
+    let help = String::from_utf8(helicon(&d, &["sim", "--help"]).stdout).unwrap();
+    for opt in ["--params <FILE>", "--seed <SEED>", "--duration <S>"] {
+        assert!(help.contains(opt), "sim --help lacks {opt}");
+    }
+}
+
+/// Mask the wall times of a demo printout (they vary run to run).
+fn mask_times(line: &str) -> String {
+    if line.starts_with("  times:") || line.starts_with("demo done in") {
+        return "<times>".to_string();
+    }
+    // "... Kalman predictor |z|max = 0.95802 (0.00 s)": the design time
+    match line.rfind(" (") {
+        Some(i) if line.starts_with("3. designed") && line.ends_with(" s)") => {
+            format!("{} (<time>)", &line[..i])
+        }
+        _ => line.to_string(),
+    }
+}
+
+/// The demo printout quoted in docs/closed-loop.md is what
+/// `helicon demo --out out/demo` prints today (wall times masked).
+#[test]
+fn closed_loop_doc_demo_printout_is_current() {
+    let doc = read("docs/closed-loop.md");
+    let start = doc
+        .find("```\nhelicon demo: ")
+        .expect("docs/closed-loop.md quotes the demo printout")
+        + 4;
+    let quoted = &doc[start..start + doc[start..].find("```").unwrap()];
+    let d = tmpdir("demo");
+    let out = helicon(&d, &["demo", "--out", "out/demo"]).stdout;
+    let printed = String::from_utf8(out).unwrap();
+    let a: Vec<String> = quoted.lines().map(mask_times).collect();
+    let b: Vec<String> = printed.lines().map(mask_times).collect();
+    assert_eq!(
+        a, b,
+        "docs/closed-loop.md's demo printout is stale: regenerate it with `cargo run --release -- demo`"
+    );
+}
+
+/// Every figure docs/sensors.md shows exists, and the files it says
+/// `helicon fuse` writes are written.
+#[test]
+fn sensors_doc_names_files_that_exist() {
+    let doc = read("docs/sensors.md");
+    let mut shown = 0;
+    for part in doc.split("](sensors/").skip(1) {
+        let name = &part[..part.find(')').unwrap()];
+        assert!(
+            root().join("docs/sensors").join(name).exists(),
+            "docs/sensors/{name} is shown but missing"
+        );
+        shown += 1;
+    }
+    assert!(shown >= 9, "{shown}");
+    // the fuse comment names run/<file> entries
+    let line = doc
+        .lines()
+        .find(|l| l.starts_with("helicon fuse log.csv --out run"))
+        .expect("the fuse command line");
+    let named: Vec<&str> = line
+        .split_whitespace()
+        .filter_map(|w| w.trim_end_matches(',').strip_prefix("run/"))
+        .collect();
+    assert!(named.len() >= 2, "{line}");
+    let d = tmpdir("fuse");
+    helicon(
+        &d,
+        &[
+            "sensors",
+            "simulate",
+            "--duration-s",
+            "2",
+            "--out",
+            "log.csv",
+        ],
+    );
+    helicon(&d, &["fuse", "log.csv", "--out", "run"]);
+    for f in named {
+        assert!(d.join("run").join(f).exists(), "fuse did not write run/{f}");
+    }
+    assert!(d.join("run/fused.csv").exists() && d.join("run/summary.json").exists());
+}
+
+/// scenarios/thesis-appendix-f.toml says when its thesis-inflow cases spin
+/// away: `helicon sim` must agree (to the printed 0.01 s).
+#[test]
+fn appendix_f_comment_states_the_divergence_time() {
+    let text = read("scenarios/thesis-appendix-f.toml");
+    let d = tmpdir("appf");
+    let scenario = root().join("scenarios/thesis-appendix-f.toml");
+    helicon(
+        &d,
+        &[
+            "sim",
+            scenario.to_str().unwrap(),
+            "--duration",
+            "1.5",
+            "--out",
+            "o",
+        ],
+    );
+    for case in ["thesis-inflow", "aggressive-thesis-inflow"] {
+        let v: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(d.join("o").join(case).join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(v["outcome"], "diverged", "{case}");
+        let t = format!("t = {:.2} s", v["t_end_s"].as_f64().unwrap());
+        assert!(
+            text.contains(&t),
+            "the scenario comment should say `{t}` for {case}"
+        );
+    }
+}
