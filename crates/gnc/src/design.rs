@@ -419,71 +419,7 @@ impl Gains {
         };
         let value: serde_json::Value =
             serde_json::from_str(text).map_err(|e| bad(format!("not valid JSON: {e}")))?;
-        // serde_json keeps the last of duplicated keys silently: a key given
-        // twice (an edit gone wrong) is refused, naming it.
-        struct NoDuplicateKeys(String);
-        impl<'de> serde::de::DeserializeSeed<'de> for NoDuplicateKeys {
-            type Value = ();
-            fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
-                d.deserialize_any(self)
-            }
-        }
-        impl<'de> serde::de::Visitor<'de> for NoDuplicateKeys {
-            type Value = ();
-            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str("any JSON value")
-            }
-            fn visit_bool<E>(self, _: bool) -> Result<(), E> {
-                Ok(())
-            }
-            fn visit_i64<E>(self, _: i64) -> Result<(), E> {
-                Ok(())
-            }
-            fn visit_u64<E>(self, _: u64) -> Result<(), E> {
-                Ok(())
-            }
-            fn visit_f64<E>(self, _: f64) -> Result<(), E> {
-                Ok(())
-            }
-            fn visit_str<E>(self, _: &str) -> Result<(), E> {
-                Ok(())
-            }
-            fn visit_unit<E>(self) -> Result<(), E> {
-                Ok(())
-            }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<(), A::Error> {
-                let mut i = 0usize;
-                while a
-                    .next_element_seed(NoDuplicateKeys(format!("{}[{i}]", self.0)))?
-                    .is_some()
-                {
-                    i += 1;
-                }
-                Ok(())
-            }
-            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut m: A) -> Result<(), A::Error> {
-                let mut seen = std::collections::BTreeSet::new();
-                while let Some(k) = m.next_key::<String>()? {
-                    let path = if self.0.is_empty() {
-                        k.clone()
-                    } else {
-                        format!("{}.{k}", self.0)
-                    };
-                    if !seen.insert(k) {
-                        return Err(serde::de::Error::custom(format!(
-                            "duplicate key `{path}` (a key given twice is ambiguous)"
-                        )));
-                    }
-                    m.next_value_seed(NoDuplicateKeys(path))?;
-                }
-                Ok(())
-            }
-        }
-        serde::de::DeserializeSeed::deserialize(
-            NoDuplicateKeys(String::new()),
-            &mut serde_json::Deserializer::from_str(text),
-        )
-        .map_err(|e| bad(e.to_string()))?;
+        reject_duplicate_keys(text).map_err(bad)?;
         let version = value.get("version").and_then(serde_json::Value::as_u64);
         if version != Some(u64::from(GAINS_FORMAT_VERSION)) {
             return Err(bad(format!(
@@ -538,4 +474,73 @@ impl Gains {
             estimator_poles: f.estimator_poles,
         })
     }
+}
+
+/// Refuse JSON text with a key given twice in one object (serde_json keeps
+/// the last one silently; in an edited gains file that is ambiguous), naming
+/// the key by its path.
+fn reject_duplicate_keys(text: &str) -> Result<(), String> {
+    struct NoDuplicateKeys(String);
+    impl<'de> serde::de::DeserializeSeed<'de> for NoDuplicateKeys {
+        type Value = ();
+        fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+            d.deserialize_any(self)
+        }
+    }
+    impl<'de> serde::de::Visitor<'de> for NoDuplicateKeys {
+        type Value = ();
+        fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("any JSON value")
+        }
+        fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_str<E>(self, _: &str) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_unit<E>(self) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<(), A::Error> {
+            let mut i = 0usize;
+            while a
+                .next_element_seed(NoDuplicateKeys(format!("{}[{i}]", self.0)))?
+                .is_some()
+            {
+                i += 1;
+            }
+            Ok(())
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(self, mut m: A) -> Result<(), A::Error> {
+            let mut seen = std::collections::BTreeSet::new();
+            while let Some(k) = m.next_key::<String>()? {
+                let path = if self.0.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{}.{k}", self.0)
+                };
+                if !seen.insert(k) {
+                    return Err(serde::de::Error::custom(format!(
+                        "duplicate key `{path}` (a key given twice is ambiguous)"
+                    )));
+                }
+                m.next_value_seed(NoDuplicateKeys(path))?;
+            }
+            Ok(())
+        }
+    }
+    serde::de::DeserializeSeed::deserialize(
+        NoDuplicateKeys(String::new()),
+        &mut serde_json::Deserializer::from_str(text),
+    )
+    .map_err(|e| e.to_string())
 }

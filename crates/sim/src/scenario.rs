@@ -462,6 +462,7 @@ impl Scenario {
 
     /// Check ranges and names. Every error names the file and the field
     /// (`file: \`wind.dryden.w20_m_s\` = -1.0: finite, >= 0`), once.
+    #[allow(clippy::too_many_lines)] // every section's rules, in file order
     pub fn validate(&self, file: &str) -> Result<(), ScenarioError> {
         let bad = |field: &str, value: String, rule: &str| ScenarioError::Invalid {
             file: file.to_string(),
