@@ -208,7 +208,7 @@ impl SensorConfig {
     /// Check every field's range; `file` names the source in errors.
     pub fn validate(&self, file: &str) -> Result<(), SensorConfigError> {
         let bad = |field: String, value: f64, allowed: &'static str| {
-            SensorConfigError::invalid(file, field, value, format!("allowed {allowed}"))
+            SensorConfigError::invalid(file, field, value, format!("allowed: {allowed}"))
         };
         let nonneg = |field: String, v: f64| {
             if v.is_finite() && v >= 0.0 {

@@ -35,7 +35,7 @@ fn check(
             "[wind]",
             field,
             value,
-            format!("allowed {allowed}"),
+            format!("allowed: {allowed}"),
         ))
     }
 }
