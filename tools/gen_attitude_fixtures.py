@@ -2,9 +2,9 @@
 """Generate Wahba-problem fixtures for helicon-gnc from SciPy's Rotation.align_vectors.
 
 An independent solver (SciPy uses the SVD / Kabsch method, not Davenport's
-q-method) for `crates/gnc/tests/xval_attitude.rs`.
+q-method) for `crates/core/tests/xval_attitude.rs`.
 
-Output: crates/gnc/tests/fixtures/attitude_scipy.csv, one case per row:
+Output: crates/core/tests/fixtures/attitude_scipy.csv, one case per row:
   case, n, then for k = 1..5: wk, bkx, bky, bkz, rkx, rky, rkz (empty when k > n),
   then qw, qx, qy, qz (Hamilton, scalar first, body_from_ned),
   phi, theta, psi (3-2-1 Euler of ned_from_body, rad), loss (Wahba J = rssd^2 / 2).
@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 
 MAXOBS = 5
 HERE = os.path.dirname(os.path.abspath(__file__))
-OUT = os.path.join(HERE, "..", "crates", "gnc", "tests", "fixtures", "attitude_scipy.csv")
+OUT = os.path.join(HERE, "..", "crates", "core", "tests", "fixtures", "attitude_scipy.csv")
 
 
 def unit(v):

@@ -2,14 +2,14 @@
 """Reference Kalman filter for helicon-gnc's fusion filter (thesis §13.3).
 
 Independent NumPy implementation of the filter documented in
-crates/gnc/src/fusion.rs: state [p_ned, v_ned, euler], input from the IMU
+crates/core/src/fusion.rs: state [p_ned, v_ned, euler], input from the IMU
 (specific force rotated to NED with the current estimate plus gravity, Euler
 rates from (9.14)), A (13.27), exact ZOH B, Q = B Qu B^T, P- = A P A^T + Q
 (the corrected (13.20)), and a *joint* update with the stacked H of the
 measurements present (the Rust filter updates sequentially; equal for
 block-diagonal R). Joseph-free (I - K H) P, then symmetrised, as (13.22).
 
-Output: crates/gnc/tests/fixtures/fusion_reference.csv with per-step inputs
+Output: crates/core/tests/fixtures/fusion_reference.csv with per-step inputs
 (fx,fy,fz, gx,gy,gz, gps_n,gps_e,gps_d (empty: no fix), att_phi,att_theta,att_psi
 (empty: none)) and the reference posterior x0..x8, P_i_j (row-major, 81).
 The first line after the comment holds the config and initial state.
@@ -21,7 +21,7 @@ import os
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-OUT = os.path.join(HERE, "..", "crates", "gnc", "tests", "fixtures", "fusion_reference.csv")
+OUT = os.path.join(HERE, "..", "crates", "core", "tests", "fixtures", "fusion_reference.csv")
 
 DT = 0.01
 G = 9.82
