@@ -11,13 +11,15 @@
 
 use crate::console::Console;
 use crate::model_cmd::ModelFlags;
-use crate::sim_cmd::{RunReport, fly_and_write_step, overrides_label, prepare_step, print_run};
+use crate::sim_cmd::{
+    RunReport, fly_and_write_step, overrides_from, overrides_label, prepare_step, print_run,
+};
 use anyhow::{Context, Result};
 use clap::Args;
 use helicon_model::InflowMode;
 use helicon_model::linearize::linearize;
 use helicon_model::state::ix;
-use helicon_sim::scenario::{Scenario, ScenarioOverrides};
+use helicon_sim::scenario::Scenario;
 use nalgebra::Vector3;
 use std::path::PathBuf;
 
@@ -44,18 +46,7 @@ pub struct DemoArgs {
 pub fn demo_scenario(args: &DemoArgs) -> Result<Scenario> {
     let mut s = Scenario::from_toml_str(DEMO_SCENARIO, "scenarios/demo.toml (embedded)")?;
     s.preset = args.model.preset;
-    let params = match &args.model.params {
-        Some(p) => Some(
-            std::path::absolute(p)
-                .with_context(|| format!("--params {}: cannot resolve the path", p.display()))?,
-        ),
-        None => None,
-    };
-    let overrides = ScenarioOverrides {
-        params,
-        seed: args.seed,
-        duration_s: args.duration,
-    };
+    let overrides = overrides_from(args.model.params.as_deref(), args.seed, args.duration)?;
     let origin = format!("helicon demo{}", overrides_label(&overrides));
     Ok(s.with_overrides(&overrides, &origin)?)
 }

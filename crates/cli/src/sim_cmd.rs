@@ -85,6 +85,28 @@ pub fn prepare_step(scenario: &Scenario) -> Result<(Prepared, f64)> {
     Ok((prepared, t0.elapsed().as_secs_f64()))
 }
 
+/// The scenario overrides of `--params`, `--seed`, `--duration` (the
+/// parameter path made absolute: the scenario resolves paths against its
+/// own folder).
+pub fn overrides_from(
+    params: Option<&Path>,
+    seed: Option<u64>,
+    duration_s: Option<f64>,
+) -> Result<ScenarioOverrides> {
+    let params = match params {
+        Some(p) => Some(
+            std::path::absolute(p)
+                .with_context(|| format!("--params {}: cannot resolve the path", p.display()))?,
+        ),
+        None => None,
+    };
+    Ok(ScenarioOverrides {
+        params,
+        seed,
+        duration_s,
+    })
+}
+
 /// How command-line overrides are named in errors: ` (with --duration 0)`.
 pub fn overrides_label(o: &ScenarioOverrides) -> String {
     let mut given = Vec::new();
@@ -252,18 +274,7 @@ pub fn print_run(con: &mut Console, report: &RunReport) {
 /// Run `helicon sim`: one run folder, or for a scenario with `[[case]]`
 /// entries one sub-folder per case plus a `summary.json`/`report.md` index.
 pub fn run(args: &SimArgs) -> Result<()> {
-    let params = match &args.params {
-        Some(p) => Some(
-            std::path::absolute(p)
-                .with_context(|| format!("--params {}: cannot resolve the path", p.display()))?,
-        ),
-        None => None,
-    };
-    let overrides = ScenarioOverrides {
-        params,
-        seed: args.seed,
-        duration_s: args.duration,
-    };
+    let overrides = overrides_from(args.params.as_deref(), args.seed, args.duration)?;
     let source = format!("{}{}", args.scenario.display(), overrides_label(&overrides));
     let scenario = Scenario::from_file(&args.scenario)?.with_overrides(&overrides, &source)?;
     let out = args

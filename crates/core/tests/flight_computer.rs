@@ -11,27 +11,10 @@ use helicon_core::{
     Reference, ServoLimits, ThesisEstimator,
 };
 use nalgebra::{SMatrix, SVector, Vector3};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
-struct Counting;
-thread_local! {
-    static ALLOCS: Cell<usize> = const { Cell::new(0) };
-}
-// SAFETY: forwards every call unchanged to the system allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.with(|c| c.set(c.get() + 1));
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations;
 
 const TS: f64 = 0.0025;
 const G: f64 = 9.81;
@@ -114,7 +97,7 @@ fn flight_computer_step_does_not_allocate() {
         yaw_rad: 0.3,
     };
     let _ = c.step(&frame(0), &r).unwrap();
-    let before = ALLOCS.with(Cell::get);
+    let before = allocations();
     let mut acc = 0.0;
     let mut fixes = 0;
     for k in 1..4000 {
@@ -122,7 +105,7 @@ fn flight_computer_step_does_not_allocate() {
         acc += t.command.sum();
         fixes += usize::from(t.navigation.is_some_and(|n| n.gps_fused));
     }
-    let allocs = ALLOCS.with(Cell::get) - before;
+    let allocs = allocations() - before;
     assert!(acc.is_finite());
     assert_eq!(fixes, 49, "GPS fixes fused");
     assert_eq!(allocs, 0, "FlightComputer::step allocated {allocs} times");

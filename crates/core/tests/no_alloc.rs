@@ -6,27 +6,10 @@
 use helicon_core::attitude::{VectorObservation, q_method, quaternion_from_euler};
 use helicon_core::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
 use nalgebra::Vector3;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
-struct Counting;
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-
-// SAFETY: forwards every call unchanged to the system allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations;
 
 #[test]
 fn q_method_and_fusion_step_do_not_allocate() {
@@ -51,14 +34,14 @@ fn q_method_and_fusion_step_do_not_allocate() {
         gps_vel_ned_m_s: None,
         attitude_rad: Some(Vector3::new(0.01, 0.0, 0.02)),
     };
-    let before = ALLOCS.load(Ordering::SeqCst);
+    let before = allocations();
     let mut acc = 0.0;
     for _ in 0..1000 {
         let s = q_method(&obs).unwrap();
         acc += s.loss;
         f.step(&input).unwrap();
     }
-    let after = ALLOCS.load(Ordering::SeqCst);
+    let after = allocations();
     assert!(acc.is_finite());
     assert_eq!(
         after - before,

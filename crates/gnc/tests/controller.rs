@@ -12,27 +12,10 @@ use helicon_model::linearize::linearize;
 use helicon_model::trim::{TrimOptions, TrimTarget, trim};
 use helicon_model::{InflowMode, Model, Preset};
 use nalgebra::{DMatrix, DVector, SVector, Vector3};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
-struct Counting;
-thread_local! {
-    static ALLOCS: Cell<usize> = const { Cell::new(0) };
-}
-// SAFETY: forwards every call unchanged to the system allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.with(|c| c.set(c.get() + 1));
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "../../core/tests/common/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations;
 
 struct Setup {
     gains: Gains,
@@ -144,17 +127,13 @@ fn step_does_not_allocate_and_gains_round_trip() {
     let xt = s.x_trim.map(|v| v + 0.01);
     let r = Reference::default();
     let _ = c.step(&measure(0, &xt), &r).unwrap();
-    let before = ALLOCS.with(Cell::get);
+    let before = allocations();
     let mut acc = 0.0;
     for k in 1..1000 {
         acc += c.step(&measure(k, &xt), &r).unwrap().command[0];
     }
     assert!(acc.is_finite());
-    assert_eq!(
-        ALLOCS.with(Cell::get) - before,
-        0,
-        "FlightComputer::step allocated"
-    );
+    assert_eq!(allocations() - before, 0, "FlightComputer::step allocated");
     // a corrupted file is an error naming it, not a panic
     std::fs::write(&path, "{\"version\": 1}").unwrap();
     let e = Gains::load(&path).unwrap_err().to_string();

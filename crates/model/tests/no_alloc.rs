@@ -5,30 +5,10 @@
 
 use helicon_model::{Input, Model, Preset, State};
 use nalgebra::Vector3;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
-struct Counting;
-thread_local! {
-    // Per-thread count: the test harness's own threads allocate concurrently.
-    static ALLOCS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: forwards to the system allocator and only counts.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.with(|c| c.set(c.get() + 1));
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "../../core/tests/common/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations;
 
 #[test]
 fn derivative_and_step_do_not_allocate() {
@@ -42,14 +22,14 @@ fn derivative_and_step_do_not_allocate() {
         let wind = Vector3::new(1.0, -2.0, 0.3);
         // warm up (lazy statics, if any)
         let _ = model.derivative(&x, &u, &wind).unwrap();
-        let before = ALLOCS.with(Cell::get);
+        let before = allocations();
         let mut acc = 0.0;
         for _ in 0..1000 {
             let (xd, aux) = model.derivative(&x, &u, &wind).unwrap();
             acc += xd[8] + aux.lambda_mr;
             x = model.step(&x, &u, &wind, 1.0 / 400.0).unwrap().0;
         }
-        let after = ALLOCS.with(Cell::get);
+        let after = allocations();
         assert!(acc.is_finite());
         assert_eq!(
             after - before,
