@@ -3,7 +3,7 @@
 //! Inputs are CSV files of plain numbers, one matrix row per line (comma-separated, or
 //! whitespace-separated when a line has no comma). A header row whose cells are all
 //! non-numeric is skipped, and so is a first column of row names (as in
-//! `../shared/reference/thesis_A.csv`). Empty lines and lines starting with `#` are ignored.
+//! `reference/thesis_A.csv`). Empty lines and lines starting with `#` are ignored.
 //! A file ending in `.json` holds a nested row list (`[[1, 2], [3, 4]]`, or a bare number
 //! for 1×1); `FILE.json#Key` takes the field `Key` of a JSON object, e.g. the `Phi` of a
 //! previous `helicon control c2d` output.

@@ -3,7 +3,7 @@
 //! The first-principles nonlinear model of a miniature helicopter from the thesis
 //! *Nonlinear Modeling and Optimal Control of a Miniature Autonomous Helicopter*
 //! (Aalborg University, 2006), chapters 4–10 and appendices B–D, with the
-//! readings and corrections documented in `shared/spec/MODEL.md`.
+//! readings and corrections documented in docs/model.md.
 //!
 //! The blocks of thesis Figure 4.4, one module each:
 //! [`actuators`] (servos), [`flapping`] (main rotor and stabilizer bar),
