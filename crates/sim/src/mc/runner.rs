@@ -429,6 +429,11 @@ pub fn run(
         trace_map: BTreeMap::new(),
     });
     let nominal = campaign.prepare_nominal()?;
+    // each run's work is bounded as `helicon sim` bounds a flight's
+    campaign.scenario.check_work(
+        &format!("campaign `{}` scenario", campaign.name),
+        nominal.gains.set.sample_time_s,
+    )?;
     let total = runs_here
         - (0..runs_here)
             .filter(|&j| done.contains_key(&shard.index(j)))
