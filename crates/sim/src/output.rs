@@ -45,14 +45,10 @@ use std::path::{Path, PathBuf};
 /// Errors writing the run outputs; each names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    /// Creating or writing a file failed.
-    #[error("{path}: {message}")]
-    Io {
-        /// File or folder.
-        path: String,
-        /// Message.
-        message: String,
-    },
+    /// Creating or writing a file failed (the one configuration/file error
+    /// shape: file, action, the `io::Error` kept as source).
+    #[error(transparent)]
+    Io(#[from] helicon_model::ConfigError),
     /// Serialising the summary or the scenario failed.
     #[error("{path}: cannot serialise: {message}")]
     Serialize {
@@ -101,11 +97,12 @@ pub struct RunFiles {
     pub log_rows: usize,
 }
 
-fn io_err(path: &Path, e: impl std::fmt::Display) -> OutputError {
-    OutputError::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
-    }
+fn io_err(path: &Path, source: std::io::Error) -> OutputError {
+    OutputError::Io(helicon_model::ConfigError::Io {
+        file: path.display().to_string(),
+        action: "write",
+        source,
+    })
 }
 
 /// Check that every number of a summary is finite. serde_json writes NaN
@@ -190,8 +187,13 @@ fn scenario_as_flown(scenario: &Scenario) -> Result<Scenario, std::io::Error> {
 
 /// Write `scenario.toml`.
 pub fn write_scenario(path: &Path, scenario: &Scenario) -> Result<(), OutputError> {
-    let s = scenario_as_flown(scenario)
-        .map_err(|e| io_err(path, format!("current folder for absolute paths: {e}")))?;
+    let s = scenario_as_flown(scenario).map_err(|source| {
+        OutputError::Io(helicon_model::ConfigError::Io {
+            file: path.display().to_string(),
+            action: "resolve its paths against the current folder",
+            source,
+        })
+    })?;
     let body = toml::to_string(&s).map_err(|e| OutputError::Serialize {
         path: path.display().to_string(),
         message: e.to_string(),

@@ -484,7 +484,7 @@ fn a_key_dispersed_twice_is_an_error_naming_the_file_key_and_both_entries() {
     let e = Campaign::from_toml_str(&text, "twice.toml", None).unwrap_err();
     let msg = e.to_string();
     assert!(
-        matches!(e, McError::Scenario(ScenarioError::Invalid { .. })),
+        matches!(e, McError::Config(ScenarioError::Invalid { .. })),
         "{msg}"
     );
     for part in [
@@ -576,7 +576,10 @@ fn an_unwritable_output_folder_is_an_error_before_any_run_is_flown() {
         Some(&progress),
     )
     .unwrap_err();
-    assert!(matches!(e, McError::Io { .. }), "{e}");
+    assert!(
+        matches!(e, McError::Config(ScenarioError::Io { .. })),
+        "{e}"
+    );
     assert!(e.to_string().contains("a-file/out"), "{e}");
     // a file in the folder that cannot be written (a directory in its place)
     let d2 = d.join("out2");

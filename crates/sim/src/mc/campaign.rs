@@ -161,7 +161,7 @@ impl Campaign {
     /// Load a campaign file (the scenario path resolves against its folder).
     pub fn from_file(path: &Path) -> Result<Campaign, McError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| McError::Io {
+        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
             file: file.clone(),
             action: "read",
             source,

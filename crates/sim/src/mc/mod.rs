@@ -117,28 +117,18 @@ pub const FORMAT_VERSION: u32 = 2;
 /// fails is an outcome recorded in `runs.csv`, not an error.
 #[derive(Debug, thiserror::Error)]
 pub enum McError {
-    /// The campaign file or its scenario: invalid TOML, an unknown field or
-    /// a field out of range (the file and the field are named).
+    /// The campaign file or its scenario (invalid TOML, an unknown field or
+    /// a field out of range), or a file that could not be read or written:
+    /// the toolkit's one configuration error shape (file, field or action,
+    /// the `io::Error` kept as source).
     #[error(transparent)]
-    Scenario(#[from] ScenarioError),
+    Config(#[from] ScenarioError),
     /// The nominal parameters (the scenario's `params` file or `--params`).
     #[error(transparent)]
     Params(#[from] ParamError),
     /// Preparing the nominal design.
     #[error("nominal design: {0}")]
     Prepare(#[from] ClosedLoopError),
-    /// A file (the campaign file, or one in the output folder) could not be
-    /// read or written.
-    #[error("{file}: cannot {action}")]
-    Io {
-        /// File or folder.
-        file: String,
-        /// What was attempted (`read`, `write`, `create the folder`, …).
-        action: &'static str,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
-    },
     /// A results file (`runs.csv`, `traces.csv`, `manifest.json`) that
     /// cannot be read back.
     #[error("{file}: line {line}: {message}")]

@@ -46,11 +46,11 @@ pub(super) struct Manifest {
 
 /// An I/O error on `path` while doing `action`.
 pub(super) fn io_err(path: &Path, action: &'static str, source: std::io::Error) -> McError {
-    McError::Io {
+    McError::Config(crate::scenario::ScenarioError::Io {
         file: path.display().to_string(),
         action,
         source,
-    }
+    })
 }
 
 pub(super) fn write_file(path: &Path, text: &str) -> Result<(), McError> {
