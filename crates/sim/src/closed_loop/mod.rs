@@ -1,0 +1,424 @@
+//! The closed loop: the thesis's Simulink environment (Appendix E figure)
+//! rebuilt as software. World (nonlinear model + wind [+ sensor models]) and
+//! the on-board flight software (`helicon_core::FlightComputer`) exchange servo commands and measurements
+//! once per controller sample; the plant is integrated with RK4 in between
+//! (inputs held, optional sub-steps).
+//!
+//! Preparation ([`prepare`]): trim at the scenario's design point, linearize,
+//! ZOH-discretize, design (or load) the gains. Flight ([`fly`]): one loop per
+//! sample; divergence (non-finite state, attitude beyond the limit, a model or
+//! estimator failure) stops the run cleanly with the reason, time and state,
+//! keeping the log so far.
+
+use crate::log_csv::LogWriter;
+use crate::metrics::{OutputMetrics, output_metrics};
+use crate::navigation::{navigation_filter_at, sensor_suite_at};
+use crate::scenario::{DesignInflow, OUTPUTS, PlantInflow, Scenario};
+use crate::sensor_log::{LoggedTruth, SensorLogRow};
+use crate::sensors::SensorSuite;
+use crate::trajectory::TruthSample;
+use crate::wind::{Wind, WindModel};
+use helicon_core::frames::{EulerTrig, wrap_pi};
+use helicon_core::navigation::NavigationFilter;
+use helicon_core::{
+    CoreError, FlightComputer, KalmanPredictor, Lqi, Reference, ServoLimits, StateMeasurement,
+    Telemetry, ThesisEstimator, ThesisFlightComputer, TruthFeed, TruthMeasurement,
+};
+use helicon_gnc::design::{Gains, design};
+use helicon_model::integrate::rk4;
+use helicon_model::linearize::linearize;
+use helicon_model::state::{REDUCED_OFFSET, expand, ix, reduce};
+use helicon_model::trim::{Trim, TrimOptions, TrimTarget, trim};
+use helicon_model::{Aux, InflowMode, Input, Model, ModelError, Params, ReducedState, State};
+use nalgebra::{SVector, Vector3};
+use serde::Serialize;
+
+mod stages;
+mod summary;
+
+use stages::{OnBoard, Plant, check_limits};
+use summary::summarize;
+pub use summary::{METRIC_TRACE_CAP, Outcome, Summary, SummaryAccumulator, Termination};
+
+/// Errors before the flight starts (a divergence during flight is an outcome, not an error).
+#[derive(Debug, thiserror::Error)]
+pub enum ClosedLoopError {
+    /// Parameters.
+    #[error(transparent)]
+    Params(#[from] helicon_model::ParamError),
+    /// Trim failed.
+    #[error("design point: {0}")]
+    Trim(#[from] helicon_model::trim::TrimError),
+    /// Model evaluation during linearization.
+    #[error("linearization: {0}")]
+    Model(#[from] ModelError),
+    /// Discretization.
+    #[error("discretization: {0}")]
+    Lti(#[from] helicon_lti::LtiError),
+    /// Controller design or gains file.
+    #[error(transparent)]
+    Design(#[from] helicon_gnc::design::DesignError),
+    /// Wind or sensor configuration (the one configuration error shape).
+    #[error(transparent)]
+    Config(#[from] helicon_model::ConfigError),
+    /// Navigation (fusion) setup.
+    #[error(transparent)]
+    Fusion(#[from] helicon_core::fusion::FusionError),
+    /// The flight software could not be built from the gains.
+    #[error("flight software: {0}")]
+    Core(#[from] CoreError),
+    /// A gains file designed for another sample time than the helicopter's.
+    #[error(
+        "{file}: the gains were designed for a sample time of {gains_s} s but the parameters' \
+         `control.sample_time_s` is {params_s} s: redesign, or fly the parameters they were made for"
+    )]
+    SampleTimeMismatch {
+        /// The gains file.
+        file: String,
+        /// Its sample time (s).
+        gains_s: f64,
+        /// The parameters' sample time (s).
+        params_s: f64,
+    },
+    /// The log would not fit in the memory budget.
+    #[error(
+        "the flight log would need {rows} rows, {} MiB, beyond the {} MiB budget ({why}): \
+         raise [log] decimation, shorten duration_s, or write it to a file (`helicon sim` does)",
+        bytes >> 20,
+        budget >> 20
+    )]
+    LogTooLarge {
+        /// Rows needed.
+        rows: usize,
+        /// Bytes needed.
+        bytes: u64,
+        /// The budget (bytes).
+        budget: u64,
+        /// Where the budget comes from.
+        why: String,
+    },
+    /// Writing the streamed log failed.
+    #[error(transparent)]
+    Log(#[from] crate::log_csv::LogCsvError),
+}
+
+/// Everything prepared for flying a scenario.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The plant model.
+    pub model: Model,
+    /// The design trim.
+    pub trim: Trim,
+    /// The gains flown.
+    pub gains: Gains,
+}
+
+/// Trim, linearize, discretize and design (or load) the gains for a scenario.
+pub fn prepare(scenario: &Scenario) -> Result<Prepared, ClosedLoopError> {
+    let params = match &scenario.params {
+        Some(p) => Params::from_file(&scenario.resolve(p))?,
+        None => Params::bergen_twin(),
+    };
+    prepare_with_params(scenario, params)
+}
+
+/// As [`prepare`] with explicit parameters (Monte Carlo dispersions).
+pub fn prepare_with_params(
+    scenario: &Scenario,
+    params: Params,
+) -> Result<Prepared, ClosedLoopError> {
+    let model = Model::new(params, scenario.preset.options());
+    let target = TrimTarget {
+        velocity_ned_m_s: Vector3::from(scenario.trim.velocity_ned_m_s),
+        yaw_rad: scenario.trim.yaw_rad,
+        wind_ned_m_s: Vector3::zeros(),
+    };
+    // the flight starts at this equilibrium: it must be one the helicopter
+    // can hold (inputs within the servo range, blades unstalled, …)
+    let t = trim(&model, &target, &TrimOptions::default())?.require_physical(&model)?;
+    let ts = model.params().control.sample_time_s;
+    let gains = match &scenario.controller.gains_file {
+        Some(f) => {
+            let path = scenario.resolve(f);
+            let g = Gains::load(&path)?;
+            if g.set.sample_time_s != ts {
+                return Err(ClosedLoopError::SampleTimeMismatch {
+                    file: path.display().to_string(),
+                    gains_s: g.set.sample_time_s,
+                    params_s: ts,
+                });
+            }
+            g
+        }
+        None => {
+            let inflow = match scenario.controller.design_inflow {
+                DesignInflow::Converged => InflowMode::Converged,
+                DesignInflow::ThesisIteration => InflowMode::ThesisIteration {
+                    lambda_mr_in: t.aux.lambda_mr,
+                    lambda_tr_in: t.aux.lambda_tr,
+                    iterations: scenario.plant.inflow_iterations,
+                },
+            };
+            let lm = linearize(&model, &t.x, &t.u, &Vector3::zeros(), inflow)?;
+            let (phi, gamma) = lm.discretize(ts)?;
+            design(&phi, &gamma, &t.x, &t.u, ts, &scenario.controller.design)?
+        }
+    };
+    Ok(Prepared {
+        model,
+        trim: t,
+        gains,
+    })
+}
+
+/// One logged sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogRow {
+    /// Time (s).
+    pub t_s: f64,
+    /// True state (30).
+    pub x: State,
+    /// Servo command (after saturation).
+    pub u: Input,
+    /// Reference [vn, ve, vd, psi].
+    pub reference: [f64; 4],
+    /// True outputs [vn, ve, vd, psi].
+    pub output: [f64; 4],
+    /// Estimated 9 measured states (absolute).
+    pub estimate9: [f64; 9],
+    /// Measurement given to the controller (9).
+    pub measured9: [f64; 9],
+    /// Wind NED (m/s).
+    pub wind_ned: [f64; 3],
+    /// Inflow ratios [main, tail].
+    pub lambda: [f64; 2],
+    /// Main-rotor thrust −hFz (N) and tail-rotor force tFy (N).
+    pub thrust: [f64; 2],
+    /// |g(λ)| of the momentum equations (7.33)/(7.56) at the λ used [main,
+    /// tail]: ~1e-13 when converged; large when the thesis iteration is off its root.
+    pub inflow_residual: [f64; 2],
+}
+
+/// A finished flight: the log and the summary.
+#[derive(Debug, Clone)]
+pub struct Flight {
+    /// Samples (every `[log] decimation`-th).
+    pub log: Vec<LogRow>,
+    /// Every sensor frame given to the flight software, with its truth
+    /// (`[log] sensors = true` with sensor models in the loop; else empty).
+    pub sensors: Vec<SensorLogRow>,
+    /// Summary and metrics.
+    pub summary: Summary,
+}
+
+/// FNV-1a 64-bit hash, as hex.
+pub fn fnv1a_hex(text: &str) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.as_bytes() {
+        h ^= u64::from(*b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    format!("{h:016x}")
+}
+
+/// The initial true state: the trim plus the scenario's deviations.
+pub fn initial_state(scenario: &Scenario, trim: &Trim) -> State {
+    let mut x = expand(&trim.x, [0.0; 3]);
+    let o = REDUCED_OFFSET;
+    let mut dv_ned = Vector3::zeros();
+    for (k, v) in &scenario.initial {
+        match k.as_str() {
+            "vn" => dv_ned.x += v,
+            "ve" => dv_ned.y += v,
+            "vd" => dv_ned.z += v,
+            name => {
+                if let Some(i) = helicon_model::REDUCED_STATE_NAMES
+                    .iter()
+                    .position(|n| *n == name)
+                {
+                    x[i + o] += v;
+                }
+            }
+        }
+    }
+    if dv_ned.norm() > 0.0 {
+        let dv_body =
+            helicon_model::frames::body_from_ned(x[ix::PHI], x[ix::THETA], x[ix::PSI]) * dv_ned;
+        x[ix::U] += dv_body.x;
+        x[ix::V] += dv_body.y;
+        x[ix::W] += dv_body.z;
+    }
+    x
+}
+
+fn outputs(x: &State) -> [f64; 4] {
+    let v = EulerTrig::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]).ned_from_body()
+        * Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
+    [v.x, v.y, v.z, x[ix::PSI]]
+}
+
+/// Progress callback: fraction done in [0, 1].
+pub type Progress<'a> = &'a mut dyn FnMut(f64);
+
+/// Fly a prepared scenario, keeping the log in memory ([`Flight::log`]):
+/// one loop per controller sample — sense, run the flight software,
+/// integrate the plant, log, check the envelope. A log that would not fit in
+/// the memory budget ([`crate::resources::memory_budget`]) is refused before
+/// the flight; [`fly_to`] streams it to a file instead.
+pub fn fly(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    progress: Option<Progress<'_>>,
+) -> Result<Flight, ClosedLoopError> {
+    fly_with(scenario, prepared, None, progress)
+}
+
+/// As [`fly`], writing each kept log row to `log` as it is flown (memory
+/// independent of the duration; [`Flight::log`] stays empty).
+pub fn fly_to(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    log: &mut LogWriter,
+    progress: Option<Progress<'_>>,
+) -> Result<Flight, ClosedLoopError> {
+    fly_with(scenario, prepared, Some(log), progress)
+}
+
+/// The number of controller samples a flight of this scenario takes, and the
+/// kept log rows.
+fn sample_counts(scenario: &Scenario, ts: f64) -> (usize, usize) {
+    let n = (scenario.duration_s / ts).round() as usize;
+    let decimation = scenario.log.decimation.max(1) as usize;
+    (n, n / decimation + 2)
+}
+
+/// Refuse a memory reservation beyond the budget before flying.
+fn check_log_memory(rows: usize, row_bytes: usize) -> Result<(), ClosedLoopError> {
+    let (budget, why) = crate::resources::memory_budget();
+    let need = (rows as u64).saturating_mul(row_bytes as u64);
+    if need > budget {
+        return Err(ClosedLoopError::LogTooLarge {
+            rows,
+            bytes: need,
+            budget,
+            why,
+        });
+    }
+    Ok(())
+}
+
+fn fly_with(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    mut stream: Option<&mut LogWriter>,
+    progress: Option<Progress<'_>>,
+) -> Result<Flight, ClosedLoopError> {
+    let mut progress = progress;
+    let ts = prepared.gains.set.sample_time_s;
+    let (n, rows) = sample_counts(scenario, ts);
+    let decimation = scenario.log.decimation.max(1) as usize;
+    let mut log = Vec::new();
+    if stream.is_none() {
+        check_log_memory(rows, std::mem::size_of::<LogRow>())?;
+        log.reserve(rows);
+    }
+    let record_sensors = scenario.log.sensors && scenario.controller.fusion;
+    if record_sensors {
+        check_log_memory(n + 1, std::mem::size_of::<SensorLogRow>())?;
+    }
+    let mut plant = Plant::new(scenario, prepared, ts);
+    let mut onboard = OnBoard::new(scenario, prepared, &plant.x)?;
+    let mut wind = Wind::from_config(&scenario.wind)?;
+    let schedule = scenario.reference_schedule();
+    let mut acc = SummaryAccumulator::new(prepared);
+    let mut sensors = Vec::new();
+    if record_sensors {
+        sensors.reserve(n + 1);
+    }
+    let mut reason: Option<(Termination, String)> = None;
+    let mut t = 0.0;
+    for k in 0..=n {
+        t = k as f64 * ts;
+        let wind_ned = wind.step(t, ts);
+        let r = schedule.at(t);
+        let reference = Reference {
+            velocity_ned_m_s: Vector3::new(r[0], r[1], r[2]),
+            yaw_rad: r[3],
+        };
+        let record = record_sensors.then_some(&mut sensors);
+        let tel = match onboard.step(t, &plant, &reference, record) {
+            Ok(tel) => tel,
+            Err(e) => {
+                reason = Some((
+                    Termination::NavigationFailure,
+                    format!("navigation failed at t = {t:.3} s: {e}"),
+                ));
+                break;
+            }
+        };
+        let x_start = plant.x;
+        let step = plant.advance(&tel.command, &wind_ned);
+        // the log keeps every `decimation`-th sample (and the last one)
+        if k % decimation == 0 || k == n {
+            let row = LogRow::new(t, &x_start, &tel, r, &wind_ned, &step.aux);
+            acc.push(&row);
+            match stream.as_deref_mut() {
+                Some(w) => w.write(&row)?,
+                None => log.push(row),
+            }
+        }
+        if let Some(e) = step.error {
+            reason = Some((
+                Termination::ModelFailure,
+                format!("model failed at t = {t:.3} s: {e}"),
+            ));
+            break;
+        }
+        if let Some(stop) = check_limits(scenario, &plant.x, t + ts, schedule.at(t + ts)[3]) {
+            reason = Some(stop);
+            break;
+        }
+        if let Some(cb) = progress.as_mut()
+            && k % 400 == 0
+        {
+            cb(k as f64 / n.max(1) as f64);
+        }
+    }
+    if let Some(cb) = progress.as_mut() {
+        cb(1.0);
+    }
+    let summary = summarize(scenario, prepared, &acc, reason, t);
+    Ok(Flight {
+        log,
+        sensors,
+        summary,
+    })
+}
+
+impl LogRow {
+    /// The row of one sample: the true state at its start, the flight
+    /// software's telemetry, the reference, the wind and the plant's
+    /// auxiliary outputs.
+    pub fn new(
+        t_s: f64,
+        x: &State,
+        tel: &Telemetry,
+        reference: [f64; 4],
+        wind_ned: &Vector3<f64>,
+        aux: &Aux,
+    ) -> Self {
+        LogRow {
+            t_s,
+            x: *x,
+            u: tel.command,
+            reference,
+            output: outputs(x),
+            estimate9: std::array::from_fn(|i| tel.estimate[i]),
+            measured9: std::array::from_fn(|i| tel.measured[i]),
+            wind_ned: [wind_ned.x, wind_ned.y, wind_ned.z],
+            lambda: [aux.lambda_mr, aux.lambda_tr],
+            thrust: [-aux.force_mr_hub_n.z, aux.force_tr_y_n],
+            inflow_residual: aux.inflow_residual,
+        }
+    }
+}

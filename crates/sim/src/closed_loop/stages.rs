@@ -1,0 +1,285 @@
+//! The stages of one controller sample: the plant ([`Plant`]), the on-board
+//! software composed from the core ([`OnBoard`]) and the flight-envelope
+//! checks ([`check_limits`]).
+
+use super::*;
+
+/// The plant: the nonlinear model integrated with RK4 between controller
+/// samples, inputs and wind held, inflow warm-started from the last solution.
+pub(super) struct Plant<'a> {
+    model: &'a Model,
+    pub(super) x: State,
+    /// Inflow ratios (main, tail) carried between evaluations.
+    lambda: (f64, f64),
+    /// The derivative at the start of the last step (for the accelerometer).
+    xdot: State,
+    inflow: PlantInflow,
+    inflow_iterations: u32,
+    substeps: u32,
+    h_s: f64,
+}
+
+/// What one plant step reports.
+pub(super) struct PlantStep {
+    /// Auxiliary outputs at the start of the step (default when the first
+    /// evaluation failed).
+    pub(super) aux: Aux,
+    /// The model failure that cut the step short, if any.
+    pub(super) error: Option<ModelError>,
+}
+
+impl<'a> Plant<'a> {
+    pub(super) fn new(scenario: &Scenario, prepared: &'a Prepared, ts: f64) -> Self {
+        Plant {
+            model: &prepared.model,
+            x: initial_state(scenario, &prepared.trim),
+            lambda: (prepared.trim.aux.lambda_mr, prepared.trim.aux.lambda_tr),
+            xdot: State::zeros(),
+            inflow: scenario.plant.inflow,
+            inflow_iterations: scenario.plant.inflow_iterations,
+            substeps: scenario.plant.substeps,
+            h_s: ts / f64::from(scenario.plant.substeps),
+        }
+    }
+
+    /// The true motion the sensor models sample; the inertial acceleration
+    /// comes from the previous step's derivative (one sample old).
+    pub(super) fn truth(&self, t_s: f64) -> TruthSample {
+        let x = &self.x;
+        let ned_from_body = EulerTrig::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]).ned_from_body();
+        let v_body = Vector3::new(x[ix::U], x[ix::V], x[ix::W]);
+        let omega = Vector3::new(x[ix::P], x[ix::Q], x[ix::R]);
+        let dv = Vector3::new(self.xdot[ix::U], self.xdot[ix::V], self.xdot[ix::W]);
+        TruthSample {
+            t_s,
+            pos_ned_m: Vector3::new(x[ix::X], x[ix::Y], x[ix::Z]),
+            vel_ned_m_s: ned_from_body * v_body,
+            acc_ned_m_s2: ned_from_body * (dv + omega.cross(&v_body)),
+            euler_rad: Vector3::new(x[ix::PHI], x[ix::THETA], x[ix::PSI]),
+            omega_body_rad_s: omega,
+        }
+    }
+
+    /// Integrate one controller sample with `u` and the wind held.
+    pub(super) fn advance(&mut self, u: &Input, wind_ned: &Vector3<f64>) -> PlantStep {
+        let mut first: Option<(Aux, State)> = None;
+        let mut error = None;
+        let (inflow, iterations, model) = (self.inflow, self.inflow_iterations, self.model);
+        let lam = &mut self.lambda;
+        for _ in 0..self.substeps {
+            let res = rk4(&self.x, self.h_s, |s| {
+                let mode = match inflow {
+                    PlantInflow::Converged => InflowMode::ConvergedFrom {
+                        lambda_mr_hint: lam.0,
+                        lambda_tr_hint: lam.1,
+                    },
+                    PlantInflow::ThesisIteration => InflowMode::ThesisIteration {
+                        lambda_mr_in: lam.0,
+                        lambda_tr_in: lam.1,
+                        iterations,
+                    },
+                };
+                let (d, a) = model.derivative_with(s, u, wind_ned, mode)?;
+                // warm start (converged) or the thesis's recursion (iteration)
+                *lam = (a.lambda_mr, a.lambda_tr);
+                if first.is_none() {
+                    first = Some((a, d));
+                }
+                Ok::<_, ModelError>(d)
+            });
+            match res {
+                Ok(next) => self.x = next,
+                Err(e) => {
+                    error = Some(e);
+                    break;
+                }
+            }
+        }
+        let (aux, xdot) = first.unwrap_or_default();
+        self.xdot = xdot;
+        PlantStep { aux, error }
+    }
+}
+
+/// The on-board software flown in the loop, as the scenario's switches
+/// compose it from the core's parts.
+pub(super) enum OnBoard {
+    /// Sensor models feeding the thesis's whole chain (`fusion = true`).
+    Thesis {
+        /// The world's sensors.
+        suite: Box<SensorSuite>,
+        /// Navigation + predictor + LQI.
+        computer: Box<ThesisFlightComputer>,
+    },
+    /// Ideal navigation: the predictor is given the nine measured states.
+    IdealNavigation(Box<FlightComputer<KalmanPredictor, Lqi>>),
+    /// The thesis's "estimator off" switch: the law is fed the true state;
+    /// with `fusion = true` the navigation still runs and is logged.
+    Truth {
+        /// Truth feed + LQI.
+        computer: Box<FlightComputer<TruthFeed, Lqi>>,
+        /// Sensors and navigation run alongside, for the log.
+        navigation: Option<(Box<SensorSuite>, Box<NavigationFilter>)>,
+    },
+}
+
+impl OnBoard {
+    pub(super) fn new(
+        scenario: &Scenario,
+        prepared: &Prepared,
+        x0: &State,
+    ) -> Result<Self, ClosedLoopError> {
+        let p = prepared.model.params();
+        let limits = ServoLimits {
+            min: Input::from_fn(|i, _| p.servos[i].s_min),
+            max: Input::from_fn(|i, _| p.servos[i].s_max),
+        };
+        let set = &prepared.gains.set;
+        let ts = set.sample_time_s;
+        let g = p.environment.g_m_s2;
+        let law = Lqi::new(set, limits, scenario.controller.feedback)?;
+        // The estimator starts from the measured states and the trim for the rest.
+        let mut x0_est: ReducedState = prepared.trim.x;
+        for i in 0..9 {
+            x0_est[i] = x0[i + REDUCED_OFFSET];
+        }
+        let c = &scenario.controller;
+        let sensed = || -> Result<_, ClosedLoopError> {
+            Ok((
+                Box::new(sensor_suite_at(&scenario.sensors, ts, g)?),
+                Box::new(navigation_filter_at(
+                    &scenario.sensors,
+                    &scenario.navigation,
+                    ts,
+                    g,
+                    x0,
+                )?),
+            ))
+        };
+        Ok(match (c.estimator, c.fusion) {
+            (true, true) => {
+                let (suite, navigation) = sensed()?;
+                let estimator = ThesisEstimator {
+                    navigation: *navigation,
+                    predictor: KalmanPredictor::new(set, &x0_est)?,
+                };
+                OnBoard::Thesis {
+                    suite,
+                    computer: Box::new(FlightComputer::new(estimator, law)),
+                }
+            }
+            (true, false) => OnBoard::IdealNavigation(Box::new(FlightComputer::new(
+                KalmanPredictor::new(set, &x0_est)?,
+                law,
+            ))),
+            (false, fusion) => OnBoard::Truth {
+                computer: Box::new(FlightComputer::new(TruthFeed, law)),
+                navigation: if fusion { Some(sensed()?) } else { None },
+            },
+        })
+    }
+
+    /// One control sample against the plant's true state; the sensor frame
+    /// and its truth are pushed to `record` when given.
+    pub(super) fn step(
+        &mut self,
+        t_s: f64,
+        plant: &Plant<'_>,
+        reference: &Reference,
+        record: Option<&mut Vec<SensorLogRow>>,
+    ) -> Result<Telemetry, CoreError> {
+        let xr: ReducedState = reduce(&plant.x);
+        let sense = |suite: &mut SensorSuite| {
+            let truth = plant.truth(t_s);
+            let frame = suite.sample(&truth);
+            if let Some(rec) = record {
+                rec.push(SensorLogRow {
+                    frame,
+                    truth: LoggedTruth::from(&truth),
+                });
+            }
+            frame
+        };
+        match self {
+            OnBoard::Thesis { suite, computer } => {
+                let frame = sense(suite);
+                computer.step(&frame, reference)
+            }
+            OnBoard::IdealNavigation(computer) => {
+                let m = StateMeasurement {
+                    t_s,
+                    measured: SVector::from_fn(|i, _| xr[i]),
+                };
+                computer.step(&m, reference)
+            }
+            OnBoard::Truth {
+                computer,
+                navigation,
+            } => {
+                let nav = match navigation {
+                    Some((suite, filter)) => {
+                        let frame = sense(suite);
+                        Some((filter.step(&frame)?, filter.solution()))
+                    }
+                    None => None,
+                };
+                let mut tel = computer.step(&TruthMeasurement { t_s, state: xr }, reference)?;
+                if let Some((y, solution)) = nav {
+                    tel.measured = y;
+                    tel.navigation = Some(solution);
+                }
+                Ok(tel)
+            }
+        }
+    }
+}
+
+/// The flight-envelope checks after a plant step at `t_next_s`: the first
+/// limit crossed, as a termination kind and a sentence.
+pub(super) fn check_limits(
+    scenario: &Scenario,
+    x: &State,
+    t_next_s: f64,
+    psi_ref_next: f64,
+) -> Option<(Termination, String)> {
+    let plant = &scenario.plant;
+    if !x.iter().all(|v| v.is_finite()) {
+        return Some((
+            Termination::NonFiniteState,
+            format!("non-finite state at t = {t_next_s:.3} s"),
+        ));
+    }
+    let lim = plant.max_attitude_rad;
+    if x[ix::PHI].abs() > lim || x[ix::THETA].abs() > lim {
+        return Some((
+            Termination::AttitudeLimit,
+            format!(
+                "attitude beyond {lim} rad at t = {t_next_s:.3} s (phi = {:.3}, theta = {:.3})",
+                x[ix::PHI],
+                x[ix::THETA]
+            ),
+        ));
+    }
+    let rate = x[ix::P].abs().max(x[ix::Q].abs()).max(x[ix::R].abs());
+    if rate > plant.max_rate_rad_s {
+        return Some((
+            Termination::RateLimit,
+            format!(
+                "body rate {rate:.2} rad/s beyond {} rad/s at t = {t_next_s:.3} s",
+                plant.max_rate_rad_s
+            ),
+        ));
+    }
+    let yaw_err = x[ix::PSI] - psi_ref_next;
+    if yaw_err.abs() > plant.max_yaw_error_rad {
+        return Some((
+            Termination::HeadingLost,
+            format!(
+                "heading {:.2} rad is {yaw_err:.2} rad from its reference at t = {t_next_s:.3} s: \
+                 the helicopter spins away",
+                x[ix::PSI]
+            ),
+        ));
+    }
+    None
+}
