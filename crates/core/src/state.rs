@@ -56,36 +56,17 @@ pub const STATE_NAMES: [&str; NX] = [
     "theta_tr_dot",
 ];
 
-/// Names of the 27 reduced states (the full list without `x y z`).
-pub const REDUCED_STATE_NAMES: [&str; NX_REDUCED] = [
-    "phi",
-    "theta",
-    "psi",
-    "u",
-    "v",
-    "w",
-    "p",
-    "q",
-    "r",
-    "a0",
-    "a1",
-    "b1",
-    "a0_dot",
-    "a1_dot",
-    "b1_dot",
-    "a1sb",
-    "b1sb",
-    "a1sb_dot",
-    "b1sb_dot",
-    "theta0",
-    "A1",
-    "B1",
-    "theta_tr",
-    "theta0_dot",
-    "A1_dot",
-    "B1_dot",
-    "theta_tr_dot",
-];
+/// Names of the 27 reduced states (the full list without `x y z`), derived
+/// from [`STATE_NAMES`].
+pub const REDUCED_STATE_NAMES: [&str; NX_REDUCED] = {
+    let mut out = [""; NX_REDUCED];
+    let mut i = 0;
+    while i < NX_REDUCED {
+        out[i] = STATE_NAMES[i + REDUCED_OFFSET];
+        i += 1;
+    }
+    out
+};
 
 /// Units of the 30 states, in order (SI).
 pub const STATE_UNITS: [&str; NX] = [
