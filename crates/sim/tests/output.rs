@@ -523,7 +523,7 @@ fn reader_rejects_a_row_with_missing_or_extra_cells() {
             .contains("bad.csv:3: 2 cells, the header has 3"),
         "{e}"
     );
-    let p = bad_file("long", "t_s,a\n0,1,2\n");
+    let p = bad_file("row_too_long", "t_s,a\n0,1,2\n");
     assert!(matches!(
         read_err(&p),
         LogCsvError::RowLength {
@@ -827,7 +827,7 @@ fn figures_are_written_and_non_trivial() {
 
 #[test]
 fn figures_of_a_long_log_have_a_bounded_number_of_points() {
-    let dir = tmpdir("long");
+    let dir = tmpdir("long_log_figures");
     let path = dir.join("log.csv");
     let mut w = LogWriter::create(&path).unwrap();
     let n = 60_000;
