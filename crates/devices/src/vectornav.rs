@@ -478,7 +478,8 @@ pub type VnAsciiDecoder = StreamDecoder<VnAscii>;
 
 impl VnYmr {
     /// Encodes the sentence with the device's field widths (`%+08.3f` angles,
-    /// `%+07.4f` field, `%+07.3f` acceleration, `%+09.6f` rates).
+    /// `%+08.4f` field, `%+07.3f` acceleration, `%+010.6f` rates): a decoded
+    /// device sentence re-encodes to the same bytes.
     pub fn encode(&self) -> Result<EncodedFrame, EncodeError> {
         use core::fmt::Write;
         let all = self
