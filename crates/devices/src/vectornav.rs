@@ -411,7 +411,7 @@ pub(crate) fn sentence_body(frame: &[u8]) -> Result<&[u8], Reject> {
     }
     let (hi, lo) = (hex_value(line[star + 1]), hex_value(line[star + 2]));
     let (Some(hi), Some(lo)) = (hi, lo) else {
-        return Err(Reject::Unsupported);
+        return Err(Reject::Checksum);
     };
     let body = &line[1..star];
     if xor8(body) != (hi << 4) | lo {
