@@ -19,7 +19,8 @@ fn encoders_name_the_bad_field() {
 
     let e = ServoCommand::from_inputs(0, true, &Vector4::new(0.1, 0.2, 4.0, 0.0)).unwrap_err();
     assert!(e.to_string().contains("S_lon"), "{e}");
-    let e = ServoCommand::from_inputs(0, true, &Vector4::new(0.1, f64::INFINITY, 0.0, 0.0)).unwrap_err();
+    let e = ServoCommand::from_inputs(0, true, &Vector4::new(0.1, f64::INFINITY, 0.0, 0.0))
+        .unwrap_err();
     assert!(e.to_string().contains("S_lat"), "{e}");
 
     let home = LocalNed::new(Geodetic::new(57.0, 9.9, 30.0).unwrap());
@@ -51,7 +52,12 @@ fn encoders_name_the_bad_field() {
 
 #[test]
 fn a_missing_serial_port_is_an_error_naming_it() {
-    let e = SerialLink::open(Path::new("/dev/helicon-no-such-port"), 115_200, Duration::from_millis(10)).unwrap_err();
+    let e = SerialLink::open(
+        Path::new("/dev/helicon-no-such-port"),
+        115_200,
+        Duration::from_millis(10),
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("/dev/helicon-no-such-port"), "{e}");
 }
 
@@ -89,7 +95,9 @@ fn the_pty_is_eight_bit_clean_and_raw() {
     link.write_all(&all).unwrap();
     let mut back = Vec::new();
     while back.len() < all.len() && Instant::now() < deadline {
-        let n = pty.read_timeout(&mut buf, Duration::from_millis(20)).unwrap();
+        let n = pty
+            .read_timeout(&mut buf, Duration::from_millis(20))
+            .unwrap();
         back.extend_from_slice(&buf[..n]);
     }
     assert_eq!(back, all);

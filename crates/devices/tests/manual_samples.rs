@@ -56,7 +56,10 @@ fn ublox_nmea_examples_decode_and_reencode_to_the_same_bytes() {
     // from the 0.001 kn one (0.007): everything else is byte for byte
     let ours = v.encode().unwrap();
     let text = std::str::from_utf8(ours.as_bytes()).unwrap();
-    assert!(text.starts_with("$GPVTG,77.52,T,,M,0.004,N,0.007,K,A*"), "{text}");
+    assert!(
+        text.starts_with("$GPVTG,77.52,T,,M,0.004,N,0.007,K,A*"),
+        "{text}"
+    );
 }
 
 #[test]
@@ -125,8 +128,14 @@ fn ublox_captured_nav_pvt_decodes_to_the_published_values() {
     assert_eq!((got.len(), stats.checksum_failures), (1, 0));
     let p = got[0];
     assert_eq!(p.itow_ms, 477_230_000);
-    assert_eq!((p.year, p.month, p.day, p.hour, p.min, p.sec), (2023, 8, 11, 12, 33, 32));
-    assert_eq!((p.valid, p.fix_type, p.flags, p.num_sv), (0xf7, 3, 0x01, 22));
+    assert_eq!(
+        (p.year, p.month, p.day, p.hour, p.min, p.sec),
+        (2023, 8, 11, 12, 33, 32)
+    );
+    assert_eq!(
+        (p.valid, p.fix_type, p.flags, p.num_sv),
+        (0xf7, 3, 0x01, 22)
+    );
     assert_eq!((p.lon_e7, p.lat_e7), (-748_276, 522_227_387));
     assert_eq!((p.height_mm, p.height_msl_mm), (128_858, 83_104));
     assert_eq!((p.h_acc_mm, p.v_acc_mm), (911, 1427));
@@ -138,7 +147,10 @@ fn ublox_captured_nav_pvt_decodes_to_the_published_values() {
     let home = LocalNed::new(p.geodetic().unwrap());
     let fix = p.to_gps_fix(&home, 12.5);
     assert_eq!(fix.position_ned_m.norm(), 0.0);
-    assert_eq!(fix.velocity_ned_m_s.unwrap(), nalgebra::Vector3::new(-0.008, -0.005, 0.019));
+    assert_eq!(
+        fix.velocity_ned_m_s.unwrap(),
+        nalgebra::Vector3::new(-0.008, -0.005, 0.019)
+    );
     // one flipped payload bit is caught by the Fletcher checksum
     let mut bad = UBLOX_NAV_PVT;
     bad[40] ^= 0x10;

@@ -42,7 +42,13 @@ fn vn_common() -> impl Strategy<Value = VnCommon> {
         prop::option::of(any::<u32>()),
     )
         .prop_filter("at least one field", |t| {
-            t.0.is_some() || t.1.is_some() || t.2.is_some() || t.3.is_some() || t.4.is_some() || t.5.is_some() || t.6.is_some()
+            t.0.is_some()
+                || t.1.is_some()
+                || t.2.is_some()
+                || t.3.is_some()
+                || t.4.is_some()
+                || t.5.is_some()
+                || t.6.is_some()
         })
         .prop_map(|(t, ypr, q, w, a, mp, s)| VnCommon {
             time_startup_ns: t,
@@ -61,64 +67,101 @@ fn vn_common() -> impl Strategy<Value = VnCommon> {
 
 /// Values on the printed grid of each `$VNYMR` field.
 fn vn_ymr() -> impl Strategy<Value = VnYmr> {
-    let grid = |scale: f64, max: i64| prop::array::uniform3(-max..=max).prop_map(move |a| a.map(|k| k as f64 / scale));
-    (grid(1e3, 999_999), grid(1e4, 99_999), grid(1e3, 99_999), grid(1e6, 99_999_999)).prop_map(|(y, m, a, g)| VnYmr {
-        yaw_pitch_roll_deg: y,
-        mag_gauss: m,
-        accel_m_s2: a,
-        angular_rate_rad_s: g,
-    })
+    let grid = |scale: f64, max: i64| {
+        prop::array::uniform3(-max..=max).prop_map(move |a| a.map(|k| k as f64 / scale))
+    };
+    (
+        grid(1e3, 999_999),
+        grid(1e4, 99_999),
+        grid(1e3, 99_999),
+        grid(1e6, 99_999_999),
+    )
+        .prop_map(|(y, m, a, g)| VnYmr {
+            yaw_pitch_roll_deg: y,
+            mag_gauss: m,
+            accel_m_s2: a,
+            angular_rate_rad_s: g,
+        })
 }
 
 fn nav_pvt() -> impl Strategy<Value = NavPvt> {
     (
-        (any::<u32>(), any::<u16>(), any::<[u8; 5]>(), any::<u8>(), 0u8..=5, any::<u8>(), any::<u8>()),
-        (any::<[i32; 4]>(), any::<[u32; 2]>(), any::<[i32; 3]>(), any::<[i32; 2]>(), any::<[u32; 2]>(), any::<u16>()),
+        (
+            any::<u32>(),
+            any::<u16>(),
+            any::<[u8; 5]>(),
+            any::<u8>(),
+            0u8..=5,
+            any::<u8>(),
+            any::<u8>(),
+        ),
+        (
+            any::<[i32; 4]>(),
+            any::<[u32; 2]>(),
+            any::<[i32; 3]>(),
+            any::<[i32; 2]>(),
+            any::<[u32; 2]>(),
+            any::<u16>(),
+        ),
     )
-        .prop_map(|((itow, year, t, valid, fix_type, flags, num_sv), (pos, acc, vel, gh, sh, pdop))| NavPvt {
-            itow_ms: itow,
-            year,
-            month: t[0],
-            day: t[1],
-            hour: t[2],
-            min: t[3],
-            sec: t[4],
-            valid,
-            fix_type,
-            flags,
-            num_sv,
-            lon_e7: pos[0],
-            lat_e7: pos[1],
-            height_mm: pos[2],
-            height_msl_mm: pos[3],
-            h_acc_mm: acc[0],
-            v_acc_mm: acc[1],
-            vel_ned_mm_s: vel,
-            g_speed_mm_s: gh[0],
-            head_mot_e5: gh[1],
-            s_acc_mm_s: sh[0],
-            head_acc_e5: sh[1],
-            pdop_e2: pdop,
-        })
+        .prop_map(
+            |((itow, year, t, valid, fix_type, flags, num_sv), (pos, acc, vel, gh, sh, pdop))| {
+                NavPvt {
+                    itow_ms: itow,
+                    year,
+                    month: t[0],
+                    day: t[1],
+                    hour: t[2],
+                    min: t[3],
+                    sec: t[4],
+                    valid,
+                    fix_type,
+                    flags,
+                    num_sv,
+                    lon_e7: pos[0],
+                    lat_e7: pos[1],
+                    height_mm: pos[2],
+                    height_msl_mm: pos[3],
+                    h_acc_mm: acc[0],
+                    v_acc_mm: acc[1],
+                    vel_ned_mm_s: vel,
+                    g_speed_mm_s: gh[0],
+                    head_mot_e5: gh[1],
+                    s_acc_mm_s: sh[0],
+                    head_acc_e5: sh[1],
+                    pdop_e2: pdop,
+                }
+            },
+        )
 }
 
 fn avionics_msg() -> impl Strategy<Value = AvionicsMessage> {
     prop_oneof![
-        (any::<u8>(), any::<bool>(), any::<[i16; 4]>()).prop_map(|(seq, armed, c)| AvionicsMessage::Servo(ServoCommand {
-            seq,
-            armed,
-            servo_counts: c,
-        })),
-        (any::<u8>(), any::<bool>(), any::<bool>(), any::<[u16; 8]>(), any::<[i16; 4]>(), any::<u8>()).prop_map(
-            |(seq, autonomous, failsafe, ch, applied, last)| AvionicsMessage::Rc(RcInput {
+        (any::<u8>(), any::<bool>(), any::<[i16; 4]>()).prop_map(|(seq, armed, c)| {
+            AvionicsMessage::Servo(ServoCommand {
                 seq,
-                autonomous,
-                failsafe,
-                channels_us: ch,
-                applied_counts: applied,
-                last_command_seq: last,
+                armed,
+                servo_counts: c,
             })
-        ),
+        }),
+        (
+            any::<u8>(),
+            any::<bool>(),
+            any::<bool>(),
+            any::<[u16; 8]>(),
+            any::<[i16; 4]>(),
+            any::<u8>()
+        )
+            .prop_map(
+                |(seq, autonomous, failsafe, ch, applied, last)| AvionicsMessage::Rc(RcInput {
+                    seq,
+                    autonomous,
+                    failsafe,
+                    channels_us: ch,
+                    applied_counts: applied,
+                    last_command_seq: last,
+                })
+            ),
     ]
 }
 
@@ -127,7 +170,10 @@ fn avionics_msg() -> impl Strategy<Value = AvionicsMessage> {
 fn gga() -> impl Strategy<Value = Gga> {
     (
         prop::option::of(0u64..8_640_000),
-        prop::option::of((-540_000_000i64..=540_000_000, -1_080_000_000i64..=1_080_000_000)),
+        prop::option::of((
+            -540_000_000i64..=540_000_000,
+            -1_080_000_000i64..=1_080_000_000,
+        )),
         0u8..=8,
         prop::option::of(0u8..=99),
         prop::option::of(0u32..=9999),
@@ -156,7 +202,12 @@ fn decode_random(bytes: &[u8], chunks: &[usize]) {
     assert_eq!(s.bytes, bytes.len() as u64);
     for m in vn {
         if let Some(i) = m.imu_sample() {
-            assert!(i.gyro_body_rad_s.iter().chain(i.specific_force_body_m_s2.iter()).all(|x| x.is_finite()));
+            assert!(
+                i.gyro_body_rad_s
+                    .iter()
+                    .chain(i.specific_force_body_m_s2.iter())
+                    .all(|x| x.is_finite())
+            );
         }
     }
     for m in decode_chunked::<vectornav::VnAscii>(bytes, chunks).0 {
@@ -185,7 +236,13 @@ where
 }
 
 /// `garbage frame garbage frame` decodes to exactly the two messages.
-fn survives_garbage<P: Protocol>(frame: &[u8], g1: &[u8], g2: &[u8], want: &P::Message, ch: &[usize]) -> Result<(), TestCaseError>
+fn survives_garbage<P: Protocol>(
+    frame: &[u8],
+    g1: &[u8],
+    g2: &[u8],
+    want: &P::Message,
+    ch: &[usize],
+) -> Result<(), TestCaseError>
 where
     P::Message: std::fmt::Debug + PartialEq,
 {

@@ -145,7 +145,12 @@ fn geodetic_ned_matches_pymap3d() {
     let mut worst = (0.0f64, 0.0f64, 0.0f64);
     for c in f["geodetic"].as_array().unwrap() {
         let g = |v: &Value| {
-            let a: Vec<f64> = v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+            let a: Vec<f64> = v
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
             a
         };
         let home = g(&c["home"]);
@@ -162,7 +167,10 @@ fn geodetic_ned_matches_pymap3d() {
             .max((back.longitude_deg - want[1]).abs());
         worst.2 = worst.2.max((back.height_m - want[2]).abs());
     }
-    println!("worst: NED {:.2e} m, lat/lon {:.2e} deg, height {:.2e} m", worst.0, worst.1, worst.2);
+    println!(
+        "worst: NED {:.2e} m, lat/lon {:.2e} deg, height {:.2e} m",
+        worst.0, worst.1, worst.2
+    );
     assert!(worst.0 < 1e-6, "{worst:?}");
     assert!(worst.1 < 1e-12, "{worst:?}");
     assert!(worst.2 < 1e-6, "{worst:?}");
