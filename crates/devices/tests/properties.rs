@@ -280,6 +280,28 @@ proptest! {
         decode_random(&all, &ch);
     }
 
+    /// Sentences with a valid checksum but hostile fields reach the `nmea`
+    /// crate's parser and `$VNYMR`'s: no panic, no non-finite value.
+    #[test]
+    fn hostile_fields_with_valid_checksums_never_panic(
+        head in prop::sample::select(vec!["GPGGA,", "GNRMC,", "GPVTG,", "VNYMR,", "GPGGA,123519,"]),
+        body in "[-+,.0-9NSEWAVMTKDe]{0,70}",
+    ) {
+        let text = format!("{head}{body}");
+        let cs = text.bytes().fold(0u8, |a, b| a ^ b);
+        let line = format!("${text}*{cs:02X}\r\n");
+        for m in decode_chunked::<nmea0183::Nmea>(line.as_bytes(), &[7]).0 {
+            match m {
+                NmeaMessage::Gga(g) => prop_assert!(g.altitude_msl_m.is_none_or(f64::is_finite)),
+                NmeaMessage::Rmc(r) => prop_assert!(r.speed_knots.is_none_or(f64::is_finite)),
+                NmeaMessage::Vtg(v) => prop_assert!(v.course_true_deg.is_none_or(f64::is_finite)),
+            }
+        }
+        for m in decode_chunked::<vectornav::VnAscii>(line.as_bytes(), &[7]).0 {
+            prop_assert!(m.angular_rate_rad_s.iter().all(|x| x.is_finite()));
+        }
+    }
+
     #[test]
     fn vn_binary_round_trips(m in vn_common(), ch in chunks(), bit in any::<usize>(), g1 in garbage(), g2 in garbage()) {
         let f = m.encode().unwrap();
