@@ -131,4 +131,12 @@ fn decoder_statistics_count_what_was_rejected() {
     two.extend(frame.as_bytes());
     drop(d.push(&two));
     assert_eq!((d.stats().messages, d.stats().unread), (2, 2));
+
+    // a false start declaring the longest frame does not delay a real one:
+    // it comes out as soon as its last byte is in
+    let mut d = AvionicsDecoder::new();
+    let mut stream = vec![0xA5, 0x5A, 26, 0x02, 0x00];
+    stream.extend(frame.as_bytes());
+    assert_eq!(d.push(&stream).count(), 1);
+    assert_eq!((d.stats().discarded_bytes, d.pending_bytes()), (5, 0));
 }

@@ -192,6 +192,39 @@ fn gga() -> impl Strategy<Value = Gga> {
         })
 }
 
+/// RMC and VTG on the encoder's grid: 0.001 kn, 0.01°, 0.01 s.
+fn rmc_vtg() -> impl Strategy<Value = (Rmc, Vtg)> {
+    (
+        prop::option::of(0u64..8_640_000),
+        prop::option::of((1983i32..=2082, 1u8..=12, 1u8..=28)),
+        any::<bool>(),
+        prop::option::of((
+            -540_000_000i64..=540_000_000,
+            -1_080_000_000i64..=1_080_000_000,
+        )),
+        prop::option::of((0u32..999_999, 0u32..36_000)),
+    )
+        .prop_map(|(t, date, valid, pos, vel)| {
+            let speed = vel.map(|(k, _)| f64::from(k) / 1000.0);
+            let course = vel.map(|(_, c)| f64::from(c) / 100.0);
+            (
+                Rmc {
+                    utc_time_s: t.map(|c| c as f64 / 100.0),
+                    date,
+                    valid,
+                    latitude_deg: pos.map(|(m, _)| m as f64 / 6e6),
+                    longitude_deg: pos.map(|(_, m)| m as f64 / 6e6),
+                    speed_knots: speed,
+                    course_true_deg: course,
+                },
+                Vtg {
+                    course_true_deg: course,
+                    speed_knots: speed,
+                },
+            )
+        })
+}
+
 fn chunks() -> impl Strategy<Value = Vec<usize>> {
     prop::collection::vec(1usize..40, 1..6)
 }
@@ -359,5 +392,33 @@ proptest! {
         prop_assert_eq!(again.as_bytes(), f.as_bytes());
         flipped_is_rejected::<nmea0183::Nmea>(f.as_bytes(), bit)?;
         survives_garbage::<nmea0183::Nmea>(f.as_bytes(), &g1, &g2, &got[0], &ch)?;
+    }
+
+    #[test]
+    fn nmea_rmc_vtg_round_trip(m in rmc_vtg(), ch in chunks(), bit in any::<usize>()) {
+        for msg in [NmeaMessage::Rmc(m.0), NmeaMessage::Vtg(m.1)] {
+            let f = msg.encode().unwrap();
+            let (got, stats) = decode_chunked::<nmea0183::Nmea>(f.as_bytes(), &ch);
+            prop_assert_eq!(got.len(), 1, "{:?} {:?}", std::str::from_utf8(f.as_bytes()), stats);
+            match (got[0], msg) {
+                // speed and course pass through the nmea crate's f32; RMC
+                // re-encodes to the same bytes
+                (NmeaMessage::Rmc(_), _) => {
+                    let again = got[0].encode().unwrap();
+                    prop_assert_eq!(again.as_bytes(), f.as_bytes());
+                }
+                // VTG's km/h field is derived from the (f32) knots, so
+                // compare the fields: within f32 rounding (2^-24 relative)
+                (NmeaMessage::Vtg(g), NmeaMessage::Vtg(w)) => {
+                    let close = |a: Option<f64>, b: Option<f64>| match (a, b) {
+                        (Some(a), Some(b)) => (a - b).abs() <= 1e-7 * b.abs().max(1.0),
+                        (a, b) => a.is_none() && b.is_none(),
+                    };
+                    prop_assert!(close(g.speed_knots, w.speed_knots) && close(g.course_true_deg, w.course_true_deg));
+                }
+                (g, w) => return Err(TestCaseError::fail(format!("{g:?} from {w:?}"))),
+            }
+            flipped_is_rejected::<nmea0183::Nmea>(f.as_bytes(), bit)?;
+        }
     }
 }
