@@ -168,6 +168,12 @@ impl<W: Write> UlogWriter<W> {
         self.stats
     }
 
+    /// Bytes encoded but not yet written to the output (what a killed
+    /// process would lose).
+    pub fn buffered_bytes(&self) -> usize {
+        self.buf.len()
+    }
+
     /// The output (e.g. the `Vec<u8>` of a test); call [`Self::finish`]
     /// first to have everything in it.
     pub fn get_ref(&self) -> &W {
