@@ -60,11 +60,16 @@ fn truncation_note(file: &std::path::Path, end: End) {
 }
 
 fn run_export(a: &ExportArgs) -> Result<()> {
-    let report = export_csv(&a.file, &a.csv)
-        .with_context(|| format!("exporting {}", a.file.display()))?;
+    let report =
+        export_csv(&a.file, &a.csv).with_context(|| format!("exporting {}", a.file.display()))?;
     let mut con = crate::console::Console::stdout();
     for ((topic, multi_id), t) in &report.topics {
-        writeln!(con, "{topic} {multi_id}: {} rows -> {}", t.stats.rows, t.file.display());
+        writeln!(
+            con,
+            "{topic} {multi_id}: {} rows -> {}",
+            t.stats.rows,
+            t.file.display()
+        );
     }
     for f in &report.text_files {
         writeln!(con, "{}", f.display());
@@ -92,9 +97,11 @@ fn run_info(a: &InfoArgs) -> Result<()> {
     writeln!(con, "dropouts: {} ms", s.dropout_ms);
     writeln!(con, "topic multi_id records first_us last_us rate_hz");
     for ((topic, multi_id), t) in &s.topics {
-        let (first, last) = t.first_last_us.map_or((String::new(), String::new()), |(f, l)| {
-            (f.to_string(), l.to_string())
-        });
+        let (first, last) = t
+            .first_last_us
+            .map_or((String::new(), String::new()), |(f, l)| {
+                (f.to_string(), l.to_string())
+            });
         let rate = t.rate_hz().map_or(String::new(), |r| format!("{r:.3}"));
         writeln!(con, "{topic} {multi_id} {} {first} {last} {rate}", t.rows);
     }

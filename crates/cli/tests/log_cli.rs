@@ -48,14 +48,29 @@ fn export_writes_one_csv_per_topic_and_the_text_files() {
     let head = lines.next().unwrap();
     assert!(head.starts_with("timestamp,sample,t_s,"), "{head}");
     assert_eq!(lines.count(), 60);
-    for topic in ["sensor_imu", "sensor_mag", "sensor_gps", "navigation", "servo_output"] {
-        assert!(out.join(format!("helicon_sample_{topic}_0.csv")).exists(), "{topic}");
+    for topic in [
+        "sensor_imu",
+        "sensor_mag",
+        "sensor_gps",
+        "navigation",
+        "servo_output",
+    ] {
+        assert!(
+            out.join(format!("helicon_sample_{topic}_0.csv")).exists(),
+            "{topic}"
+        );
     }
     let msgs = std::fs::read_to_string(out.join("helicon_sample_messages.txt")).unwrap();
-    assert!(msgs.contains("1125000 critical failsafe raised: RC signal lost"), "{msgs}");
+    assert!(
+        msgs.contains("1125000 critical failsafe raised: RC signal lost"),
+        "{msgs}"
+    );
     assert!(msgs.contains("1050000 dropout 12 ms"), "{msgs}");
     let params = std::fs::read_to_string(out.join("helicon_sample_params.txt")).unwrap();
-    assert_eq!(params, "CTRL_DT 0.0025\nLOG_RATE 400\nCTRL_DT 0.005 @ 1050000\n");
+    assert_eq!(
+        params,
+        "CTRL_DT 0.0025\nLOG_RATE 400\nCTRL_DT 0.005 @ 1050000\n"
+    );
     let info = std::fs::read_to_string(out.join("helicon_sample_info.txt")).unwrap();
     assert!(info.contains("sys_name: helicon\n"), "{info}");
     std::fs::remove_dir_all(&dir).unwrap();
@@ -66,7 +81,10 @@ fn info_lists_topics_with_rates() {
     let ulg = fixture("helicon_sample.ulg");
     let (ok, stdout, stderr) = helicon(&["log", "info", ulg.to_str().unwrap()]);
     assert!(ok, "{stderr}");
-    assert!(stdout.contains("control 0 60 1000000 1147500 400.000"), "{stdout}");
+    assert!(
+        stdout.contains("control 0 60 1000000 1147500 400.000"),
+        "{stdout}"
+    );
     assert!(stdout.contains("dropouts: 12 ms"), "{stdout}");
 }
 

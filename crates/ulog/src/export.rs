@@ -341,7 +341,8 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
                     }
                     w.write_field(&field).map_err(csv_err(&report.file))?;
                 }
-                w.write_record(None::<&[u8]>).map_err(csv_err(&report.file))?;
+                w.write_record(None::<&[u8]>)
+                    .map_err(csv_err(&report.file))?;
                 report.stats.add(timestamp_us);
             }
             Event::Logging {

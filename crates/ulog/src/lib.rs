@@ -46,7 +46,7 @@ pub use format::{FieldDef, Record, UlogType, UlogValue};
 pub use messages::{FlightLog, LogInfo, LogRecord};
 pub use spec::LogLevel;
 pub use writer::{FlushPolicy, Topic, UlogWriter, WriterStats, timestamp_us};
+pub mod export;
 pub mod flat;
 pub mod reader;
 pub mod visit;
-pub mod export;

@@ -465,9 +465,7 @@ fn parse_format(b: &[u8]) -> Result<Format, String> {
 }
 
 fn parse_key_value(b: &[u8]) -> Result<KeyValue, String> {
-    let (&key_len, rest) = b
-        .split_first()
-        .ok_or_else(|| "no key length".to_string())?;
+    let (&key_len, rest) = b.split_first().ok_or_else(|| "no key length".to_string())?;
     let key_len = usize::from(key_len);
     let key = rest
         .get(..key_len)
@@ -487,7 +485,12 @@ fn parse_key_value(b: &[u8]) -> Result<KeyValue, String> {
             if raw.len() < t.size() * n {
                 return Err(format!("value of `{name}` shorter than its type"));
             }
-            Value::Array(raw.chunks_exact(t.size()).take(n).map(|c| decode_value(t, c)).collect())
+            Value::Array(
+                raw.chunks_exact(t.size())
+                    .take(n)
+                    .map(|c| decode_value(t, c))
+                    .collect(),
+            )
         }
         (None, _) => Value::Raw(raw.to_vec()),
     };

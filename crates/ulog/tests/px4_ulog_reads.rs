@@ -136,9 +136,17 @@ fn px4_ulog_reads_every_control_step_at_400_hz() {
     assert!(ts.windows(2).all(|w| (w[1] - w[0]).abs_diff(2500) <= 2));
     // the telemetry's values, bit for bit
     let cmd0 = f64s(&control["command[0]"]);
-    assert!(cmd0.iter().zip(&commands).all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert!(
+        cmd0.iter()
+            .zip(&commands)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    );
     let psi = f64s(&control["estimate[5]"]);
-    assert!(psi.iter().zip(&estimates).all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert!(
+        psi.iter()
+            .zip(&estimates)
+            .all(|(a, b)| a.to_bits() == b.to_bits())
+    );
     // trailing padding is not a field
     assert!(!control.keys().any(|k| k.starts_with("_padding")));
     // the sensors: an IMU record per step, magnetometer every 4th, GPS every 80th

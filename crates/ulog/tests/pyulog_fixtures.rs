@@ -56,13 +56,19 @@ fn collect(path: &Path) -> Collected {
                 timestamp_us,
             } => {
                 if in_data {
-                    c.changed.push((timestamp_us, kv.name.clone(), kv.value.clone()));
+                    c.changed
+                        .push((timestamp_us, kv.name.clone(), kv.value.clone()));
                 } else {
                     c.initial.insert(kv.name.clone(), kv.value.clone());
                 }
             }
             Event::Subscribed { topic, .. } => {
-                let cols = topic.format.columns.iter().map(|c| c.name.clone()).collect();
+                let cols = topic
+                    .format
+                    .columns
+                    .iter()
+                    .map(|c| c.name.clone())
+                    .collect();
                 c.data
                     .entry(format!("{}_{}", topic.name, topic.multi_id))
                     .or_insert((cols, Vec::new()));
@@ -125,7 +131,11 @@ fn check_against_pyulog(ulg: &str, json: &str) -> usize {
     let info = py["info"].as_object().unwrap();
     assert_eq!(info.len(), ours.info.len(), "info keys");
     for (k, v) in info {
-        assert!(same(&ours.info[k], v), "info {k}: {:?} vs {v}", ours.info[k]);
+        assert!(
+            same(&ours.info[k], v),
+            "info {k}: {:?} vs {v}",
+            ours.info[k]
+        );
     }
     let params = py["initial_parameters"].as_object().unwrap();
     assert_eq!(params.len(), ours.initial.len());
@@ -235,7 +245,11 @@ fn csv_export_matches_pyulog() {
             for (i, col) in header.iter().enumerate() {
                 let py_vals = topic["values"][col.as_str()].as_array().unwrap();
                 let mut rows = 0;
-                for (rec, p) in csv::Reader::from_path(&path).unwrap().records().zip(py_vals) {
+                for (rec, p) in csv::Reader::from_path(&path)
+                    .unwrap()
+                    .records()
+                    .zip(py_vals)
+                {
                     let field = rec.unwrap()[i].to_string();
                     let ok = match p {
                         // `float` columns are written in f32's shortest form

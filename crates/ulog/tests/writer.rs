@@ -181,9 +181,14 @@ fn flush_policy_bounds_the_loss_to_a_tenth_of_a_second() {
             max_unflushed = max_unflushed.max(k + 1 - flushed);
         }
     }
-    // 0.1 s at 400 Hz = 40 steps
+    eprintln!("largest backlog: {max_unflushed} control steps");
+    // 0.1 s at 400 Hz = 40 steps; at ~490 bytes a step the 16 KiB bound
+    // comes first, after 33 steps
     assert!(max_unflushed <= 40, "{max_unflushed} steps buffered");
-    assert!(max_unflushed >= 30, "{max_unflushed}: flushing more often than the policy says");
+    assert!(
+        max_unflushed >= 30,
+        "{max_unflushed}: flushing more often than the policy says"
+    );
 
     // the byte bound: records all at one time stamp
     let policy = FlushPolicy {
@@ -195,12 +200,26 @@ fn flush_policy_bounds_the_loss_to_a_tenth_of_a_second() {
     w.add_format::<Control>().unwrap();
     let topic = w.add_logged::<Control>(0).unwrap();
     for k in 0..200 {
-        w.write(topic, &Control { sample: k, ..Default::default() }).unwrap();
-        assert!(w.buffered_bytes() < 4096, "{} bytes buffered", w.buffered_bytes());
+        w.write(
+            topic,
+            &Control {
+                sample: k,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert!(
+            w.buffered_bytes() < 4096,
+            "{} bytes buffered",
+            w.buffered_bytes()
+        );
         assert_eq!(w.get_ref().len() as u64, w.stats().bytes_flushed);
     }
     let n = control_records(w.get_ref()).len();
-    assert!((180..200).contains(&n), "{n} of 200 flushed by the 4 KiB bound");
+    assert!(
+        (180..200).contains(&n),
+        "{n} of 200 flushed by the 4 KiB bound"
+    );
 }
 
 #[test]
@@ -216,7 +235,10 @@ fn misuse_is_a_typed_error() {
         w.info_str("bad key", "x"),
         Err(WriteError::Invalid { .. })
     ));
-    assert!(matches!(w.parameter_f32("", 1.0), Err(WriteError::Invalid { .. })));
+    assert!(matches!(
+        w.parameter_f32("", 1.0),
+        Err(WriteError::Invalid { .. })
+    ));
     let c = w.add_logged::<Control>(0).unwrap();
     assert!(matches!(
         w.add_logged::<Control>(0),
