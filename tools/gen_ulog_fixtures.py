@@ -9,7 +9,7 @@
    against it.
 2. Conversely, a small log written by pyulog's writer with real PX4 message
    formats (nested types, several instances, float/bool/int/char fields,
-   text messages): give the path of a PX4 log (e.g. pyulog's own test log
+   text messages, multi-part information): give the path of a PX4 log (e.g. pyulog's own test log
    test/sample_log_small.ulg, BSD-3-Clause, from the pyulog repository) as
    --px4 FILE; a few topics and rows are kept, written with
    ULog.write_ulog to px4_trimmed.ulg and parsed back by pyulog into
@@ -62,6 +62,9 @@ def dump(ulg_path, json_path):
         "start_timestamp": int(u.start_timestamp),
         "file_corruption": bool(u.file_corruption),
         "info": {k: plain(v) for k, v in sorted(u.msg_info_dict.items())},
+        # each sequence of INFO_MULTIPLE parts joined
+        "info_multiple": {k: ["".join(plain(p) for p in seq) for seq in v]
+                          for k, v in sorted(u.msg_info_multiple_dict.items())},
         "initial_parameters": {k: plain(v) for k, v in sorted(u.initial_parameters.items())},
         "changed_parameters": [[int(t), n, plain(v)] for t, n, v in u.changed_parameters],
         "logged_messages": [[int(m.timestamp), int(m.log_level), m.log_level_str(), m.message]
@@ -92,7 +95,6 @@ def trim_px4(src, dst):
     u._initial_parameters = {k: u.initial_parameters[k] for k in keep}
     u._changed_parameters = []
     u._default_parameters = {}
-    u._msg_info_multiple_dict = {}
     u.write_ulog(dst)
 
 

@@ -135,6 +135,11 @@ pub fn summarize(input: &Path) -> Result<LogSummary, ReadError> {
     s.pass = visit(reader, |ev| -> Result<(), ReadError> {
         match ev {
             Event::Info(kv) => s.info.push((kv.name.clone(), kv.value.to_string())),
+            Event::InfoMultiple(kv) => {
+                let len = kv.value.to_string().len();
+                s.info
+                    .push((kv.name.clone(), format!("({len} bytes in several parts)")));
+            }
             Event::Parameter { .. } => s.parameters += 1,
             Event::Subscribed { topic, .. } => {
                 s.topics
@@ -285,7 +290,7 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
 
     let pass = visit(reader, |ev| -> Result<(), ExportError> {
         match ev {
-            Event::Info(kv) => {
+            Event::Info(kv) | Event::InfoMultiple(kv) => {
                 writeln!(info, "{}: {}", kv.name, kv.value).map_err(io_err(&info_path))?;
             }
             Event::Parameter {

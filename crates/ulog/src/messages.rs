@@ -520,9 +520,10 @@ impl<W: Write> FlightLog<W> {
         &mut self.writer
     }
 
-    /// Write one record (failsafe and mode events also as LOGGING text).
-    /// No allocation.
-    pub fn write(&mut self, r: &LogRecord) -> Result<(), WriteError> {
+    /// Write one record's data only: no LOGGING text for failsafe and mode
+    /// events (for a runtime that writes its own, more precise text with
+    /// [`UlogWriter::log`]). No allocation.
+    pub fn write_data(&mut self, r: &LogRecord) -> Result<(), WriteError> {
         let t = &self.topics;
         let w = &mut self.writer;
         match r {
@@ -534,8 +535,18 @@ impl<W: Write> FlightLog<W> {
             LogRecord::Servo(x) => w.write(t.servo, x),
             LogRecord::Rc(x) => w.write(t.rc, x),
             LogRecord::Timing(x) => w.write(t.timing, x),
+            LogRecord::Failsafe(x) => w.write(t.failsafe, x),
+            LogRecord::Mode(x) => w.write(t.mode, x),
+        }
+    }
+
+    /// Write one record (failsafe and mode events also as LOGGING text).
+    /// No allocation.
+    pub fn write(&mut self, r: &LogRecord) -> Result<(), WriteError> {
+        self.write_data(r)?;
+        let w = &mut self.writer;
+        match r {
             LogRecord::Failsafe(x) => {
-                w.write(t.failsafe, x)?;
                 let name = FailsafeReason::from_code(x.reason).map_or("unknown", |r| r.name());
                 let mut text = StackText::new();
                 let _ = if x.active {
@@ -551,7 +562,6 @@ impl<W: Write> FlightLog<W> {
                 w.log(level, x.timestamp, text.as_str())
             }
             LogRecord::Mode(x) => {
-                w.write(t.mode, x)?;
                 let name = |c| FlightMode::from_code(c).map_or("unknown", |m| m.name());
                 let mut text = StackText::new();
                 let _ = write_fmt(
@@ -560,6 +570,7 @@ impl<W: Write> FlightLog<W> {
                 );
                 w.log(LogLevel::Info, x.timestamp, text.as_str())
             }
+            _ => Ok(()),
         }
     }
 

@@ -4,7 +4,7 @@
 
 use crate::error::ReadError;
 use crate::flat::{FlatFormat, flatten};
-use crate::reader::{Format, KeyValue, Message, UlogReader};
+use crate::reader::{Format, KeyValue, Message, UlogReader, Value};
 use crate::spec::LogLevel;
 use std::collections::HashMap;
 use std::io::Read;
@@ -25,8 +25,12 @@ pub struct Subscription {
 /// What the pass found, in file order.
 #[derive(Debug)]
 pub enum Event<'a> {
-    /// An INFO (or one part of an INFO_MULTIPLE) message.
+    /// An INFO message.
     Info(&'a KeyValue),
+    /// An INFO_MULTIPLE sequence, its parts joined (strings and arrays
+    /// concatenated); reported when the next message is not its
+    /// continuation. A key may have several sequences.
+    InfoMultiple(&'a KeyValue),
     /// A parameter; `in_data` for a change during the log, at the newest
     /// timestamp seen so far.
     Parameter {
@@ -122,6 +126,7 @@ pub fn visit<R: Read, E: From<ReadError>>(
     let mut formats: HashMap<String, Format> = HashMap::new();
     let mut subs: HashMap<u16, (Subscription, Option<u64>)> = HashMap::new();
     let mut in_data = false;
+    let mut pending: Option<KeyValue> = None;
     let mut newest_us = 0u64;
     let mut summary = PassSummary {
         end: End::Complete,
@@ -140,11 +145,28 @@ pub fn visit<R: Read, E: From<ReadError>>(
             }
             Err(e) => return Err(e.into()),
         };
+        if !matches!(m, Message::InfoMultiple { .. })
+            && let Some(p) = pending.take()
+        {
+            f(Event::InfoMultiple(&p))?;
+        }
         match m {
             Message::Format(fmt) => {
                 formats.insert(fmt.name.clone(), fmt);
             }
-            Message::Info(kv) | Message::InfoMultiple { kv, .. } => f(Event::Info(&kv))?,
+            Message::Info(kv) => f(Event::Info(&kv))?,
+            Message::InfoMultiple { is_continued, kv } => {
+                match pending.as_mut() {
+                    Some(p) if is_continued && p.name == kv.name => join(p, kv),
+                    _ => {
+                        if let Some(p) = pending.take() {
+                            f(Event::InfoMultiple(&p))?;
+                        }
+                        pending = Some(kv);
+                    }
+                }
+                continue;
+            }
             Message::Parameter(kv) => f(Event::Parameter {
                 kv: &kv,
                 in_data,
@@ -234,5 +256,20 @@ pub fn visit<R: Read, E: From<ReadError>>(
             Message::ParameterDefault { .. } | Message::Sync | Message::Unknown { .. } => {}
         }
     }
+    if let Some(p) = pending.take() {
+        f(Event::InfoMultiple(&p))?;
+    }
     Ok(summary)
+}
+
+/// Append a continuation part to an INFO_MULTIPLE sequence.
+fn join(to: &mut KeyValue, part: KeyValue) {
+    match (&mut to.value, part.value) {
+        (Value::Str(a), Value::Str(b)) => a.push_str(&b),
+        (Value::Array(a), Value::Array(b)) => a.extend(b),
+        (Value::Raw(a), Value::Raw(b)) => a.extend(b),
+        // parts of different types: keep the first, as the specification
+        // gives no meaning to the mix
+        _ => {}
+    }
 }

@@ -33,6 +33,7 @@ fn fixture(name: &str) -> PathBuf {
 #[derive(Default, Debug)]
 struct Collected {
     info: BTreeMap<String, Value>,
+    info_multiple: BTreeMap<String, Vec<String>>,
     initial: BTreeMap<String, Value>,
     changed: Vec<(u64, String, Value)>,
     logged: Vec<(u64, u8, String)>,
@@ -49,6 +50,15 @@ fn collect(path: &Path) -> Collected {
         match ev {
             Event::Info(kv) => {
                 c.info.insert(kv.name.clone(), kv.value.clone());
+            }
+            Event::InfoMultiple(kv) => {
+                let Value::Str(text) = &kv.value else {
+                    panic!("{}: not text", kv.name)
+                };
+                c.info_multiple
+                    .entry(kv.name.clone())
+                    .or_default()
+                    .push(text.clone());
             }
             Event::Parameter {
                 kv,
@@ -137,6 +147,9 @@ fn check_against_pyulog(ulg: &str, json: &str) -> usize {
             ours.info[k]
         );
     }
+    let multiple: BTreeMap<String, Vec<String>> =
+        serde_json::from_value(py["info_multiple"].clone()).unwrap();
+    assert_eq!(multiple, ours.info_multiple, "multi-part information");
     let params = py["initial_parameters"].as_object().unwrap();
     assert_eq!(params.len(), ours.initial.len());
     for (k, v) in params {

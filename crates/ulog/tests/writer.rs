@@ -304,3 +304,55 @@ fn io_errors_name_the_file() {
     assert!(e.to_string().contains("/nonexistent-dir/x.ulg"), "{e}");
     assert!(e.to_string().contains("create"), "{e}");
 }
+
+/// `write` adds a text message for failsafe and mode events, `write_data`
+/// does not.
+#[test]
+fn events_as_text_or_data_only() {
+    let texts = |data_only: bool| {
+        let mut log =
+            FlightLog::new(Vec::new(), &LogInfo::default(), FlushPolicy::default()).unwrap();
+        let ev = [
+            LogRecord::Failsafe(Failsafe {
+                timestamp: 10,
+                reason: FailsafeReason::RcLoss as u8,
+                active: true,
+            }),
+            LogRecord::Mode(Mode {
+                timestamp: 10,
+                mode: FlightMode::Failsafe as u8,
+                previous: 99, // an unknown code is named `unknown`
+            }),
+        ];
+        for e in &ev {
+            if data_only {
+                log.write_data(e).unwrap();
+            } else {
+                log.write(e).unwrap();
+            }
+        }
+        let bytes = log.finish().unwrap();
+        let mut r = UlogReader::new(&bytes[..], "t").unwrap();
+        let (mut texts, mut data) = (Vec::new(), 0);
+        while let Some(m) = r.next_message().unwrap() {
+            match m {
+                Message::Logging { text, level, .. } => texts.push((level.unwrap(), text)),
+                Message::Data { .. } => data += 1,
+                _ => {}
+            }
+        }
+        assert_eq!(data, 2);
+        texts
+    };
+    assert_eq!(
+        texts(false),
+        vec![
+            (
+                LogLevel::Critical,
+                "failsafe raised: RC signal lost".to_string()
+            ),
+            (LogLevel::Info, "mode: unknown -> failsafe".to_string()),
+        ]
+    );
+    assert!(texts(true).is_empty());
+}
