@@ -178,18 +178,8 @@ pub fn visit<R: Read, E: From<ReadError>>(
                 name,
             } => {
                 in_data = true;
-                let format = flatten(&name, &formats);
-                let format = format.map_err(|rule| malformed(&file, at, "'A'", rule))?;
-                let Some(timestamp_column) = format.timestamp_column() else {
-                    let rule = format!("topic `{name}` has no `uint64_t timestamp` field");
-                    return Err(malformed(&file, at, "'A'", rule).into());
-                };
-                let sub = Subscription {
-                    name,
-                    multi_id,
-                    format,
-                    timestamp_column,
-                };
+                let sub = subscription(name, multi_id, &formats)
+                    .map_err(|rule| malformed(&file, at, "'A'", rule))?;
                 subs.insert(msg_id, (sub, None));
                 if let Some((topic, _)) = subs.get(&msg_id) {
                     f(Event::Subscribed { msg_id, topic })?;
@@ -203,19 +193,8 @@ pub fn visit<R: Read, E: From<ReadError>>(
                     summary.unknown_records += 1;
                     continue;
                 };
-                if payload.len() < topic.format.min_len {
-                    let rule = format!(
-                        "`{}` record of {} bytes, its format needs {}",
-                        topic.name,
-                        payload.len(),
-                        topic.format.min_len
-                    );
-                    return Err(malformed(&file, at, "'D'", rule).into());
-                }
-                let c = &topic.format.columns[topic.timestamp_column];
-                let mut ts = [0u8; 8];
-                ts.copy_from_slice(&payload[c.offset..c.offset + 8]);
-                let timestamp_us = u64::from_le_bytes(ts);
+                let timestamp_us = record_timestamp(topic, payload)
+                    .map_err(|rule| malformed(&file, at, "'D'", rule))?;
                 if last.is_some_and(|l| timestamp_us < l) {
                     summary.non_monotonic += 1;
                 }
@@ -260,6 +239,40 @@ pub fn visit<R: Read, E: From<ReadError>>(
         f(Event::InfoMultiple(&p))?;
     }
     Ok(summary)
+}
+
+/// The subscription of topic `name`, its format flattened.
+fn subscription(
+    name: String,
+    multi_id: u8,
+    formats: &HashMap<String, Format>,
+) -> Result<Subscription, String> {
+    let format = flatten(&name, formats)?;
+    let Some(timestamp_column) = format.timestamp_column() else {
+        return Err(format!("topic `{name}` has no `uint64_t timestamp` field"));
+    };
+    Ok(Subscription {
+        name,
+        multi_id,
+        format,
+        timestamp_column,
+    })
+}
+
+/// The timestamp of a record, after checking its length against its format.
+fn record_timestamp(topic: &Subscription, payload: &[u8]) -> Result<u64, String> {
+    if payload.len() < topic.format.min_len {
+        return Err(format!(
+            "`{}` record of {} bytes, its format needs {}",
+            topic.name,
+            payload.len(),
+            topic.format.min_len
+        ));
+    }
+    match topic.format.value(payload, topic.timestamp_column) {
+        Some(Value::UInt(t)) => Ok(t),
+        _ => Err(format!("`{}` record without its timestamp", topic.name)),
+    }
 }
 
 /// Append a continuation part to an INFO_MULTIPLE sequence.
