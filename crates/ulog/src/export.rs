@@ -17,7 +17,7 @@
 
 use crate::error::ReadError;
 use crate::reader::{UlogReader, Value};
-use crate::visit::{End, Event, PassSummary, visit};
+use crate::visit::{End, Event, PassSummary, Subscription, visit};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::fs::File;
@@ -249,6 +249,33 @@ fn format_value(v: &Value, s: &mut String) -> bool {
     true
 }
 
+type TopicCsv = (csv::Writer<File>, (String, u8), TopicReport);
+
+/// The CSV of a topic instance, its header written: `timestamp` first.
+fn new_csv(
+    out: &mut Outputs,
+    topic: &Subscription,
+    key: (String, u8),
+) -> Result<TopicCsv, ExportError> {
+    let suffix = format!("{}_{}.csv", safe(&topic.name), topic.multi_id);
+    let path = out.path(&suffix);
+    let err = |source| ExportError::Csv {
+        file: path.display().to_string(),
+        source,
+    };
+    let mut w = csv::Writer::from_path(&path).map_err(err)?;
+    let cols = &topic.format.columns;
+    let ts = topic.timestamp_column;
+    let order = std::iter::once(ts).chain((0..cols.len()).filter(|i| *i != ts));
+    w.write_record(order.map(|i| cols[i].name.as_str()))
+        .map_err(err)?;
+    let report = TopicReport {
+        file: path,
+        stats: TopicStats::default(),
+    };
+    Ok((w, key, report))
+}
+
 /// Export `input` (a `.ulg` file) into the folder `dir` (created if
 /// needed). See the module documentation for the files.
 #[allow(clippy::too_many_lines)] // one pass: each event kind to its file
@@ -275,7 +302,7 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
 
     // per message id: index into `csvs`
     let mut by_msg_id: BTreeMap<u16, usize> = BTreeMap::new();
-    let mut csvs: Vec<(csv::Writer<File>, (String, u8), TopicReport)> = Vec::new();
+    let mut csvs: Vec<TopicCsv> = Vec::new();
     let mut field = String::new();
     let mut non_finite = 0u64;
     let mut log_messages = 0u64;
@@ -305,28 +332,9 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
                 }
                 .map_err(io_err(&params_path))?;
             }
-            Event::Subscribed { msg_id, topic } => {
-                let key = (topic.name.clone(), topic.multi_id);
-                let idx = match csvs.iter().position(|(_, k, _)| *k == key) {
-                    Some(i) => i,
-                    None => {
-                        let suffix = format!("{}_{}.csv", safe(&topic.name), topic.multi_id);
-                        let path = out.path(&suffix);
-                        let mut w = csv::Writer::from_path(&path).map_err(csv_err(&path))?;
-                        let cols = &topic.format.columns;
-                        let ts = topic.timestamp_column;
-                        let order = std::iter::once(ts).chain((0..cols.len()).filter(|i| *i != ts));
-                        w.write_record(order.map(|i| cols[i].name.as_str()))
-                            .map_err(csv_err(&path))?;
-                        let report = TopicReport {
-                            file: path,
-                            stats: TopicStats::default(),
-                        };
-                        csvs.push((w, key, report));
-                        csvs.len() - 1
-                    }
-                };
-                by_msg_id.insert(msg_id, idx);
+            Event::Subscribed { msg_id, .. } => {
+                // a message id subscribed again may be another topic
+                by_msg_id.remove(&msg_id);
             }
             Event::Data {
                 msg_id,
@@ -334,8 +342,24 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
                 payload,
                 timestamp_us,
             } => {
-                let Some((w, _, report)) = by_msg_id.get(&msg_id).and_then(|i| csvs.get_mut(*i))
-                else {
+                // the CSV of a topic instance is created at its first record
+                // (as pyulog does: no file for a topic that logged nothing)
+                let idx = match by_msg_id.get(&msg_id) {
+                    Some(i) => *i,
+                    None => {
+                        let key = (topic.name.clone(), topic.multi_id);
+                        let i = match csvs.iter().position(|(_, k, _)| *k == key) {
+                            Some(i) => i,
+                            None => {
+                                csvs.push(new_csv(&mut out, topic, key)?);
+                                csvs.len() - 1
+                            }
+                        };
+                        by_msg_id.insert(msg_id, i);
+                        i
+                    }
+                };
+                let Some((w, _, report)) = csvs.get_mut(idx) else {
                     return Ok(());
                 };
                 let ts = topic.timestamp_column;

@@ -442,3 +442,30 @@ proptest! {
         }
     }
 }
+
+/// As pyulog's `ulog2csv`: no CSV for a topic that logged no record; the
+/// text files always.
+#[test]
+fn export_skips_topics_without_records() {
+    let dir = tmpdir("empty_topic");
+    let mut w = UlogWriter::new(Vec::new(), 0, FlushPolicy::default()).unwrap();
+    w.add_format::<Control>().unwrap();
+    w.add_format::<Timing>().unwrap();
+    let tc = w.add_logged::<Control>(0).unwrap();
+    let _unused = w.add_logged::<Timing>(0).unwrap();
+    w.write(tc, &Control::default()).unwrap();
+    let path = dir.join("x.ulg");
+    std::fs::write(&path, w.finish().unwrap()).unwrap();
+    let out = dir.join("csv");
+    let report = helicon_ulog::export::export_csv(&path, &out).unwrap();
+    assert_eq!(report.topics.len(), 1);
+    assert!(out.join("x_control_0.csv").exists());
+    assert!(!out.join("x_timing_0.csv").exists());
+    for t in ["info", "params", "messages"] {
+        assert!(out.join(format!("x_{t}.txt")).exists(), "{t}");
+    }
+    // the summary still lists the subscription
+    let s = helicon_ulog::export::summarize(&path).unwrap();
+    assert_eq!(s.topics[&("timing".to_string(), 0)].rows, 0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
