@@ -4,7 +4,7 @@
 //! version 1), the format pyulog, PlotJuggler and PX4 Flight Review read
 //! (the tests read it with pyulog and px4-ulog).
 //!
-//! - [`format`]: message formats declared from Rust types
+//! - [`format`](mod@format): message formats declared from Rust types
 //!   ([`ulog_message!`], [`Record`]): name, fields with ULog types and
 //!   arrays, `uint64_t timestamp` (µs) first, trailing padding to 8 bytes.
 //! - [`writer`]: [`UlogWriter`]: header, flag bits, formats, info,
