@@ -4,7 +4,8 @@
 //! - `NAME_<topic>_<multi_id>.csv` per topic instance (pyulog's `ulog2csv`
 //!   naming): `timestamp` (µs) first, then the flattened fields in file
 //!   order (`command[0]`, `esc[1].rpm`); integers as integers, bools as
-//!   0/1, floats in shortest round-trip form (`NaN`, `inf`, `-inf` for
+//!   0/1, floats in shortest round-trip form, exponent notation outside
+//!   [1e-4, 1e15) (`NaN`, `inf`, `-inf` for
 //!   non-finite values, which are counted in the report);
 //! - `NAME_info.txt`: the header timestamp and each INFO as `key: value`;
 //! - `NAME_params.txt`: `name value` per parameter, changes during the log

@@ -69,13 +69,32 @@ pub enum Value {
     Raw(Vec<u8>),
 }
 
+/// Floats print in their shortest round-trip form, in plain notation for
+/// ordinary magnitudes and in exponent notation outside [1e-4, 1e15) (the
+/// rule of the toolkit's other number printing: 1e-300 stays `1e-300`).
+fn plain(v: f64) -> bool {
+    v == 0.0 || !v.is_finite() || (1e-4..1e15).contains(&v.abs())
+}
+
 impl std::fmt::Display for Value {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Value::Int(v) => write!(f, "{v}"),
             Value::UInt(v) => write!(f, "{v}"),
-            Value::Float32(v) => write!(f, "{v}"),
-            Value::Float(v) => write!(f, "{v}"),
+            Value::Float32(v) => {
+                if plain(f64::from(*v)) {
+                    write!(f, "{v}")
+                } else {
+                    write!(f, "{v:e}")
+                }
+            }
+            Value::Float(v) => {
+                if plain(*v) {
+                    write!(f, "{v}")
+                } else {
+                    write!(f, "{v:e}")
+                }
+            }
             Value::Bool(v) => write!(f, "{}", u8::from(*v)),
             Value::Str(s) => f.write_str(s),
             Value::Array(a) => {
@@ -522,5 +541,26 @@ pub fn decode_value(t: UlogType, b: &[u8]) -> Value {
         UlogType::Float => Value::Float32(f32::from_le_bytes([a[0], a[1], a[2], a[3]])),
         UlogType::Double => Value::Float(f64::from_le_bytes(a)),
         UlogType::Bool => Value::Bool(a[0] != 0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floats_print_shortest_and_readable() {
+        assert_eq!(Value::Float(2.5).to_string(), "2.5");
+        assert_eq!(Value::Float(-1e-300).to_string(), "-1e-300");
+        assert_eq!(Value::Float(2.5e16).to_string(), "2.5e16");
+        assert_eq!(Value::Float(86400.0).to_string(), "86400");
+        assert_eq!(Value::Float32(0.0025).to_string(), "0.0025");
+        assert_eq!(Value::Float32(3e-7).to_string(), "3e-7");
+        assert_eq!(Value::Float(0.1 + 0.2).to_string(), "0.30000000000000004");
+        assert_eq!(Value::Bool(true).to_string(), "1");
+        assert_eq!(
+            Value::Array(vec![Value::Int(-3), Value::UInt(4)]).to_string(),
+            "[-3, 4]"
+        );
     }
 }
