@@ -1,7 +1,7 @@
 //! `helicon log`: flight logs in ULog format (`.ulg`) — a summary, and the
 //! export to CSV and text for the tools that want CSV.
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::{Args, Subcommand};
 use helicon_ulog::export::{export_csv, summarize};
 use helicon_ulog::visit::End;
@@ -60,8 +60,8 @@ fn truncation_note(file: &std::path::Path, end: End) {
 }
 
 fn run_export(a: &ExportArgs) -> Result<()> {
-    let report =
-        export_csv(&a.file, &a.csv).with_context(|| format!("exporting {}", a.file.display()))?;
+    // the errors name the file, the byte offset and the rule
+    let report = export_csv(&a.file, &a.csv)?;
     let mut con = crate::console::Console::stdout();
     for ((topic, multi_id), t) in &report.topics {
         writeln!(
@@ -86,7 +86,7 @@ fn run_export(a: &ExportArgs) -> Result<()> {
 }
 
 fn run_info(a: &InfoArgs) -> Result<()> {
-    let s = summarize(&a.file).with_context(|| format!("reading {}", a.file.display()))?;
+    let s = summarize(&a.file)?;
     let mut con = crate::console::Console::stdout();
     writeln!(con, "start: {} us", s.pass.start_us);
     for (k, v) in &s.info {

@@ -129,3 +129,57 @@ fn bad_inputs_are_errors_naming_the_file() {
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_corrupt_log_is_one_error_line_with_the_offset_and_rule() {
+    let dir = tmpdir("corrupt");
+    // a valid header, then two formats that refer to each other
+    let mut f = b"ULog\x01\x12\x35\x01".to_vec();
+    f.extend_from_slice(&0u64.to_le_bytes());
+    for (kind, payload) in [
+        (b'F', &b"a:uint64_t timestamp;b x;"[..]),
+        (b'F', &b"b:a y;"[..]),
+        (b'A', &b"\x00\x00\x00a"[..]),
+    ] {
+        f.extend_from_slice(&(payload.len() as u16).to_le_bytes());
+        f.push(kind);
+        f.extend_from_slice(payload);
+    }
+    let bad = dir.join("cycle.ulg");
+    std::fs::write(&bad, &f).unwrap();
+    for args in [
+        vec!["log", "info", bad.to_str().unwrap()],
+        vec![
+            "log",
+            "export",
+            bad.to_str().unwrap(),
+            "--csv",
+            dir.join("out").to_str().unwrap(),
+        ],
+    ] {
+        let (ok, _, stderr) = helicon(&args);
+        assert!(!ok, "{args:?}");
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.starts_with("error: ")
+                && stderr.contains(
+                    "cycle.ulg: byte 53: 'A' message: topic `a`: types nest deeper than 8 levels"
+                ),
+            "{stderr}"
+        );
+    }
+    // an output folder that is a file
+    let file = dir.join("taken");
+    std::fs::write(&file, "x").unwrap();
+    let ulg = fixture("helicon_sample.ulg");
+    let (ok, _, stderr) = helicon(&[
+        "log",
+        "export",
+        ulg.to_str().unwrap(),
+        "--csv",
+        file.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(stderr.contains("taken: cannot create"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -54,7 +54,8 @@ impl FlatFormat {
 /// [`MAX_DEPTH`] and records larger than a message can hold.
 pub fn flatten(name: &str, formats: &HashMap<String, Format>) -> Result<FlatFormat, String> {
     let mut columns = Vec::new();
-    let end = walk(name, "", 0, 0, true, formats, &mut columns)?;
+    let end = walk(name, "", 0, 0, true, formats, &mut columns)
+        .map_err(|rule| format!("topic `{name}`: {rule}"))?;
     Ok(FlatFormat {
         name: name.to_string(),
         columns,
@@ -73,7 +74,7 @@ fn walk(
 ) -> Result<usize, String> {
     if depth > MAX_DEPTH {
         return Err(format!(
-            "`{name}` nests deeper than {MAX_DEPTH} (or refers to itself)"
+            "types nest deeper than {MAX_DEPTH} levels (or refer to themselves) at `{name}`"
         ));
     }
     let f = formats

@@ -263,7 +263,7 @@ fn corrupt_files_are_typed_errors() {
         message(msg::FORMAT, b"b:a y;"),
         add_logged("a"),
     ]);
-    assert!(malformed_rule(&f).contains("nests deeper"));
+    assert!(malformed_rule(&f).contains("nest deeper"));
     // a nested array that would be larger than any message
     let f = file(&[
         message(msg::FORMAT, b"a:uint64_t timestamp;b[65535] x;"),

@@ -275,6 +275,21 @@ fn misuse_is_a_typed_error() {
 }
 
 #[test]
+fn an_oversized_buffer_is_refused() {
+    let policy = FlushPolicy {
+        max_bytes: usize::MAX,
+        ..FlushPolicy::default()
+    };
+    let e = UlogWriter::new(Vec::new(), 0, policy).unwrap_err();
+    assert!(e.to_string().contains("max_bytes"), "{e}");
+    let ok = FlushPolicy {
+        max_bytes: helicon_ulog::writer::MAX_FLUSH_BYTES,
+        ..FlushPolicy::default()
+    };
+    assert!(UlogWriter::new(Vec::new(), 0, ok).is_ok());
+}
+
+#[test]
 fn bad_times_are_refused() {
     for t in [f64::NAN, f64::INFINITY, -1e-3, 1e20] {
         let e = timestamp_us(t, "control").unwrap_err();
