@@ -204,9 +204,14 @@ fn a_killed_writer_leaves_a_readable_log() {
         }
     }
     assert_eq!(k, controls);
-    // and PX4's reader reads it
+    // and PX4's reader reads the same steps
     let theirs = px4_ulog::full_parser::read_file(path.to_str().unwrap()).unwrap();
-    assert!(theirs.messages.contains_key("control"));
+    let px4_samples = match &theirs.messages["control"][&px4_ulog::full_parser::MultiId::new(0)]["sample"]
+    {
+        px4_ulog::full_parser::SomeVec::UInt64(v) => v.clone(),
+        _ => panic!("sample type"),
+    };
+    assert_eq!(px4_samples, (0..controls).collect::<Vec<u64>>());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
