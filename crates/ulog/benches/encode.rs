@@ -1,6 +1,8 @@
 //! Encoder throughput: one `control` record encoded into a caller buffer,
 //! and one whole control step (IMU, control, navigation, timing) written
-//! through the `FlightLog` into a sink (buffering and flushing included).
+//! through the `FlightLog` into a sink (buffering and flushing included);
+//! and the reader: one pass (formats resolved, every record's timestamp)
+//! over the committed sample log, in bytes per second.
 #![allow(clippy::unwrap_used, missing_docs)] // bench: criterion macros generate undocumented items
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -58,5 +60,28 @@ fn bench_encode(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_encode);
+fn bench_read(c: &mut Criterion) {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/helicon_sample.ulg");
+    let bytes = std::fs::read(path).unwrap();
+    let mut g = c.benchmark_group("ulog");
+    g.throughput(Throughput::Bytes(bytes.len() as u64));
+    g.bench_function("read_pass_sample", |b| {
+        b.iter(|| {
+            let r = helicon_ulog::reader::UlogReader::new(black_box(&bytes[..]), "s").unwrap();
+            let mut n = 0u64;
+            helicon_ulog::visit::visit(r, |ev| -> Result<(), helicon_ulog::ReadError> {
+                if let helicon_ulog::visit::Event::Data { timestamp_us, .. } = ev {
+                    n = n.wrapping_add(timestamp_us);
+                }
+                Ok(())
+            })
+            .unwrap();
+            n
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench_encode, bench_read);
 criterion_main!(benches);
