@@ -40,14 +40,14 @@ enum Command {
     Sensors(sensors::SensorsArgs),
     /// Replay a sensor log through attitude determination and the fusion filter (§13.3).
     Fuse(sensors::FuseArgs),
+    /// Flight logs (ULog): export to CSV, summarise.
+    Log(log_cmd::LogArgs),
     /// Monte Carlo campaign: dispersed parameters, wind and sensor seeds (rayon, shards, resume).
     Mc(mc_cmd::McArgs),
     /// Time the hot path on this machine: derivative, closed-loop step, real-time factor.
     Bench(mc_cmd::BenchArgs),
     /// Fly a closed-loop scenario (TOML): log.csv, summary.json, gains, plots, report.
     Sim(sim_cmd::SimArgs),
-    /// Flight logs (ULog): export to CSV, summarise.
-    Log(log_cmd::LogArgs),
 }
 
 /// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
@@ -108,10 +108,10 @@ fn run() -> anyhow::Result<()> {
             sensors::SensorsCommand::Config => sensors::run_sensors_config(),
         },
         Command::Fuse(a) => sensors::run_fuse(&a),
+        Command::Log(a) => log_cmd::run(&a),
         Command::Mc(a) => mc_cmd::run_mc(&a),
         Command::Bench(a) => mc_cmd::run_bench(&a),
         Command::Sim(a) => sim_cmd::run(&a),
-        Command::Log(a) => log_cmd::run(&a),
     }
 }
 
