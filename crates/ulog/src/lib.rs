@@ -1,0 +1,48 @@
+//! # helicon-ulog
+//!
+//! The flight data log in PX4's ULog format (PX4 "ULog File Format",
+//! version 1), readable by pyulog, PlotJuggler and PX4 Flight Review.
+//!
+//! - [`format`]: message formats declared from Rust types
+//!   ([`ulog_message!`], [`Record`]): name, fields with ULog types and
+//!   arrays, `uint64_t timestamp` (µs) first, trailing padding to 8 bytes.
+//! - [`writer`]: [`UlogWriter`]: header, flag bits, formats, info,
+//!   parameters, subscriptions, data, text (LOGGING with levels), SYNC,
+//!   DROPOUT. Records are encoded into the writer's buffer with no
+//!   allocation; the buffer is written out whole at least every 0.1 s of
+//!   log time and every 16 KiB ([`FlushPolicy`]), so a killed process
+//!   leaves a file whose prefix is complete messages.
+//! - [`messages`]: the on-board message set (`control`, `navigation`,
+//!   `sensor_imu`, `sensor_mag`, `sensor_gps`, `servo_output`,
+//!   `rc_input`, `timing`, `failsafe`, `mode`), the helpers that fill them
+//!   from [`helicon_core`]'s `Telemetry` and `SensorFrame`, and
+//!   [`FlightLog`], the writer with the whole set subscribed.
+//!
+//! ## Writing a flight log
+//!
+//! ```
+//! use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogRecord, messages::Timing};
+//! # fn main() -> Result<(), helicon_ulog::WriteError> {
+//! let mut log = FlightLog::new(Vec::new(), &LogInfo::default(), FlushPolicy::default())?;
+//! // each control step (on the logger thread, records from the ring):
+//! log.write(&LogRecord::Timing(Timing { timestamp: 2500, sample: 1, ..Default::default() }))?;
+//! // log.log_telemetry(&telemetry)?; log.log_frame(&frame)?;
+//! let bytes = log.finish()?;
+//! assert_eq!(&bytes[..4], b"ULog");
+//! # Ok(()) }
+//! ```
+//!
+//! The writer is not thread-safe by itself: the runtime's logger thread
+//! owns it and drains a ring of [`LogRecord`]s (all `Copy`, no heap).
+
+pub mod error;
+pub mod format;
+pub mod messages;
+pub mod spec;
+pub mod writer;
+
+pub use error::{ReadError, WriteError};
+pub use format::{FieldDef, Record, UlogType, UlogValue};
+pub use messages::{FlightLog, LogInfo, LogRecord};
+pub use spec::LogLevel;
+pub use writer::{FlushPolicy, Topic, UlogWriter, WriterStats, timestamp_us};

@@ -1,0 +1,646 @@
+//! The on-board message set: the topics the flight runtime logs, defined
+//! once here so the writer on board and the readers on the ground agree,
+//! and the allocation-free helpers that fill them from the core's types.
+//!
+//! | topic | per | from |
+//! |---|---|---|
+//! | `control` | control step | [`Telemetry`] |
+//! | `navigation` | control step with a navigation solution | [`Telemetry::navigation`] |
+//! | `sensor_imu` | sensor frame | [`SensorFrame::imu`] |
+//! | `sensor_mag` | frame with a magnetometer sample | [`SensorFrame::mag_body`] |
+//! | `sensor_gps` | frame with a GPS solution | [`SensorFrame::gps`] |
+//! | `servo_output` | servo update | the runtime (what was sent, and who decided) |
+//! | `rc_input` | RC frame | the runtime (pulse widths, manual switch) |
+//! | `timing` | control step | the runtime (wake-up jitter, compute time, misses) |
+//! | `failsafe` | event | the runtime; also a LOGGING message |
+//! | `mode` | event | the runtime; also a LOGGING message |
+//!
+//! Units are SI, frames NED (navigation) and FRD (body); times on the
+//! on-board clock, `timestamp` in µs. Physical quantities are `double` so a
+//! log replays bit for bit (the navigation can be re-run from
+//! `sensor_*`). At 400 Hz the control, navigation, IMU and timing records
+//! come to about 230 kB/s.
+
+use crate::error::WriteError;
+use crate::format::Record;
+use crate::spec::LogLevel;
+use crate::ulog_message;
+use crate::writer::{FlushPolicy, Topic, UlogWriter, timestamp_us};
+use helicon_core::computer::Telemetry;
+use helicon_core::navigation::NavigationSolution;
+use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame};
+use helicon_core::state::NM;
+use std::fs::File;
+use std::io::Write;
+use std::path::Path;
+
+ulog_message! {
+    /// One control step: what the flight software decided and knew
+    /// ([`Telemetry`]).
+    pub struct Control: "control" {
+        /// Time of the measurement the step was computed from (µs).
+        timestamp: u64,
+        /// Sample counter since the flight computer was built.
+        sample: u64,
+        /// The same time in seconds, exact (s).
+        t_s: f64,
+        /// Reference heading ψ (rad).
+        ref_yaw_rad: f64,
+        /// Reference velocity NED (m/s).
+        ref_vel_ned_m_s: [f64; 3],
+        /// Servo commands sent, after saturation [S_col S_lat S_lon S_tr].
+        command: [f64; 4],
+        /// Output errors [ψ (rad), vn, ve, vd (m/s)], reference − estimate.
+        tracking_error: [f64; 4],
+        /// Integral states after this step [ψ (rad·samples), vn, ve, vd (m/s·samples)].
+        integral: [f64; 4],
+        /// The estimate of the nine measured states [φ θ ψ (rad), u v w (m/s), p q r (rad/s)].
+        estimate: [f64; 9],
+        /// The nine measured states the estimator was given (same units).
+        measured: [f64; 9],
+        /// Which commands were saturated.
+        saturated: [bool; 4],
+    }
+}
+
+ulog_message! {
+    /// The navigation solution of a control step.
+    pub struct Navigation: "navigation" {
+        /// Time (µs).
+        timestamp: u64,
+        /// Fused position NED (m).
+        position_ned_m: [f64; 3],
+        /// Fused velocity NED (m/s).
+        velocity_ned_m_s: [f64; 3],
+        /// Fused attitude [φ θ ψ] (rad).
+        attitude_rad: [f64; 3],
+        /// 1σ of the fused position per NED axis (m).
+        position_sigma_m: [f64; 3],
+        /// A q-method attitude was fused this step.
+        attitude_fix: bool,
+        /// A GPS fix was fused this step.
+        gps_fused: bool,
+    }
+}
+
+ulog_message! {
+    /// A raw IMU sample.
+    pub struct SensorImu: "sensor_imu" {
+        /// Time of the sample (µs).
+        timestamp: u64,
+        /// Specific force f = a − g in body axes (m/s²).
+        specific_force_body_m_s2: [f64; 3],
+        /// Body rates (rad/s).
+        gyro_body_rad_s: [f64; 3],
+    }
+}
+
+ulog_message! {
+    /// A raw magnetometer sample.
+    pub struct SensorMag: "sensor_mag" {
+        /// Time of the frame (µs).
+        timestamp: u64,
+        /// Field in body axes, in the units of the configured local field.
+        field_body: [f64; 3],
+    }
+}
+
+ulog_message! {
+    /// A GPS solution as delivered.
+    pub struct SensorGps: "sensor_gps" {
+        /// Time of the frame that delivered it (µs).
+        timestamp: u64,
+        /// Time of validity of the solution (s, on-board clock).
+        epoch_s: f64,
+        /// Position NED (m).
+        position_ned_m: [f64; 3],
+        /// Doppler velocity NED (m/s); zeros when not given.
+        velocity_ned_m_s: [f64; 3],
+        /// Fix type: 0 none, 2 2-D, 3 3-D (PX4's `fix_type` codes).
+        fix_type: u8,
+        /// The receiver gave a velocity.
+        velocity_valid: bool,
+    }
+}
+
+ulog_message! {
+    /// The commands sent to the servos and who decided them.
+    pub struct ServoOutput: "servo_output" {
+        /// Time (µs).
+        timestamp: u64,
+        /// Commands [S_col S_lat S_lon S_tr] in the model's input units.
+        command: [f64; 4],
+        /// Source: 0 the control law, 1 the pilot (manual), 2 failsafe.
+        source: u8,
+    }
+}
+
+ulog_message! {
+    /// One RC receiver frame.
+    pub struct RcInput: "rc_input" {
+        /// Time (µs).
+        timestamp: u64,
+        /// Channel pulse widths (µs); unused channels 0.
+        channels_us: [u16; 16],
+        /// Number of channels received.
+        channel_count: u8,
+        /// The pilot's manual/automatic switch is at manual.
+        manual_switch: bool,
+        /// No valid RC signal.
+        signal_lost: bool,
+    }
+}
+
+ulog_message! {
+    /// Real-time behaviour of one control step.
+    pub struct Timing: "timing" {
+        /// Time (µs).
+        timestamp: u64,
+        /// The control step's sample counter.
+        sample: u64,
+        /// Wake-up time minus the scheduled time (µs).
+        wakeup_jitter_us: i32,
+        /// Time from wake-up to commands out (µs).
+        compute_time_us: u32,
+        /// Deadline misses since start.
+        deadline_misses: u32,
+        /// Log records dropped since start (logger ring full).
+        log_dropped: u32,
+    }
+}
+
+ulog_message! {
+    /// A failsafe raised or cleared (also written as a LOGGING message).
+    pub struct Failsafe: "failsafe" {
+        /// Time (µs).
+        timestamp: u64,
+        /// Reason code ([`FailsafeReason`]).
+        reason: u8,
+        /// Raised (true) or cleared (false).
+        active: bool,
+    }
+}
+
+ulog_message! {
+    /// A flight mode change (also written as a LOGGING message).
+    pub struct Mode: "mode" {
+        /// Time (µs).
+        timestamp: u64,
+        /// New mode ([`FlightMode`] code).
+        mode: u8,
+        /// Previous mode.
+        previous: u8,
+    }
+}
+
+/// Why a failsafe was raised (the `failsafe.reason` codes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum FailsafeReason {
+    /// The navigation failed (no attitude, diverged filter).
+    NavigationFailure = 1,
+    /// A non-finite measurement or estimate.
+    NonFinite = 2,
+    /// A sensor stopped delivering.
+    SensorTimeout = 3,
+    /// The control step missed its deadline.
+    DeadlineMiss = 4,
+    /// The RC link was lost.
+    RcLoss = 5,
+    /// The pilot commanded it.
+    Pilot = 6,
+    /// Anything else.
+    Other = 255,
+}
+
+impl FailsafeReason {
+    /// Every reason.
+    pub const ALL: [FailsafeReason; 7] = [
+        FailsafeReason::NavigationFailure,
+        FailsafeReason::NonFinite,
+        FailsafeReason::SensorTimeout,
+        FailsafeReason::DeadlineMiss,
+        FailsafeReason::RcLoss,
+        FailsafeReason::Pilot,
+        FailsafeReason::Other,
+    ];
+
+    /// Text for logs.
+    pub const fn name(self) -> &'static str {
+        match self {
+            FailsafeReason::NavigationFailure => "navigation failure",
+            FailsafeReason::NonFinite => "non-finite measurement or estimate",
+            FailsafeReason::SensorTimeout => "sensor timeout",
+            FailsafeReason::DeadlineMiss => "deadline miss",
+            FailsafeReason::RcLoss => "RC signal lost",
+            FailsafeReason::Pilot => "pilot",
+            FailsafeReason::Other => "other",
+        }
+    }
+
+    /// The reason of a code read from a log.
+    pub fn from_code(code: u8) -> Option<FailsafeReason> {
+        FailsafeReason::ALL.into_iter().find(|r| *r as u8 == code)
+    }
+}
+
+/// The flight modes (the `mode.mode` codes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum FlightMode {
+    /// On the ground, servos held.
+    Standby = 0,
+    /// The pilot flies (RC passthrough).
+    Manual = 1,
+    /// The control law flies.
+    Automatic = 2,
+    /// Failsafe commands.
+    Failsafe = 3,
+}
+
+impl FlightMode {
+    /// Every mode.
+    pub const ALL: [FlightMode; 4] = [
+        FlightMode::Standby,
+        FlightMode::Manual,
+        FlightMode::Automatic,
+        FlightMode::Failsafe,
+    ];
+
+    /// Text for logs.
+    pub const fn name(self) -> &'static str {
+        match self {
+            FlightMode::Standby => "standby",
+            FlightMode::Manual => "manual",
+            FlightMode::Automatic => "automatic",
+            FlightMode::Failsafe => "failsafe",
+        }
+    }
+
+    /// The mode of a code read from a log.
+    pub fn from_code(code: u8) -> Option<FlightMode> {
+        FlightMode::ALL.into_iter().find(|m| *m as u8 == code)
+    }
+}
+
+fn vec3(v: &nalgebra::Vector3<f64>) -> [f64; 3] {
+    [v.x, v.y, v.z]
+}
+
+impl Control {
+    /// The record of one control step. Errors only for a time that cannot
+    /// be a timestamp.
+    pub fn from_telemetry(t: &Telemetry) -> Result<Self, WriteError> {
+        let mut estimate = [0.0; NM];
+        estimate.copy_from_slice(&t.estimate.as_slice()[..NM]);
+        let v = &t.reference.velocity_ned_m_s;
+        Ok(Control {
+            timestamp: timestamp_us(t.t_s, "control")?,
+            sample: t.sample,
+            t_s: t.t_s,
+            ref_yaw_rad: t.reference.yaw_rad,
+            ref_vel_ned_m_s: [v.x, v.y, v.z],
+            command: t.command.into(),
+            tracking_error: t.tracking_error.into(),
+            integral: t.integral.into(),
+            estimate,
+            measured: t.measured.into(),
+            saturated: t.saturated,
+        })
+    }
+}
+
+impl Navigation {
+    /// The record of a navigation solution at time `t_s`.
+    pub fn from_solution(t_s: f64, n: &NavigationSolution) -> Result<Self, WriteError> {
+        Ok(Navigation {
+            timestamp: timestamp_us(t_s, "navigation")?,
+            position_ned_m: vec3(&n.position_ned_m),
+            velocity_ned_m_s: vec3(&n.velocity_ned_m_s),
+            attitude_rad: vec3(&n.attitude_rad),
+            position_sigma_m: vec3(&n.position_sigma_m),
+            attitude_fix: n.attitude_fix,
+            gps_fused: n.gps_fused,
+        })
+    }
+}
+
+impl SensorImu {
+    /// The record of an IMU sample at time `t_s`.
+    pub fn from_sample(t_s: f64, imu: &ImuSample) -> Result<Self, WriteError> {
+        Ok(SensorImu {
+            timestamp: timestamp_us(t_s, "sensor_imu")?,
+            specific_force_body_m_s2: vec3(&imu.specific_force_body_m_s2),
+            gyro_body_rad_s: vec3(&imu.gyro_body_rad_s),
+        })
+    }
+}
+
+impl SensorGps {
+    /// The record of a GPS solution delivered at time `t_s`.
+    pub fn from_fix(t_s: f64, g: &GpsFix) -> Result<Self, WriteError> {
+        Ok(SensorGps {
+            timestamp: timestamp_us(t_s, "sensor_gps")?,
+            epoch_s: g.epoch_s,
+            position_ned_m: vec3(&g.position_ned_m),
+            velocity_ned_m_s: g.velocity_ned_m_s.as_ref().map_or([0.0; 3], vec3),
+            fix_type: match g.fix {
+                GpsFixType::NoFix => 0,
+                GpsFixType::Fix2d => 2,
+                GpsFixType::Fix3d => 3,
+            },
+            velocity_valid: g.velocity_ned_m_s.is_some(),
+        })
+    }
+
+    /// The core's GPS solution back (`None` for an unknown fix code).
+    pub fn to_fix(&self) -> Option<GpsFix> {
+        let [vn, ve, vd] = self.velocity_ned_m_s;
+        let [n, e, d] = self.position_ned_m;
+        Some(GpsFix {
+            epoch_s: self.epoch_s,
+            fix: match self.fix_type {
+                0 | 1 => GpsFixType::NoFix,
+                2 => GpsFixType::Fix2d,
+                3 => GpsFixType::Fix3d,
+                _ => return None,
+            },
+            position_ned_m: nalgebra::Vector3::new(n, e, d),
+            velocity_ned_m_s: self
+                .velocity_valid
+                .then(|| nalgebra::Vector3::new(vn, ve, vd)),
+        })
+    }
+}
+
+/// The records of one sensor frame: IMU always, magnetometer and GPS when
+/// present in the frame.
+pub fn frame_records(
+    f: &SensorFrame,
+) -> Result<(SensorImu, Option<SensorMag>, Option<SensorGps>), WriteError> {
+    let imu = SensorImu::from_sample(f.t_s, &f.imu)?;
+    let mag = f.mag_body.as_ref().map(|m| SensorMag {
+        timestamp: imu.timestamp,
+        field_body: vec3(m),
+    });
+    let gps = match &f.gps {
+        Some(g) => Some(SensorGps::from_fix(f.t_s, g)?),
+        None => None,
+    };
+    Ok((imu, mag, gps))
+}
+
+/// One record of any topic: what a logger ring carries (all `Copy`, no
+/// heap).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LogRecord {
+    /// `control`
+    Control(Control),
+    /// `navigation`
+    Navigation(Navigation),
+    /// `sensor_imu`
+    Imu(SensorImu),
+    /// `sensor_mag`
+    Mag(SensorMag),
+    /// `sensor_gps`
+    Gps(SensorGps),
+    /// `servo_output`
+    Servo(ServoOutput),
+    /// `rc_input`
+    Rc(RcInput),
+    /// `timing`
+    Timing(Timing),
+    /// `failsafe` (also logged as text)
+    Failsafe(Failsafe),
+    /// `mode` (also logged as text)
+    Mode(Mode),
+}
+
+/// Identification written into the log's INFO messages.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LogInfo {
+    /// `sys_name` (shown by the log viewers).
+    pub sys_name: String,
+    /// `ver_sw`: the software version (a git hash or version string).
+    pub ver_sw: String,
+    /// `time_ref_utc`: offset of the log clock's zero from UTC (s), if known.
+    pub time_ref_utc_s: Option<i32>,
+    /// Header timestamp (µs on the on-board clock).
+    pub start_us: u64,
+}
+
+impl Default for LogInfo {
+    fn default() -> Self {
+        LogInfo {
+            sys_name: "helicon".to_string(),
+            ver_sw: env!("CARGO_PKG_VERSION").to_string(),
+            time_ref_utc_s: None,
+            start_us: 0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Topics {
+    control: Topic<Control>,
+    navigation: Topic<Navigation>,
+    imu: Topic<SensorImu>,
+    mag: Topic<SensorMag>,
+    gps: Topic<SensorGps>,
+    servo: Topic<ServoOutput>,
+    rc: Topic<RcInput>,
+    timing: Topic<Timing>,
+    failsafe: Topic<Failsafe>,
+    mode: Topic<Mode>,
+}
+
+/// The flight log: a [`UlogWriter`] with the whole message set declared
+/// and subscribed (instance 0 of each topic).
+#[derive(Debug)]
+pub struct FlightLog<W: Write> {
+    writer: UlogWriter<W>,
+    topics: Topics,
+}
+
+impl FlightLog<File> {
+    /// Create the log file, write `info` and the definitions.
+    pub fn create(path: &Path, info: &LogInfo, policy: FlushPolicy) -> Result<Self, WriteError> {
+        let w = UlogWriter::create(path, info.start_us, policy)?;
+        Self::with_info(w, info)
+    }
+}
+
+impl<W: Write> FlightLog<W> {
+    /// A flight log into `out` with `info`.
+    pub fn new(out: W, info: &LogInfo, policy: FlushPolicy) -> Result<Self, WriteError> {
+        let w = UlogWriter::new(out, info.start_us, policy)?;
+        Self::with_info(w, info)
+    }
+
+    fn with_info(mut w: UlogWriter<W>, info: &LogInfo) -> Result<Self, WriteError> {
+        w.info_str("sys_name", &info.sys_name)?;
+        w.info_str("ver_sw", &info.ver_sw)?;
+        if let Some(t) = info.time_ref_utc_s {
+            w.info_i32("time_ref_utc", t)?;
+        }
+        Self::from_writer(w)
+    }
+
+    /// Declare and subscribe the message set on a writer whose own
+    /// information and parameters are written (definitions still open).
+    pub fn from_writer(mut w: UlogWriter<W>) -> Result<Self, WriteError> {
+        w.add_format::<Control>()?;
+        w.add_format::<Navigation>()?;
+        w.add_format::<SensorImu>()?;
+        w.add_format::<SensorMag>()?;
+        w.add_format::<SensorGps>()?;
+        w.add_format::<ServoOutput>()?;
+        w.add_format::<RcInput>()?;
+        w.add_format::<Timing>()?;
+        w.add_format::<Failsafe>()?;
+        w.add_format::<Mode>()?;
+        let topics = Topics {
+            control: w.add_logged(0)?,
+            navigation: w.add_logged(0)?,
+            imu: w.add_logged(0)?,
+            mag: w.add_logged(0)?,
+            gps: w.add_logged(0)?,
+            servo: w.add_logged(0)?,
+            rc: w.add_logged(0)?,
+            timing: w.add_logged(0)?,
+            failsafe: w.add_logged(0)?,
+            mode: w.add_logged(0)?,
+        };
+        Ok(FlightLog { writer: w, topics })
+    }
+
+    /// The underlying writer (parameters changes, text messages, dropouts,
+    /// flushing).
+    pub fn writer_mut(&mut self) -> &mut UlogWriter<W> {
+        &mut self.writer
+    }
+
+    /// Write one record (failsafe and mode events also as LOGGING text).
+    /// No allocation.
+    pub fn write(&mut self, r: &LogRecord) -> Result<(), WriteError> {
+        let t = &self.topics;
+        let w = &mut self.writer;
+        match r {
+            LogRecord::Control(x) => w.write(t.control, x),
+            LogRecord::Navigation(x) => w.write(t.navigation, x),
+            LogRecord::Imu(x) => w.write(t.imu, x),
+            LogRecord::Mag(x) => w.write(t.mag, x),
+            LogRecord::Gps(x) => w.write(t.gps, x),
+            LogRecord::Servo(x) => w.write(t.servo, x),
+            LogRecord::Rc(x) => w.write(t.rc, x),
+            LogRecord::Timing(x) => w.write(t.timing, x),
+            LogRecord::Failsafe(x) => {
+                w.write(t.failsafe, x)?;
+                let name = FailsafeReason::from_code(x.reason).map_or("unknown", |r| r.name());
+                let mut text = StackText::new();
+                let _ = if x.active {
+                    write_fmt(&mut text, format_args!("failsafe raised: {name}"))
+                } else {
+                    write_fmt(&mut text, format_args!("failsafe cleared: {name}"))
+                };
+                let level = if x.active {
+                    LogLevel::Critical
+                } else {
+                    LogLevel::Notice
+                };
+                w.log(level, x.timestamp, text.as_str())
+            }
+            LogRecord::Mode(x) => {
+                w.write(t.mode, x)?;
+                let name = |c| FlightMode::from_code(c).map_or("unknown", |m| m.name());
+                let mut text = StackText::new();
+                let _ = write_fmt(
+                    &mut text,
+                    format_args!("mode: {} -> {}", name(x.previous), name(x.mode)),
+                );
+                w.log(LogLevel::Info, x.timestamp, text.as_str())
+            }
+        }
+    }
+
+    /// Log one control step: `control`, and `navigation` when the
+    /// estimator runs one.
+    pub fn log_telemetry(&mut self, t: &Telemetry) -> Result<(), WriteError> {
+        self.write(&LogRecord::Control(Control::from_telemetry(t)?))?;
+        if let Some(n) = &t.navigation {
+            self.write(&LogRecord::Navigation(Navigation::from_solution(t.t_s, n)?))?;
+        }
+        Ok(())
+    }
+
+    /// Log one sensor frame: `sensor_imu`, and `sensor_mag`/`sensor_gps`
+    /// when sampled.
+    pub fn log_frame(&mut self, f: &SensorFrame) -> Result<(), WriteError> {
+        let (imu, mag, gps) = frame_records(f)?;
+        self.write(&LogRecord::Imu(imu))?;
+        if let Some(m) = mag {
+            self.write(&LogRecord::Mag(m))?;
+        }
+        if let Some(g) = gps {
+            self.write(&LogRecord::Gps(g))?;
+        }
+        Ok(())
+    }
+
+    /// Flush and return the output.
+    pub fn finish(self) -> Result<W, WriteError> {
+        self.writer.finish()
+    }
+}
+
+fn write_fmt(text: &mut StackText, args: std::fmt::Arguments<'_>) -> std::fmt::Result {
+    std::fmt::Write::write_fmt(text, args)
+}
+
+/// A short text formatted on the stack (no allocation); longer text is cut.
+struct StackText {
+    buf: [u8; 128],
+    len: usize,
+}
+
+impl StackText {
+    fn new() -> Self {
+        StackText {
+            buf: [0; 128],
+            len: 0,
+        }
+    }
+    fn as_str(&self) -> &str {
+        std::str::from_utf8(&self.buf[..self.len]).unwrap_or("")
+    }
+}
+
+impl std::fmt::Write for StackText {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        let room = self.buf.len() - self.len;
+        let mut n = s.len().min(room);
+        while !s.is_char_boundary(n) {
+            n -= 1;
+        }
+        self.buf[self.len..self.len + n].copy_from_slice(&s.as_bytes()[..n]);
+        self.len += n;
+        Ok(())
+    }
+}
+
+/// The sizes of the message set's records (bytes logged per message,
+/// without the 5-byte header and id).
+pub fn record_sizes() -> [(&'static str, usize); 10] {
+    [
+        (Control::NAME, Control::SIZE),
+        (Navigation::NAME, Navigation::SIZE),
+        (SensorImu::NAME, SensorImu::SIZE),
+        (SensorMag::NAME, SensorMag::SIZE),
+        (SensorGps::NAME, SensorGps::SIZE),
+        (ServoOutput::NAME, ServoOutput::SIZE),
+        (RcInput::NAME, RcInput::SIZE),
+        (Timing::NAME, Timing::SIZE),
+        (Failsafe::NAME, Failsafe::SIZE),
+        (Mode::NAME, Mode::SIZE),
+    ]
+}
