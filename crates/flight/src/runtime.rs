@@ -23,7 +23,7 @@ use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
 use crate::records::{FlightRecord, write_record};
 use crate::safety::{Mode, RcInput};
 use helicon_core::state::Input;
-use helicon_core::{Reference, SensorFrame};
+use helicon_core::{Reference, SensorFrame, Telemetry};
 use helicon_sim::scenario::ReferenceSchedule;
 use helicon_ulog::messages::{Control, Navigation, RcInput as RcRecord, ServoOutput, Timing};
 use helicon_ulog::{FlightLog, LogRecord, WriteError, timestamp_us};
@@ -213,7 +213,9 @@ const POLL: Duration = Duration::from_millis(50);
 
 /// Spawn the runtime: sensor server, receiver, control task, avionics-out
 /// and logger threads. `log` is owned by the logger thread and finished
-/// when the runtime ends.
+/// when the runtime ends; `downlink`, when given, receives each step's
+/// telemetry (the ground link; SITL fills the truth log's estimate columns
+/// from it).
 pub fn spawn<S, R, V, W>(
     task: ControlTask,
     mission: Mission,
@@ -221,6 +223,7 @@ pub fn spawn<S, R, V, W>(
     rc: R,
     servos: V,
     log: FlightLog<W>,
+    downlink: Option<rtrb::Producer<Telemetry>>,
     options: RuntimeOptions,
 ) -> RuntimeHandle
 where
@@ -295,6 +298,7 @@ where
                 last_output_ns: &last,
                 wake_out,
                 wake_log,
+                downlink,
                 options,
             };
             control_loop(task, &mission, ctx)
@@ -503,6 +507,7 @@ struct ControlCtx<'a> {
     last_output_ns: &'a AtomicU64,
     wake_out: Option<Thread>,
     wake_log: Option<Thread>,
+    downlink: Option<rtrb::Producer<Telemetry>>,
     options: RuntimeOptions,
 }
 
@@ -651,6 +656,11 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
             reference: mission.at(now_s),
         };
         let out = task.step(&tick);
+        // the telemetry downlink before the servo frame: whoever waits for
+        // the servo frame finds the sample's telemetry
+        if let (Some(d), Some(t)) = (ctx.downlink.as_mut(), out.telemetry) {
+            let _ = d.push(t);
+        }
         let item = ServoItem {
             u: out.servo,
             arrived_ns: arrival.map(|a| a.arrived_ns),

@@ -188,6 +188,12 @@ impl Supervisor {
         }
     }
 
+    /// Arm (as the arm switch would): the first update enters auto. SITL
+    /// starts armed, as a pilot arms on the ground before the flight.
+    pub fn arm(&mut self) {
+        self.armed = true;
+    }
+
     /// The mode now.
     pub fn mode(&self) -> Mode {
         self.mode
