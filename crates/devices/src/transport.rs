@@ -1,0 +1,245 @@
+//! Serial transport: a serial port opened with the `serialport` crate
+//! (built without libudev), a pseudo-terminal pair for software-in-the-loop
+//! runs, and the staleness watch of a sensor.
+
+use crate::error::{EncodeError, TransportError, check_range};
+use rustix::fd::OwnedFd;
+use std::fs::File;
+use std::io::{ErrorKind, Read, Write};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// An open serial port with a read timeout.
+pub struct SerialLink {
+    port: Box<dyn serialport::SerialPort>,
+    path: PathBuf,
+}
+
+impl core::fmt::Debug for SerialLink {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("SerialLink")
+            .field("path", &self.path)
+            .finish()
+    }
+}
+
+impl SerialLink {
+    /// Opens `path` at `baud` (8N1, no flow control); reads wait at most
+    /// `read_timeout`.
+    pub fn open(path: &Path, baud: u32, read_timeout: Duration) -> Result<Self, TransportError> {
+        let name = path.to_string_lossy();
+        let port = serialport::new(name, baud)
+            .data_bits(serialport::DataBits::Eight)
+            .parity(serialport::Parity::None)
+            .stop_bits(serialport::StopBits::One)
+            .flow_control(serialport::FlowControl::None)
+            .timeout(read_timeout)
+            .open()
+            .map_err(|source| TransportError::Serial {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        Ok(Self {
+            port,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// The device path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Reads what is available into `buf`, waiting at most the read timeout;
+    /// `Ok(0)` when nothing arrived in time.
+    pub fn read_chunk(&mut self, buf: &mut [u8]) -> Result<usize, TransportError> {
+        match self.port.read(buf) {
+            Ok(n) => Ok(n),
+            Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => Ok(0),
+            Err(e) if e.kind() == ErrorKind::Interrupted => Ok(0),
+            Err(source) => Err(TransportError::Io {
+                what: format!("reading {}", self.path.display()),
+                source,
+            }),
+        }
+    }
+
+    /// Writes all of `bytes`.
+    pub fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        self.port
+            .write_all(bytes)
+            .and_then(|()| self.port.flush())
+            .map_err(|source| TransportError::Io {
+                what: format!("writing {}", self.path.display()),
+                source,
+            })
+    }
+}
+
+/// A pseudo-terminal pair for software-in-the-loop: the simulator plays the
+/// device on the master side, the on-board software opens
+/// [`PtyPair::slave_path`] as if it were the device's serial port. The
+/// line is in raw mode (no echo, no line editing, 8-bit clean). The pair
+/// keeps a handle on the slave side open so that the master never reads
+/// end-of-file or an error while the on-board side reopens the port.
+#[derive(Debug)]
+pub struct PtyPair {
+    master: File,
+    slave_path: PathBuf,
+    _slave_hold: OwnedFd,
+}
+
+fn pty_err(step: &'static str) -> impl FnOnce(rustix::io::Errno) -> TransportError {
+    move |e| TransportError::Pty {
+        step,
+        source: e.into(),
+    }
+}
+
+impl PtyPair {
+    /// Creates the pair.
+    pub fn open() -> Result<Self, TransportError> {
+        use rustix::fs::{Mode, OFlags};
+        use rustix::pty::{OpenptFlags, grantpt, openpt, ptsname, unlockpt};
+        use rustix::termios::{OptionalActions, tcgetattr, tcsetattr};
+        let master = openpt(OpenptFlags::RDWR | OpenptFlags::NOCTTY | OpenptFlags::CLOEXEC)
+            .map_err(pty_err("posix_openpt"))?;
+        grantpt(&master).map_err(pty_err("grantpt"))?;
+        unlockpt(&master).map_err(pty_err("unlockpt"))?;
+        let name = ptsname(&master, Vec::new()).map_err(pty_err("ptsname"))?;
+        let slave_path = PathBuf::from(name.to_string_lossy().into_owned());
+        let slave = rustix::fs::open(
+            &slave_path,
+            OFlags::RDWR | OFlags::NOCTTY | OFlags::CLOEXEC,
+            Mode::empty(),
+        )
+        .map_err(pty_err("opening the slave"))?;
+        let mut t = tcgetattr(&slave).map_err(pty_err("tcgetattr"))?;
+        t.make_raw();
+        tcsetattr(&slave, OptionalActions::Now, &t).map_err(pty_err("tcsetattr"))?;
+        Ok(Self {
+            master: File::from(master),
+            slave_path,
+            _slave_hold: slave,
+        })
+    }
+
+    /// The path of the slave side (e.g. `/dev/pts/7`).
+    pub fn slave_path(&self) -> &Path {
+        &self.slave_path
+    }
+
+    /// The master side, for reading and writing.
+    pub fn master(&mut self) -> &mut File {
+        &mut self.master
+    }
+
+    /// A second handle on the master side (e.g. for a reader thread).
+    pub fn try_clone_master(&self) -> Result<File, TransportError> {
+        self.master
+            .try_clone()
+            .map_err(|source| TransportError::Io {
+                what: "cloning the pseudo-terminal master".into(),
+                source,
+            })
+    }
+
+    /// Reads what is available on the master side, waiting at most
+    /// `timeout`; `Ok(0)` when nothing arrived in time.
+    pub fn read_timeout(
+        &mut self,
+        buf: &mut [u8],
+        timeout: Duration,
+    ) -> Result<usize, TransportError> {
+        read_with_timeout(&mut self.master, buf, timeout)
+    }
+
+    /// Writes all of `bytes` to the master side.
+    pub fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        self.master
+            .write_all(bytes)
+            .map_err(|source| TransportError::Io {
+                what: format!(
+                    "writing the pseudo-terminal of {}",
+                    self.slave_path.display()
+                ),
+                source,
+            })
+    }
+}
+
+/// Waits at most `timeout` for `file` to be readable, then reads; `Ok(0)`
+/// on timeout.
+pub fn read_with_timeout(
+    file: &mut File,
+    buf: &mut [u8],
+    timeout: Duration,
+) -> Result<usize, TransportError> {
+    use rustix::event::{PollFd, PollFlags, Timespec, poll};
+    let io = |source: std::io::Error| TransportError::Io {
+        what: "reading a pseudo-terminal".into(),
+        source,
+    };
+    let ts = Timespec {
+        tv_sec: i64::try_from(timeout.as_secs()).unwrap_or(i64::MAX),
+        tv_nsec: i64::from(timeout.subsec_nanos()),
+    };
+    let mut fds = [PollFd::new(&*file, PollFlags::IN)];
+    match poll(&mut fds, Some(&ts)) {
+        Ok(0) => return Ok(0),
+        Ok(_) => {}
+        Err(rustix::io::Errno::INTR) => return Ok(0),
+        Err(e) => return Err(io(e.into())),
+    }
+    match file.read(buf) {
+        Ok(n) => Ok(n),
+        Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => Ok(0),
+        Err(e) => Err(io(e)),
+    }
+}
+
+/// Last-seen time of one sensor and its staleness threshold.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StaleDetector {
+    threshold_s: f64,
+    last_seen_s: Option<f64>,
+}
+
+impl StaleDetector {
+    /// A detector that calls the sensor stale when its last message is older
+    /// than `threshold_s` (finite, > 0; e.g. three sample periods).
+    pub fn new(threshold_s: f64) -> Result<Self, EncodeError> {
+        let t = check_range("stale threshold_s", threshold_s, f64::MIN_POSITIVE, 1e6)?;
+        Ok(Self {
+            threshold_s: t,
+            last_seen_s: None,
+        })
+    }
+
+    /// Records a message at `t_s` (a non-finite time is ignored).
+    pub fn seen(&mut self, t_s: f64) {
+        if t_s.is_finite() {
+            self.last_seen_s = Some(t_s);
+        }
+    }
+
+    /// Seconds since the last message, `None` if none yet. A clock that went
+    /// backwards gives 0.
+    pub fn age_s(&self, now_s: f64) -> Option<f64> {
+        self.last_seen_s.map(|t| (now_s - t).max(0.0))
+    }
+
+    /// True when no message was ever seen, or the last one is older than
+    /// the threshold, or `now_s` is not finite.
+    pub fn is_stale(&self, now_s: f64) -> bool {
+        if !now_s.is_finite() {
+            return true;
+        }
+        self.age_s(now_s).is_none_or(|a| a > self.threshold_s)
+    }
+
+    /// The threshold (s).
+    pub fn threshold_s(&self) -> f64 {
+        self.threshold_s
+    }
+}
