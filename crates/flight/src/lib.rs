@@ -20,4 +20,6 @@ pub mod control;
 pub mod realtime;
 pub mod records;
 pub mod runtime;
+pub mod ports;
 pub mod safety;
+pub mod sitl;
