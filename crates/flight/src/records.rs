@@ -39,7 +39,7 @@ pub fn flight_mode(m: Mode) -> FlightMode {
 /// failsafe).
 pub fn failsafe_reason(r: Reason) -> Option<FailsafeReason> {
     match r {
-        Reason::ImuStale | Reason::GpsStale | Reason::MagStale => {
+        Reason::ImuStale | Reason::GpsStale | Reason::MagStale | Reason::ImuRecovered => {
             Some(FailsafeReason::SensorTimeout)
         }
         Reason::Overrun => Some(FailsafeReason::DeadlineMiss),

@@ -64,6 +64,10 @@ pub struct Arrival {
     pub frame: Option<SensorFrame>,
     /// When the message was decoded (`CLOCK_MONOTONIC`, ns).
     pub arrived_ns: u64,
+    /// The receiver's newest frame, when the sensor server also reads the
+    /// receiver (lock-step: its frames written before the IMU message then
+    /// reach the same control step, deterministically).
+    pub rc: Option<RcInput>,
 }
 
 /// The sensor devices (IMU with magnetometer, GPS) read together.
@@ -211,8 +215,9 @@ const SERVO_RING: usize = 64;
 const LOG_RING: usize = 16_384;
 const POLL: Duration = Duration::from_millis(50);
 
-/// Spawn the runtime: sensor server, receiver, control task, avionics-out
-/// and logger threads. `log` is owned by the logger thread and finished
+/// Spawn the runtime: sensor server, receiver (when `rc` is given; else
+/// the sensor port reports the receiver's frames), control task,
+/// avionics-out and logger threads. `log` is owned by the logger thread and finished
 /// when the runtime ends; `downlink`, when given, receives each step's
 /// telemetry (the ground link; SITL fills the truth log's estimate columns
 /// from it).
@@ -220,7 +225,7 @@ pub fn spawn<S, R, V, W>(
     task: ControlTask,
     mission: Mission,
     sensors: S,
-    rc: R,
+    rc: Option<R>,
     servos: V,
     log: FlightLog<W>,
     downlink: Option<rtrb::Producer<Telemetry>>,
@@ -329,15 +334,18 @@ where
                 sensor_loop(sensors, frame_tx, &stop, &closed, wake)
             })
     };
-    let receiver = {
+    let receiver = rc.map(|rc| {
         let stop = stop.clone();
         thread::Builder::new()
             .name("receiver".into())
             .spawn(move || receiver_loop(rc, rc_tx, &stop))
-    };
+    });
     let mut others = Vec::new();
     let mut wakers = Vec::new();
-    for h in [sensor, receiver, avionics, logger] {
+    for h in [Some(sensor), receiver, Some(avionics), Some(logger)]
+        .into_iter()
+        .flatten()
+    {
         match h {
             Ok(h) => {
                 wakers.push(h.thread().clone());
@@ -640,7 +648,7 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
             Pacing::Clock => (wake_ns - t0_ns) as f64 * 1e-9,
             Pacing::Sensor => steps as f64 * ts_s,
         };
-        let mut rc = None;
+        let mut rc = arrival.and_then(|a| a.rc);
         while let Ok(r) = ctx.rc.pop() {
             rc = Some(r);
         }
