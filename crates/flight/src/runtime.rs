@@ -18,15 +18,15 @@
 //! on-board time is k·Ts from the first message). Either way each step is
 //! the [`ControlTask`]'s and sends exactly one servo frame.
 
-use crate::control::{ControlOutput, ControlTask, Tick};
+use crate::control::{ControlTask, Tick};
 use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
-use crate::records::{FlightRecord, write_record};
+use crate::records::{FlightRecord, step_records, write_record};
 use crate::safety::{Mode, RcInput};
 use helicon_core::state::Input;
 use helicon_core::{Reference, SensorFrame, Telemetry};
 use helicon_sim::scenario::ReferenceSchedule;
-use helicon_ulog::messages::{Control, Navigation, RcInput as RcRecord, ServoOutput, Timing};
-use helicon_ulog::{FlightLog, LogRecord, WriteError, timestamp_us};
+use helicon_ulog::messages::Timing;
+use helicon_ulog::{FlightLog, timestamp_us};
 use nalgebra::Vector3;
 use std::io::Write;
 use std::sync::Arc;
@@ -519,76 +519,6 @@ struct ControlCtx<'a> {
     options: RuntimeOptions,
 }
 
-/// Everything one step logs: timing, the frame, the control step, the
-/// servo command, the receiver frame and the event.
-fn log_step(
-    ctx: &mut ControlCtx<'_>,
-    tick: &Tick,
-    out: &ControlOutput,
-    timing: Timing,
-) -> Result<u64, WriteError> {
-    let mut dropped = 0;
-    let mut push = |r: FlightRecord| {
-        if ctx.log.push(r).is_err() {
-            dropped += 1;
-        }
-    };
-    let ts = timestamp_us(tick.now_s, "control step")?;
-    if let Some(f) = &tick.frame {
-        let (imu, mag, gps) = helicon_ulog::messages::frame_records(f)?;
-        push(FlightRecord::Log(LogRecord::Imu(imu)));
-        if let Some(m) = mag {
-            push(FlightRecord::Log(LogRecord::Mag(m)));
-        }
-        if let Some(g) = gps {
-            push(FlightRecord::Log(LogRecord::Gps(g)));
-        }
-    }
-    if let Some(rc) = &tick.rc {
-        push(FlightRecord::Log(LogRecord::Rc(rc_record(ts, rc))));
-    }
-    if let Some(ev) = out.event {
-        push(FlightRecord::Event(ev));
-    }
-    if let Some(t) = &out.telemetry {
-        push(FlightRecord::Log(LogRecord::Control(Control::from_telemetry(t)?)));
-        if let Some(n) = &t.navigation {
-            push(FlightRecord::Log(LogRecord::Navigation(
-                Navigation::from_solution(t.t_s, n)?,
-            )));
-        }
-    }
-    push(FlightRecord::Log(LogRecord::Servo(ServoOutput {
-        timestamp: ts,
-        command: out.servo.into(),
-        source: match out.mode {
-            Mode::Auto => 0,
-            Mode::Manual => 1,
-            _ => 2,
-        },
-    })));
-    push(FlightRecord::Log(LogRecord::Timing(timing)));
-    Ok(dropped)
-}
-
-/// The receiver's frame as a log record: the sticks as servo commands are
-/// carried in the first four channels as pulse widths
-/// (1500 µs + 1000 µs per unit of servo command, clamped to 800..2200 µs).
-fn rc_record(ts: u64, rc: &RcInput) -> RcRecord {
-    let mut channels_us = [0u16; 16];
-    for i in 0..4 {
-        let us = (1500.0 + 1000.0 * rc.servo[i]).clamp(800.0, 2200.0);
-        channels_us[i] = us as u16;
-    }
-    RcRecord {
-        timestamp: ts,
-        channels_us,
-        channel_count: 4,
-        manual_switch: rc.manual,
-        signal_lost: false,
-    }
-}
-
 #[allow(clippy::too_many_lines)] // one loop: wait, gather, step, hand over, log
 fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_>) -> ControlResult {
     let ts_s = ctx.options.sample_time_s;
@@ -696,10 +626,14 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
             deadline_misses: u32::try_from(misses).unwrap_or(u32::MAX),
             log_dropped: u32::try_from(log_dropped).unwrap_or(u32::MAX),
         };
-        match log_step(&mut ctx, &tick, &out, timing) {
-            Ok(d) => log_dropped += d,
-            Err(_) => log_dropped += 1,
-        }
+        let ring = &mut ctx.log;
+        let mut dropped = 0;
+        let res = step_records(&tick, &out, timing, &mut |r| {
+            if ring.push(r).is_err() {
+                dropped += 1;
+            }
+        });
+        log_dropped += dropped + u64::from(res.is_err());
         if let Some(t) = &ctx.wake_log {
             t.unpark();
         }
