@@ -382,6 +382,11 @@ where
 }
 
 impl RuntimeHandle {
+    /// The real-time warnings of the start (privileges refused).
+    pub fn warnings(&self) -> Vec<String> {
+        self.realtime.warnings.clone()
+    }
+
     /// Ask every thread to stop.
     pub fn stop(&self) {
         self.stop.store(true, Ordering::SeqCst);
