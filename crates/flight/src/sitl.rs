@@ -115,6 +115,8 @@ pub struct SitlResult {
     pub ulog: PathBuf,
     /// The truth log.
     pub log_csv: PathBuf,
+    /// Its rows.
+    pub log_rows: usize,
 }
 
 /// Errors of a SITL run (a divergence is an outcome, not an error).
@@ -381,7 +383,7 @@ pub fn run(
     let wall_s = wall0.elapsed().as_secs_f64();
     handle.stop();
     let onboard = handle.join();
-    writer.finish()?;
+    let log_rows = writer.finish()?;
     if let Some(e) = failure {
         return Err(e);
     }
@@ -400,6 +402,7 @@ pub fn run(
         received,
         ulog,
         log_csv,
+        log_rows,
     })
 }
 
