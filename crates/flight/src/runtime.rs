@@ -12,8 +12,10 @@
 //! counts it. Threads waiting for work park and are unparked by the producer.
 //!
 //! The control task is paced either by the clock ([`Pacing::Clock`]: absolute
-//! deadlines k·Ts on `CLOCK_MONOTONIC`; the frame that arrived since the last
-//! deadline is used, none means no fresh IMU sample) or by sensor arrival
+//! deadlines on `CLOCK_MONOTONIC`, one period apart and phase-locked to
+//! 250 µs after the IMU's arrivals; the frame that arrived since the last
+//! deadline is used, none means no fresh IMU sample; a silent IMU leaves
+//! the deadlines running) or by sensor arrival
 //! ([`Pacing::Sensor`]: one step per IMU message, the lock-step of SITL, where
 //! on-board time is k·Ts from the first message). Either way each step is
 //! the [`ControlTask`]'s and sends exactly one servo frame.
@@ -214,6 +216,9 @@ const RC_RING: usize = 64;
 const SERVO_RING: usize = 64;
 const LOG_RING: usize = 16_384;
 const POLL: Duration = Duration::from_millis(50);
+/// Clock pacing: how long after the IMU message's arrival the control task
+/// wakes (the phase it locks to).
+const SENSOR_LAG_NS: u64 = 250_000;
 
 /// Spawn the runtime: sensor server, receiver (when `rc` is given; else
 /// the sensor port reports the receiver's frames), control task,
@@ -645,6 +650,21 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
         steps += 1;
         if ctx.options.pacing == Pacing::Clock {
             deadline_ns += period_ns;
+            // phase lock to the IMU: the deadline follows the IMU's arrival
+            // by SENSOR_LAG_NS (a first-order loop, 1/8 of the error per
+            // step, at most 50 µs a step), so each step finds exactly one
+            // fresh sample and the servo frame leaves within the period
+            if let Some(a) = arrival {
+                // the error wrapped into (−Ts/2, Ts/2]: a sample that arrived
+                // just after the last deadline reads as late, not early
+                let period = i128::from(period_ns);
+                let lag = wake_ns as i128 - i128::from(a.arrived_ns);
+                let err = (lag - i128::from(SENSOR_LAG_NS) + period / 2).rem_euclid(period)
+                    - period / 2;
+                let shift = (err / 8).clamp(-50_000, 50_000);
+                let shifted = i128::from(deadline_ns) - shift;
+                deadline_ns = u64::try_from(shifted).unwrap_or(deadline_ns);
+            }
             // after a long stall, skip the deadlines already past (counted)
             let now = realtime::monotonic_ns();
             while deadline_ns + period_ns < now {

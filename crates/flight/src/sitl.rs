@@ -249,6 +249,14 @@ pub fn run(
         },
     );
 
+    // real time: the hardware is a real-time task too (devices keep their
+    // rate), one priority above the on-board control task
+    if !lockstep
+        && options.realtime.sched_fifo
+        && let Err(e) = crate::realtime::set_fifo(options.realtime.priority.saturating_add(1).min(99))
+    {
+        eprintln!("warning: SCHED_FIFO for the simulated hardware not permitted ({e})");
+    }
     let log_csv = options.out_dir.join("log.csv");
     let mut writer = LogWriter::create(&log_csv)?;
     let mut servo_in = wires.avionics.try_clone_master().map_err(dev("avionics"))?;
