@@ -216,6 +216,8 @@ const RC_RING: usize = 64;
 const SERVO_RING: usize = 64;
 const LOG_RING: usize = 16_384;
 const POLL: Duration = Duration::from_millis(50);
+/// The logger's own wake-up period (at 400 Hz about 60 records pile up).
+const LOG_POLL: Duration = Duration::from_millis(10);
 /// Clock pacing: how long after the IMU message's arrival the control task
 /// wakes (the phase it locks to).
 const SENSOR_LAG_NS: u64 = 250_000;
@@ -644,7 +646,11 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
             }
         });
         log_dropped += dropped + u64::from(res.is_err());
-        if let Some(t) = &ctx.wake_log {
+        // the logger wakes on its own every LOG_POLL; it is woken early
+        // only when its ring fills past a quarter (one wake-up less per step)
+        if ctx.log.slots() < LOG_RING * 3 / 4
+            && let Some(t) = &ctx.wake_log
+        {
             t.unpark();
         }
         steps += 1;
@@ -768,7 +774,7 @@ fn logger_loop<W: Write>(
             break;
         }
         if !any {
-            thread::park_timeout(POLL);
+            thread::park_timeout(LOG_POLL);
         }
     }
     if let Err(e) = log.finish() {
