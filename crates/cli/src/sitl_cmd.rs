@@ -115,13 +115,14 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         writeln!(
             con,
             
-            "{}: {} at t = {:.3} s{}; {} control steps, {:.1}x real time, final mode {}",
+            "{}: {} at t = {:.3} s{}; {} control steps, {:.1}x real time ({:.0}x per CPU second), final mode {}",
             case.name,
             s.termination,
             s.t_end_s,
             s.reason.as_deref().map_or(String::new(), |r| format!(" ({r})")),
             r.onboard.steps,
             r.speed_x,
+            if r.cpu_s > 0.0 { r.samples as f64 * r.sample_time_s / r.cpu_s } else { 0.0 },
             r.onboard.final_mode
         );
         for name in OUTPUTS {

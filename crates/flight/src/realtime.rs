@@ -23,6 +23,16 @@ pub fn monotonic_ns() -> u64 {
         .unwrap_or(0)
 }
 
+/// CPU time (user + system) of the whole process so far (s; 0 when the
+/// system does not say).
+pub fn process_cpu_s() -> f64 {
+    use nix::sys::resource::{UsageWho, getrusage};
+    getrusage(UsageWho::RUSAGE_SELF).map_or(0.0, |u| {
+        let t = |tv: nix::sys::time::TimeVal| tv.tv_sec() as f64 + tv.tv_usec() as f64 * 1e-6;
+        t(u.user_time()) + t(u.system_time())
+    })
+}
+
 /// Sleep until the absolute `CLOCK_MONOTONIC` time `deadline_ns`
 /// (`TIMER_ABSTIME`: no drift from the time spent computing). Interrupted
 /// sleeps are resumed.

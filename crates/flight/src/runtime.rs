@@ -185,6 +185,9 @@ pub struct RuntimeHandle {
 }
 
 struct ControlResult {
+    /// Lock-step: the servo frames, latency and port error of the control
+    /// task's own I/O.
+    direct: Option<ThreadResult>,
     steps: u64,
     misses: u64,
     superseded: u64,
@@ -275,16 +278,34 @@ where
     };
     let logger_thread = logger.as_ref().ok().map(|h| h.thread().clone());
 
+    // lock-step: the control task reads the sensors and writes the servos
+    // itself (the pacing is the sensor's anyway): two thread hand-overs per
+    // sample instead of four
+    let direct = options.pacing == Pacing::Sensor;
+    let mut sensors = Some(sensors);
+    let mut servos = Some(servos);
+    let direct_io: Option<(Box<dyn SensorPort>, Box<dyn ServoPort>)> = if direct {
+        match (sensors.take(), servos.take()) {
+            (Some(a), Some(b)) => Some((Box::new(a), Box::new(b))),
+            _ => None,
+        }
+    } else {
+        None
+    };
+
     // avionics-out
-    let avionics = {
+    let avionics = servos.take().map(|servos| {
         let stop = stop.clone();
         let last = last_output_ns.clone();
         let logger_thread = logger_thread.clone();
         thread::Builder::new().name("avionics-out".into()).spawn(move || {
             avionics_loop(servos, servo_rx, wlog_tx, &stop, &last, logger_thread, options)
         })
-    };
-    let avionics_thread = avionics.as_ref().ok().map(|h| h.thread().clone());
+    });
+    let avionics_thread = avionics
+        .as_ref()
+        .and_then(|h| h.as_ref().ok())
+        .map(|h| h.thread().clone());
 
     // control task
     let (fifo_tx, fifo_rx) = std::sync::mpsc::channel::<Result<(), String>>();
@@ -311,6 +332,13 @@ where
                 wake_out,
                 wake_log,
                 downlink,
+                direct: direct_io.map(|(sensors, servos)| Direct {
+                    sensors,
+                    servos,
+                    latency: LatencyStats::new(),
+                    frames: 0,
+                    error: None,
+                }),
                 options,
             };
             control_loop(task, &mission, ctx)
@@ -328,7 +356,7 @@ where
     let control_thread = control.as_ref().ok().map(|h| h.thread().clone());
 
     // sensor server and receiver (SCHED_FIFO one below the control task)
-    let sensor = {
+    let sensor = sensors.take().map(|sensors| {
         let stop = stop.clone();
         let closed = sensors_closed.clone();
         let wake = control_thread.clone();
@@ -340,7 +368,7 @@ where
                 }
                 sensor_loop(sensors, frame_tx, &stop, &closed, wake)
             })
-    };
+    });
     let receiver = rc.map(|rc| {
         let stop = stop.clone();
         thread::Builder::new()
@@ -349,7 +377,7 @@ where
     });
     let mut others = Vec::new();
     let mut wakers = Vec::new();
-    for h in [Some(sensor), receiver, Some(avionics), Some(logger)]
+    for h in [sensor, receiver, avionics, Some(logger)]
         .into_iter()
         .flatten()
     {
@@ -368,6 +396,7 @@ where
             stop.store(true, Ordering::SeqCst);
             realtime.warnings.push(format!("control task: {e}"));
             thread::spawn(|| ControlResult {
+                direct: None,
                 steps: 0,
                 misses: 0,
                 superseded: 0,
@@ -428,6 +457,13 @@ impl RuntimeHandle {
         };
         match c {
             Ok(c) => {
+                if let Some(d) = c.direct {
+                    report.servo_frames += d.servo_frames;
+                    if let Some(l) = d.latency {
+                        report.sensor_to_servo = l.summary();
+                    }
+                    report.error = d.error;
+                }
                 report.steps = c.steps;
                 report.deadline_misses = c.misses;
                 report.frames_superseded = c.superseded;
@@ -528,7 +564,17 @@ struct ControlCtx<'a> {
     wake_out: Option<Thread>,
     wake_log: Option<Thread>,
     downlink: Option<rtrb::Producer<Telemetry>>,
+    direct: Option<Direct>,
     options: RuntimeOptions,
+}
+
+/// The control task's own I/O in lock-step.
+struct Direct {
+    sensors: Box<dyn SensorPort>,
+    servos: Box<dyn ServoPort>,
+    latency: LatencyStats,
+    frames: u64,
+    error: Option<String>,
 }
 
 #[allow(clippy::too_many_lines)] // one loop: wait, gather, step, hand over, log
@@ -570,6 +616,17 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
             }
             Pacing::Sensor => {
                 let a = loop {
+                    if let Some(d) = ctx.direct.as_mut() {
+                        match d.sensors.next(POLL) {
+                            Ok(Next::Item(a)) => break Some(a),
+                            Ok(Next::Timeout) if !ctx.stop.load(Ordering::Relaxed) => continue,
+                            Ok(_) => break None,
+                            Err(e) => {
+                                d.error.get_or_insert(e.to_string());
+                                break None;
+                            }
+                        }
+                    }
                     if let Ok(a) = ctx.frames.pop() {
                         break Some(a);
                     }
@@ -611,15 +668,27 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
         if let (Some(d), Some(t)) = (ctx.downlink.as_mut(), out.telemetry) {
             let _ = d.push(t);
         }
-        let item = ServoItem {
-            u: out.servo,
-            arrived_ns: arrival.map(|a| a.arrived_ns),
-        };
-        if ctx.servo.push(item).is_err() {
-            log_dropped += 1;
-        }
-        if let Some(t) = &ctx.wake_out {
-            t.unpark();
+        if let Some(d) = ctx.direct.as_mut() {
+            match d.servos.send(&out.servo) {
+                Ok(()) => d.frames += 1,
+                Err(e) => {
+                    d.error.get_or_insert(e.to_string());
+                }
+            }
+            if let Some(a) = arrival {
+                d.latency.push(realtime::monotonic_ns().saturating_sub(a.arrived_ns));
+            }
+        } else {
+            let item = ServoItem {
+                u: out.servo,
+                arrived_ns: arrival.map(|a| a.arrived_ns),
+            };
+            if ctx.servo.push(item).is_err() {
+                log_dropped += 1;
+            }
+            if let Some(t) = &ctx.wake_out {
+                t.unpark();
+            }
         }
         let done_ns = realtime::monotonic_ns();
         ctx.last_output_ns.store(done_ns, Ordering::Relaxed);
@@ -680,6 +749,12 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
         }
     }
     ControlResult {
+        direct: ctx.direct.map(|d| ThreadResult {
+            servo_frames: d.frames,
+            latency: Some(d.latency),
+            error: d.error,
+            ..ThreadResult::default()
+        }),
         steps,
         misses,
         superseded,

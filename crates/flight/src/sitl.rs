@@ -103,10 +103,14 @@ pub struct SitlResult {
     pub onboard: RunReport,
     /// Control periods flown.
     pub samples: u64,
+    /// The control period (s).
+    pub sample_time_s: f64,
     /// Wall time of the flight (s).
     pub wall_s: f64,
     /// Simulated time per wall time.
     pub speed_x: f64,
+    /// CPU time of the process (both sides, all threads) during the flight (s).
+    pub cpu_s: f64,
     /// The frames the hardware sent (when kept), in order.
     pub sent: Vec<SensorFrame>,
     /// The servo commands the plant received, in order.
@@ -271,6 +275,7 @@ pub fn run(
     let timeout = Duration::from_secs(10);
     let t0 = crate::realtime::monotonic_ns();
     let wall0 = Instant::now();
+    let cpu0 = crate::realtime::process_cpu_s();
     let mut failure = None;
     while let Some(s) = hw.sense() {
         let t = s.t_s;
@@ -389,6 +394,7 @@ pub fn run(
         }
     }
     let wall_s = wall0.elapsed().as_secs_f64();
+    let cpu_s = crate::realtime::process_cpu_s() - cpu0;
     handle.stop();
     let onboard = handle.join();
     let log_rows = writer.finish()?;
@@ -404,14 +410,23 @@ pub fn run(
         summary,
         onboard,
         samples,
+        sample_time_s: ts,
         wall_s,
         speed_x: if wall_s > 0.0 { sim_s / wall_s } else { 0.0 },
+        cpu_s,
         sent,
         received,
         ulog,
         log_csv,
         log_rows,
     })
+}
+
+impl SitlResult {
+    /// The control period flown (s).
+    pub fn onboard_sample_time_s(&self) -> f64 {
+        self.sample_time_s
+    }
 }
 
 /// `timing.json` of a SITL run.
@@ -421,6 +436,8 @@ pub fn timing_json(result: &SitlResult, speed: Speed) -> serde_json::Value {
         "samples": result.samples,
         "wall_s": result.wall_s,
         "speed_x_realtime": result.speed_x,
+        "cpu_s": result.cpu_s,
+        "speed_x_realtime_per_cpu_s": if result.cpu_s > 0.0 { result.samples as f64 * result.onboard_sample_time_s() / result.cpu_s } else { 0.0 },
         "onboard": result.onboard,
     })
 }
