@@ -160,7 +160,9 @@ pub fn step_records(
         push(FlightRecord::Event(ev));
     }
     if let Some(t) = &out.telemetry {
-        push(FlightRecord::Log(LogRecord::Control(Control::from_telemetry(t)?)));
+        push(FlightRecord::Log(LogRecord::Control(
+            Control::from_telemetry(t)?,
+        )));
         if let Some(n) = &t.navigation {
             push(FlightRecord::Log(LogRecord::Navigation(
                 Navigation::from_solution(t.t_s, n)?,

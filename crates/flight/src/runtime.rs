@@ -298,9 +298,19 @@ where
         let stop = stop.clone();
         let last = last_output_ns.clone();
         let logger_thread = logger_thread.clone();
-        thread::Builder::new().name("avionics-out".into()).spawn(move || {
-            avionics_loop(servos, servo_rx, wlog_tx, &stop, &last, logger_thread, options)
-        })
+        thread::Builder::new()
+            .name("avionics-out".into())
+            .spawn(move || {
+                avionics_loop(
+                    servos,
+                    servo_rx,
+                    wlog_tx,
+                    &stop,
+                    &last,
+                    logger_thread,
+                    options,
+                )
+            })
     });
     let avionics_thread = avionics
         .as_ref()
@@ -315,34 +325,36 @@ where
         let last = last_output_ns.clone();
         let wake_out = avionics_thread.clone();
         let wake_log = logger_thread.clone();
-        thread::Builder::new().name("control".into()).spawn(move || {
-            if options.realtime.sched_fifo {
-                let _ = fifo_tx.send(realtime::set_fifo(options.realtime.priority));
-            } else {
-                let _ = fifo_tx.send(Ok(()));
-            }
-            let ctx = ControlCtx {
-                frames: frame_rx,
-                rc: rc_rx,
-                servo: servo_tx,
-                log: log_tx,
-                stop: &stop,
-                closed: &closed,
-                last_output_ns: &last,
-                wake_out,
-                wake_log,
-                downlink,
-                direct: direct_io.map(|(sensors, servos)| Direct {
-                    sensors,
-                    servos,
-                    latency: LatencyStats::new(),
-                    frames: 0,
-                    error: None,
-                }),
-                options,
-            };
-            control_loop(task, &mission, ctx)
-        })
+        thread::Builder::new()
+            .name("control".into())
+            .spawn(move || {
+                if options.realtime.sched_fifo {
+                    let _ = fifo_tx.send(realtime::set_fifo(options.realtime.priority));
+                } else {
+                    let _ = fifo_tx.send(Ok(()));
+                }
+                let ctx = ControlCtx {
+                    frames: frame_rx,
+                    rc: rc_rx,
+                    servo: servo_tx,
+                    log: log_tx,
+                    stop: &stop,
+                    closed: &closed,
+                    last_output_ns: &last,
+                    wake_out,
+                    wake_log,
+                    downlink,
+                    direct: direct_io.map(|(sensors, servos)| Direct {
+                        sensors,
+                        servos,
+                        latency: LatencyStats::new(),
+                        frames: 0,
+                        error: None,
+                    }),
+                    options,
+                };
+                control_loop(task, &mission, ctx)
+            })
     };
     match fifo_rx.recv() {
         Ok(Ok(())) => realtime.sched_fifo = options.realtime.sched_fifo,
@@ -386,7 +398,9 @@ where
                 wakers.push(h.thread().clone());
                 others.push(h);
             }
-            Err(e) => realtime.warnings.push(format!("a thread did not start: {e}")),
+            Err(e) => realtime
+                .warnings
+                .push(format!("a thread did not start: {e}")),
         }
     }
     let control = match control {
@@ -489,7 +503,9 @@ impl RuntimeHandle {
                     }
                 }
                 Err(_) => {
-                    report.error.get_or_insert_with(|| "a thread panicked".into());
+                    report
+                        .error
+                        .get_or_insert_with(|| "a thread panicked".into());
                 }
             }
         }
@@ -578,7 +594,11 @@ struct Direct {
 }
 
 #[allow(clippy::too_many_lines)] // one loop: wait, gather, step, hand over, log
-fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_>) -> ControlResult {
+fn control_loop(
+    mut task: ControlTask,
+    mission: &Mission,
+    mut ctx: ControlCtx<'_>,
+) -> ControlResult {
     let ts_s = ctx.options.sample_time_s;
     let period_ns = (ts_s * 1e9).round() as u64;
     let mut jitter = LatencyStats::new();
@@ -676,7 +696,8 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
                 }
             }
             if let Some(a) = arrival {
-                d.latency.push(realtime::monotonic_ns().saturating_sub(a.arrived_ns));
+                d.latency
+                    .push(realtime::monotonic_ns().saturating_sub(a.arrived_ns));
             }
         } else {
             let item = ServoItem {
@@ -734,8 +755,8 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
                 // just after the last deadline reads as late, not early
                 let period = i128::from(period_ns);
                 let lag = wake_ns as i128 - i128::from(a.arrived_ns);
-                let err = (lag - i128::from(SENSOR_LAG_NS) + period / 2).rem_euclid(period)
-                    - period / 2;
+                let err =
+                    (lag - i128::from(SENSOR_LAG_NS) + period / 2).rem_euclid(period) - period / 2;
                 let shift = (err / 8).clamp(-50_000, 50_000);
                 let shifted = i128::from(deadline_ns) - shift;
                 deadline_ns = u64::try_from(shifted).unwrap_or(deadline_ns);

@@ -30,8 +30,7 @@ use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, RcInput as RcFrame};
 use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCommon};
 use helicon_sim::closed_loop::{
-    ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination,
-    thesis_flight_computer,
+    ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, thesis_flight_computer,
 };
 use helicon_sim::log_csv::{LogCsvError, LogWriter};
 use helicon_sim::scenario::Scenario;
@@ -219,12 +218,11 @@ pub fn run(
         sys_name: format!("helicon sitl {}", scenario.name),
         ..LogInfo::default()
     };
-    let log = FlightLog::create(&ulog, &info, FlushPolicy::default()).map_err(|e| {
-        SitlError::Log {
+    let log =
+        FlightLog::create(&ulog, &info, FlushPolicy::default()).map_err(|e| SitlError::Log {
             path: ulog.display().to_string(),
             message: e.to_string(),
-        }
-    })?;
+        })?;
     let (downlink_tx, mut downlink) = rtrb::RingBuffer::new(1024);
     let realtime = if lockstep {
         RealtimeConfig {
@@ -245,7 +243,11 @@ pub fn run(
         Some(downlink_tx),
         RuntimeOptions {
             sample_time_s: ts,
-            pacing: if lockstep { Pacing::Sensor } else { Pacing::Clock },
+            pacing: if lockstep {
+                Pacing::Sensor
+            } else {
+                Pacing::Clock
+            },
             max_steps: None,
             realtime,
             watchdog_s: 0.1,
@@ -257,7 +259,8 @@ pub fn run(
     // rate), one priority above the on-board control task
     if !lockstep
         && options.realtime.sched_fifo
-        && let Err(e) = crate::realtime::set_fifo(options.realtime.priority.saturating_add(1).min(99))
+        && let Err(e) =
+            crate::realtime::set_fifo(options.realtime.priority.saturating_add(1).min(99))
     {
         eprintln!("warning: SCHED_FIFO for the simulated hardware not permitted ({e})");
     }
@@ -300,11 +303,18 @@ pub fn run(
                 .map_err(dev("avionics"))?;
         }
         // the GPS receiver
-        let gps_on = options.faults.gps_lost_from_s.is_none_or(|t_loss| t < t_loss);
+        let gps_on = options
+            .faults
+            .gps_lost_from_s
+            .is_none_or(|t_loss| t < t_loss);
         if let (Some(fix), true) = (&s.frame.gps, gps_on) {
             let itow_ms = ((TOW0_S + fix.epoch_s) * 1000.0).round() as u32;
-            let pvt = NavPvt::from_gps_fix(fix, &home, itow_ms, 0.0).map_err(dev("GPS encoding"))?;
-            wires.gps.write_all(pvt.encode().as_bytes()).map_err(dev("GPS"))?;
+            let pvt =
+                NavPvt::from_gps_fix(fix, &home, itow_ms, 0.0).map_err(dev("GPS encoding"))?;
+            wires
+                .gps
+                .write_all(pvt.encode().as_bytes())
+                .map_err(dev("GPS"))?;
         }
         // the IMU (and magnetometer): last, it paces the on-board software
         let frozen = options
@@ -402,7 +412,10 @@ pub fn run(
         return Err(e);
     }
     if let Some(e) = &onboard.error {
-        hw.abort(Termination::NavigationFailure, format!("on-board program: {e}"));
+        hw.abort(
+            Termination::NavigationFailure,
+            format!("on-board program: {e}"),
+        );
     }
     let summary = hw.summary();
     let sim_s = samples as f64 * ts;

@@ -40,7 +40,8 @@ fn a_control_step_and_its_log_allocate_nothing() {
     sup.arm();
     let mut task = ControlTask::new(computer, sup, prepared.gains.set.u_trim);
     let (mut tx, mut rx) = rtrb::RingBuffer::<FlightRecord>::new(4096);
-    let mut log = FlightLog::new(std::io::sink(), &LogInfo::default(), FlushPolicy::default()).unwrap();
+    let mut log =
+        FlightLog::new(std::io::sink(), &LogInfo::default(), FlushPolicy::default()).unwrap();
     let rc = RcInput {
         servo: prepared.gains.set.u_trim,
         manual: false,

@@ -30,7 +30,10 @@ fn check(file: &str) {
             r.summary.t_end_s,
             r.speed_x
         );
-        assert_eq!(r.summary.termination, flown.summary.termination, "{file} case {i}");
+        assert_eq!(
+            r.summary.termination, flown.summary.termination,
+            "{file} case {i}"
+        );
         if r.summary.termination == helicon_sim::closed_loop::Termination::Completed {
             for o in OUTPUTS {
                 let (a, b) = (&r.summary.metrics[o], &flown.summary.metrics[o]);

@@ -79,7 +79,11 @@ fn sim_and_sitl_agree_up_to_the_transport_quantisation() {
         assert_eq!(p.len(), fixes.len());
         for (k, fix) in fixes.iter().enumerate() {
             let dp = (p[k] - fix.position_ned_m[i]).abs();
-            let bound = if i == 2 { GPS_VERTICAL_M } else { GPS_HORIZONTAL_M };
+            let bound = if i == 2 {
+                GPS_VERTICAL_M
+            } else {
+                GPS_HORIZONTAL_M
+            };
             assert!(dp <= bound, "fix {k} axis {i}: {dp} m > {bound} m");
             let vs = fix.velocity_ned_m_s.unwrap()[i];
             assert!((v[k] - vs).abs() <= GPS_VELOCITY_M_S, "velocity {k}");
@@ -123,7 +127,10 @@ fn the_onboard_log_has_every_control_step_at_400_hz() {
     assert!((rate / 400.0 - 1.0).abs() < 1e-3, "{rate} Hz");
     // one timing and one servo record per step
     assert_eq!(log.u64s("timing", "sample").len() as u64, r.onboard.steps);
-    assert_eq!(log.u64s("servo_output", "timestamp").len() as u64, r.onboard.steps);
+    assert_eq!(
+        log.u64s("servo_output", "timestamp").len() as u64,
+        r.onboard.steps
+    );
     assert_eq!(r.onboard.log_dropped, 0);
     // armed at the start: one mode change, standby -> automatic
     assert_eq!(log.u8s("mode", "mode"), vec![2]);

@@ -3,9 +3,7 @@
 //! wind, sensors, flight software and plant, so a software-in-the-loop run
 //! differs from `helicon sim` only by what its transports do to the numbers.
 
-use helicon_sim::closed_loop::{
-    Hardware, OnBoardSetup, fly, prepare, thesis_flight_computer,
-};
+use helicon_sim::closed_loop::{Hardware, OnBoardSetup, fly, prepare, thesis_flight_computer};
 use helicon_sim::scenario::Scenario;
 use std::path::Path;
 
