@@ -231,6 +231,7 @@ const SENSOR_LAG_NS: u64 = 250_000;
 /// when the runtime ends; `downlink`, when given, receives each step's
 /// telemetry (the ground link; SITL fills the truth log's estimate columns
 /// from it).
+#[allow(clippy::too_many_lines)] // the threads of Figure 3.5, started in order
 pub fn spawn<S, R, V, W>(
     task: ControlTask,
     mission: Mission,

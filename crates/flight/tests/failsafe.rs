@@ -1,6 +1,7 @@
 //! The failsafes under lock-step SITL: GPS loss, a stuck IMU, the pilot's
 //! manual override mid-flight. Each: the expected behaviour of the
 //! helicopter (truth) and the on-board log's entries (read by `px4-ulog`).
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 mod common;
 

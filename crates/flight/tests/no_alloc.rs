@@ -2,6 +2,7 @@
 //! supervisor, the flight computer, the log records of the step, the rings
 //! to the logger, and the logger's ULog encoding (counted per thread with a
 //! wrapping allocator, over the 4400 samples after the first second).
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 #![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; the shared counter only forwards to System
 
 #[path = "../../core/tests/common/counting_alloc.rs"]

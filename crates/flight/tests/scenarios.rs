@@ -3,6 +3,7 @@
 //! the completed ones track within 2 % (+2 mm/s, 2 mrad) of the RMS error. SITL always flies the whole on-board chain
 //! from the sensor models (`fusion = true`); the comparison flies `helicon
 //! sim` the same way.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 mod common;
 
