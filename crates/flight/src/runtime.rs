@@ -305,6 +305,11 @@ where
         thread::Builder::new()
             .name("avionics-out".into())
             .spawn(move || {
+                // the servo frame leaves as soon as the step is done: one
+                // below the control task, as the sensor server
+                if options.realtime.sched_fifo {
+                    let _ = realtime::set_fifo(options.realtime.priority.saturating_sub(1).max(1));
+                }
                 avionics_loop(
                     servos,
                     servo_rx,
