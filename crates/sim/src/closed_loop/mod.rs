@@ -15,14 +15,15 @@ use crate::metrics::{OutputMetrics, output_metrics};
 use crate::navigation::{navigation_filter_at, sensor_suite_at};
 use crate::scenario::{DesignInflow, OUTPUTS, PlantInflow, Scenario};
 use crate::sensor_log::{LoggedTruth, SensorLogRow};
-use crate::sensors::SensorSuite;
+use crate::sensors::{SensorConfig, SensorSuite};
 use crate::trajectory::TruthSample;
 use crate::wind::{Wind, WindModel};
 use helicon_core::frames::{EulerTrig, wrap_pi};
-use helicon_core::navigation::NavigationFilter;
+use helicon_core::navigation::{NavigationConfig, NavigationFilter};
 use helicon_core::{
-    CoreError, FlightComputer, KalmanPredictor, Lqi, Reference, ServoLimits, StateMeasurement,
-    Telemetry, ThesisEstimator, ThesisFlightComputer, TruthFeed, TruthMeasurement,
+    CoreError, FlightComputer, GainSet, KalmanPredictor, Lqi, Reference, ServoLimits,
+    StateMeasurement, Telemetry, ThesisEstimator, ThesisFlightComputer, TruthFeed,
+    TruthMeasurement,
 };
 use helicon_gnc::design::{Gains, design};
 use helicon_model::integrate::rk4;
@@ -33,10 +34,13 @@ use helicon_model::{Aux, InflowMode, Input, Model, ModelError, Params, ReducedSt
 use nalgebra::{SVector, Vector3};
 use serde::Serialize;
 
+mod hardware;
 mod stages;
 mod summary;
 
+pub use hardware::{Hardware, HardwareSample, HardwareStep};
 use stages::{OnBoard, Plant, check_limits};
+pub use stages::{OnBoardSetup, servo_limits, thesis_flight_computer};
 use summary::summarize;
 pub use summary::{METRIC_TRACE_CAP, Outcome, Summary, SummaryAccumulator, Termination};
 

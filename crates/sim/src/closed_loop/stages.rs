@@ -101,6 +101,63 @@ impl<'a> Plant<'a> {
     }
 }
 
+/// The servo range of the parameters, as the control law saturates to it.
+pub fn servo_limits(p: &Params) -> ServoLimits {
+    ServoLimits {
+        min: Input::from_fn(|i, _| p.servos[i].s_min),
+        max: Input::from_fn(|i, _| p.servos[i].s_max),
+    }
+}
+
+/// The predictor's initial reduced state: the nine measured states of `x0`
+/// and the trim for the rest.
+fn estimator_start(trim_x: &ReducedState, x0: &State) -> ReducedState {
+    let mut x0_est: ReducedState = *trim_x;
+    for i in 0..9 {
+        x0_est[i] = x0[i + REDUCED_OFFSET];
+    }
+    x0_est
+}
+
+/// What the thesis's on-board chain is built from, wherever it flies.
+#[derive(Debug, Clone, Copy)]
+pub struct OnBoardSetup<'a> {
+    /// The helicopter's parameters (servo range, gravity).
+    pub params: &'a Params,
+    /// The gains flown (their sample time is the control period).
+    pub gains: &'a GainSet,
+    /// The trim the predictor starts from for the states not measured.
+    pub trim_x: &'a ReducedState,
+    /// The sensors' noise figures and local magnetic field (the navigation's
+    /// measurement model).
+    pub sensors: &'a SensorConfig,
+    /// The navigation tuning.
+    pub navigation: &'a NavigationConfig,
+    /// Feedback on (off: trim inputs held).
+    pub feedback: bool,
+    /// The full state the navigation and the predictor start from (after
+    /// alignment on the ground).
+    pub x0: &'a State,
+}
+
+/// The thesis's on-board chain (navigation + Kalman predictor + LQI) exactly
+/// as the simulator flies it with `fusion = true`: `helicon sim`, `helicon
+/// sitl` and `helicon onboard` build their flight computer here.
+pub fn thesis_flight_computer(
+    setup: &OnBoardSetup<'_>,
+) -> Result<ThesisFlightComputer, ClosedLoopError> {
+    let set = setup.gains;
+    let ts = set.sample_time_s;
+    let g = setup.params.environment.g_m_s2;
+    let law = Lqi::new(set, servo_limits(setup.params), setup.feedback)?;
+    let navigation = navigation_filter_at(setup.sensors, setup.navigation, ts, g, setup.x0)?;
+    let estimator = ThesisEstimator {
+        navigation,
+        predictor: KalmanPredictor::new(set, &estimator_start(setup.trim_x, setup.x0))?,
+    };
+    Ok(FlightComputer::new(estimator, law))
+}
+
 /// The on-board software flown in the loop, as the scenario's switches
 /// compose it from the core's parts.
 pub(super) enum OnBoard {
@@ -130,19 +187,11 @@ impl OnBoard {
         x0: &State,
     ) -> Result<Self, ClosedLoopError> {
         let p = prepared.model.params();
-        let limits = ServoLimits {
-            min: Input::from_fn(|i, _| p.servos[i].s_min),
-            max: Input::from_fn(|i, _| p.servos[i].s_max),
-        };
         let set = &prepared.gains.set;
         let ts = set.sample_time_s;
         let g = p.environment.g_m_s2;
-        let law = Lqi::new(set, limits, scenario.controller.feedback)?;
-        // The estimator starts from the measured states and the trim for the rest.
-        let mut x0_est: ReducedState = prepared.trim.x;
-        for i in 0..9 {
-            x0_est[i] = x0[i + REDUCED_OFFSET];
-        }
+        let law = Lqi::new(set, servo_limits(p), scenario.controller.feedback)?;
+        let x0_est = estimator_start(&prepared.trim.x, x0);
         let c = &scenario.controller;
         let sensed = || -> Result<_, ClosedLoopError> {
             Ok((
@@ -157,17 +206,18 @@ impl OnBoard {
             ))
         };
         Ok(match (c.estimator, c.fusion) {
-            (true, true) => {
-                let (suite, navigation) = sensed()?;
-                let estimator = ThesisEstimator {
-                    navigation: *navigation,
-                    predictor: KalmanPredictor::new(set, &x0_est)?,
-                };
-                OnBoard::Thesis {
-                    suite,
-                    computer: Box::new(FlightComputer::new(estimator, law)),
-                }
-            }
+            (true, true) => OnBoard::Thesis {
+                suite: Box::new(sensor_suite_at(&scenario.sensors, ts, g)?),
+                computer: Box::new(thesis_flight_computer(&OnBoardSetup {
+                    params: p,
+                    gains: set,
+                    trim_x: &prepared.trim.x,
+                    sensors: &scenario.sensors,
+                    navigation: &scenario.navigation,
+                    feedback: c.feedback,
+                    x0,
+                })?),
+            },
             (true, false) => OnBoard::IdealNavigation(Box::new(FlightComputer::new(
                 KalmanPredictor::new(set, &x0_est)?,
                 law,

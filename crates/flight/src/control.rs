@@ -1,0 +1,121 @@
+//! The control task's work for one sample, independent of how it is paced
+//! (a 400 Hz clock on board, sensor arrival in lock-step SITL): the safety
+//! supervisor decides the mode, the flight computer (the very
+//! `ThesisFlightComputer` `helicon sim` flies) computes the law, the mode
+//! picks what goes to the servos. Allocation-free.
+
+use crate::safety::{Health, Mode, RcInput, SafetyEvent, Supervisor};
+use helicon_core::state::Input;
+use helicon_core::{Reference, SensorFrame, StateFeedback, Telemetry, ThesisFlightComputer};
+
+/// What the control task is given for one sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tick {
+    /// On-board time now (s).
+    pub now_s: f64,
+    /// The fresh sensor frame of this sample (`None`: no new IMU sample
+    /// arrived by the deadline).
+    pub frame: Option<SensorFrame>,
+    /// The previous sample missed its deadline.
+    pub deadline_missed: bool,
+    /// The receiver's latest frame, when a new one arrived.
+    pub rc: Option<RcInput>,
+    /// The mission's reference now.
+    pub reference: Reference,
+}
+
+/// What the control task decided.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControlOutput {
+    /// The servo commands to send.
+    pub servo: Input,
+    /// Who decided them: the law, the pilot, or the trim.
+    pub mode: Mode,
+    /// The flight computer's record of the sample (when it ran).
+    pub telemetry: Option<Telemetry>,
+    /// A change of mode this sample.
+    pub event: Option<SafetyEvent>,
+}
+
+/// The control task: the flight computer under the safety supervisor.
+#[derive(Debug, Clone)]
+pub struct ControlTask {
+    computer: ThesisFlightComputer,
+    supervisor: Supervisor,
+    u_trim: Input,
+    law: Input,
+    rc: Option<RcInput>,
+    heading_rad: f64,
+    nav_failed: bool,
+}
+
+impl ControlTask {
+    /// A control task flying `computer` (disarmed until the receiver arms
+    /// it), holding `u_trim` when the law is not flying.
+    pub fn new(computer: ThesisFlightComputer, supervisor: Supervisor, u_trim: Input) -> Self {
+        ControlTask {
+            computer,
+            supervisor,
+            u_trim,
+            law: u_trim,
+            rc: None,
+            heading_rad: 0.0,
+            nav_failed: false,
+        }
+    }
+
+    /// The mode now.
+    pub fn mode(&self) -> Mode {
+        self.supervisor.mode()
+    }
+
+    /// One sample. The supervisor first takes this sample's health (IMU,
+    /// GPS and magnetometer freshness, the last deadline, the last
+    /// sample's navigation) and the receiver; the flight computer then runs
+    /// on the fresh frame against the mode's reference; the mode picks the
+    /// servo commands. Entering auto from any other mode resets the law's
+    /// integrators (no wound-up integral from the ground or from manual
+    /// flight).
+    pub fn step(&mut self, tick: &Tick) -> ControlOutput {
+        if let Some(rc) = tick.rc {
+            self.rc = Some(rc);
+        }
+        let health = Health {
+            now_s: tick.now_s,
+            imu_fresh: tick.frame.is_some(),
+            gps_fresh: tick.frame.is_some_and(|f| f.gps.is_some()),
+            mag_fresh: tick.frame.is_some_and(|f| f.mag_body.is_some()),
+            deadline_missed: tick.deadline_missed,
+            navigation_failed: self.nav_failed,
+        };
+        let event = self
+            .supervisor
+            .update(&health, tick.rc.as_ref(), self.heading_rad);
+        if let Some(ev) = &event
+            && ev.to == Mode::Auto
+        {
+            self.computer.feedback.reset();
+        }
+        self.nav_failed = false;
+        let mut telemetry = None;
+        if let Some(frame) = &tick.frame {
+            let reference = self.supervisor.reference(&tick.reference);
+            match self.computer.step(frame, &reference) {
+                Ok(t) => {
+                    self.law = t.command;
+                    self.heading_rad = t.estimate[2];
+                    telemetry = Some(t);
+                }
+                Err(_) => self.nav_failed = true,
+            }
+        }
+        ControlOutput {
+            servo: self
+                .supervisor
+                .servo(&self.law, &self.u_trim, self.rc.as_ref()),
+            mode: self.supervisor.mode(),
+            telemetry,
+            event,
+        }
+    }
+}

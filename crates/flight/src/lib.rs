@@ -1,0 +1,26 @@
+//! # helicon-flight
+//!
+//! The on-board program of the thesis's helicopter (chapter 3, Figure 3.5)
+//! around the very flight software `helicon sim` flies
+//! (`helicon_core::ThesisFlightComputer`, built by
+//! `helicon_sim::closed_loop::thesis_flight_computer`):
+//!
+//! - [`config`]: `onboard.toml` (devices, parameter and gains files, stale
+//!   limits, failsafes, log folder, real-time options), checked field by field;
+//! - [`safety`]: arming, the pilot's switch, sensor stale limits and overruns;
+//!   hold, then a descent;
+//! - [`control`]: the control task's work for one sample;
+//! - [`runtime`]: the threads (sensor server, receiver, control task,
+//!   avionics-out with its watchdog, logger) and the lock-free rings between them;
+//! - [`realtime`]: absolute-deadline sleeps, SCHED_FIFO, `mlockall`, latency statistics;
+//! - [`records`]: what is logged (ULog through `helicon-ulog`).
+
+pub mod config;
+pub mod control;
+pub mod onboard;
+pub mod ports;
+pub mod realtime;
+pub mod records;
+pub mod runtime;
+pub mod safety;
+pub mod sitl;

@@ -1,0 +1,347 @@
+//! The device drivers of the on-board program: serial ports read through
+//! `helicon-devices`' decoders into the runtime's [`SensorPort`],
+//! [`RcPort`] and [`ServoPort`].
+//!
+//! - IMU + magnetometer: VectorNav VN-100 binary (Common group: time since
+//!   startup, angular rate, acceleration, MagPres); the IMU's own time
+//!   stamps the frame; a message whose time did not advance is not a fresh
+//!   sample (a stuck sensor).
+//! - GPS: u-blox UBX NAV-PVT, converted to the local NED frame of the
+//!   configured home. The fix's epoch on the on-board clock is its GPS time
+//!   of week less the offset measured at the first fix, less the receiver's
+//!   nominal latency (`sensors.gps.latency_s`).
+//! - Avionics: the project's framed servo/RC protocol. The receiver's
+//!   sticks are the first four channels, 1500 µs ± 1000 µs per unit of
+//!   servo command; the pilot's switch is the frame's `autonomous` flag;
+//!   the arm switch is channel 5 above 1500 µs.
+//!
+//! [`TtyPort`] opens a device as the program opens `/dev/ttyS*` (raw 8N1
+//! at the baud rate, through `nix`'s termios): a minimal adapter beside
+//! `helicon-devices`' `SerialLink`, because the runtime needs a handle it
+//! can clone (a reader and a writer thread on the avionics port) and poll
+//! together with another port.
+
+use crate::runtime::{Arrival, Next, PortError, RcPort, SensorPort, ServoPort};
+use crate::safety::RcInput;
+use helicon_core::SensorFrame;
+use helicon_core::state::Input;
+use helicon_devices::avionics::{AvionicsMessage, ServoCommand};
+use helicon_devices::{AvionicsDecoder, LocalNed, UbxDecoder, VnBinaryDecoder};
+use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+use nix::sys::termios::{BaudRate, SetArg, cfmakeraw, cfsetspeed, tcgetattr, tcsetattr};
+use std::fs::File;
+use std::io::{ErrorKind, Read, Write};
+use std::os::fd::AsFd;
+use std::os::unix::fs::OpenOptionsExt;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// The baud rates a [`TtyPort`] can be opened at.
+pub const BAUDS: [u32; 9] = [
+    9600, 19200, 38400, 57600, 115_200, 230_400, 460_800, 921_600, 1_000_000,
+];
+
+fn baud_rate(baud: u32) -> Option<BaudRate> {
+    Some(match baud {
+        9600 => BaudRate::B9600,
+        19200 => BaudRate::B19200,
+        38400 => BaudRate::B38400,
+        57600 => BaudRate::B57600,
+        115_200 => BaudRate::B115200,
+        230_400 => BaudRate::B230400,
+        460_800 => BaudRate::B460800,
+        921_600 => BaudRate::B921600,
+        1_000_000 => BaudRate::B1000000,
+        _ => return None,
+    })
+}
+
+/// A serial device: raw 8N1 at a baud rate.
+#[derive(Debug)]
+pub struct TtyPort {
+    file: File,
+    path: PathBuf,
+}
+
+impl TtyPort {
+    /// Open `path` at `baud` (one of [`BAUDS`]).
+    pub fn open(path: &Path, baud: u32) -> Result<Self, PortError> {
+        let err = |message: String| PortError {
+            port: path.display().to_string(),
+            message,
+        };
+        let rate =
+            baud_rate(baud).ok_or_else(|| err(format!("baud rate {baud} not one of {BAUDS:?}")))?;
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags(nix::fcntl::OFlag::O_NOCTTY.bits())
+            .open(path)
+            .map_err(|e| err(format!("cannot open: {e}")))?;
+        let mut t =
+            tcgetattr(file.as_fd()).map_err(|e| err(format!("not a serial device: {e}")))?;
+        cfmakeraw(&mut t);
+        cfsetspeed(&mut t, rate).map_err(|e| err(format!("baud rate: {e}")))?;
+        tcsetattr(file.as_fd(), SetArg::TCSANOW, &t).map_err(|e| err(format!("tcsetattr: {e}")))?;
+        Ok(TtyPort {
+            file,
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// A second handle on the same device (a reader and a writer thread).
+    pub fn try_clone(&self) -> Result<Self, PortError> {
+        Ok(TtyPort {
+            file: self
+                .file
+                .try_clone()
+                .map_err(|e| self.error(format!("cannot clone: {e}")))?,
+            path: self.path.clone(),
+        })
+    }
+
+    fn error(&self, message: String) -> PortError {
+        PortError {
+            port: self.path.display().to_string(),
+            message,
+        }
+    }
+
+    /// Read what is available, waiting at most `timeout`: `Ok(0)` on
+    /// timeout; an error once the device is gone (end of file, EIO).
+    pub fn read_timeout(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, PortError> {
+        let ms = PollTimeout::try_from(timeout).unwrap_or(PollTimeout::MAX);
+        let mut fds = [PollFd::new(self.file.as_fd(), PollFlags::POLLIN)];
+        match poll(&mut fds, ms) {
+            Ok(0) | Err(nix::errno::Errno::EINTR) => return Ok(0),
+            Ok(_) => {}
+            Err(e) => return Err(self.error(format!("poll: {e}"))),
+        }
+        match self.file.read(buf) {
+            // readable, yet nothing: the other side is gone
+            Ok(0) if !buf.is_empty() => Err(self.error("closed (end of file)".into())),
+            Ok(n) => Ok(n),
+            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => Ok(0),
+            Err(e) => Err(self.error(format!("read: {e}"))),
+        }
+    }
+
+    /// Write all of `bytes`.
+    pub fn write_all(&mut self, bytes: &[u8]) -> Result<(), PortError> {
+        self.file
+            .write_all(bytes)
+            .map_err(|e| self.error(format!("write: {e}")))
+    }
+}
+
+/// The IMU (with magnetometer) and GPS read by one sensor-server thread.
+pub struct DeviceSensors {
+    imu: TtyPort,
+    gps: TtyPort,
+    vn: VnBinaryDecoder,
+    ubx: UbxDecoder,
+    home: LocalNed,
+    gps_latency_s: f64,
+    tow_offset_s: Option<f64>,
+    last_imu_ns: Option<u64>,
+    pending_gps: Option<helicon_devices::NavPvt>,
+    pending_mag: Option<nalgebra::Vector3<f64>>,
+    receiver: Option<DeviceRc>,
+    pending_rc: Option<RcInput>,
+    buf: [u8; 512],
+}
+
+impl DeviceSensors {
+    /// The sensors on their ports; GPS positions in the NED frame of `home`.
+    pub fn new(imu: TtyPort, gps: TtyPort, home: LocalNed, gps_latency_s: f64) -> Self {
+        DeviceSensors {
+            imu,
+            gps,
+            vn: VnBinaryDecoder::new(),
+            ubx: UbxDecoder::new(),
+            home,
+            gps_latency_s,
+            tow_offset_s: None,
+            last_imu_ns: None,
+            pending_gps: None,
+            pending_mag: None,
+            receiver: None,
+            pending_rc: None,
+            buf: [0; 512],
+        }
+    }
+
+    /// Also read the receiver (a handle of the avionics port), drained
+    /// before each IMU frame is assembled, as the GPS is: lock-step SITL,
+    /// where the receiver's frames then reach the control step they
+    /// precede. On board the receiver has its own thread (manual must work
+    /// without the IMU).
+    #[must_use]
+    pub fn with_receiver(mut self, rc: DeviceRc) -> Self {
+        self.receiver = Some(rc);
+        self
+    }
+
+    fn drain_rc(&mut self) -> Result<(), PortError> {
+        if let Some(rc) = self.receiver.as_mut() {
+            while let Next::Item(r) = rc.next(Duration::ZERO)? {
+                self.pending_rc = Some(r);
+            }
+        }
+        Ok(())
+    }
+
+    /// Bytes rejected by the decoders so far (IMU, GPS).
+    pub fn rejected(&self) -> (u64, u64) {
+        (
+            self.vn.stats().discarded_bytes,
+            self.ubx.stats().discarded_bytes,
+        )
+    }
+
+    /// Read whatever the GPS port holds now (no waiting): the receiver's
+    /// bytes written before the IMU message are decoded before its frame
+    /// is assembled.
+    fn drain_gps(&mut self) -> Result<(), PortError> {
+        loop {
+            let n = self.gps.read_timeout(&mut self.buf, Duration::ZERO)?;
+            if n == 0 {
+                return Ok(());
+            }
+            let mut last = None;
+            self.ubx.push_with(&self.buf[..n], |m| last = Some(m));
+            if last.is_some() {
+                self.pending_gps = last;
+            }
+        }
+    }
+
+    fn assemble(&mut self, m: &helicon_devices::VnCommon) -> Option<Arrival> {
+        let arrived_ns = crate::realtime::monotonic_ns();
+        if let Some(mag) = m.mag_body_gauss() {
+            self.pending_mag = Some(mag);
+        }
+        let (Some(ns), Some(imu)) = (m.time_startup_ns, m.imu_sample()) else {
+            return None;
+        };
+        if self.last_imu_ns.is_some_and(|last| ns <= last) {
+            // the IMU's time did not advance: not a fresh sample
+            return Some(Arrival {
+                frame: None,
+                arrived_ns,
+                rc: self.pending_rc.take(),
+            });
+        }
+        self.last_imu_ns = Some(ns);
+        let t_s = ns as f64 * 1e-9;
+        let gps = self.pending_gps.take().map(|pvt| {
+            let tow_s = f64::from(pvt.itow_ms) * 1e-3;
+            let offset = *self.tow_offset_s.get_or_insert(tow_s - t_s);
+            pvt.to_gps_fix(&self.home, tow_s - offset - self.gps_latency_s)
+        });
+        Some(Arrival {
+            frame: Some(SensorFrame {
+                t_s,
+                imu,
+                mag_body: self.pending_mag.take(),
+                gps,
+            }),
+            arrived_ns,
+            rc: self.pending_rc.take(),
+        })
+    }
+}
+
+impl SensorPort for DeviceSensors {
+    fn next(&mut self, timeout: Duration) -> Result<Next<Arrival>, PortError> {
+        let n = self.imu.read_timeout(&mut self.buf, timeout)?;
+        if n == 0 {
+            // the GPS keeps being read while the IMU is silent
+            self.drain_gps()?;
+            return Ok(Next::Timeout);
+        }
+        // the newest complete IMU message of the read (a reader that fell
+        // behind keeps the newest sample)
+        let mut newest = None;
+        let buf = self.buf;
+        self.vn.push_with(&buf[..n], |m| newest = Some(m));
+        let Some(m) = newest else {
+            return Ok(Next::Timeout);
+        };
+        self.drain_gps()?;
+        self.drain_rc()?;
+        Ok(self.assemble(&m).map_or(Next::Timeout, Next::Item))
+    }
+}
+
+/// The stick mapping of the receiver: servo command ↔ pulse width.
+pub fn stick_us(u: f64) -> u16 {
+    (1500.0 + 1000.0 * u).clamp(800.0, 2200.0).round() as u16
+}
+
+/// The servo command of a stick's pulse width.
+pub fn stick_command(us: u16) -> f64 {
+    (f64::from(us) - 1500.0) / 1000.0
+}
+
+/// The receiver side of the avionics port.
+pub struct DeviceRc {
+    port: TtyPort,
+    decoder: AvionicsDecoder,
+    buf: [u8; 256],
+}
+
+impl DeviceRc {
+    /// The receiver on (a handle of) the avionics port.
+    pub fn new(port: TtyPort) -> Self {
+        DeviceRc {
+            port,
+            decoder: AvionicsDecoder::new(),
+            buf: [0; 256],
+        }
+    }
+}
+
+impl RcPort for DeviceRc {
+    fn next(&mut self, timeout: Duration) -> Result<Next<RcInput>, PortError> {
+        let n = self.port.read_timeout(&mut self.buf, timeout)?;
+        let mut last = None;
+        self.decoder.push_with(&self.buf[..n], |m| {
+            if let AvionicsMessage::Rc(rc) = m {
+                last = Some(rc);
+            }
+        });
+        Ok(match last {
+            Some(rc) => Next::Item(RcInput {
+                servo: Input::from_fn(|i, _| stick_command(rc.channels_us[i])),
+                manual: !rc.autonomous,
+                armed: rc.channels_us[4] > 1500,
+            }),
+            None => Next::Timeout,
+        })
+    }
+}
+
+/// The servo side of the avionics port.
+pub struct DeviceServos {
+    port: TtyPort,
+    seq: u8,
+}
+
+impl DeviceServos {
+    /// The servos on (a handle of) the avionics port.
+    pub fn new(port: TtyPort) -> Self {
+        DeviceServos { port, seq: 0 }
+    }
+}
+
+impl ServoPort for DeviceServos {
+    fn send(&mut self, u: &Input) -> Result<(), PortError> {
+        let cmd = ServoCommand::from_inputs(self.seq, true, u).map_err(|e| PortError {
+            port: "servo command".into(),
+            message: e.to_string(),
+        })?;
+        self.seq = self.seq.wrapping_add(1);
+        self.port.write_all(cmd.encode().as_bytes())
+    }
+}

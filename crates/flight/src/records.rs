@@ -1,0 +1,201 @@
+//! What the runtime logs: the ULog records of `helicon-ulog`'s on-board
+//! message set, plus the supervisor's events with their precise reason,
+//! carried to the logger thread through lock-free rings (all `Copy`).
+
+use crate::control::{ControlOutput, Tick};
+use crate::safety::{Mode, RcInput, Reason, SafetyEvent};
+use helicon_ulog::messages::{
+    Control, Failsafe, FailsafeReason, FlightMode, Mode as ModeRecord, Navigation,
+    RcInput as RcRecord, ServoOutput, Timing,
+};
+use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, timestamp_us};
+use std::io::Write;
+
+/// One item of a logger ring.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[allow(clippy::large_enum_variant)] // ring items stay inline: boxing would allocate per record
+pub enum FlightRecord {
+    /// A record of the message set.
+    Log(LogRecord),
+    /// A change of mode (written as `mode`, `failsafe` when it raises or
+    /// clears one, and a text message naming the precise reason).
+    Event(SafetyEvent),
+    /// The watchdog commanded the trim: the control task was silent for
+    /// this long (s).
+    Watchdog {
+        /// On-board time (s).
+        t_s: f64,
+        /// Silence (s).
+        silent_s: f64,
+    },
+}
+
+/// The log's flight mode of a supervisor mode.
+pub fn flight_mode(m: Mode) -> FlightMode {
+    match m {
+        Mode::Disarmed => FlightMode::Standby,
+        Mode::Auto => FlightMode::Automatic,
+        Mode::Manual => FlightMode::Manual,
+        Mode::Hold | Mode::Descent | Mode::ImuLost => FlightMode::Failsafe,
+    }
+}
+
+/// The log's failsafe reason code of a supervisor reason (`None`: not a
+/// failsafe).
+pub fn failsafe_reason(r: Reason) -> Option<FailsafeReason> {
+    match r {
+        Reason::ImuStale | Reason::GpsStale | Reason::MagStale | Reason::ImuRecovered => {
+            Some(FailsafeReason::SensorTimeout)
+        }
+        Reason::Overrun => Some(FailsafeReason::DeadlineMiss),
+        Reason::NavigationFailure => Some(FailsafeReason::NavigationFailure),
+        Reason::PilotManual | Reason::PilotAuto => Some(FailsafeReason::Pilot),
+        Reason::Armed | Reason::Disarmed | Reason::HoldElapsed => None,
+    }
+}
+
+fn is_failsafe(m: Mode) -> bool {
+    matches!(m, Mode::Hold | Mode::Descent | Mode::ImuLost)
+}
+
+/// A short text on the stack (no allocation).
+struct Text {
+    buf: [u8; 160],
+    len: usize,
+}
+
+impl std::fmt::Write for Text {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        let n = s.len().min(self.buf.len() - self.len);
+        self.buf[self.len..self.len + n].copy_from_slice(&s.as_bytes()[..n]);
+        self.len += n;
+        Ok(())
+    }
+}
+
+/// Write one ring item to the flight log (no allocation).
+pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Result<(), WriteError> {
+    match r {
+        FlightRecord::Log(x) => log.write(x),
+        FlightRecord::Event(ev) => {
+            let ts = timestamp_us(ev.t_s, "mode change")?;
+            log.write(&LogRecord::Mode(ModeRecord {
+                timestamp: ts,
+                mode: flight_mode(ev.to) as u8,
+                previous: flight_mode(ev.from) as u8,
+            }))?;
+            let raised = is_failsafe(ev.to) && !is_failsafe(ev.from);
+            let cleared = is_failsafe(ev.from) && !is_failsafe(ev.to);
+            if let Some(code) = failsafe_reason(ev.reason)
+                && (raised || cleared)
+            {
+                log.write(&LogRecord::Failsafe(Failsafe {
+                    timestamp: ts,
+                    reason: code as u8,
+                    active: raised,
+                }))?;
+            }
+            let mut text = Text {
+                buf: [0; 160],
+                len: 0,
+            };
+            let _ = std::fmt::Write::write_fmt(
+                &mut text,
+                format_args!(
+                    "{}: {} -> {} at t = {:.4} s",
+                    ev.reason.as_str(),
+                    ev.from.as_str(),
+                    ev.to.as_str(),
+                    ev.t_s
+                ),
+            );
+            let level = if is_failsafe(ev.to) {
+                LogLevel::Critical
+            } else {
+                LogLevel::Notice
+            };
+            let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("mode change");
+            log.writer_mut().log(level, ts, s)
+        }
+        FlightRecord::Watchdog { t_s, silent_s } => {
+            let ts = timestamp_us(*t_s, "watchdog")?;
+            let mut text = Text {
+                buf: [0; 160],
+                len: 0,
+            };
+            let _ = std::fmt::Write::write_fmt(
+                &mut text,
+                format_args!("watchdog: control task silent for {silent_s:.4} s: servos at trim"),
+            );
+            let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("watchdog");
+            log.writer_mut().log(LogLevel::Emergency, ts, s)
+        }
+    }
+}
+
+/// Everything one control step logs, handed to `push` in order: the frame
+/// (`sensor_imu`, `sensor_mag`, `sensor_gps`), the receiver's frame, the
+/// change of mode, the control step (`control`, `navigation`), the servo
+/// command and the timing. No allocation.
+pub fn step_records(
+    tick: &Tick,
+    out: &ControlOutput,
+    timing: Timing,
+    push: &mut impl FnMut(FlightRecord),
+) -> Result<(), WriteError> {
+    let ts = timestamp_us(tick.now_s, "control step")?;
+    if let Some(f) = &tick.frame {
+        let (imu, mag, gps) = helicon_ulog::messages::frame_records(f)?;
+        push(FlightRecord::Log(LogRecord::Imu(imu)));
+        if let Some(m) = mag {
+            push(FlightRecord::Log(LogRecord::Mag(m)));
+        }
+        if let Some(g) = gps {
+            push(FlightRecord::Log(LogRecord::Gps(g)));
+        }
+    }
+    if let Some(rc) = &tick.rc {
+        push(FlightRecord::Log(LogRecord::Rc(rc_record(ts, rc))));
+    }
+    if let Some(ev) = out.event {
+        push(FlightRecord::Event(ev));
+    }
+    if let Some(t) = &out.telemetry {
+        push(FlightRecord::Log(LogRecord::Control(
+            Control::from_telemetry(t)?,
+        )));
+        if let Some(n) = &t.navigation {
+            push(FlightRecord::Log(LogRecord::Navigation(
+                Navigation::from_solution(t.t_s, n)?,
+            )));
+        }
+    }
+    push(FlightRecord::Log(LogRecord::Servo(ServoOutput {
+        timestamp: ts,
+        command: out.servo.into(),
+        source: match out.mode {
+            Mode::Auto => 0,
+            Mode::Manual => 1,
+            _ => 2,
+        },
+    })));
+    push(FlightRecord::Log(LogRecord::Timing(timing)));
+    Ok(())
+}
+
+/// The receiver's frame as a log record: the sticks in the first four
+/// channels as pulse widths (the receiver's mapping,
+/// [`crate::ports::stick_us`]).
+fn rc_record(ts: u64, rc: &RcInput) -> RcRecord {
+    let mut channels_us = [0u16; 16];
+    for i in 0..4 {
+        channels_us[i] = crate::ports::stick_us(rc.servo[i]);
+    }
+    RcRecord {
+        timestamp: ts,
+        channels_us,
+        channel_count: 4,
+        manual_switch: rc.manual,
+        signal_lost: false,
+    }
+}

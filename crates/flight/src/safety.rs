@@ -1,0 +1,453 @@
+//! The safety supervisor: arming, the pilot's switch, sensor stale limits
+//! and control overruns decide each sample what flies.
+//!
+//! | mode | servos | references |
+//! |---|---|---|
+//! | `Disarmed` | the trim (the hover equilibrium), nothing beyond | — |
+//! | `Auto` | the control law | the mission's |
+//! | `Hold` | the control law | zero velocity, the heading at entry |
+//! | `Descent` | the control law | `failsafe.descent_m_s` down, heading held |
+//! | `ImuLost` | the trim, open loop | — (no attitude to close a loop on) |
+//! | `Manual` | the RC receiver's, at once | — (the estimator keeps running) |
+//!
+//! Priority, highest first: the pilot's switch (manual), disarmed, IMU lost
+//! or a navigation failure, the failsafes (GPS, magnetometer, overruns),
+//! auto. A failsafe latches: GPS coming back does not resume the mission;
+//! the pilot takes over (manual) and hands back (auto) to clear it. After
+//! `failsafe.hold_s` in `Hold` the helicopter descends at
+//! `failsafe.descent_m_s` until the pilot takes over or disarms. Every
+//! change of mode is one [`SafetyEvent`] with its reason, for the log.
+
+use crate::config::{FailsafeConfig, StaleLimits};
+use helicon_core::Reference;
+use helicon_core::state::Input;
+use nalgebra::Vector3;
+
+/// What flies this sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// Not armed: servos at the trim.
+    Disarmed,
+    /// The control law tracks the mission's references.
+    Auto,
+    /// Failsafe: hover (zero velocity), heading held.
+    Hold,
+    /// Failsafe after the hold: descend at the configured rate.
+    Descent,
+    /// No IMU (or the navigation failed): servos at the trim, open loop.
+    ImuLost,
+    /// The pilot flies: the receiver's commands go to the servos.
+    Manual,
+}
+
+impl Mode {
+    /// The name written in logs.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Mode::Disarmed => "disarmed",
+            Mode::Auto => "auto",
+            Mode::Hold => "hold",
+            Mode::Descent => "descent",
+            Mode::ImuLost => "imu_lost",
+            Mode::Manual => "manual",
+        }
+    }
+
+    /// A small code for binary logs (0..=5, in declaration order).
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+}
+
+/// Why the mode changed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Reason {
+    /// The arm switch was set.
+    Armed,
+    /// The arm switch was cleared.
+    Disarmed,
+    /// The pilot's switch went to manual.
+    PilotManual,
+    /// The pilot's switch went back to auto.
+    PilotAuto,
+    /// No fresh IMU sample within `stale.imu_s`.
+    ImuStale,
+    /// The navigation or estimator refused a sample.
+    NavigationFailure,
+    /// No GPS fix within `stale.gps_s`.
+    GpsStale,
+    /// No magnetometer sample within `stale.mag_s`.
+    MagStale,
+    /// `failsafe.overrun_limit` consecutive deadline misses.
+    Overrun,
+    /// `failsafe.hold_s` in hold elapsed: descending.
+    HoldElapsed,
+    /// The IMU delivers again (or the navigation recovered): auto.
+    ImuRecovered,
+}
+
+impl Reason {
+    /// The name written in logs.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Reason::Armed => "armed",
+            Reason::Disarmed => "disarmed",
+            Reason::PilotManual => "pilot_manual",
+            Reason::PilotAuto => "pilot_auto",
+            Reason::ImuStale => "imu_stale",
+            Reason::NavigationFailure => "navigation_failure",
+            Reason::GpsStale => "gps_stale",
+            Reason::MagStale => "mag_stale",
+            Reason::Overrun => "overrun",
+            Reason::HoldElapsed => "hold_elapsed",
+            Reason::ImuRecovered => "imu_recovered",
+        }
+    }
+
+    /// A small code for binary logs (0..=10, in declaration order).
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+}
+
+/// One change of mode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SafetyEvent {
+    /// On-board time (s).
+    pub t_s: f64,
+    /// Mode before.
+    pub from: Mode,
+    /// Mode after.
+    pub to: Mode,
+    /// Why.
+    pub reason: Reason,
+}
+
+/// The RC receiver's frame as the avionics board reports it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RcInput {
+    /// The sticks, mapped to servo commands (the servos' units).
+    pub servo: Input,
+    /// The pilot's switch: true hands the servos to the receiver.
+    pub manual: bool,
+    /// The arm switch.
+    pub armed: bool,
+}
+
+/// What the supervisor is told each sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Health {
+    /// On-board time now (s).
+    pub now_s: f64,
+    /// A fresh IMU sample arrived for this sample.
+    pub imu_fresh: bool,
+    /// A GPS fix arrived this sample.
+    pub gps_fresh: bool,
+    /// A magnetometer sample arrived this sample.
+    pub mag_fresh: bool,
+    /// The control task missed its previous deadline.
+    pub deadline_missed: bool,
+    /// The navigation or estimator refused this sample.
+    pub navigation_failed: bool,
+}
+
+/// The supervisor's state.
+#[derive(Debug, Clone)]
+pub struct Supervisor {
+    stale: StaleLimits,
+    failsafe: FailsafeConfig,
+    mode: Mode,
+    since_s: f64,
+    /// The latched failsafe (mode and reason) to resume after an IMU
+    /// recovery; `None` when the mission flies.
+    latched: Option<Reason>,
+    hold_heading_rad: f64,
+    last_imu_s: f64,
+    last_gps_s: f64,
+    last_mag_s: f64,
+    misses: u32,
+    armed: bool,
+    manual: bool,
+    nav_failed: bool,
+}
+
+impl Supervisor {
+    /// Disarmed at `t0_s`, every sensor taken as fresh then.
+    pub fn new(stale: StaleLimits, failsafe: FailsafeConfig, t0_s: f64) -> Self {
+        Supervisor {
+            stale,
+            failsafe,
+            mode: Mode::Disarmed,
+            since_s: t0_s,
+            latched: None,
+            hold_heading_rad: 0.0,
+            last_imu_s: t0_s,
+            last_gps_s: t0_s,
+            last_mag_s: t0_s,
+            misses: 0,
+            armed: false,
+            manual: false,
+            nav_failed: false,
+        }
+    }
+
+    /// Arm (as the arm switch would): the first update enters auto. SITL
+    /// starts armed, as a pilot arms on the ground before the flight.
+    pub fn arm(&mut self) {
+        self.armed = true;
+    }
+
+    /// The mode now.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
+    /// The latched failsafe reason, if any.
+    pub fn latched(&self) -> Option<Reason> {
+        self.latched
+    }
+
+    /// Take in this sample's health and the receiver's latest frame;
+    /// `heading_rad` is the estimated heading (held on entering a
+    /// failsafe). Returns the change of mode, if any (at most one per sample).
+    pub fn update(
+        &mut self,
+        h: &Health,
+        rc: Option<&RcInput>,
+        heading_rad: f64,
+    ) -> Option<SafetyEvent> {
+        if h.imu_fresh {
+            self.last_imu_s = h.now_s;
+        }
+        if h.gps_fresh {
+            self.last_gps_s = h.now_s;
+        }
+        if h.mag_fresh {
+            self.last_mag_s = h.now_s;
+        }
+        self.misses = if h.deadline_missed {
+            self.misses + 1
+        } else {
+            0
+        };
+        self.nav_failed |= h.navigation_failed;
+        if let Some(rc) = rc {
+            self.armed = rc.armed;
+            let was_manual = self.manual;
+            self.manual = rc.manual;
+            if was_manual && !rc.manual {
+                // the pilot hands back: failsafes are cleared
+                self.latched = None;
+                self.nav_failed = false;
+            }
+        }
+        // older than the limit by more than 1 ns: k·Ts sums do not flip a
+        // sample early by rounding
+        let stale = |last: f64, limit: f64| h.now_s - last > limit + 1e-9;
+        let imu_lost = stale(self.last_imu_s, self.stale.imu_s) || self.nav_failed;
+        if !self.armed {
+            self.latched = None;
+        } else if self.latched.is_none() && !self.manual {
+            self.latched = if stale(self.last_gps_s, self.stale.gps_s) {
+                Some(Reason::GpsStale)
+            } else if stale(self.last_mag_s, self.stale.mag_s) {
+                Some(Reason::MagStale)
+            } else if self.misses >= self.failsafe.overrun_limit {
+                Some(Reason::Overrun)
+            } else {
+                None
+            };
+        }
+        let (to, reason) = if self.manual {
+            (Mode::Manual, Reason::PilotManual)
+        } else if !self.armed {
+            (Mode::Disarmed, Reason::Disarmed)
+        } else if imu_lost {
+            let r = if self.nav_failed {
+                Reason::NavigationFailure
+            } else {
+                Reason::ImuStale
+            };
+            (Mode::ImuLost, r)
+        } else if let Some(r) = self.latched {
+            match self.mode {
+                Mode::Hold if h.now_s - self.since_s >= self.failsafe.hold_s => {
+                    (Mode::Descent, Reason::HoldElapsed)
+                }
+                Mode::Descent => (Mode::Descent, Reason::HoldElapsed),
+                _ => (Mode::Hold, r),
+            }
+        } else {
+            let r = match self.mode {
+                Mode::Manual => Reason::PilotAuto,
+                Mode::ImuLost => Reason::ImuRecovered,
+                _ => Reason::Armed,
+            };
+            (Mode::Auto, r)
+        };
+        if to == self.mode {
+            return None;
+        }
+        let ev = SafetyEvent {
+            t_s: h.now_s,
+            from: self.mode,
+            to,
+            reason,
+        };
+        if to == Mode::Hold {
+            self.hold_heading_rad = heading_rad;
+        }
+        self.mode = to;
+        self.since_s = h.now_s;
+        Some(ev)
+    }
+
+    /// The reference flown in this mode: the mission's in auto, hover and
+    /// the held heading in hold, the descent in descent.
+    pub fn reference(&self, mission: &Reference) -> Reference {
+        match self.mode {
+            Mode::Hold => Reference {
+                velocity_ned_m_s: Vector3::zeros(),
+                yaw_rad: self.hold_heading_rad,
+            },
+            Mode::Descent => Reference {
+                velocity_ned_m_s: Vector3::new(0.0, 0.0, self.failsafe.descent_m_s),
+                yaw_rad: self.hold_heading_rad,
+            },
+            _ => *mission,
+        }
+    }
+
+    /// The servo commands sent in this mode.
+    pub fn servo(&self, law: &Input, trim: &Input, rc: Option<&RcInput>) -> Input {
+        match self.mode {
+            Mode::Auto | Mode::Hold | Mode::Descent => *law,
+            Mode::Manual => rc.map_or(*trim, |r| r.servo),
+            Mode::Disarmed | Mode::ImuLost => *trim,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn health(now_s: f64, gps: bool) -> Health {
+        Health {
+            now_s,
+            imu_fresh: true,
+            gps_fresh: gps,
+            mag_fresh: true,
+            deadline_missed: false,
+            navigation_failed: false,
+        }
+    }
+
+    fn rc(manual: bool, armed: bool) -> RcInput {
+        RcInput {
+            servo: Input::repeat(0.1),
+            manual,
+            armed,
+        }
+    }
+
+    #[test]
+    fn gps_loss_holds_then_descends_and_latches() {
+        let fs = FailsafeConfig {
+            hold_s: 1.0,
+            descent_m_s: 0.5,
+            overrun_limit: 3,
+        };
+        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
+        let armed = rc(false, true);
+        let ev = s.update(&health(0.0, true), Some(&armed), 0.3).unwrap();
+        assert_eq!(
+            (ev.from, ev.to, ev.reason),
+            (Mode::Disarmed, Mode::Auto, Reason::Armed)
+        );
+        // GPS last seen at 0.5 s; stale after 1.0 s more
+        assert!(s.update(&health(0.5, true), None, 0.3).is_none());
+        assert!(s.update(&health(1.5, false), None, 0.3).is_none());
+        let ev = s.update(&health(1.5025, false), None, 0.7).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Hold, Reason::GpsStale));
+        let mission = Reference {
+            velocity_ned_m_s: Vector3::new(2.0, 0.0, 0.0),
+            yaw_rad: 1.0,
+        };
+        let r = s.reference(&mission);
+        assert_eq!(r.velocity_ned_m_s, Vector3::zeros());
+        assert_eq!(r.yaw_rad, 0.7);
+        // the fix comes back: still holding (latched)
+        assert!(s.update(&health(2.0, true), None, 0.7).is_none());
+        let ev = s.update(&health(2.5025, true), None, 0.7).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Descent, Reason::HoldElapsed));
+        assert_eq!(s.reference(&mission).velocity_ned_m_s.z, 0.5);
+        // the pilot takes over and hands back: the mission resumes
+        let ev = s
+            .update(&health(3.0, true), Some(&rc(true, true)), 0.7)
+            .unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Manual, Reason::PilotManual));
+        assert_eq!(
+            s.servo(&Input::zeros(), &Input::zeros(), Some(&rc(true, true)))[0],
+            0.1
+        );
+        let ev = s.update(&health(3.1, true), Some(&armed), 0.7).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Auto, Reason::PilotAuto));
+        assert_eq!(s.reference(&mission), mission);
+    }
+
+    #[test]
+    fn imu_loss_and_overruns() {
+        let fs = FailsafeConfig {
+            hold_s: 1.0,
+            descent_m_s: 0.5,
+            overrun_limit: 3,
+        };
+        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
+        s.update(&health(0.0, true), Some(&rc(false, true)), 0.0);
+        let mut h = health(0.01, true);
+        h.imu_fresh = false;
+        assert!(s.update(&h, None, 0.0).is_none());
+        h.now_s = 0.0201;
+        let ev = s.update(&h, None, 0.0).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::ImuLost, Reason::ImuStale));
+        let trim = Input::repeat(0.05);
+        assert_eq!(s.servo(&Input::zeros(), &trim, None), trim);
+        // the IMU comes back: auto again (the IMU loss is not latched)
+        let ev = s.update(&health(0.03, true), None, 0.0).unwrap();
+        assert_eq!(ev.to, Mode::Auto);
+        let mut h = health(0.04, true);
+        h.deadline_missed = true;
+        assert!(s.update(&h, None, 0.0).is_none());
+        assert!(s.update(&h, None, 0.0).is_none());
+        let ev = s.update(&h, None, 0.0).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Hold, Reason::Overrun));
+        // disarmed: trim, nothing beyond
+        let ev = s
+            .update(&health(0.05, true), Some(&rc(false, false)), 0.0)
+            .unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Disarmed, Reason::Disarmed));
+        assert_eq!(s.servo(&Input::repeat(9.0), &trim, None), trim);
+    }
+
+    #[test]
+    fn magnetometer_loss_holds_and_disarming_clears_the_latch() {
+        let fs = FailsafeConfig::default();
+        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
+        s.update(&health(0.0, true), Some(&rc(false, true)), 0.2);
+        let mut h = health(0.5, true);
+        h.mag_fresh = false;
+        assert!(s.update(&h, None, 0.2).is_none()); // 0.5 s old: not yet
+        h.now_s = 0.5025;
+        let ev = s.update(&h, None, 0.2).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Hold, Reason::MagStale));
+        assert_eq!(s.latched(), Some(Reason::MagStale));
+        // disarm, then arm again with a healthy magnetometer: auto, latch cleared
+        s.update(&health(0.6, true), Some(&rc(false, false)), 0.2);
+        assert_eq!(s.latched(), None);
+        let ev = s
+            .update(&health(0.7, true), Some(&rc(false, true)), 0.2)
+            .unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Auto, Reason::Armed));
+    }
+}

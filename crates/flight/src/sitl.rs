@@ -1,0 +1,470 @@
+//! Software in the loop: the simulator plays the helicopter's hardware
+//! (plant, wind, sensor models: `helicon_sim::closed_loop::Hardware`) and
+//! speaks the devices' byte protocols on pseudo-terminals; the on-board
+//! program ([`crate::runtime`]) opens the pty slave paths exactly as it
+//! would open `/dev/ttyS*`, reads them through its drivers
+//! ([`crate::ports`]), and its servo frames drive the plant.
+//!
+//! Per control period the hardware writes, in this order: a receiver frame
+//! (every 8th period, 50 Hz), the GPS receiver's NAV-PVT when a fix is
+//! delivered, the IMU's VN-100 packet (with the magnetometer when sampled).
+//!
+//! - [`Speed::Max`], lock-step: the hardware then waits for the servo frame
+//!   of that sample before stepping the plant; the control task is paced
+//!   by IMU arrival. Deterministic and as fast as the machine allows.
+//! - [`Speed::Realtime`]: the hardware runs on the wall clock (absolute
+//!   deadlines) and the plant takes the newest servo frame at each period's
+//!   end; the control task runs on its own 400 Hz clock.
+//!
+//! The on-board side is aligned on the ground to the simulator's initial
+//! state (as `helicon sim` aligns its navigation), armed, and flies the
+//! scenario's references (the ground station's mission uplink).
+
+use crate::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
+use crate::control::ControlTask;
+use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort, stick_us};
+use crate::runtime::{self, Mission, Pacing, RunReport, RuntimeOptions};
+use crate::safety::Supervisor;
+use helicon_core::SensorFrame;
+use helicon_core::state::Input;
+use helicon_devices::avionics::{AvionicsMessage, RcInput as RcFrame};
+use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCommon};
+use helicon_sim::closed_loop::{
+    ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, thesis_flight_computer,
+};
+use helicon_sim::log_csv::{LogCsvError, LogWriter};
+use helicon_sim::scenario::Scenario;
+use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// How fast the simulator runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Speed {
+    /// Lock-step, as fast as the machine allows.
+    Max,
+    /// The wall clock.
+    Realtime,
+}
+
+/// Faults injected by the hardware side.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Faults {
+    /// The GPS receiver stops delivering from this time on (s).
+    pub gps_lost_from_s: Option<f64>,
+    /// The IMU repeats its last packet (its time does not advance) over
+    /// this interval (s).
+    pub imu_frozen_s: Option<(f64, f64)>,
+}
+
+/// The pilot's receiver.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Pilot {
+    /// The pilot's switch goes to manual at this time (s), the sticks at
+    /// the trim.
+    pub manual_from_s: Option<f64>,
+}
+
+/// A SITL run's settings.
+#[derive(Debug, Clone)]
+pub struct SitlOptions {
+    /// Lock-step or wall clock.
+    pub speed: Speed,
+    /// Output folder (`flight.ulg`, `log.csv`, `timing.json`).
+    pub out_dir: PathBuf,
+    /// Injected faults.
+    pub faults: Faults,
+    /// The pilot.
+    pub pilot: Pilot,
+    /// Stale limits.
+    pub stale: StaleLimits,
+    /// Failsafes.
+    pub failsafe: FailsafeConfig,
+    /// Real-time options of the on-board side (real-time speed only).
+    pub realtime: RealtimeConfig,
+    /// Keep every sensor frame the hardware sent ([`SitlResult::sent`]).
+    pub keep_frames: bool,
+}
+
+/// The home of the local NED frame (the GPS receiver's WGS-84 position of
+/// the origin): a field near Aalborg.
+pub const HOME: (f64, f64, f64) = (57.0146, 9.9869, 20.0);
+
+/// GPS time of week at t = 0 (s): Wednesday 00:00.
+pub const TOW0_S: f64 = 259_200.0;
+
+/// What a SITL run produced.
+#[derive(Debug)]
+pub struct SitlResult {
+    /// The flight summary (as `helicon sim` writes it).
+    pub summary: Summary,
+    /// The on-board runtime's report.
+    pub onboard: RunReport,
+    /// Control periods flown.
+    pub samples: u64,
+    /// The control period (s).
+    pub sample_time_s: f64,
+    /// Wall time of the flight (s).
+    pub wall_s: f64,
+    /// Simulated time per wall time.
+    pub speed_x: f64,
+    /// CPU time of the process (both sides, all threads) during the flight (s).
+    pub cpu_s: f64,
+    /// The frames the hardware sent (when kept), in order.
+    pub sent: Vec<SensorFrame>,
+    /// The servo commands the plant received, in order.
+    pub received: Vec<Input>,
+    /// The on-board log.
+    pub ulog: PathBuf,
+    /// The truth log.
+    pub log_csv: PathBuf,
+    /// Its rows.
+    pub log_rows: usize,
+}
+
+/// Errors of a SITL run (a divergence is an outcome, not an error).
+#[derive(Debug, thiserror::Error)]
+pub enum SitlError {
+    /// Preparing the scenario or the flight software.
+    #[error(transparent)]
+    Prepare(#[from] ClosedLoopError),
+    /// A pseudo-terminal or device.
+    #[error("{0}")]
+    Device(String),
+    /// The on-board log.
+    #[error("{path}: {message}")]
+    Log {
+        /// The file.
+        path: String,
+        /// What failed.
+        message: String,
+    },
+    /// The truth log.
+    #[error(transparent)]
+    Csv(#[from] LogCsvError),
+    /// The on-board program stopped answering.
+    #[error("the on-board program sent no servo frame for sample {k} within {timeout_s} s")]
+    Silent {
+        /// The sample.
+        k: usize,
+        /// The wait (s).
+        timeout_s: f64,
+    },
+}
+
+fn dev<E: std::fmt::Display>(what: &str) -> impl FnOnce(E) -> SitlError + '_ {
+    move |e| SitlError::Device(format!("{what}: {e}"))
+}
+
+/// The hardware's three devices on pseudo-terminals.
+struct Wires {
+    imu: PtyPair,
+    gps: PtyPair,
+    avionics: PtyPair,
+}
+
+/// Fly `scenario` (prepared) under SITL.
+#[allow(clippy::too_many_lines)] // one loop: sense, speak, wait, step, log
+pub fn run(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    options: &SitlOptions,
+) -> Result<SitlResult, SitlError> {
+    std::fs::create_dir_all(&options.out_dir).map_err(|e| SitlError::Log {
+        path: options.out_dir.display().to_string(),
+        message: format!("cannot create: {e}"),
+    })?;
+    let mut hw = Hardware::new(scenario, prepared)?;
+    let ts = hw.sample_time_s();
+    let x0 = *hw.state();
+    let p = prepared.model.params();
+    let computer = thesis_flight_computer(&OnBoardSetup {
+        params: p,
+        gains: &prepared.gains.set,
+        trim_x: &prepared.trim.x,
+        sensors: &scenario.sensors,
+        navigation: &scenario.navigation,
+        feedback: scenario.controller.feedback,
+        x0: &x0,
+    })?;
+    let u_trim = prepared.gains.set.u_trim;
+    let mut supervisor = Supervisor::new(options.stale, options.failsafe, 0.0);
+    supervisor.arm();
+    let task = ControlTask::new(computer, supervisor, u_trim);
+
+    let mut wires = Wires {
+        imu: PtyPair::open().map_err(dev("IMU pseudo-terminal"))?,
+        gps: PtyPair::open().map_err(dev("GPS pseudo-terminal"))?,
+        avionics: PtyPair::open().map_err(dev("avionics pseudo-terminal"))?,
+    };
+    let home_geo = Geodetic::new(HOME.0, HOME.1, HOME.2).map_err(dev("home"))?;
+    let home = LocalNed::new(home_geo);
+    // the on-board side opens the slave paths as its serial devices
+    let imu_port = TtyPort::open(wires.imu.slave_path(), 921_600).map_err(dev("IMU"))?;
+    let gps_port = TtyPort::open(wires.gps.slave_path(), 115_200).map_err(dev("GPS"))?;
+    let av_port = TtyPort::open(wires.avionics.slave_path(), 115_200).map_err(dev("avionics"))?;
+    let rc_port = av_port.try_clone().map_err(dev("avionics"))?;
+    let sensors = DeviceSensors::new(imu_port, gps_port, home, scenario.sensors.gps.latency_s);
+    let lockstep = options.speed == Speed::Max;
+    // lock-step: the sensor server reads the receiver too (deterministic);
+    // real time: the receiver has its own thread, as on board
+    let (sensors, receiver) = if lockstep {
+        (sensors.with_receiver(DeviceRc::new(rc_port)), None)
+    } else {
+        (sensors, Some(DeviceRc::new(rc_port)))
+    };
+    let ulog = options.out_dir.join("flight.ulg");
+    let info = LogInfo {
+        sys_name: format!("helicon sitl {}", scenario.name),
+        ..LogInfo::default()
+    };
+    let log =
+        FlightLog::create(&ulog, &info, FlushPolicy::default()).map_err(|e| SitlError::Log {
+            path: ulog.display().to_string(),
+            message: e.to_string(),
+        })?;
+    let (downlink_tx, mut downlink) = rtrb::RingBuffer::new(1024);
+    let realtime = if lockstep {
+        RealtimeConfig {
+            sched_fifo: false,
+            priority: options.realtime.priority,
+            mlockall: false,
+        }
+    } else {
+        options.realtime
+    };
+    let handle = runtime::spawn(
+        task,
+        Mission::Schedule(scenario.reference_schedule()),
+        sensors,
+        receiver,
+        DeviceServos::new(av_port),
+        log,
+        Some(downlink_tx),
+        RuntimeOptions {
+            sample_time_s: ts,
+            pacing: if lockstep {
+                Pacing::Sensor
+            } else {
+                Pacing::Clock
+            },
+            max_steps: None,
+            realtime,
+            watchdog_s: 0.1,
+            u_trim,
+        },
+    );
+
+    // real time: the hardware is a real-time task too (devices keep their
+    // rate), one priority above the on-board control task
+    if !lockstep
+        && options.realtime.sched_fifo
+        && let Err(e) =
+            crate::realtime::set_fifo(options.realtime.priority.saturating_add(1).min(99))
+    {
+        eprintln!("warning: SCHED_FIFO for the simulated hardware not permitted ({e})");
+    }
+    let log_csv = options.out_dir.join("log.csv");
+    let mut writer = LogWriter::create(&log_csv)?;
+    let mut servo_in = wires.avionics.try_clone_master().map_err(dev("avionics"))?;
+    let mut decoder = AvionicsDecoder::new();
+    let mut buf = [0u8; 256];
+    let mut u = u_trim;
+    let mut last_vn: Option<VnCommon> = None;
+    let mut rc_seq = 0u8;
+    let mut sent = Vec::new();
+    let mut received = Vec::with_capacity(hw.samples());
+    let mut samples = 0u64;
+    let timeout = Duration::from_secs(10);
+    let t0 = crate::realtime::monotonic_ns();
+    let wall0 = Instant::now();
+    let cpu0 = crate::realtime::process_cpu_s();
+    let mut failure = None;
+    while let Some(s) = hw.sense() {
+        let t = s.t_s;
+        // the receiver at 50 Hz
+        if s.k % 8 == 0 {
+            let manual = options.pilot.manual_from_s.is_some_and(|m| t >= m);
+            let mut channels_us = [1500u16; 8];
+            for i in 0..4 {
+                channels_us[i] = stick_us(u_trim[i]);
+            }
+            channels_us[4] = 2000; // armed
+            let frame = RcFrame {
+                seq: rc_seq,
+                autonomous: !manual,
+                channels_us,
+                ..RcFrame::default()
+            };
+            rc_seq = rc_seq.wrapping_add(1);
+            wires
+                .avionics
+                .write_all(frame.encode().as_bytes())
+                .map_err(dev("avionics"))?;
+        }
+        // the GPS receiver
+        let gps_on = options
+            .faults
+            .gps_lost_from_s
+            .is_none_or(|t_loss| t < t_loss);
+        if let (Some(fix), true) = (&s.frame.gps, gps_on) {
+            let itow_ms = ((TOW0_S + fix.epoch_s) * 1000.0).round() as u32;
+            let pvt =
+                NavPvt::from_gps_fix(fix, &home, itow_ms, 0.0).map_err(dev("GPS encoding"))?;
+            wires
+                .gps
+                .write_all(pvt.encode().as_bytes())
+                .map_err(dev("GPS"))?;
+        }
+        // the IMU (and magnetometer): last, it paces the on-board software
+        let frozen = options
+            .faults
+            .imu_frozen_s
+            .is_some_and(|(a, b)| t >= a && t < b);
+        let vn = match (frozen, last_vn) {
+            (true, Some(v)) => v,
+            _ => VnCommon::from_samples(t, &s.frame.imu, s.frame.mag_body.as_ref())
+                .map_err(dev("IMU encoding"))?,
+        };
+        last_vn = Some(vn);
+        let bytes = vn.encode().map_err(dev("IMU encoding"))?;
+        wires.imu.write_all(bytes.as_bytes()).map_err(dev("IMU"))?;
+        if options.keep_frames {
+            sent.push(s.frame);
+        }
+        // the servo frame
+        if lockstep {
+            let start = Instant::now();
+            let mut got = None;
+            while got.is_none() {
+                if start.elapsed() > timeout {
+                    failure = Some(SitlError::Silent {
+                        k: s.k,
+                        timeout_s: timeout.as_secs_f64(),
+                    });
+                    break;
+                }
+                let n = helicon_devices::transport::read_with_timeout(
+                    &mut servo_in,
+                    &mut buf,
+                    Duration::from_millis(100),
+                )
+                .map_err(dev("avionics"))?;
+                decoder.push_with(&buf[..n], |m| {
+                    if let AvionicsMessage::Servo(c) = m {
+                        got = Some(c.inputs());
+                    }
+                });
+            }
+            match got {
+                Some(v) => u = v,
+                None => break,
+            }
+        } else {
+            let deadline = t0 + ((s.k + 1) as f64 * ts * 1e9) as u64;
+            crate::realtime::sleep_until_ns(deadline);
+            loop {
+                let n = helicon_devices::transport::read_with_timeout(
+                    &mut servo_in,
+                    &mut buf,
+                    Duration::ZERO,
+                )
+                .map_err(dev("avionics"))?;
+                if n == 0 {
+                    break;
+                }
+                decoder.push_with(&buf[..n], |m| {
+                    if let AvionicsMessage::Servo(c) = m {
+                        u = c.inputs();
+                    }
+                });
+            }
+        }
+        // the telemetry of this sample (lock-step: pushed before its servo frame)
+        let mut tel = None;
+        while let Ok(x) = downlink.pop() {
+            let newer = tel.is_none_or(|t: helicon_core::Telemetry| x.sample >= t.sample);
+            if newer {
+                tel = Some(x);
+            }
+            if lockstep {
+                break;
+            }
+        }
+        received.push(u);
+        samples += 1;
+        let Some(step) = hw.actuate(&u, tel.as_ref()) else {
+            break;
+        };
+        if step.kept {
+            writer.write(&step.row)?;
+        }
+        if step.end.is_some() {
+            break;
+        }
+    }
+    let wall_s = wall0.elapsed().as_secs_f64();
+    let cpu_s = crate::realtime::process_cpu_s() - cpu0;
+    handle.stop();
+    let onboard = handle.join();
+    let log_rows = writer.finish()?;
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    if let Some(e) = &onboard.error {
+        hw.abort(
+            Termination::NavigationFailure,
+            format!("on-board program: {e}"),
+        );
+    }
+    let summary = hw.summary();
+    let sim_s = samples as f64 * ts;
+    Ok(SitlResult {
+        summary,
+        onboard,
+        samples,
+        sample_time_s: ts,
+        wall_s,
+        speed_x: if wall_s > 0.0 { sim_s / wall_s } else { 0.0 },
+        cpu_s,
+        sent,
+        received,
+        ulog,
+        log_csv,
+        log_rows,
+    })
+}
+
+impl SitlResult {
+    /// The control period flown (s).
+    pub fn onboard_sample_time_s(&self) -> f64 {
+        self.sample_time_s
+    }
+}
+
+/// `timing.json` of a SITL run.
+pub fn timing_json(result: &SitlResult, speed: Speed) -> serde_json::Value {
+    serde_json::json!({
+        "speed": match speed { Speed::Max => "max", Speed::Realtime => "realtime" },
+        "samples": result.samples,
+        "wall_s": result.wall_s,
+        "speed_x_realtime": result.speed_x,
+        "cpu_s": result.cpu_s,
+        "speed_x_realtime_per_cpu_s": if result.cpu_s > 0.0 { result.samples as f64 * result.onboard_sample_time_s() / result.cpu_s } else { 0.0 },
+        "onboard": result.onboard,
+    })
+}
+
+/// Write `timing.json` into `dir`.
+pub fn write_timing(dir: &Path, value: &serde_json::Value) -> Result<PathBuf, SitlError> {
+    let path = dir.join("timing.json");
+    let text = serde_json::to_string_pretty(value).map_err(|e| SitlError::Log {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    std::fs::write(&path, text).map_err(|e| SitlError::Log {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    Ok(path)
+}
