@@ -3,7 +3,8 @@
 //! from the same configuration. The navigation itself lives in
 //! `helicon_core`: the closed loop and `helicon fuse` run that one type.
 
-use crate::sensors::{SensorConfig, SensorConfigError, SensorSuite};
+use crate::sensors::{G0_M_S2, SensorConfig, SensorConfigError, SensorSuite};
+use helicon_core::eskf::{Eskf, EskfConfig, ImuNoise};
 use helicon_core::fusion::FusionError;
 pub use helicon_core::navigation::NavigationConfig;
 use helicon_core::navigation::NavigationFilter;
@@ -69,6 +70,41 @@ pub fn navigation_filter_at(
 ) -> Result<NavigationFilter, FusionError> {
     let (s0, omega0) = navigation_initial(x0);
     NavigationFilter::new(nav, &sensor_noise(config, gravity_m_s2), dt_s, &s0, &omega0)
+}
+
+/// The IMU and magnetometer figures of a sensor configuration, as the ESKF
+/// assumes them (the filter is tuned from the sensors' datasheet figures).
+pub fn imu_noise(config: &SensorConfig) -> ImuNoise {
+    let (a, g) = (&config.imu.accel, &config.imu.gyro);
+    ImuNoise {
+        accel_noise_density: a.noise_density,
+        accel_bias_walk: a.bias_random_walk,
+        // the scale-factor error on the 1 g the accelerometer carries in hover
+        // acts as a bias: the filter's initial bias σ covers both
+        accel_bias_sigma: a.initial_bias_sigma.hypot(a.scale_factor_sigma * G0_M_S2),
+        gyro_noise_density: g.noise_density,
+        gyro_bias_walk: g.bias_random_walk,
+        gyro_bias_sigma: g.initial_bias_sigma,
+        mag_sigma: config.mag.noise_sigma,
+    }
+}
+
+/// An ESKF navigation initialised at the true full state `x0`.
+pub fn eskf_at(
+    config: &SensorConfig,
+    eskf: &EskfConfig,
+    dt_s: f64,
+    gravity_m_s2: f64,
+    x0: &State,
+) -> Result<Eskf, FusionError> {
+    let (s0, _) = navigation_initial(x0);
+    Eskf::new(
+        eskf,
+        &imu_noise(config),
+        &sensor_noise(config, gravity_m_s2),
+        dt_s,
+        &s0,
+    )
 }
 
 /// How a navigation replaying a sensor log is initialised.

@@ -131,6 +131,30 @@ impl Default for ControllerSection {
     }
 }
 
+/// Which navigation flies ahead of the Kalman predictor (TOML `[estimator]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum EstimatorKind {
+    /// The thesis's chain: q-method attitude + the GPS/IMU fusion filter
+    /// without bias states (chapter 13).
+    #[default]
+    Thesis,
+    /// The error-state Kalman filter with gyro and accelerometer bias states,
+    /// GPS latency and innovation gating (`helicon_core::eskf`).
+    Eskf,
+}
+
+/// The estimator section: the kind and the ESKF's tuning (used when
+/// `controller.estimator` and `controller.fusion` put sensors in the loop).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct EstimatorSection {
+    /// `thesis` (default) or `eskf`.
+    pub kind: EstimatorKind,
+    /// ESKF tuning (`[estimator.eskf]`).
+    pub eskf: helicon_core::eskf::EskfConfig,
+}
+
 /// Plant integration settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -219,6 +243,9 @@ pub struct Scenario {
     /// Navigation filter tuning (used when `controller.fusion`).
     #[serde(default)]
     pub navigation: crate::navigation::NavigationConfig,
+    /// Navigation kind and tuning.
+    #[serde(default)]
+    pub estimator: EstimatorSection,
     /// Controller.
     #[serde(default)]
     pub controller: ControllerSection,
@@ -588,6 +615,26 @@ impl Scenario {
                 } => bad(field, num(value), &format!("allowed: {allowed}")),
                 other => section(format!("[navigation]: {other}")),
             });
+        }
+        if let Err(e) = self.estimator.eskf.validate() {
+            return Err(match e {
+                helicon_core::fusion::FusionError::InvalidConfig {
+                    field,
+                    value,
+                    allowed,
+                } => bad(field, num(value), &format!("allowed: {allowed}")),
+                other => section(format!("[estimator.eskf]: {other}")),
+            });
+        }
+        if self.estimator.kind == EstimatorKind::Eskf
+            && !(self.controller.estimator && self.controller.fusion)
+        {
+            return Err(bad(
+                "estimator.kind",
+                "\"eskf\"".into(),
+                "needs the sensors in the loop: controller.estimator = true and \
+                 controller.fusion = true",
+            ));
         }
         self.sensors
             .validate(file)
