@@ -1042,11 +1042,15 @@ mod tests {
             dt,
         };
         let mut fm = Matrix15::identity();
-        fm.fixed_view_mut::<3, 3>(ATT, ATT).copy_from(&blocks.att_att);
-        fm.fixed_view_mut::<3, 3>(ATT, BG).copy_from(&(-Matrix3::identity() * dt));
-        fm.fixed_view_mut::<3, 3>(VEL, ATT).copy_from(&blocks.vel_att);
+        fm.fixed_view_mut::<3, 3>(ATT, ATT)
+            .copy_from(&blocks.att_att);
+        fm.fixed_view_mut::<3, 3>(ATT, BG)
+            .copy_from(&(-Matrix3::identity() * dt));
+        fm.fixed_view_mut::<3, 3>(VEL, ATT)
+            .copy_from(&blocks.vel_att);
         fm.fixed_view_mut::<3, 3>(VEL, BA).copy_from(&blocks.vel_ba);
-        fm.fixed_view_mut::<3, 3>(POS, VEL).copy_from(&(Matrix3::identity() * dt));
+        fm.fixed_view_mut::<3, 3>(POS, VEL)
+            .copy_from(&(Matrix3::identity() * dt));
         let dense = fm * p * fm.transpose();
         let by_blocks = blocks.left(&blocks.left(&p).transpose());
         assert!((dense - by_blocks).abs().max() < 1e-12 * p.abs().max());
