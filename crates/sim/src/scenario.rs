@@ -815,6 +815,26 @@ mod tests {
     }
 
     #[test]
+    fn estimator_kind_is_chosen_and_checked() {
+        let s = parse("duration_s = 1.0\n").unwrap();
+        assert_eq!(s.estimator.kind, EstimatorKind::Thesis);
+        let ok = "duration_s = 1.0\n[controller]\nfusion = true\n[estimator]\nkind = \"eskf\"\n";
+        assert_eq!(parse(ok).unwrap().estimator.kind, EstimatorKind::Eskf);
+        // the ESKF needs the sensors in the loop
+        let e = parse("duration_s = 1.0\n[estimator]\nkind = \"eskf\"\n").unwrap_err();
+        assert!(e.contains("s.toml") && e.contains("estimator.kind"), "{e}");
+        let e = parse("duration_s = 1.0\n[estimator]\nkind = \"ukf\"\n").unwrap_err();
+        assert!(e.contains("s.toml") && e.contains("eskf"), "{e}");
+        let e = parse(&format!("{ok}[estimator.eskf]\ngate_nis = -1.0\n")).unwrap_err();
+        assert!(
+            e.contains("s.toml") && e.contains("estimator.eskf.gate_nis"),
+            "{e}"
+        );
+        let e = parse(&format!("{ok}[estimator.eskf]\nbogus = 1.0\n")).unwrap_err();
+        assert!(e.contains("s.toml") && e.contains("bogus"), "{e}");
+    }
+
+    #[test]
     fn numbers_print_short() {
         assert_eq!(num(1e-300), "1e-300");
         assert_eq!(num(1e308), "1e308");
