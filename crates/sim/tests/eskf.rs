@@ -428,3 +428,28 @@ fn report_navigation_eskf() {
         );
     }
 }
+
+/// The shipped ESKF scenario carries the MPU-6000 preset's figures and the
+/// campaign loads it.
+#[test]
+fn shipped_eskf_scenario_and_campaign_load() {
+    use helicon_sim::sensors::{ImuConfig, ImuPreset};
+    let s = scenario("beyond-eskf.toml");
+    assert_eq!(s.estimator.kind, EstimatorKind::Eskf);
+    let preset = ImuConfig::preset(ImuPreset::Mpu6000, s.sensors.imu.rate_hz);
+    for (a, b) in [(s.sensors.imu.accel, preset.accel), (s.sensors.imu.gyro, preset.gyro)] {
+        for (x, y) in [
+            (a.noise_density, b.noise_density),
+            (a.bias_random_walk, b.bias_random_walk),
+            (a.initial_bias_sigma, b.initial_bias_sigma),
+            (a.scale_factor_sigma, b.scale_factor_sigma),
+            (a.range, b.range),
+            (a.resolution, b.resolution),
+        ] {
+            assert!((x - y).abs() <= 1e-12 * y.abs(), "{x} vs {y}");
+        }
+    }
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../campaigns/eskf-mpu6000.toml");
+    let c = helicon_sim::mc::Campaign::from_file(&path).unwrap();
+    assert_eq!(c.scenario.estimator.kind, EstimatorKind::Eskf);
+}
