@@ -478,7 +478,7 @@ impl Eskf {
         self.p_ned += self.v_ned * dt + a * (0.5 * dt * dt);
         self.v_ned += a * dt;
         let dq = UnitQuaternion::from_scaled_axis(omega * dt);
-        self.q = self.q * dq;
+        self.q *= dq;
         self.q.renormalize_fast();
         // F = I + A T, the attitude block exact: Exp(−ω T) = dqᵀ; P ← F P Fᵀ
         // as F (F P)ᵀ (P symmetric), F applied by its non-zero blocks
@@ -681,7 +681,7 @@ impl Eskf {
         let dtheta = Vector3::new(dx[ATT], dx[ATT + 1], dx[ATT + 2]);
         let dv = Vector3::new(dx[VEL], dx[VEL + 1], dx[VEL + 2]);
         let dp = Vector3::new(dx[POS], dx[POS + 1], dx[POS + 2]);
-        self.q = self.q * UnitQuaternion::from_scaled_axis(dtheta);
+        self.q *= UnitQuaternion::from_scaled_axis(dtheta);
         self.q.renormalize_fast();
         self.v_ned += dv;
         self.p_ned += dp;

@@ -100,7 +100,6 @@ mod consistency {
         pub gyro_bias_err: Vector3<f64>,
         pub accel_bias_err: Vector3<f64>,
         pub gyro_bias_sigma: Vector3<f64>,
-        pub accel_bias_sigma: Vector3<f64>,
     }
 
     /// Fly the scripted trajectory (a 15 m circle with climbs and ±0.15 rad
@@ -162,7 +161,6 @@ mod consistency {
                 gyro_bias_err: bg - f.gyro_bias_rad_s(),
                 accel_bias_err: ba - f.accel_bias_m_s2(),
                 gyro_bias_sigma: sd(9),
-                accel_bias_sigma: sd(12),
             });
         }
         (out, f)
@@ -234,13 +232,17 @@ fn eskf_nees_and_nis_are_consistent() {
 
 /// The biases are estimated: after 30 s on the scripted trajectory the gyro
 /// bias errors are within 3σ of the filter's own covariance and below
-/// 0.05 °/s, the horizontal accelerometer bias errors below 10 mg (the
-/// default hobby IMU draws turn-on biases of σ 0.5 °/s and 5 mg).
+/// 0.05 °/s, the horizontal accelerometer bias errors below 3 mg (the
+/// default hobby IMU draws turn-on biases of σ 0.5 °/s and 5 mg; measured
+/// worst over 3 seeds: 0.013 °/s and 0.55 mg).
 #[test]
 fn eskf_biases_converge() {
+    let (mut worst_g, mut worst_a) = (0.0f64, 0.0f64);
     for seed in 1..=3 {
         let (samples, _) = consistency::run(&modelled_sensors(), &Default::default(), seed, 60.0);
         for s in samples.iter().filter(|s| s.t_s >= 30.0) {
+            worst_g = worst_g.max(s.gyro_bias_err.abs().max());
+            worst_a = worst_a.max(s.accel_bias_err.x.abs().max(s.accel_bias_err.y.abs()));
             for i in 0..3 {
                 let e = s.gyro_bias_err[i].abs();
                 assert!(
@@ -256,10 +258,15 @@ fn eskf_biases_converge() {
             }
             for i in 0..2 {
                 let e = s.accel_bias_err[i].abs();
-                assert!(e < 0.1, "seed {seed} t {} axis {i}: {e}", s.t_s);
+                assert!(e < 0.03, "seed {seed} t {} axis {i}: {e}", s.t_s);
             }
         }
     }
+    println!(
+        "after 30 s: largest gyro bias error {:.4} deg/s, horizontal accelerometer {:.2} mg",
+        worst_g.to_degrees(),
+        worst_a / helicon_sim::sensors::G0_M_S2 * 1e3
+    );
 }
 
 mod report {
@@ -386,6 +393,25 @@ mod report {
 fn report_navigation_eskf() {
     use helicon_sim::sensors::ImuPreset;
     let beyond = scenario("beyond-physical-turbulence.toml");
+    // NEES split with the default sensors' scale factors left in
+    for scale in [1.0, 2.0] {
+        let e = helicon_core::eskf::EskfConfig {
+            imu_noise_scale: scale,
+            ..Default::default()
+        };
+        let runs: Vec<_> = (1..=5)
+            .map(|s| consistency::run(&helicon_sim::sensors::SensorConfig::default(), &e, s, 60.0))
+            .collect();
+        let n = runs.iter().map(|r| r.0.len()).sum::<usize>() as f64;
+        let m = |f: fn(&consistency::Sample) -> f64| {
+            runs.iter().flat_map(|r| r.0.iter().map(f)).sum::<f64>() / n
+        };
+        println!(
+            "default sensors, imu_noise_scale {scale}: NEES attitude {:.2} velocity {:.2} (3 dof each)",
+            m(|s| s.nees_att),
+            m(|s| s.nees_vel)
+        );
+    }
     report::side_by_side("beyond, default IMU", &beyond, 10);
     for preset in [
         ImuPreset::Mpu6000,
@@ -437,7 +463,10 @@ fn shipped_eskf_scenario_and_campaign_load() {
     let s = scenario("beyond-eskf.toml");
     assert_eq!(s.estimator.kind, EstimatorKind::Eskf);
     let preset = ImuConfig::preset(ImuPreset::Mpu6000, s.sensors.imu.rate_hz);
-    for (a, b) in [(s.sensors.imu.accel, preset.accel), (s.sensors.imu.gyro, preset.gyro)] {
+    for (a, b) in [
+        (s.sensors.imu.accel, preset.accel),
+        (s.sensors.imu.gyro, preset.gyro),
+    ] {
         for (x, y) in [
             (a.noise_density, b.noise_density),
             (a.bias_random_walk, b.bias_random_walk),
