@@ -205,7 +205,7 @@ impl ImuNoise {
 /// checks).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct EskfDiagnostics {
-    /// Magnetometer updates fused / rejected by the gate.
+    /// Magnetometer updates fused.
     pub mag_fused: u64,
     /// Magnetometer updates rejected by the gate.
     pub mag_rejected: u64,
@@ -443,13 +443,14 @@ impl Eskf {
         if let Some(g) = frame.gps.filter(|g| g.is_valid()) {
             self.update_gps(frame.t_s, g.epoch_s, &g.position_ned_m, g.velocity_ned_m_s)?;
         }
-        if !(self.p.iter().all(|v| v.is_finite())
-            && self
-                .v_ned
-                .iter()
-                .chain(self.p_ned.iter())
-                .all(|v| v.is_finite()))
-        {
+        let mut nominal = self
+            .v_ned
+            .iter()
+            .chain(self.p_ned.iter())
+            .chain(self.b_g.iter())
+            .chain(self.b_a.iter())
+            .chain(self.q.coords.iter());
+        if !(self.p.as_slice().iter().all(|v| v.is_finite()) && nominal.all(|v| v.is_finite())) {
             return Err(FusionError::NonFiniteInput {
                 what: "navigation state (the filter diverged)",
             });

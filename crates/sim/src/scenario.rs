@@ -155,6 +155,13 @@ pub struct EstimatorSection {
     pub eskf: helicon_core::eskf::EskfConfig,
 }
 
+impl EstimatorSection {
+    /// True for the default section (the thesis chain, default tuning).
+    pub fn is_default(&self) -> bool {
+        *self == EstimatorSection::default()
+    }
+}
+
 /// Plant integration settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -243,8 +250,10 @@ pub struct Scenario {
     /// Navigation filter tuning (used when `controller.fusion`).
     #[serde(default)]
     pub navigation: crate::navigation::NavigationConfig,
-    /// Navigation kind and tuning.
-    #[serde(default)]
+    /// Navigation kind and tuning. Not written when default, so the
+    /// effective scenarios (and campaign hashes) of thesis-chain flights
+    /// are those of before the section existed.
+    #[serde(default, skip_serializing_if = "EstimatorSection::is_default")]
     pub estimator: EstimatorSection,
     /// Controller.
     #[serde(default)]
@@ -832,6 +841,13 @@ mod tests {
         );
         let e = parse(&format!("{ok}[estimator.eskf]\nbogus = 1.0\n")).unwrap_err();
         assert!(e.contains("s.toml") && e.contains("bogus"), "{e}");
+        // the default section is not written (effective scenarios and
+        // campaign hashes unchanged); a chosen one round-trips
+        let plain = toml::to_string(&parse("duration_s = 1.0\n").unwrap()).unwrap();
+        assert!(!plain.contains("estimator]"), "{plain}");
+        let eskf = parse(ok).unwrap();
+        let text = toml::to_string(&eskf).unwrap();
+        assert_eq!(parse(&text).unwrap().estimator, eskf.estimator);
     }
 
     #[test]
