@@ -859,6 +859,21 @@ mod tests {
         seconds: f64,
         mut each: impl FnMut(&Eskf, f64, &Vector3<f64>, f64),
     ) -> Eskf {
+        fly_told(vel, yaw_rate, bg, ba, latency, latency, seconds, &mut each)
+    }
+
+    /// As [`fly`], the fixes stamped `told` s before delivery while they
+    /// are `latency` s old.
+    fn fly_told(
+        vel: Vector3<f64>,
+        yaw_rate: f64,
+        bg: Vector3<f64>,
+        ba: Vector3<f64>,
+        latency: f64,
+        told: f64,
+        seconds: f64,
+        each: &mut impl FnMut(&Eskf, f64, &Vector3<f64>, f64),
+    ) -> Eskf {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let mut n = move || -> f64 { StandardNormal.sample(&mut rng) };
         let init = SVector::<f64, 9>::from_column_slice(&[
@@ -885,7 +900,7 @@ mod tests {
                 gps: (k % 80 == 0 && t >= latency).then(|| {
                     let epoch = t - latency;
                     GpsFix {
-                        epoch_s: epoch,
+                        epoch_s: t - told,
                         fix: GpsFixType::Fix3d,
                         position_ned_m: vel * epoch + Vector3::new(1.5 * n(), 1.5 * n(), 3.0 * n()),
                         velocity_ned_m_s: Some(vel + Vector3::new(n(), n(), 2.0 * n()) * 0.05),
@@ -950,6 +965,26 @@ mod tests {
         );
         let mean = sum / count;
         assert!(mean.abs() < 0.3, "mean along-track position error {mean} m");
+        // the control: the same fixes stamped as current lag ~1 m
+        let (mut sum, mut count) = (0.0, 0.0);
+        let mut each = |f: &Eskf, t: f64, p: &Vector3<f64>, _: f64| {
+            if t > 20.0 {
+                sum += f.position_ned_m().x - p.x;
+                count += 1.0;
+            }
+        };
+        fly_told(
+            vel,
+            0.0,
+            Vector3::zeros(),
+            Vector3::zeros(),
+            0.1,
+            0.0,
+            60.0,
+            &mut each,
+        );
+        let lag = sum / count;
+        assert!(lag < -0.7, "fixes fused as current: mean error {lag} m");
     }
 
     #[test]
