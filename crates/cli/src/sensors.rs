@@ -515,7 +515,7 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
     })?;
     replay.with_context(|| format!("cannot write {}", fused_path.display()))?;
     w.flush()?;
-    let summary = serde_json::json!({
+    let mut summary = serde_json::json!({
         "log": args.log.display().to_string(),
         "rows": log.rows.len(),
         "dt_s": log.mean_dt_s(),
@@ -523,10 +523,6 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
         "gps_fixes_fused": n_gps,
         "attitude_solutions_fused": n_att,
         "estimator": if eskf { "eskf" } else { "thesis" },
-        // the ESKF's: updates rejected by its gate, final bias estimates
-        "rejected_updates": last.map(|s| s.rejected_updates),
-        "gyro_bias_rad_s": last.and_then(|s| s.imu_bias).map(|b| b.gyro_rad_s.as_slice().to_vec()),
-        "accel_bias_m_s2": last.and_then(|s| s.imu_bias).map(|b| b.accel_m_s2.as_slice().to_vec()),
         "navigation": {
             "accel_sigma_m_s2": nav.accel_sigma_m_s2,
             "euler_rate_sigma_rad_s": nav.euler_rate_sigma_rad_s,
@@ -540,6 +536,20 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
         "rms_gps_horizontal_error_m": rms(&e_gps_h),
         "rms_attitude_error_rad": rms(&e_att),
     });
+    // the ESKF's: updates rejected by its gate, the final bias estimates
+    if let (Some(sol), Some(b), Some(obj)) =
+        (last, last.and_then(|s| s.imu_bias), summary.as_object_mut())
+    {
+        obj.insert("rejected_updates".into(), sol.rejected_updates.into());
+        obj.insert(
+            "gyro_bias_rad_s".into(),
+            b.gyro_rad_s.as_slice().to_vec().into(),
+        );
+        obj.insert(
+            "accel_bias_m_s2".into(),
+            b.accel_m_s2.as_slice().to_vec().into(),
+        );
+    }
     let summary_path = args.out.join("summary.json");
     std::fs::write(&summary_path, serde_json::to_string_pretty(&summary)?)
         .with_context(|| format!("cannot write {}", summary_path.display()))?;
