@@ -12,9 +12,11 @@ use clap::{Args, Subcommand, ValueEnum};
 use helicon_core::attitude::{VectorObservation, q_method};
 use helicon_core::frames::wrap_pi;
 use helicon_model::Params;
-use helicon_sim::navigation::{NavigationConfig, ReplayInit, replay_navigation, sensor_noise};
+use helicon_sim::navigation::{
+    NavigationConfig, ReplayInit, ReplayNavigation, imu_noise, replay_navigation, sensor_noise,
+};
 use helicon_sim::plot::{LinePlot, Series};
-use helicon_sim::scenario::Scenario;
+use helicon_sim::scenario::{EstimatorKind, EstimatorSection, Scenario};
 use helicon_sim::sensor_log::{
     GroupKind, LoggedTruth, SensorLogRow, SensorLogWriter, read_sensor_log,
 };
@@ -252,6 +254,15 @@ pub enum InitArg {
     Sensors,
 }
 
+/// Which navigation `fuse` replays.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EstimatorArg {
+    /// The thesis's q-method + fusion filter.
+    Thesis,
+    /// The error-state Kalman filter with IMU bias states.
+    Eskf,
+}
+
 /// Arguments of `helicon fuse`.
 #[derive(Args, Debug)]
 pub struct FuseArgs {
@@ -288,6 +299,10 @@ pub struct FuseArgs {
     /// Navigation: q-method attitude σ (rad); overrides the tuning.
     #[arg(long)]
     pub attitude_sigma_rad: Option<f64>,
+    /// The navigation replayed (default: the scenario's `[estimator] kind`,
+    /// else the thesis's). The ESKF takes its tuning from the scenario.
+    #[arg(long, value_enum)]
+    pub estimator: Option<EstimatorArg>,
 }
 
 fn rms(v: &[f64]) -> Option<f64> {
@@ -335,14 +350,14 @@ const FUSED_COLUMNS: [&str; 30] = [
 /// Replay a sensor log through the navigation that flies.
 #[allow(clippy::too_many_lines)] // the replay, its CSV row and its plots in one pass over the log
 pub fn run_fuse(args: &FuseArgs) -> Result<()> {
-    let (sensors, mut nav, params) = match &args.scenario {
+    let (sensors, mut nav, params, estimator) = match &args.scenario {
         Some(p) => {
             let sc = Scenario::from_file(p)?;
             let params = match &sc.params {
                 Some(pp) => Params::from_file(&sc.resolve(pp))?,
                 None => Params::bergen_twin(),
             };
-            (sc.sensors, sc.navigation, params)
+            (sc.sensors, sc.navigation, params, sc.estimator)
         }
         None => (
             match &args.sensors {
@@ -351,7 +366,13 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
             },
             NavigationConfig::default(),
             params_from(&args.params)?,
+            EstimatorSection::default(),
         ),
+    };
+    let eskf = match args.estimator {
+        Some(EstimatorArg::Eskf) => true,
+        Some(EstimatorArg::Thesis) => false,
+        None => estimator.kind == EstimatorKind::Eskf,
     };
     if let Some(v) = args.accel_sigma_m_s2 {
         nav.accel_sigma_m_s2 = v;
@@ -406,10 +427,17 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
     let every = (log.rows.len() / 4000).max(1);
     let mut line = String::new();
     let mut k = 0usize;
-    let replay = replay_navigation(&log, &nav, &noise, init, |row, y, filter| {
+    let which = if eskf {
+        ReplayNavigation::Eskf(&estimator.eskf, imu_noise(&sensors))
+    } else {
+        ReplayNavigation::Thesis(&nav)
+    };
+    let mut last = None;
+    let replay = replay_navigation(&log, which, &noise, init, |row, y, filter| {
         use std::fmt::Write as _;
         let sol = filter.solution();
-        let p = filter.filter().covariance();
+        last = Some(sol);
+        let att_sigma = filter.attitude_sigma_rad();
         let t = row.frame.t_s;
         n_att += usize::from(sol.attitude_fix);
         n_gps += usize::from(sol.gps_fused);
@@ -441,8 +469,8 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
         {
             let _ = write!(line, ",{v}");
         }
-        for i in [0, 1, 2, 6, 7, 8] {
-            let _ = write!(line, ",{}", p[(i, i)].sqrt());
+        for v in sol.position_sigma_m.iter().chain(att_sigma.iter()) {
+            let _ = write!(line, ",{v}");
         }
         for v in y.iter() {
             let _ = write!(line, ",{v}");
@@ -487,13 +515,14 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
     })?;
     replay.with_context(|| format!("cannot write {}", fused_path.display()))?;
     w.flush()?;
-    let summary = serde_json::json!({
+    let mut summary = serde_json::json!({
         "log": args.log.display().to_string(),
         "rows": log.rows.len(),
         "dt_s": log.mean_dt_s(),
         "init": format!("{init:?}").to_lowercase(),
         "gps_fixes_fused": n_gps,
         "attitude_solutions_fused": n_att,
+        "estimator": if eskf { "eskf" } else { "thesis" },
         "navigation": {
             "accel_sigma_m_s2": nav.accel_sigma_m_s2,
             "euler_rate_sigma_rad_s": nav.euler_rate_sigma_rad_s,
@@ -507,6 +536,20 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
         "rms_gps_horizontal_error_m": rms(&e_gps_h),
         "rms_attitude_error_rad": rms(&e_att),
     });
+    // the ESKF's: updates rejected by its gate, the final bias estimates
+    if let (Some(sol), Some(b), Some(obj)) =
+        (last, last.and_then(|s| s.imu_bias), summary.as_object_mut())
+    {
+        obj.insert("rejected_updates".into(), sol.rejected_updates.into());
+        obj.insert(
+            "gyro_bias_rad_s".into(),
+            b.gyro_rad_s.as_slice().to_vec().into(),
+        );
+        obj.insert(
+            "accel_bias_m_s2".into(),
+            b.accel_m_s2.as_slice().to_vec().into(),
+        );
+    }
     let summary_path = args.out.join("summary.json");
     std::fs::write(&summary_path, serde_json::to_string_pretty(&summary)?)
         .with_context(|| format!("cannot write {}", summary_path.display()))?;

@@ -117,6 +117,31 @@ fn simulate_then_fuse_beats_gps_and_rejects_bad_logs() {
     );
     assert!(fused < gps, "fused {fused} vs gps {gps}");
     assert!(att < 0.05);
+    // the same log through the ESKF
+    let out_eskf = d.join("run_eskf");
+    let o = helicon(&[
+        "fuse",
+        log.to_str().unwrap(),
+        "--out",
+        out_eskf.to_str().unwrap(),
+        "--estimator",
+        "eskf",
+    ]);
+    no_panic(&o);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_eskf.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(s["estimator"], "eskf");
+    assert!(s["rejected_updates"].as_u64().is_some());
+    assert_eq!(s["gyro_bias_rad_s"].as_array().unwrap().len(), 3);
+    let fused_eskf = s["rms_horizontal_position_error_m"].as_f64().unwrap();
+    let att_eskf = s["rms_attitude_error_rad"].as_f64().unwrap();
+    println!(
+        "fuse --estimator eskf: horizontal RMS {fused_eskf:.3} m; attitude RMS {att_eskf:.4} rad"
+    );
+    assert!(fused_eskf < gps, "ESKF {fused_eskf} vs gps {gps}");
+    assert!(att_eskf < att, "ESKF attitude {att_eskf} vs thesis {att}");
 
     let text = std::fs::read_to_string(&log).unwrap();
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();

@@ -16,6 +16,8 @@
 //! - [`sensor`]: the one timestamped [`SensorFrame`];
 //! - [`attitude`] (q-method, §13.2), [`fusion`] (GPS/IMU filter, §13.3),
 //!   [`navigation`] (both, frames to the nine measured states);
+//! - [`eskf`]: the error-state Kalman filter navigation with IMU bias
+//!   states, GPS latency and innovation gating (beyond the thesis);
 //! - [`estimator`]: the [`Estimator`] extension point; the thesis's chain,
 //!   the Kalman predictor alone, the truth feed;
 //! - [`lqi`]: the [`StateFeedback`] extension point; the LQR with integral action;
@@ -29,6 +31,7 @@
 pub mod attitude;
 pub mod computer;
 pub mod error;
+pub mod eskf;
 pub mod estimator;
 pub mod frames;
 pub mod fusion;
@@ -40,14 +43,18 @@ pub mod state;
 
 pub use computer::{FlightComputer, Telemetry};
 pub use error::CoreError;
+pub use eskf::{Eskf, EskfConfig, EskfDiagnostics, EskfEstimator, ImuNoise};
 pub use estimator::{
     Estimate, Estimator, KalmanPredictor, StateMeasurement, ThesisEstimator, Timestamped,
     TruthFeed, TruthMeasurement,
 };
 pub use gains::{GainSet, LqiOptions, ServoLimits};
 pub use lqi::{Command, Lqi, Reference, StateFeedback};
-pub use navigation::{NavigationConfig, NavigationFilter, NavigationSolution};
+pub use navigation::{ImuBiasEstimate, NavigationConfig, NavigationFilter, NavigationSolution};
 pub use sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
 
 /// The thesis's on-board chain: navigation + Kalman predictor + LQI.
 pub type ThesisFlightComputer = FlightComputer<ThesisEstimator, Lqi>;
+
+/// The ESKF navigation + Kalman predictor + LQI.
+pub type EskfFlightComputer = FlightComputer<EskfEstimator, Lqi>;

@@ -106,6 +106,23 @@ pub struct NavigationSolution {
     pub attitude_fix: bool,
     /// A GPS fix was fused this sample.
     pub gps_fused: bool,
+    /// The IMU biases, when the navigation estimates them (the ESKF).
+    pub imu_bias: Option<ImuBiasEstimate>,
+    /// Updates rejected by the innovation gate (or stale) since the start.
+    pub rejected_updates: u64,
+}
+
+/// The IMU biases a navigation estimates, with their 1σ (body axes).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ImuBiasEstimate {
+    /// Gyro bias (rad/s).
+    pub gyro_rad_s: Vector3<f64>,
+    /// Accelerometer bias (m/s²).
+    pub accel_m_s2: Vector3<f64>,
+    /// 1σ of the gyro bias estimate (rad/s).
+    pub gyro_sigma_rad_s: Vector3<f64>,
+    /// 1σ of the accelerometer bias estimate (m/s²).
+    pub accel_sigma_m_s2: Vector3<f64>,
 }
 
 impl NavigationFilter {
@@ -197,6 +214,8 @@ impl NavigationFilter {
             position_sigma_m: Vector3::new(p[(0, 0)], p[(1, 1)], p[(2, 2)]).map(f64::sqrt),
             attitude_fix: self.attitude_fix,
             gps_fused: self.gps_fused,
+            imu_bias: None,
+            rejected_updates: 0,
         }
     }
 

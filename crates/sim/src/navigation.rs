@@ -3,7 +3,8 @@
 //! from the same configuration. The navigation itself lives in
 //! `helicon_core`: the closed loop and `helicon fuse` run that one type.
 
-use crate::sensors::{SensorConfig, SensorConfigError, SensorSuite};
+use crate::sensors::{G0_M_S2, SensorConfig, SensorConfigError, SensorSuite};
+use helicon_core::eskf::{Eskf, EskfConfig, ImuNoise};
 use helicon_core::fusion::FusionError;
 pub use helicon_core::navigation::NavigationConfig;
 use helicon_core::navigation::NavigationFilter;
@@ -69,6 +70,41 @@ pub fn navigation_filter_at(
 ) -> Result<NavigationFilter, FusionError> {
     let (s0, omega0) = navigation_initial(x0);
     NavigationFilter::new(nav, &sensor_noise(config, gravity_m_s2), dt_s, &s0, &omega0)
+}
+
+/// The IMU and magnetometer figures of a sensor configuration, as the ESKF
+/// assumes them (the filter is tuned from the sensors' datasheet figures).
+pub fn imu_noise(config: &SensorConfig) -> ImuNoise {
+    let (a, g) = (&config.imu.accel, &config.imu.gyro);
+    ImuNoise {
+        accel_noise_density: a.noise_density,
+        accel_bias_walk: a.bias_random_walk,
+        // the scale-factor error on the 1 g the accelerometer carries in hover
+        // acts as a bias: the filter's initial bias σ covers both
+        accel_bias_sigma: a.initial_bias_sigma.hypot(a.scale_factor_sigma * G0_M_S2),
+        gyro_noise_density: g.noise_density,
+        gyro_bias_walk: g.bias_random_walk,
+        gyro_bias_sigma: g.initial_bias_sigma,
+        mag_sigma: config.mag.noise_sigma,
+    }
+}
+
+/// An ESKF navigation initialised at the true full state `x0`.
+pub fn eskf_at(
+    config: &SensorConfig,
+    eskf: &EskfConfig,
+    dt_s: f64,
+    gravity_m_s2: f64,
+    x0: &State,
+) -> Result<Eskf, FusionError> {
+    let (s0, _) = navigation_initial(x0);
+    Eskf::new(
+        eskf,
+        &imu_noise(config),
+        &sensor_noise(config, gravity_m_s2),
+        dt_s,
+        &s0,
+    )
 }
 
 /// How a navigation replaying a sensor log is initialised.
@@ -185,29 +221,82 @@ pub fn replay_initial(
     }
 }
 
-/// Replay a sensor log through the navigation that flies: one
-/// [`NavigationFilter::step`] per row, calling `each(row, y, filter)` with the
-/// nine measured states it produced.
+/// Which navigation a replay runs, with its tuning.
+#[derive(Debug, Clone, Copy)]
+pub enum ReplayNavigation<'a> {
+    /// The thesis's navigation (q-method + fusion filter).
+    Thesis(&'a NavigationConfig),
+    /// The ESKF, with the IMU figures it assumes ([`imu_noise`]).
+    Eskf(&'a EskfConfig, ImuNoise),
+}
+
+/// A navigation being replayed.
+#[derive(Debug, Clone)]
+pub enum ReplayFilter {
+    /// The thesis's navigation.
+    Thesis(Box<NavigationFilter>),
+    /// The ESKF.
+    Eskf(Box<Eskf>),
+}
+
+impl ReplayFilter {
+    fn step(&mut self, frame: &helicon_core::SensorFrame) -> Result<SVector<f64, 9>, FusionError> {
+        match self {
+            ReplayFilter::Thesis(f) => f.step(frame),
+            ReplayFilter::Eskf(f) => f.step(frame),
+        }
+    }
+
+    /// The navigation solution after the last step.
+    pub fn solution(&self) -> helicon_core::NavigationSolution {
+        match self {
+            ReplayFilter::Thesis(f) => f.solution(),
+            ReplayFilter::Eskf(f) => f.solution(),
+        }
+    }
+
+    /// 1σ of the attitude (rad): of the Euler angles for the thesis's
+    /// filter, of the body-axis attitude error for the ESKF (the same to
+    /// first order near level flight).
+    pub fn attitude_sigma_rad(&self) -> Vector3<f64> {
+        let (p, i) = match self {
+            ReplayFilter::Thesis(f) => {
+                let c = f.filter().covariance();
+                return Vector3::new(c[(6, 6)], c[(7, 7)], c[(8, 8)]).map(f64::sqrt);
+            }
+            ReplayFilter::Eskf(f) => (f.covariance(), 0),
+        };
+        Vector3::new(p[(i, i)], p[(i + 1, i + 1)], p[(i + 2, i + 2)]).map(f64::sqrt)
+    }
+}
+
+/// Replay a sensor log through a navigation that flies: one step per row,
+/// calling `each(row, y, filter)` with the nine measured states it produced.
 pub fn replay_navigation<E>(
     log: &crate::sensor_log::SensorLog,
-    nav: &NavigationConfig,
+    nav: ReplayNavigation<'_>,
     noise: &SensorNoise,
     init: ReplayInit,
     mut each: impl FnMut(
         &crate::sensor_log::SensorLogRow,
         &SVector<f64, 9>,
-        &NavigationFilter,
+        &ReplayFilter,
     ) -> Result<(), E>,
 ) -> Result<Result<(), E>, ReplayError> {
     let dt = crate::sensor_log::uniform_step_s(log)?;
     let (s0, omega0) = replay_initial(log, init, noise)?;
     let file = log.file.display().to_string();
-    let mut filter = NavigationFilter::new(nav, noise, dt, &s0, &omega0).map_err(|source| {
-        ReplayError::Navigation {
-            file: file.clone(),
-            t_s: log.rows[0].frame.t_s,
-            source,
+    let built = match nav {
+        ReplayNavigation::Thesis(cfg) => NavigationFilter::new(cfg, noise, dt, &s0, &omega0)
+            .map(|f| ReplayFilter::Thesis(Box::new(f))),
+        ReplayNavigation::Eskf(cfg, imu) => {
+            Eskf::new(cfg, &imu, noise, dt, &s0).map(|f| ReplayFilter::Eskf(Box::new(f)))
         }
+    };
+    let mut filter = built.map_err(|source| ReplayError::Navigation {
+        file: file.clone(),
+        t_s: log.rows[0].frame.t_s,
+        source,
     })?;
     for row in &log.rows {
         let y = filter

@@ -131,6 +131,37 @@ impl Default for ControllerSection {
     }
 }
 
+/// Which navigation flies ahead of the Kalman predictor (TOML `[estimator]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum EstimatorKind {
+    /// The thesis's chain: q-method attitude + the GPS/IMU fusion filter
+    /// without bias states (chapter 13).
+    #[default]
+    Thesis,
+    /// The error-state Kalman filter with gyro and accelerometer bias states,
+    /// GPS latency and innovation gating (`helicon_core::eskf`).
+    Eskf,
+}
+
+/// The estimator section: the kind and the ESKF's tuning (used when
+/// `controller.estimator` and `controller.fusion` put sensors in the loop).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct EstimatorSection {
+    /// `thesis` (default) or `eskf`.
+    pub kind: EstimatorKind,
+    /// ESKF tuning (`[estimator.eskf]`).
+    pub eskf: helicon_core::eskf::EskfConfig,
+}
+
+impl EstimatorSection {
+    /// True for the default section (the thesis chain, default tuning).
+    pub fn is_default(&self) -> bool {
+        *self == EstimatorSection::default()
+    }
+}
+
 /// Plant integration settings.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -219,6 +250,11 @@ pub struct Scenario {
     /// Navigation filter tuning (used when `controller.fusion`).
     #[serde(default)]
     pub navigation: crate::navigation::NavigationConfig,
+    /// Navigation kind and tuning. Not written when default, so the
+    /// effective scenarios (and campaign hashes) of thesis-chain flights
+    /// are those of before the section existed.
+    #[serde(default, skip_serializing_if = "EstimatorSection::is_default")]
+    pub estimator: EstimatorSection,
     /// Controller.
     #[serde(default)]
     pub controller: ControllerSection,
@@ -589,6 +625,26 @@ impl Scenario {
                 other => section(format!("[navigation]: {other}")),
             });
         }
+        if let Err(e) = self.estimator.eskf.validate() {
+            return Err(match e {
+                helicon_core::fusion::FusionError::InvalidConfig {
+                    field,
+                    value,
+                    allowed,
+                } => bad(field, num(value), &format!("allowed: {allowed}")),
+                other => section(format!("[estimator.eskf]: {other}")),
+            });
+        }
+        if self.estimator.kind == EstimatorKind::Eskf
+            && !(self.controller.estimator && self.controller.fusion)
+        {
+            return Err(bad(
+                "estimator.kind",
+                "\"eskf\"".into(),
+                "needs the sensors in the loop: controller.estimator = true and \
+                 controller.fusion = true",
+            ));
+        }
         self.sensors
             .validate(file)
             .map_err(|e| e.within(file, "sensors"))?;
@@ -765,6 +821,33 @@ mod tests {
                 .starts_with("s.toml (with --duration NaN): `duration_s` = NaN"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn estimator_kind_is_chosen_and_checked() {
+        let s = parse("duration_s = 1.0\n").unwrap();
+        assert_eq!(s.estimator.kind, EstimatorKind::Thesis);
+        let ok = "duration_s = 1.0\n[controller]\nfusion = true\n[estimator]\nkind = \"eskf\"\n";
+        assert_eq!(parse(ok).unwrap().estimator.kind, EstimatorKind::Eskf);
+        // the ESKF needs the sensors in the loop
+        let e = parse("duration_s = 1.0\n[estimator]\nkind = \"eskf\"\n").unwrap_err();
+        assert!(e.contains("s.toml") && e.contains("estimator.kind"), "{e}");
+        let e = parse("duration_s = 1.0\n[estimator]\nkind = \"ukf\"\n").unwrap_err();
+        assert!(e.contains("s.toml") && e.contains("eskf"), "{e}");
+        let e = parse(&format!("{ok}[estimator.eskf]\ngate_nis = -1.0\n")).unwrap_err();
+        assert!(
+            e.contains("s.toml") && e.contains("estimator.eskf.gate_nis"),
+            "{e}"
+        );
+        let e = parse(&format!("{ok}[estimator.eskf]\nbogus = 1.0\n")).unwrap_err();
+        assert!(e.contains("s.toml") && e.contains("bogus"), "{e}");
+        // the default section is not written (effective scenarios and
+        // campaign hashes unchanged); a chosen one round-trips
+        let plain = toml::to_string(&parse("duration_s = 1.0\n").unwrap()).unwrap();
+        assert!(!plain.contains("estimator]"), "{plain}");
+        let eskf = parse(ok).unwrap();
+        let text = toml::to_string(&eskf).unwrap();
+        assert_eq!(parse(&text).unwrap().estimator, eskf.estimator);
     }
 
     #[test]

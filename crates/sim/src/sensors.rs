@@ -91,6 +91,72 @@ impl Default for ImuConfig {
     }
 }
 
+/// IMU presets with figures from the manufacturers' datasheets
+/// (see `docs/navigation-eskf.md` for the reading of each figure).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ImuPreset {
+    /// Hobby class, InvenSense MPU-6000/MPU-6050 Product Specification:
+    /// gyro 0.005 °/s/√Hz, accelerometer 400 µg/√Hz, zero-g offset ±50 mg
+    /// (σ 25 mg), sensitivity tolerance ±3 % (σ 1 %); the gyro's ±20 °/s
+    /// raw zero-rate offset is taken out by the usual calibration at rest,
+    /// leaving the few tenths of a degree per second of temperature drift
+    /// (σ 0.3 °/s). No bias random walk is specified: the class's typical
+    /// Allan figures (2e-5 rad/s/√s, 3e-4 m/s²/√s).
+    Mpu6000,
+    /// Better hobby class, TDK InvenSense ICM-20602 datasheet: gyro
+    /// 0.004 °/s/√Hz, accelerometer 100 µg/√Hz, zero-rate offset ±1 °/s
+    /// (σ 0.5 °/s), zero-g offset ±25 mg (σ 12.5 mg), sensitivity ±1 %
+    /// (σ 0.5 %).
+    Icm20602,
+    /// Industrial class, Analog Devices ADIS16470 data sheet: gyro angle
+    /// random walk 0.34 °/√h (the white noise used; the broadband rate noise
+    /// density is 0.008 °/s/√Hz),
+    /// 8 °/h in-run bias stability, velocity random walk 0.037 m/s/√h,
+    /// 13 µg in-run bias stability, factory calibrated (bias σ 0.05 °/s and
+    /// 2 mg, sensitivity σ 0.1 %); the random walks reach the in-run bias
+    /// stability in ~100 s.
+    Adis16470,
+}
+
+impl ImuConfig {
+    /// The IMU of a datasheet preset at `rate_hz`, ±10 g / ±500 °/s, 16 bit.
+    pub fn preset(preset: ImuPreset, rate_hz: f64) -> Self {
+        let base = ImuConfig {
+            rate_hz,
+            ..ImuConfig::default()
+        };
+        let deg = |v: f64| v.to_radians();
+        let mg = |v: f64| v * 1e-3 * G0_M_S2;
+        let (acc, gyro) = match preset {
+            ImuPreset::Mpu6000 => (
+                (mg(0.4), 3e-4, mg(25.0), 0.01),
+                (deg(0.005), 2e-5, deg(0.3), 0.01),
+            ),
+            ImuPreset::Icm20602 => (
+                (mg(0.1), 3e-4, mg(12.5), 0.005),
+                (deg(0.004), 2e-5, deg(0.5), 0.005),
+            ),
+            ImuPreset::Adis16470 => (
+                (0.037 / 60.0, mg(0.013) / 10.0, mg(2.0), 0.001),
+                (deg(0.34 / 60.0), deg(8.0 / 3600.0) / 10.0, deg(0.05), 0.001),
+            ),
+        };
+        let set = |c: InertialConfig, (n, rw, b, sf): (f64, f64, f64, f64)| InertialConfig {
+            noise_density: n,
+            bias_random_walk: rw,
+            initial_bias_sigma: b,
+            scale_factor_sigma: sf,
+            ..c
+        };
+        ImuConfig {
+            accel: set(base.accel, acc),
+            gyro: set(base.gyro, gyro),
+            ..base
+        }
+    }
+}
+
 /// Magnetometer configuration.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -132,6 +198,18 @@ pub struct GpsConfig {
     pub velocity_output: bool,
     /// Velocity noise σ per horizontal axis (m/s); twice that vertically.
     pub velocity_sigma_m_s: f64,
+    /// A GPS outage: no fix whose epoch falls in it (off by default).
+    pub outage: Option<GpsOutage>,
+}
+
+/// A window without GPS fixes (`[sensors.gps.outage]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GpsOutage {
+    /// Start of the outage (s).
+    pub start_s: f64,
+    /// Length of the outage (s).
+    pub duration_s: f64,
 }
 
 impl Default for GpsConfig {
@@ -145,6 +223,7 @@ impl Default for GpsConfig {
             dropout_probability: 0.02,
             velocity_output: true,
             velocity_sigma_m_s: 0.05,
+            outage: None,
         }
     }
 }
@@ -258,6 +337,10 @@ impl SensorConfig {
         nonneg("gps.velocity_sigma_m_s".into(), self.gps.velocity_sigma_m_s)?;
         if !(self.gps.latency_s.is_finite() && (0.0..=2.0).contains(&self.gps.latency_s)) {
             return Err(bad("gps.latency_s".into(), self.gps.latency_s, "0..=2"));
+        }
+        if let Some(o) = &self.gps.outage {
+            nonneg("gps.outage.start_s".into(), o.start_s)?;
+            nonneg("gps.outage.duration_s".into(), o.duration_s)?;
         }
         let p = self.gps.dropout_probability;
         if !(p.is_finite() && (0.0..=1.0).contains(&p)) {
@@ -419,7 +502,10 @@ impl SensorSuite {
             let sv = g.velocity_sigma_m_s;
             let mut nv = || -> f64 { StandardNormal.sample(&mut self.rng_gps_vel) };
             let vel_noise = Vector3::new(nv() * sv, nv() * sv, 2.0 * nv() * sv);
-            if !dropped {
+            let in_outage = g
+                .outage
+                .is_some_and(|o| epoch >= o.start_s && epoch < o.start_s + o.duration_s);
+            if !dropped && !in_outage {
                 self.pending_gps.push_back((
                     epoch,
                     truth.pos_ned_m + noise,

@@ -6,15 +6,27 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use helicon_sim::closed_loop::{Outcome, fly, prepare};
-use helicon_sim::navigation::{ReplayInit, replay_navigation, sensor_noise};
-use helicon_sim::scenario::Scenario;
+use helicon_sim::navigation::{
+    ReplayInit, ReplayNavigation, imu_noise, replay_navigation, sensor_noise,
+};
+use helicon_sim::scenario::{EstimatorKind, Scenario};
 use helicon_sim::sensor_log::{SensorLogWriter, read_sensor_log};
 use std::path::Path;
 
 #[test]
 fn fuse_replay_equals_closed_loop_navigation() {
+    replay_equals_flight(EstimatorKind::Thesis);
+}
+
+#[test]
+fn fuse_replay_equals_closed_loop_eskf() {
+    replay_equals_flight(EstimatorKind::Eskf);
+}
+
+fn replay_equals_flight(kind: EstimatorKind) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/demo.toml");
     let mut s = Scenario::from_file(&path).unwrap();
+    s.estimator.kind = kind;
     s.duration_s = 8.0; // through the 1 s velocity step and the 6 s heading step
     s.log.decimation = 1;
     s.log.sensors = true;
@@ -23,7 +35,7 @@ fn fuse_replay_equals_closed_loop_navigation() {
     assert_eq!(f.summary.outcome, Outcome::Completed);
     assert_eq!(f.sensors.len(), f.log.len());
 
-    let dir = std::env::temp_dir().join(format!("helicon-replay-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!("helicon-replay-{kind:?}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("sensors.csv");
     let mut w = SensorLogWriter::new(
@@ -46,7 +58,10 @@ fn fuse_replay_equals_closed_loop_navigation() {
     let mut worst = 0.0f64;
     replay_navigation(
         &log,
-        &s.navigation,
+        match kind {
+            EstimatorKind::Thesis => ReplayNavigation::Thesis(&s.navigation),
+            EstimatorKind::Eskf => ReplayNavigation::Eskf(&s.estimator.eskf, imu_noise(&s.sensors)),
+        },
         &noise,
         ReplayInit::Truth,
         |row, y, _| {
@@ -68,5 +83,5 @@ fn fuse_replay_equals_closed_loop_navigation() {
         worst <= 1e-12,
         "replay differs from the flight by {worst:e}"
     );
-    println!("replay vs flight: max |Δy| = {worst:e} over {k} samples");
+    println!("{kind:?} replay vs flight: max |Δy| = {worst:e} over {k} samples");
 }

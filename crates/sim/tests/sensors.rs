@@ -203,3 +203,58 @@ fn plot_writes_png_and_svg() {
     ));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn gps_outage_withholds_every_fix_in_its_window() {
+    let mut cfg = SensorConfig::default();
+    cfg.gps.dropout_probability = 0.0;
+    cfg.gps.outage = Some(helicon_sim::sensors::GpsOutage {
+        start_s: 2.1,
+        duration_s: 10.0,
+    });
+    let mut s = SensorSuite::new(cfg, 9.82).unwrap();
+    let mut epochs = Vec::new();
+    for k in 0..(20.0 * cfg.imu.rate_hz) as usize {
+        let t = k as f64 / cfg.imu.rate_hz;
+        if let Some(g) = s.sample(&at_rest(t)).gps {
+            epochs.push(g.epoch_s);
+        }
+    }
+    assert!(epochs.iter().all(|e| !(2.1..12.1).contains(e)));
+    // 5 Hz: the 11 fixes of 0–2 s before the outage, the rest after it
+    assert_eq!(epochs.iter().filter(|e| **e < 2.1).count(), 11);
+    assert!(epochs.iter().filter(|e| **e >= 12.1).count() >= 38);
+    let bad = "[gps.outage]\nstart_s = -1.0\nduration_s = 2.0\n";
+    let e = SensorConfig::from_toml_str(bad, "x.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("x.toml") && e.contains("gps.outage.start_s"),
+        "{e}"
+    );
+}
+
+#[test]
+fn imu_presets_are_valid_and_ordered_by_class() {
+    use helicon_sim::sensors::{ImuConfig, ImuPreset};
+    let [hobby, better, industrial] = [
+        ImuPreset::Mpu6000,
+        ImuPreset::Icm20602,
+        ImuPreset::Adis16470,
+    ]
+    .map(|p| ImuConfig::preset(p, 400.0));
+    for imu in [hobby, better, industrial] {
+        let cfg = SensorConfig {
+            imu,
+            ..SensorConfig::default()
+        };
+        cfg.validate("preset").unwrap();
+    }
+    // datasheet figures in SI: MPU-6000 400 µg/√Hz, ICM-20602 100 µg/√Hz
+    assert!((hobby.accel.noise_density - 400e-6 * G0_M_S2).abs() < 1e-12);
+    assert!((better.accel.noise_density - 100e-6 * G0_M_S2).abs() < 1e-12);
+    // the industrial IMU is better on every bias figure
+    assert!(industrial.gyro.initial_bias_sigma < better.gyro.initial_bias_sigma);
+    assert!(industrial.accel.initial_bias_sigma < better.accel.initial_bias_sigma);
+    assert!(industrial.gyro.bias_random_walk < hobby.gyro.bias_random_walk);
+}

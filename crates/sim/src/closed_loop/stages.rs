@@ -3,6 +3,9 @@
 //! checks ([`check_limits`]).
 
 use super::*;
+use crate::navigation::eskf_at;
+use crate::scenario::EstimatorKind;
+use helicon_core::{EskfEstimator, EskfFlightComputer};
 
 /// The plant: the nonlinear model integrated with RK4 between controller
 /// samples, inputs and wind held, inflow warm-started from the last solution.
@@ -168,6 +171,14 @@ pub(super) enum OnBoard {
         /// Navigation + predictor + LQI.
         computer: Box<ThesisFlightComputer>,
     },
+    /// Sensor models feeding the ESKF navigation + the Kalman predictor
+    /// (`[estimator] kind = "eskf"`).
+    Eskf {
+        /// The world's sensors.
+        suite: Box<SensorSuite>,
+        /// ESKF + predictor + LQI.
+        computer: Box<EskfFlightComputer>,
+    },
     /// Ideal navigation: the predictor is given the nine measured states.
     IdealNavigation(Box<FlightComputer<KalmanPredictor, Lqi>>),
     /// The thesis's "estimator off" switch: the law is fed the true state;
@@ -206,6 +217,15 @@ impl OnBoard {
             ))
         };
         Ok(match (c.estimator, c.fusion) {
+            (true, true) if scenario.estimator.kind == EstimatorKind::Eskf => {
+                let suite = Box::new(sensor_suite_at(&scenario.sensors, ts, g)?);
+                let navigation = eskf_at(&scenario.sensors, &scenario.estimator.eskf, ts, g, x0)?;
+                let estimator = EskfEstimator::new(navigation, set, &x0_est)?;
+                OnBoard::Eskf {
+                    suite,
+                    computer: Box::new(FlightComputer::new(estimator, law)),
+                }
+            }
             (true, true) => OnBoard::Thesis {
                 suite: Box::new(sensor_suite_at(&scenario.sensors, ts, g)?),
                 computer: Box::new(thesis_flight_computer(&OnBoardSetup {
@@ -252,6 +272,10 @@ impl OnBoard {
         };
         match self {
             OnBoard::Thesis { suite, computer } => {
+                let frame = sense(suite);
+                computer.step(&frame, reference)
+            }
+            OnBoard::Eskf { suite, computer } => {
                 let frame = sense(suite);
                 computer.step(&frame, reference)
             }
