@@ -44,6 +44,8 @@ fn telemetry(k: u64) -> Telemetry {
             position_sigma_m: Vector3::new(0.4, 0.4, 0.9),
             attitude_fix: true,
             gps_fused: k % 80 == 0,
+            imu_bias: None,
+            rejected_updates: 0,
         }),
     }
 }
