@@ -20,6 +20,10 @@
 //!   the Kalman predictor alone, the truth feed;
 //! - [`lqi`]: the [`StateFeedback`] extension point; the LQR with integral action;
 //! - [`gains`]: the fixed-size [`GainSet`] a design produces;
+//! - [`schedule`]: gain scheduling over the envelope ([`GainSchedule`],
+//!   [`ScheduledLqi`], [`ScheduledPredictor`]);
+//! - [`trajectory`]: jerk-limited references (S-curves, a mission of speed,
+//!   yaw rate and climb);
 //! - [`computer`]: [`FlightComputer`] and its [`Telemetry`].
 //!
 //! To add a sensor: a field in [`SensorFrame`] and its use in an estimator.
@@ -35,17 +39,20 @@ pub mod fusion;
 pub mod gains;
 pub mod lqi;
 pub mod navigation;
+pub mod schedule;
 pub mod sensor;
 pub mod state;
+pub mod trajectory;
 
 pub use computer::{FlightComputer, Telemetry};
 pub use error::CoreError;
 pub use estimator::{
-    Estimate, Estimator, KalmanPredictor, StateMeasurement, ThesisEstimator, Timestamped,
+    Estimate, Estimator, KalmanPredictor, Predictor, StateMeasurement, ThesisEstimator, Timestamped,
     TruthFeed, TruthMeasurement,
 };
 pub use gains::{GainSet, LqiOptions, ServoLimits};
 pub use lqi::{Command, Lqi, Reference, StateFeedback};
+pub use schedule::{GainSchedule, ScheduleAxes, ScheduledLqi, ScheduledPredictor};
 pub use navigation::{NavigationConfig, NavigationFilter, NavigationSolution};
 pub use sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
 
