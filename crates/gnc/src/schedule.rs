@@ -14,6 +14,7 @@
 //! forward_m_s = [0.0, 2.5, 5.0, 7.5, 10.0, 12.5, 15.0]
 //! lateral_m_s = [-5.0, 0.0, 5.0]
 //! down_m_s = [-3.0, 0.0, 3.0]
+//! accept_unphysical = false      # design at trims outside the model's validity (marked)
 //! [controller]                   # ControllerConfig (the thesis's final design by default)
 //! [check]
 //! subdivisions = 2               # frozen points inserted between design points per axis
@@ -23,10 +24,11 @@
 //! `version`, `kind` (`"gain-schedule"`), `name`, `preset`, `sample_time_s`,
 //! `axes` {`forward_m_s`, `lateral_m_s`, `down_m_s`}, and `points`, one per
 //! grid point in the order of [`ScheduleAxes::index`] (down fastest), each
-//! `{operating_point_m_s: [forward, lateral, down], gains: {…}}` where
+//! `{operating_point_m_s: [forward, lateral, down], unphysical?: "why",
+//! gains: {…}}` where
 //! `gains` is exactly a `gains.json` object (format 2, checked the same way).
 
-use crate::design::{ControllerConfig, DesignError, GAINS_FORMAT_VERSION, Gains, design};
+use crate::design::{ControllerConfig, DesignError, GAINS_FORMAT_VERSION, Gains, design_with_outputs};
 use helicon_core::frames::EulerTrig;
 use helicon_core::schedule::{GainSchedule, ScheduleAxes};
 use helicon_core::state::{NM, NU, NX_REDUCED, NY};
@@ -53,6 +55,11 @@ pub struct GridSection {
     pub lateral_m_s: Vec<f64>,
     /// Down velocity (m/s; negative climbs).
     pub down_m_s: Vec<f64>,
+    /// Design at trims the model flags as outside its validity (e.g. a rotor
+    /// in the vortex-ring state: steep descent, or sideways flight against
+    /// the tail-rotor thrust, at low speed) instead of refusing them; they
+    /// are marked in the schedule file and `envelope.csv`.
+    pub accept_unphysical: bool,
 }
 
 impl Default for GridSection {
@@ -62,6 +69,7 @@ impl Default for GridSection {
             forward_m_s: vec![0.0, 2.5, 5.0, 7.5, 10.0, 12.5, 15.0],
             lateral_m_s: vec![-5.0, 0.0, 5.0],
             down_m_s: vec![-3.0, 0.0, 3.0],
+            accept_unphysical: false,
         }
     }
 }
@@ -278,6 +286,9 @@ pub struct Schedule {
     pub axes: ScheduleAxes,
     /// One design per grid point, in the order of [`ScheduleAxes::index`].
     pub points: Vec<Gains>,
+    /// Per point: why its trim is outside the model's validity (`None`
+    /// when physical; only with `grid.accept_unphysical`).
+    pub unphysical: Vec<Option<String>>,
 }
 
 /// The trim of a velocity in heading axes at heading 0 (NED = heading axes).
@@ -285,7 +296,8 @@ fn trim_at(
     model: &Model,
     sigma: &Vector3<f64>,
     initial: Option<(ReducedState, helicon_core::state::Input)>,
-) -> Result<Trim, String> {
+    accept_unphysical: bool,
+) -> Result<(Trim, Option<String>), String> {
     let target = TrimTarget {
         velocity_ned_m_s: *sigma,
         yaw_rad: 0.0,
@@ -303,7 +315,18 @@ fn trim_at(
         }
         Err(e) => return Err(e.to_string()),
     };
-    t.require_physical(model).map_err(|e| e.to_string())
+    if accept_unphysical {
+        let v = t.validity(model);
+        let why = (!v.is_physical()).then(|| {
+            v.violations
+                .iter()
+                .map(|x| format!("{} = {:.4}", x.quantity, x.value))
+                .collect::<Vec<_>>()
+                .join("; ")
+        });
+        return Ok((t, why));
+    }
+    Ok((t.require_physical(model).map_err(|e| e.to_string())?, None))
 }
 
 /// Φ, Γ of the model linearised at a trim and discretised at `ts`.
@@ -331,6 +354,7 @@ pub fn design_schedule(
     let n = axes.len();
     let mut trims: Vec<Option<Trim>> = vec![None; n];
     let mut points: Vec<Option<Gains>> = vec![None; n];
+    let mut unphysical: Vec<Option<String>> = vec![None; n];
     let mut done = 0;
     for j in 0..axes.lateral_m_s.len() {
         for k in 0..axes.down_m_s.len() {
@@ -344,11 +368,15 @@ pub fn design_schedule(
                     .then(|| trims[axes.index(i - 1, j, k)].as_ref())
                     .flatten()
                     .map(|t| (t.x, t.u));
-                let t = trim_at(model, &sigma, warm).map_err(fail)?;
+                let (t, why) =
+                    trim_at(model, &sigma, warm, cfg.grid.accept_unphysical).map_err(fail)?;
                 let (phi, gamma) = discrete_model(model, &t, ts).map_err(fail)?;
-                let g = design(&phi, &gamma, &t.x, &t.u, ts, &cfg.controller)
+                // the outputs the on-board law integrates (NED velocity), linearised here
+                let hs = integrator_output_map(&t.x);
+                let g = design_with_outputs(&phi, &gamma, &hs, &t.x, &t.u, ts, &cfg.controller)
                     .map_err(|e| fail(e.to_string()))?;
                 let idx = axes.index(i, j, k);
+                unphysical[idx] = why;
                 trims[idx] = Some(t);
                 points[idx] = Some(g);
                 done += 1;
@@ -362,6 +390,7 @@ pub fn design_schedule(
         preset: cfg.preset.clone(),
         axes,
         points,
+        unphysical,
     };
     s.gain_schedule("(design)")?;
     Ok(s)
@@ -495,6 +524,7 @@ pub fn frozen_point_check(
     model: &Model,
     schedule: &GainSchedule,
     subdivisions: u32,
+    accept_unphysical: bool,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<FrozenCheck, ScheduleError> {
     let axes = schedule.axes();
@@ -513,7 +543,13 @@ pub fn frozen_point_check(
                     message,
                 };
                 let g = schedule.at(&sigma);
-                let t = trim_at(model, &sigma, Some((g.x_trim, g.u_trim))).map_err(fail)?;
+                let (t, _) = trim_at(
+                    model,
+                    &sigma,
+                    Some((g.x_trim, g.u_trim)),
+                    accept_unphysical,
+                )
+                .map_err(fail)?;
                 let (phi, gamma) = discrete_model(model, &t, ts).map_err(fail)?;
                 let a = frozen_closed_loop(&phi, &gamma, &t.x, &g);
                 let rho = helicon_lti::analysis::spectral_radius(&a)
@@ -556,6 +592,8 @@ struct ScheduleFile {
 #[serde(deny_unknown_fields)]
 struct PointFile {
     operating_point_m_s: [f64; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    unphysical: Option<String>,
     gains: serde_json::Value,
 }
 
@@ -600,6 +638,7 @@ impl Schedule {
                 serde_json::from_str(&g.to_json()?).map_err(|e| bad(e.to_string()))?;
             points.push(PointFile {
                 operating_point_m_s: self.operating_point(i),
+                unphysical: self.unphysical.get(i).cloned().flatten(),
                 gains: v,
             });
         }
@@ -613,6 +652,7 @@ impl Schedule {
                 forward_m_s: self.axes.forward_m_s.clone(),
                 lateral_m_s: self.axes.lateral_m_s.clone(),
                 down_m_s: self.axes.down_m_s.clone(),
+                accept_unphysical: self.unphysical.iter().any(Option::is_some),
             },
             points,
         };
@@ -680,6 +720,7 @@ impl Schedule {
             preset: f.preset,
             axes,
             points: Vec::with_capacity(f.points.len()),
+            unphysical: Vec::with_capacity(f.points.len()),
         };
         for (i, p) in f.points.into_iter().enumerate() {
             let expected = s.operating_point(i);
@@ -698,6 +739,7 @@ impl Schedule {
                 )));
             }
             s.points.push(g);
+            s.unphysical.push(p.unphysical);
         }
         s.gain_schedule(file)?;
         Ok(s)

@@ -23,6 +23,7 @@ fn small_config(forward: Vec<f64>, lateral: Vec<f64>) -> EnvelopeConfig {
         forward_m_s: forward,
         lateral_m_s: lateral,
         down_m_s: vec![0.0],
+        accept_unphysical: false,
     };
     cfg
 }
@@ -48,32 +49,41 @@ fn same_spectrum(expected: &[Complex<f64>], actual: &[Complex<f64>], tol: f64) {
     }
 }
 
-/// At hover the on-board integrator's linearised input is the design's Hs,
-/// so the frozen closed loop at a design point separates: its eigenvalues
-/// are the design's closed-loop poles and the estimator poles (separation
-/// principle). Tolerance 1e-7: both sides come from eigen-solvers of
-/// differently conditioned 31- and 58-state matrices.
+/// At a design point the frozen closed loop separates: its eigenvalues are
+/// the design's closed-loop poles and the estimator poles (separation
+/// principle), at hover (where the integrated outputs are Hs) and at
+/// 10 m/s (where they include the flight-path terms the design was given).
+/// Tolerance 1e-7: both sides come from eigen-solvers of differently
+/// conditioned 31- and 58-state matrices.
 #[test]
-fn frozen_loop_at_a_hover_design_point_is_the_design() {
+fn frozen_loop_at_a_design_point_is_the_design() {
     let m = model();
-    let s = design_schedule(&m, &small_config(vec![0.0, 5.0], vec![0.0]), &mut |_, _| {})
+    let s = design_schedule(&m, &small_config(vec![0.0, 10.0], vec![0.0]), &mut |_, _| {})
         .unwrap();
-    let g = &s.points[0];
-    let t = trim(&m, &TrimTarget::hover(), &TrimOptions::default()).unwrap();
-    let c = integrator_output_map(&t.x);
-    assert!((c - output_matrix()).amax() < 1e-9, "hover C is Hs");
-    let ts = g.set.sample_time_s;
-    let lm = linearize(&m, &t.x, &t.u, &Vector3::zeros(), InflowMode::Converged).unwrap();
-    let (phi, gamma) = lm.discretize(ts).unwrap();
-    let a = frozen_closed_loop(&phi, &gamma, &t.x, &g.set);
-    let mut expected: Vec<Complex<f64>> = g
-        .closed_loop_poles
-        .iter()
-        .chain(&g.estimator_poles)
-        .map(|z| Complex::new(z[0], z[1]))
-        .collect();
-    expected.sort_by(|a, b| a.re.total_cmp(&b.re));
-    same_spectrum(&expected, &eig(&a), 1e-7);
+    for (i, speed) in [(0usize, 0.0), (1, 10.0)] {
+        let g = &s.points[i];
+        let target = TrimTarget {
+            velocity_ned_m_s: Vector3::new(speed, 0.0, 0.0),
+            ..TrimTarget::hover()
+        };
+        let t = trim(&m, &target, &TrimOptions::default()).unwrap();
+        if speed == 0.0 {
+            let c = integrator_output_map(&t.x);
+            assert!((c - output_matrix()).amax() < 1e-9, "hover C is Hs");
+        }
+        let ts = g.set.sample_time_s;
+        let lm = linearize(&m, &t.x, &t.u, &Vector3::zeros(), InflowMode::Converged).unwrap();
+        let (phi, gamma) = lm.discretize(ts).unwrap();
+        let a = frozen_closed_loop(&phi, &gamma, &t.x, &g.set);
+        let expected: Vec<Complex<f64>> = g
+            .closed_loop_poles
+            .iter()
+            .chain(&g.estimator_poles)
+            .map(|z| Complex::new(z[0], z[1]))
+            .collect();
+        same_spectrum(&expected, &eig(&a), 1e-7);
+        assert!(g.spectral_radius() < 1.0 / g.set.alpha, "pincer");
+    }
 }
 
 /// At speed the on-board integrator sees the attitude through R_eb v: the
@@ -153,7 +163,7 @@ fn frozen_points_between_design_points_are_stable() {
     )
     .unwrap();
     let gs = s.gain_schedule("test").unwrap();
-    let check = frozen_point_check(&m, &gs, 2, &mut |_, _| {}).unwrap();
+    let check = frozen_point_check(&m, &gs, 2, false, &mut |_, _| {}).unwrap();
     assert_eq!(check.points.len(), 10);
     assert_eq!(check.points.iter().filter(|p| p.design_point).count(), 4);
     assert!(check.stable(), "worst {:?}", check.worst);
