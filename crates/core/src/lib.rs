@@ -52,7 +52,7 @@ pub use estimator::{
 };
 pub use gains::{GainSet, LqiOptions, ServoLimits};
 pub use lqi::{Command, Lqi, Reference, StateFeedback};
-pub use schedule::{GainSchedule, ScheduleAxes, ScheduledLqi, ScheduledPredictor};
+pub use schedule::{AnyPredictor, GainSchedule, Law, ScheduleAxes, ScheduledLqi, ScheduledPredictor};
 pub use navigation::{NavigationConfig, NavigationFilter, NavigationSolution};
 pub use sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
 

@@ -27,7 +27,7 @@
 
 use crate::error::CoreError;
 use crate::estimator::{Estimate, Estimator, KalmanPredictor, Predictor, StateMeasurement};
-use crate::frames::EulerTrig;
+use crate::frames::{EulerTrig, wrap_pi};
 use crate::gains::{GainSet, ServoLimits};
 use crate::lqi::{Command, Lqi, Reference, StateFeedback};
 use crate::state::{Input, MeasuredStates, ReducedState};
@@ -278,10 +278,13 @@ pub fn estimated_operating_point(x: &ReducedState) -> Vector3<f64> {
     heading_axes(x[2], &v_ned)
 }
 
-/// The commanded operating point: the reference velocity in the heading
-/// axes of the estimated heading (the law's scheduling variable).
-pub fn commanded_operating_point(estimate: &ReducedState, reference: &Reference) -> Vector3<f64> {
-    heading_axes(estimate[2], &reference.velocity_ned_m_s)
+/// The commanded operating point: the reference velocity in the axes of
+/// the reference heading (the law's scheduling variable). It depends on the
+/// reference only: a heading error does not move the operating point (with
+/// the estimated heading, a yaw error δψ at speed V would move the lateral
+/// operating point by V·δψ and feed back through the trims).
+pub fn commanded_operating_point(reference: &Reference) -> Vector3<f64> {
+    heading_axes(reference.yaw_rad, &reference.velocity_ned_m_s)
 }
 
 /// The LQI law with its gains and trim interpolated on the commanded
@@ -322,12 +325,17 @@ impl ScheduledLqi {
 
 impl StateFeedback for ScheduledLqi {
     fn command(&mut self, estimate: &ReducedState, reference: &Reference) -> Command {
-        let sigma = commanded_operating_point(estimate, reference);
+        let sigma = commanded_operating_point(reference);
         // non-finite: keep the last operating point (the law reports the error)
         if sigma.iter().all(|v| v.is_finite()) {
             self.sigma = sigma;
         }
         self.schedule.interpolate_law(&self.sigma, &mut self.law);
+        // The trim is the same at every heading: fly it at the commanded one
+        // (the reference heading nearest the estimate, so x̂ − x_trim holds
+        // the wrapped heading error), else the proportional path would pull
+        // the heading back to the design's ψ = 0 through a turn.
+        self.law.x_trim[2] = estimate[2] - wrap_pi(estimate[2] - reference.yaw_rad);
         self.law.command(estimate, reference)
     }
 
@@ -381,6 +389,76 @@ impl Predictor for ScheduledPredictor {
 }
 
 impl Estimator for ScheduledPredictor {
+    type Measurement = StateMeasurement;
+
+    fn update(&mut self, m: &StateMeasurement) -> Result<Estimate, CoreError> {
+        Ok(Estimate {
+            state: self.absorb(&m.measured)?,
+            measured: m.measured,
+            navigation: None,
+        })
+    }
+
+    fn predict(&mut self, applied: &Input) -> Result<(), CoreError> {
+        Predictor::advance(self, applied)
+    }
+}
+
+/// A law that is either one fixed design or a schedule: what a flight
+/// computer built from either a `gains.json` or a gain-schedule file flies.
+#[derive(Debug, Clone)]
+pub enum Law {
+    /// One design ([`Lqi`]).
+    Fixed(Lqi),
+    /// A gain schedule ([`ScheduledLqi`]).
+    Scheduled(Box<ScheduledLqi>),
+}
+
+impl StateFeedback for Law {
+    #[inline]
+    fn command(&mut self, estimate: &ReducedState, reference: &Reference) -> Command {
+        match self {
+            Law::Fixed(l) => l.command(estimate, reference),
+            Law::Scheduled(l) => l.command(estimate, reference),
+        }
+    }
+
+    fn reset(&mut self) {
+        match self {
+            Law::Fixed(l) => l.reset(),
+            Law::Scheduled(l) => l.reset(),
+        }
+    }
+}
+
+/// A predictor that is either one fixed design or a schedule.
+#[derive(Debug, Clone)]
+pub enum AnyPredictor {
+    /// One design ([`KalmanPredictor`]).
+    Fixed(KalmanPredictor),
+    /// A gain schedule ([`ScheduledPredictor`]).
+    Scheduled(Box<ScheduledPredictor>),
+}
+
+impl Predictor for AnyPredictor {
+    #[inline]
+    fn absorb(&mut self, measured: &MeasuredStates) -> Result<ReducedState, CoreError> {
+        match self {
+            AnyPredictor::Fixed(p) => p.absorb(measured),
+            AnyPredictor::Scheduled(p) => p.absorb(measured),
+        }
+    }
+
+    #[inline]
+    fn advance(&mut self, applied: &Input) -> Result<(), CoreError> {
+        match self {
+            AnyPredictor::Fixed(p) => p.advance(applied),
+            AnyPredictor::Scheduled(p) => Predictor::advance(p.as_mut(), applied),
+        }
+    }
+}
+
+impl Estimator for AnyPredictor {
     type Measurement = StateMeasurement;
 
     fn update(&mut self, m: &StateMeasurement) -> Result<Estimate, CoreError> {

@@ -3,6 +3,8 @@
 //! checks ([`check_limits`]).
 
 use super::*;
+use helicon_core::schedule::{AnyPredictor, Law, ScheduledLqi, ScheduledPredictor};
+use std::sync::Arc;
 
 /// The plant: the nonlinear model integrated with RK4 between controller
 /// samples, inputs and wind held, inflow warm-started from the last solution.
@@ -108,16 +110,16 @@ pub(super) enum OnBoard {
     Thesis {
         /// The world's sensors.
         suite: Box<SensorSuite>,
-        /// Navigation + predictor + LQI.
-        computer: Box<ThesisFlightComputer>,
+        /// Navigation + predictor + LQI (fixed or scheduled).
+        computer: Box<FlightComputer<ThesisEstimator<AnyPredictor>, Law>>,
     },
     /// Ideal navigation: the predictor is given the nine measured states.
-    IdealNavigation(Box<FlightComputer<KalmanPredictor, Lqi>>),
+    IdealNavigation(Box<FlightComputer<AnyPredictor, Law>>),
     /// The thesis's "estimator off" switch: the law is fed the true state;
     /// with `fusion = true` the navigation still runs and is logged.
     Truth {
         /// Truth feed + LQI.
-        computer: Box<FlightComputer<TruthFeed, Lqi>>,
+        computer: Box<FlightComputer<TruthFeed, Law>>,
         /// Sensors and navigation run alongside, for the log.
         navigation: Option<(Box<SensorSuite>, Box<NavigationFilter>)>,
     },
@@ -137,12 +139,29 @@ impl OnBoard {
         let set = &prepared.gains.set;
         let ts = set.sample_time_s;
         let g = p.environment.g_m_s2;
-        let law = Lqi::new(set, limits, scenario.controller.feedback)?;
+        let feedback = scenario.controller.feedback;
+        let law = match &prepared.schedule {
+            Some(s) => Law::Scheduled(Box::new(ScheduledLqi::new(
+                Arc::clone(s),
+                limits,
+                feedback,
+            )?)),
+            None => Law::Fixed(Lqi::new(set, limits, feedback)?),
+        };
         // The estimator starts from the measured states and the trim for the rest.
         let mut x0_est: ReducedState = prepared.trim.x;
         for i in 0..9 {
             x0_est[i] = x0[i + REDUCED_OFFSET];
         }
+        let predictor = || -> Result<AnyPredictor, ClosedLoopError> {
+            Ok(match &prepared.schedule {
+                Some(s) => AnyPredictor::Scheduled(Box::new(ScheduledPredictor::new(
+                    Arc::clone(s),
+                    &x0_est,
+                )?)),
+                None => AnyPredictor::Fixed(KalmanPredictor::new(set, &x0_est)?),
+            })
+        };
         let c = &scenario.controller;
         let sensed = || -> Result<_, ClosedLoopError> {
             Ok((
@@ -161,17 +180,16 @@ impl OnBoard {
                 let (suite, navigation) = sensed()?;
                 let estimator = ThesisEstimator {
                     navigation: *navigation,
-                    predictor: KalmanPredictor::new(set, &x0_est)?,
+                    predictor: predictor()?,
                 };
                 OnBoard::Thesis {
                     suite,
                     computer: Box::new(FlightComputer::new(estimator, law)),
                 }
             }
-            (true, false) => OnBoard::IdealNavigation(Box::new(FlightComputer::new(
-                KalmanPredictor::new(set, &x0_est)?,
-                law,
-            ))),
+            (true, false) => {
+                OnBoard::IdealNavigation(Box::new(FlightComputer::new(predictor()?, law)))
+            }
             (false, fusion) => OnBoard::Truth {
                 computer: Box::new(FlightComputer::new(TruthFeed, law)),
                 navigation: if fusion { Some(sensed()?) } else { None },
