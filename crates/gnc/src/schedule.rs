@@ -336,6 +336,22 @@ fn discrete_model(model: &Model, t: &Trim, ts: f64) -> Result<(DMatrix<f64>, DMa
     lm.discretize(ts).map_err(|e| format!("discretisation: {e}"))
 }
 
+/// The model trimmed at the operating point `sigma` (heading axes, still
+/// air, heading 0), linearised and discretised at `ts`: (Φ, Γ, trim).
+pub fn discrete_model_at(
+    model: &Model,
+    sigma: &Vector3<f64>,
+    ts: f64,
+) -> Result<(DMatrix<f64>, DMatrix<f64>, Trim), ScheduleError> {
+    let fail = |message: String| ScheduleError::Point {
+        point: [sigma.x, sigma.y, sigma.z],
+        message,
+    };
+    let (t, _) = trim_at(model, sigma, None, true).map_err(fail)?;
+    let (phi, gamma) = discrete_model(model, &t, ts).map_err(fail)?;
+    Ok((phi, gamma, t))
+}
+
 /// Design the schedule: at every grid point trim (warm-started from the
 /// previous forward speed), linearise, discretise at the helicopter's
 /// `control.sample_time_s` and design. `progress(done, total)` is called

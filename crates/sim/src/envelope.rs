@@ -237,3 +237,46 @@ fn design_envelope(path: &Path, text: &str) -> Result<Arc<(Schedule, GainSchedul
     let gs = s.gain_schedule(&file)?;
     Ok(Arc::new((s, gs)))
 }
+
+/// Tracking of one time segment of a flight.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SegmentRms {
+    /// Segment start (s).
+    pub t0_s: f64,
+    /// Segment end (s).
+    pub t1_s: f64,
+    /// Kept log rows in the segment.
+    pub rows: usize,
+    /// RMS of the horizontal velocity error |r_h − v_h| (m/s).
+    pub horizontal_m_s: f64,
+    /// RMS of the down-velocity error (m/s).
+    pub vertical_m_s: f64,
+    /// RMS of the heading error, wrapped (rad).
+    pub heading_rad: f64,
+}
+
+/// The tracking RMS of the log rows with `t0_s <= t < t1_s` (reference −
+/// true output); `None` when no row falls inside (e.g. the flight stopped
+/// before the segment).
+pub fn segment_rms(log: &[crate::closed_loop::LogRow], t0_s: f64, t1_s: f64) -> Option<SegmentRms> {
+    let mut acc = [0.0f64; 3];
+    let mut n = 0usize;
+    for r in log.iter().filter(|r| r.t_s >= t0_s && r.t_s < t1_s) {
+        let (dn, de) = (r.reference[0] - r.output[0], r.reference[1] - r.output[1]);
+        acc[0] += dn * dn + de * de;
+        acc[1] += (r.reference[2] - r.output[2]).powi(2);
+        acc[2] += helicon_core::frames::wrap_pi(r.reference[3] - r.output[3]).powi(2);
+        n += 1;
+    }
+    (n > 0).then(|| {
+        let m = |s: f64| (s / n as f64).sqrt();
+        SegmentRms {
+            t0_s,
+            t1_s,
+            rows: n,
+            horizontal_m_s: m(acc[0]),
+            vertical_m_s: m(acc[1]),
+            heading_rad: m(acc[2]),
+        }
+    })
+}
