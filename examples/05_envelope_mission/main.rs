@@ -37,7 +37,11 @@ fn fly_seed(base: &Scenario, seed: u64, schedule: bool) -> Result<Flight> {
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
-    if v.is_empty() { f64::NAN } else { v[v.len() / 2] }
+    if v.is_empty() {
+        f64::NAN
+    } else {
+        v[v.len() / 2]
+    }
 }
 
 fn table(name: &str, flights: &[Flight]) {
@@ -101,9 +105,9 @@ fn frozen_comparison(base: &Scenario) -> Result<()> {
         let sigma = nalgebra::Vector3::new(v, 0.0, 0.0);
         let (phi, gamma, t) = discrete_model_at(&p.model, &sigma, ts)?;
         let radius = |g: &helicon_core::GainSet| -> Result<f64> {
-            Ok(helicon_lti::analysis::spectral_radius(&frozen_closed_loop(
-                &phi, &gamma, &t.x, g,
-            ))?)
+            Ok(helicon_lti::analysis::spectral_radius(
+                &frozen_closed_loop(&phi, &gamma, &t.x, g),
+            )?)
         };
         println!(
             "| {v} | {:.6} | {:.6} |",

@@ -11,7 +11,9 @@
 
 use anyhow::{Context, Result, bail};
 use clap::Args;
-use helicon_gnc::schedule::{EnvelopeConfig, FrozenCheck, Schedule, design_schedule, frozen_point_check};
+use helicon_gnc::schedule::{
+    EnvelopeConfig, FrozenCheck, Schedule, design_schedule, frozen_point_check,
+};
 use helicon_sim::plot::{Figure, Panel, Series};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -58,8 +60,14 @@ pub fn run(args: &DesignArgs) -> Result<()> {
         None
     } else {
         let gs = schedule.gain_schedule(&file.display().to_string())?;
-        let c = frozen_point_check(&model, &gs, cfg.check.subdivisions, cfg.grid.accept_unphysical, &mut |_, _| {})
-            .context("frozen-point check")?;
+        let c = frozen_point_check(
+            &model,
+            &gs,
+            cfg.check.subdivisions,
+            cfg.grid.accept_unphysical,
+            &mut |_, _| {},
+        )
+        .context("frozen-point check")?;
         write_frozen_csv(&args.out.join("frozen_check.csv"), &c)?;
         Some(c)
     };
@@ -181,7 +189,10 @@ fn envelope_figure(schedule: &Schedule, check: Option<&FrozenCheck>, path: &Path
         "|z| max, frozen loop",
     ];
     let mut fig = Figure::new(
-        &format!("Envelope map `{}`: trims and stability versus forward speed", schedule.name),
+        &format!(
+            "Envelope map `{}`: trims and stability versus forward speed",
+            schedule.name
+        ),
         "forward speed (m/s)",
     );
     for (c, label) in labels.iter().enumerate() {
@@ -198,7 +209,7 @@ fn envelope_figure(schedule: &Schedule, check: Option<&FrozenCheck>, path: &Path
         fig = fig.panel(p);
     }
     fig.panel_height_px = 170;
-    fig.write(path).with_context(|| format!("{}: cannot write the envelope map", path.display()))?;
+    fig.write(path)
+        .with_context(|| format!("{}: cannot write the envelope map", path.display()))?;
     Ok(())
 }
-

@@ -47,13 +47,15 @@ pub mod trajectory;
 pub use computer::{FlightComputer, Telemetry};
 pub use error::CoreError;
 pub use estimator::{
-    Estimate, Estimator, KalmanPredictor, Predictor, StateMeasurement, ThesisEstimator, Timestamped,
-    TruthFeed, TruthMeasurement,
+    Estimate, Estimator, KalmanPredictor, Predictor, StateMeasurement, ThesisEstimator,
+    Timestamped, TruthFeed, TruthMeasurement,
 };
 pub use gains::{GainSet, LqiOptions, ServoLimits};
 pub use lqi::{Command, Lqi, Reference, StateFeedback};
-pub use schedule::{AnyPredictor, GainSchedule, Law, ScheduleAxes, ScheduledLqi, ScheduledPredictor};
 pub use navigation::{NavigationConfig, NavigationFilter, NavigationSolution};
+pub use schedule::{
+    AnyPredictor, GainSchedule, Law, ScheduleAxes, ScheduledLqi, ScheduledPredictor,
+};
 pub use sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
 
 /// The thesis's on-board chain: navigation + Kalman predictor + LQI.

@@ -164,7 +164,11 @@ fn blend<const R: usize, const C: usize>(
 ) {
     out.fill(0.0);
     for &(i, w) in corners {
-        for (o, x) in out.as_mut_slice().iter_mut().zip(pick(&points[i]).as_slice()) {
+        for (o, x) in out
+            .as_mut_slice()
+            .iter_mut()
+            .zip(pick(&points[i]).as_slice())
+        {
             *o += w * x;
         }
     }
@@ -268,7 +272,11 @@ impl GainSchedule {
 /// The velocity `v_ned` in heading axes [forward, right, down] for heading ψ.
 pub fn heading_axes(psi_rad: f64, v_ned: &Vector3<f64>) -> Vector3<f64> {
     let (s, c) = psi_rad.sin_cos();
-    Vector3::new(c * v_ned.x + s * v_ned.y, -s * v_ned.x + c * v_ned.y, v_ned.z)
+    Vector3::new(
+        c * v_ned.x + s * v_ned.y,
+        -s * v_ned.x + c * v_ned.y,
+        v_ned.z,
+    )
 }
 
 /// The estimated ground velocity of an absolute reduced state, in heading

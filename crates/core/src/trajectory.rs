@@ -112,7 +112,9 @@ impl SCurve {
         let total = self.duration_s();
         let d = self.delta.abs();
         let phase1 = |t: f64| j * t * t * t / 6.0;
-        let phase2 = |t: f64| phase1(t1) + 0.5 * j * t1 * t1 * (t - t1) + 0.5 * self.peak_rate * (t - t1).powi(2);
+        let phase2 = |t: f64| {
+            phase1(t1) + 0.5 * j * t1 * t1 * (t - t1) + 0.5 * self.peak_rate * (t - t1).powi(2)
+        };
         // phase 3: value = d − J (T − t)²/2
         let phase3 = |t: f64| {
             let s = t1 + t2;

@@ -73,7 +73,8 @@ fn limits() -> ServoLimits {
 fn interpolation_is_the_hand_computed_bilinear_blend() {
     let s = schedule();
     let g = s.at(&Vector3::new(7.5, 0.0, 0.0));
-    let corners = [(5.0, -5.0), (5.0, 5.0), (10.0, -5.0), (10.0, 5.0)].map(|(f, l)| gain_set_at(f, l));
+    let corners =
+        [(5.0, -5.0), (5.0, 5.0), (10.0, -5.0), (10.0, 5.0)].map(|(f, l)| gain_set_at(f, l));
     let mean_ls = corners.iter().fold(SMatrix::zeros(), |a, c| a + c.ls) / 4.0;
     assert!((g.ls - mean_ls).amax() < 1e-15);
     let mean_phi = corners.iter().fold(SMatrix::zeros(), |a, c| a + c.phi) / 4.0;
@@ -181,10 +182,19 @@ fn scheduled_law_and_predictor_do_not_allocate() {
 /// difference quotient averages across the kink).
 #[test]
 fn s_curves_match_their_closed_forms_and_limits() {
-    for (delta, a, j) in [(15.0, 1.0, 0.5), (-2.0, 0.5, 0.5), (0.1, 0.05, 0.05), (0.3, 1.0, 2.0)] {
+    for (delta, a, j) in [
+        (15.0, 1.0, 0.5),
+        (-2.0, 0.5, 0.5),
+        (0.1, 0.05, 0.05),
+        (0.3, 1.0, 2.0),
+    ] {
         let c = SCurve::new(delta, a, j);
         let d = f64::abs(delta);
-        let expected = if d * j >= a * a { d / a + a / j } else { 2.0 * (d / j).sqrt() };
+        let expected = if d * j >= a * a {
+            d / a + a / j
+        } else {
+            2.0 * (d / j).sqrt()
+        };
         assert!((c.duration_s() - expected).abs() < 1e-12 * expected);
         assert_eq!(c.value(c.duration_s() + 1.0), delta);
         assert_eq!(c.value(-1.0), 0.0);
@@ -200,7 +210,10 @@ fn s_curves_match_their_closed_forms_and_limits() {
             assert!(da.abs() <= j * (1.0 + 1e-3), "jerk {da} at {t}");
             // the integral's derivative is the value
             let di = (c.integral(t + h) - c.integral(t - h)) / (2.0 * h);
-            assert!((di - c.value(t)).abs() < 1e-6 * d.max(1.0), "integral at {t}");
+            assert!(
+                (di - c.value(t)).abs() < 1e-6 * d.max(1.0),
+                "integral at {t}"
+            );
         }
         // ∫ over a finished curve: Δ·(t − T/2) by symmetry
         let t = c.duration_s() + 3.0;
@@ -215,12 +228,23 @@ fn s_curves_match_their_closed_forms_and_limits() {
 fn mission_turn_angle_and_velocity_direction() {
     let m = Mission {
         speed_m_s: Channel::new("speed", 15.0, &[], 1.0, 0.5).unwrap(),
-        yaw_rate_rad_s: Channel::new("yaw_rate", 0.0, &[(10.0, 0.1), (10.0 + 10.0 * std::f64::consts::PI, 0.0)], 0.05, 0.05).unwrap(),
+        yaw_rate_rad_s: Channel::new(
+            "yaw_rate",
+            0.0,
+            &[(10.0, 0.1), (10.0 + 10.0 * std::f64::consts::PI, 0.0)],
+            0.05,
+            0.05,
+        )
+        .unwrap(),
         down_m_s: Channel::new("down", 0.0, &[], 0.5, 0.5).unwrap(),
         yaw0_rad: 0.0,
     };
     let r = m.at(60.0);
-    assert!((r.yaw_rad - std::f64::consts::PI).abs() < 1e-9, "{}", r.yaw_rad);
+    assert!(
+        (r.yaw_rad - std::f64::consts::PI).abs() < 1e-9,
+        "{}",
+        r.yaw_rad
+    );
     assert!((r.velocity_ned_m_s - Vector3::new(-15.0, 0.0, 0.0)).norm() < 1e-7);
     // centripetal acceleration V r in the steady part of the turn
     let a = m.acceleration_ned_m_s2(25.0);
@@ -231,7 +255,10 @@ fn mission_turn_angle_and_velocity_direction() {
 #[test]
 fn channel_rules() {
     let e = Channel::new("speed", 0.0, &[(0.0, 15.0), (5.0, 0.0)], 1.0, 0.5).unwrap_err();
-    assert!(e.to_string().contains("speed") && e.to_string().contains("previous"), "{e}");
+    assert!(
+        e.to_string().contains("speed") && e.to_string().contains("previous"),
+        "{e}"
+    );
     assert!(Channel::new("speed", 0.0, &[(0.0, f64::NAN)], 1.0, 0.5).is_err());
     assert!(Channel::new("speed", 0.0, &[], 0.0, 0.5).is_err());
     let many: Vec<(f64, f64)> = (0..33).map(|i| (100.0 * f64::from(i), 1.0)).collect();

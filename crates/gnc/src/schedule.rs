@@ -28,7 +28,9 @@
 //! gains: {…}}` where
 //! `gains` is exactly a `gains.json` object (format 2, checked the same way).
 
-use crate::design::{ControllerConfig, DesignError, GAINS_FORMAT_VERSION, Gains, design_with_outputs};
+use crate::design::{
+    ControllerConfig, DesignError, GAINS_FORMAT_VERSION, Gains, design_with_outputs,
+};
 use helicon_core::frames::EulerTrig;
 use helicon_core::schedule::{GainSchedule, ScheduleAxes};
 use helicon_core::state::{NM, NU, NX_REDUCED, NY};
@@ -227,12 +229,10 @@ impl EnvelopeConfig {
             ),
             rule: e.to_string(),
         })?;
-        self.controller
-            .validate()
-            .map_err(|e| ConfigError::Parse {
-                file: file.to_string(),
-                message: format!("[controller]: {e}"),
-            })?;
+        self.controller.validate().map_err(|e| ConfigError::Parse {
+            file: file.to_string(),
+            message: format!("[controller]: {e}"),
+        })?;
         if self.check.subdivisions > MAX_CHECK_SUBDIVISIONS {
             return Err(ConfigError::invalid(
                 file,
@@ -330,10 +330,15 @@ fn trim_at(
 }
 
 /// Φ, Γ of the model linearised at a trim and discretised at `ts`.
-fn discrete_model(model: &Model, t: &Trim, ts: f64) -> Result<(DMatrix<f64>, DMatrix<f64>), String> {
+fn discrete_model(
+    model: &Model,
+    t: &Trim,
+    ts: f64,
+) -> Result<(DMatrix<f64>, DMatrix<f64>), String> {
     let lm = linearize(model, &t.x, &t.u, &Vector3::zeros(), InflowMode::Converged)
         .map_err(|e| format!("linearisation: {e}"))?;
-    lm.discretize(ts).map_err(|e| format!("discretisation: {e}"))
+    lm.discretize(ts)
+        .map_err(|e| format!("discretisation: {e}"))
 }
 
 /// The model trimmed at the operating point `sigma` (heading axes, still
@@ -472,8 +477,7 @@ pub fn frozen_closed_loop(
     // blocks in the order [x, xi, x̂]
     a.view_mut((0, 0), (n, n)).copy_from(phi);
     a.view_mut((0, n), (n, NY)).copy_from(&(-(gamma * &li)));
-    a.view_mut((0, n + NY), (n, n))
-        .copy_from(&(-(gamma * &ls)));
+    a.view_mut((0, n + NY), (n, n)).copy_from(&(-(gamma * &ls)));
     a.view_mut((n, 0), (NY, n)).copy_from(&(-&c));
     a.view_mut((n, n), (NY, NY)).fill_with_identity();
     a.view_mut((n + NY, 0), (n, n)).copy_from(&khm);
@@ -559,13 +563,8 @@ pub fn frozen_point_check(
                     message,
                 };
                 let g = schedule.at(&sigma);
-                let (t, _) = trim_at(
-                    model,
-                    &sigma,
-                    Some((g.x_trim, g.u_trim)),
-                    accept_unphysical,
-                )
-                .map_err(fail)?;
+                let (t, _) = trim_at(model, &sigma, Some((g.x_trim, g.u_trim)), accept_unphysical)
+                    .map_err(fail)?;
                 let (phi, gamma) = discrete_model(model, &t, ts).map_err(fail)?;
                 let a = frozen_closed_loop(&phi, &gamma, &t.x, &g);
                 let rho = helicon_lti::analysis::spectral_radius(&a)
@@ -630,7 +629,9 @@ impl Schedule {
 
     /// The sample time of the designs (s).
     pub fn sample_time_s(&self) -> f64 {
-        self.points.first().map_or(f64::NAN, |g| g.set.sample_time_s)
+        self.points
+            .first()
+            .map_or(f64::NAN, |g| g.set.sample_time_s)
     }
 
     /// The operating point of design `index` [forward, lateral, down] (m/s).

@@ -3,11 +3,11 @@
 //! round trip, and edited files refused.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests: a failed unwrap is a failed test
 
-use helicon_gnc::schedule::{
-    EnvelopeConfig, GridSection, Schedule, design_schedule, frozen_closed_loop,
-    frozen_point_check, integrator_output_map,
-};
 use helicon_gnc::design::output_matrix;
+use helicon_gnc::schedule::{
+    EnvelopeConfig, GridSection, Schedule, design_schedule, frozen_closed_loop, frozen_point_check,
+    integrator_output_map,
+};
 use helicon_model::linearize::linearize;
 use helicon_model::trim::{TrimOptions, TrimTarget, trim};
 use helicon_model::{InflowMode, Model, Params, Preset};
@@ -58,8 +58,12 @@ fn same_spectrum(expected: &[Complex<f64>], actual: &[Complex<f64>], tol: f64) {
 #[test]
 fn frozen_loop_at_a_design_point_is_the_design() {
     let m = model();
-    let s = design_schedule(&m, &small_config(vec![0.0, 10.0], vec![0.0]), &mut |_, _| {})
-        .unwrap();
+    let s = design_schedule(
+        &m,
+        &small_config(vec![0.0, 10.0], vec![0.0]),
+        &mut |_, _| {},
+    )
+    .unwrap();
     for (i, speed) in [(0usize, 0.0), (1, 10.0)] {
         let g = &s.points[i];
         let target = TrimTarget {
@@ -103,8 +107,17 @@ fn integrator_map_at_speed_has_the_flight_path_terms() {
     // R_be ∂R_eb/∂θ v = ω̂ × v with ω = (0, 1, 0) in the pitch-rotated frame:
     // for φ = 0 this is (w, 0, −u)
     assert!(t.x[0].abs() < 0.05, "near wings-level");
-    assert!((c[(1, 1)] - w).abs() < 0.05 * u.abs(), "{} vs {w}", c[(1, 1)]);
-    assert!((c[(3, 1)] + u).abs() < 0.05 * u.abs(), "{} vs {}", c[(3, 1)], -u);
+    assert!(
+        (c[(1, 1)] - w).abs() < 0.05 * u.abs(),
+        "{} vs {w}",
+        c[(1, 1)]
+    );
+    assert!(
+        (c[(3, 1)] + u).abs() < 0.05 * u.abs(),
+        "{} vs {}",
+        c[(3, 1)],
+        -u
+    );
 }
 
 /// Interpolation returns each design point's gains bit for bit at the node
@@ -112,8 +125,7 @@ fn integrator_map_at_speed_has_the_flight_path_terms() {
 #[test]
 fn interpolation_hits_the_nodes_and_averages_between() {
     let m = model();
-    let s = design_schedule(&m, &small_config(vec![0.0, 5.0], vec![0.0]), &mut |_, _| {})
-        .unwrap();
+    let s = design_schedule(&m, &small_config(vec![0.0, 5.0], vec![0.0]), &mut |_, _| {}).unwrap();
     let gs = s.gain_schedule("test").unwrap();
     let at0 = gs.at(&Vector3::zeros());
     let at5 = gs.at(&Vector3::new(5.0, 0.0, 0.0));
@@ -131,22 +143,34 @@ fn interpolation_hits_the_nodes_and_averages_between() {
 #[test]
 fn schedule_file_round_trip_and_edits_refused() {
     let m = model();
-    let s = design_schedule(&m, &small_config(vec![0.0, 5.0], vec![0.0]), &mut |_, _| {})
-        .unwrap();
+    let s = design_schedule(&m, &small_config(vec![0.0, 5.0], vec![0.0]), &mut |_, _| {}).unwrap();
     let text = s.to_json().unwrap();
     let back = Schedule::from_json(&text, "s.json").unwrap();
     assert_eq!(back, s);
-    let edited = text.replacen("\"operating_point_m_s\":[5.0", "\"operating_point_m_s\":[6.0", 1);
-    let e = Schedule::from_json(&edited, "s.json").unwrap_err().to_string();
-    assert!(e.contains("s.json") && e.contains("points[1].operating_point_m_s"), "{e}");
+    let edited = text.replacen(
+        "\"operating_point_m_s\":[5.0",
+        "\"operating_point_m_s\":[6.0",
+        1,
+    );
+    let e = Schedule::from_json(&edited, "s.json")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("s.json") && e.contains("points[1].operating_point_m_s"),
+        "{e}"
+    );
     let edited = text.replacen("\"version\":1", "\"version\":7", 1);
-    let e = Schedule::from_json(&edited, "s.json").unwrap_err().to_string();
+    let e = Schedule::from_json(&edited, "s.json")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("`version` = 7"), "{e}");
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     let alpha = v["points"][0]["gains"]["alpha"].as_f64().unwrap();
     let edited = text.replacen(&format!("\"alpha\":{alpha}"), "\"alpha\":1.5", 1);
     assert_ne!(edited, text);
-    let e = Schedule::from_json(&edited, "s.json").unwrap_err().to_string();
+    let e = Schedule::from_json(&edited, "s.json")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("points[0].gains") && e.contains("alpha"), "{e}");
 }
 
@@ -173,7 +197,9 @@ fn frozen_points_between_design_points_are_stable() {
 /// are errors naming the file and the field.
 #[test]
 fn envelope_file_errors_name_the_field() {
-    let e = EnvelopeConfig::from_toml_str("presett = 1", "env.toml").unwrap_err().to_string();
+    let e = EnvelopeConfig::from_toml_str("presett = 1", "env.toml")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("env.toml") && e.contains("presett"), "{e}");
     let e = EnvelopeConfig::from_toml_str("preset = \"nope\"", "env.toml")
         .unwrap_err()
@@ -182,7 +208,10 @@ fn envelope_file_errors_name_the_field() {
     let e = EnvelopeConfig::from_toml_str("[grid]\nforward_m_s = [0.0, 5.0, 5.0]", "env.toml")
         .unwrap_err()
         .to_string();
-    assert!(e.contains("env.toml") && e.contains("forward_m_s") && e.contains("increasing"), "{e}");
+    assert!(
+        e.contains("env.toml") && e.contains("forward_m_s") && e.contains("increasing"),
+        "{e}"
+    );
     let e = EnvelopeConfig::from_toml_str("[grid]\ndown_m_s = [nan]", "env.toml")
         .unwrap_err()
         .to_string();

@@ -150,11 +150,22 @@ impl TrajectorySection {
             ("trajectory.max_jerk_m_s3", self.max_jerk_m_s3),
             ("trajectory.max_yaw_accel_rad_s2", self.max_yaw_accel_rad_s2),
             ("trajectory.max_yaw_jerk_rad_s3", self.max_yaw_jerk_rad_s3),
-            ("trajectory.max_vertical_accel_m_s2", self.max_vertical_accel_m_s2),
-            ("trajectory.max_vertical_jerk_m_s3", self.max_vertical_jerk_m_s3),
+            (
+                "trajectory.max_vertical_accel_m_s2",
+                self.max_vertical_accel_m_s2,
+            ),
+            (
+                "trajectory.max_vertical_jerk_m_s3",
+                self.max_vertical_jerk_m_s3,
+            ),
         ] {
             if !(v.is_finite() && v > 0.0 && v <= 100.0) {
-                return Err(ScenarioError::invalid(file, f, v, "must be finite, > 0 and <= 100"));
+                return Err(ScenarioError::invalid(
+                    file,
+                    f,
+                    v,
+                    "must be finite, > 0 and <= 100",
+                ));
             }
         }
         Ok(Mission {
@@ -228,7 +239,10 @@ pub fn scenario_schedule(
     Ok(Some(s))
 }
 
-fn design_envelope(path: &Path, text: &str) -> Result<Arc<(Schedule, GainSchedule)>, ScheduleError> {
+fn design_envelope(
+    path: &Path,
+    text: &str,
+) -> Result<Arc<(Schedule, GainSchedule)>, ScheduleError> {
     let file = path.display().to_string();
     let mut cfg = EnvelopeConfig::from_toml_str(text, &file)?;
     cfg.base_dir = path.parent().map(Path::to_path_buf);
