@@ -150,14 +150,17 @@ fn envelope_rows(schedule: &Schedule, check: Option<&FrozenCheck>) -> String {
     s
 }
 
+/// The points of one line of a figure panel.
+type Points = Vec<(f64, f64)>;
+
 /// The envelope map: trim inputs, attitudes and spectral radii versus
 /// forward speed, one line per (lateral, down) pair of the grid.
 fn envelope_figure(schedule: &Schedule, check: Option<&FrozenCheck>, path: &Path) -> Result<()> {
     let axes = &schedule.axes;
-    let mut lines: Vec<(String, [Vec<(f64, f64)>; 8])> = Vec::new();
+    let mut lines: Vec<(String, [Points; 8])> = Vec::new();
     for j in 0..axes.lateral_m_s.len() {
         for k in 0..axes.down_m_s.len() {
-            let mut cols: [Vec<(f64, f64)>; 8] = Default::default();
+            let mut cols: [Points; 8] = Default::default();
             for i in 0..axes.forward_m_s.len() {
                 let g = &schedule.points[axes.index(i, j, k)];
                 let f = axes.forward_m_s[i];

@@ -419,7 +419,7 @@ pub enum Law {
     /// One design ([`Lqi`]).
     Fixed(Lqi),
     /// A gain schedule ([`ScheduledLqi`]).
-    Scheduled(Box<ScheduledLqi>),
+    Scheduled(ScheduledLqi),
 }
 
 impl StateFeedback for Law {
@@ -445,7 +445,7 @@ pub enum AnyPredictor {
     /// One design ([`KalmanPredictor`]).
     Fixed(KalmanPredictor),
     /// A gain schedule ([`ScheduledPredictor`]).
-    Scheduled(Box<ScheduledPredictor>),
+    Scheduled(ScheduledPredictor),
 }
 
 impl Predictor for AnyPredictor {
@@ -461,7 +461,7 @@ impl Predictor for AnyPredictor {
     fn advance(&mut self, applied: &Input) -> Result<(), CoreError> {
         match self {
             AnyPredictor::Fixed(p) => p.advance(applied),
-            AnyPredictor::Scheduled(p) => Predictor::advance(p.as_mut(), applied),
+            AnyPredictor::Scheduled(p) => Predictor::advance(p, applied),
         }
     }
 }

@@ -141,11 +141,7 @@ impl OnBoard {
         let g = p.environment.g_m_s2;
         let feedback = scenario.controller.feedback;
         let law = match &prepared.schedule {
-            Some(s) => Law::Scheduled(Box::new(ScheduledLqi::new(
-                Arc::clone(s),
-                limits,
-                feedback,
-            )?)),
+            Some(s) => Law::Scheduled(ScheduledLqi::new(Arc::clone(s), limits, feedback)?),
             None => Law::Fixed(Lqi::new(set, limits, feedback)?),
         };
         // The estimator starts from the measured states and the trim for the rest.
@@ -155,10 +151,9 @@ impl OnBoard {
         }
         let predictor = || -> Result<AnyPredictor, ClosedLoopError> {
             Ok(match &prepared.schedule {
-                Some(s) => AnyPredictor::Scheduled(Box::new(ScheduledPredictor::new(
-                    Arc::clone(s),
-                    &x0_est,
-                )?)),
+                Some(s) => {
+                    AnyPredictor::Scheduled(ScheduledPredictor::new(Arc::clone(s), &x0_est)?)
+                }
                 None => AnyPredictor::Fixed(KalmanPredictor::new(set, &x0_est)?),
             })
         };
