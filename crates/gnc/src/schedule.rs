@@ -46,6 +46,9 @@ use std::path::{Path, PathBuf};
 pub const SCHEDULE_FORMAT_VERSION: u32 = 1;
 /// Largest `check.subdivisions`.
 pub const MAX_CHECK_SUBDIVISIONS: u32 = 8;
+/// Largest number of frozen points of one check (each a trim, a
+/// linearisation and a 58-state eigenvalue problem, ~5 ms: ~2 minutes).
+pub const MAX_FROZEN_POINTS: usize = 25_000;
 
 /// The grid of operating points (m/s, heading axes).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -239,6 +242,23 @@ impl EnvelopeConfig {
                 "check.subdivisions",
                 f64::from(self.check.subdivisions),
                 "must be at most 8 (MAX_CHECK_SUBDIVISIONS)",
+            ));
+        }
+        let fine: usize = self
+            .axes()
+            .as_array()
+            .iter()
+            .map(|a| (a.len() - 1) * (self.check.subdivisions as usize + 1) + 1)
+            .product();
+        if fine > MAX_FROZEN_POINTS {
+            return Err(ConfigError::invalid(
+                file,
+                "check.subdivisions",
+                f64::from(self.check.subdivisions),
+                format!(
+                    "the check would take {fine} frozen points, beyond 25000 \
+                     (MAX_FROZEN_POINTS): fewer subdivisions or grid points"
+                ),
             ));
         }
         Ok(())

@@ -216,4 +216,26 @@ fn envelope_file_errors_name_the_field() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("grid.down_m_s"), "{e}");
+    // the frozen check's work is bounded: 32 x 32 x 2 points with 8 subdivisions
+    let axis = |n: usize| {
+        format!(
+            "[{}]",
+            (0..n)
+                .map(|i| format!("{i}.0"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    let text = format!(
+        "[grid]\nforward_m_s = {}\nlateral_m_s = {}\ndown_m_s = [0.0, 1.0]\n[check]\nsubdivisions = 8\n",
+        axis(32),
+        axis(16)
+    );
+    let e = EnvelopeConfig::from_toml_str(&text, "env.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("check.subdivisions") && e.contains("MAX_FROZEN_POINTS"),
+        "{e}"
+    );
 }
