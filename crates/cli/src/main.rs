@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 mod console;
 mod control;
 mod demo;
+mod design_cmd;
 mod log_cmd;
 mod mc_cmd;
 mod model_cmd;
@@ -34,6 +35,8 @@ enum Command {
     Trim(trim_cmd::TrimArgs),
     /// Trim and linearize: A.csv, B.csv, poles.csv, summary.json (and Phi/Gamma with --discrete).
     Linearize(trim_cmd::LinearizeArgs),
+    /// Gain schedule over the flight envelope: design at a grid of operating points, frozen-point check, envelope map.
+    Design(design_cmd::DesignArgs),
     /// Linear control design: DARE, dlqr (pincer), Kalman gain, c2d (JSON out).
     Control(control::ControlArgs),
     /// Batch Wahba solver (q-method, thesis §13.2) over a CSV of vector observations.
@@ -108,6 +111,7 @@ fn run() -> anyhow::Result<()> {
         Command::Trim(a) => trim_cmd::run_trim(&a),
         Command::Linearize(a) => trim_cmd::run_linearize(&a),
         Command::Control(args) => control::run(args),
+        Command::Design(a) => design_cmd::run(&a),
         Command::Attitude(a) => sensors::run_attitude(&a),
         Command::Sensors(a) => match a.command {
             sensors::SensorsCommand::Simulate(s) => sensors::run_simulate(&s),

@@ -5,9 +5,12 @@
 //! the ground-station messages are all filled.
 
 use crate::error::CoreError;
-use crate::estimator::{Estimator, Timestamped};
+use crate::eskf::EskfEstimator;
+use crate::estimator::{Estimator, ThesisEstimator, Timestamped};
 use crate::lqi::{Reference, StateFeedback};
 use crate::navigation::NavigationSolution;
+use crate::schedule::{AnyPredictor, Law};
+use crate::sensor::SensorFrame;
 use crate::state::{Input, MeasuredStates, NU, NY, ReducedState};
 use nalgebra::SVector;
 
@@ -82,5 +85,52 @@ impl<E: Estimator, F: StateFeedback> FlightComputer<E, F> {
         };
         self.sample += 1;
         Ok(t)
+    }
+}
+
+/// The flight computer fed by the sensors, with the navigation the
+/// configuration chose (the thesis's chain or the ESKF) and the law and
+/// predictor of one design or of a gain schedule. The simulator, SITL and
+/// the on-board program fly this one type; stepping it allocates nothing.
+#[derive(Debug, Clone)]
+#[allow(
+    clippy::large_enum_variant,
+    reason = "built once and owned in place (boxed by its owner); no indirection in the control step"
+)]
+pub enum SensorComputer {
+    /// q-method + fusion filter + Kalman predictor + LQI (thesis ch. 13–15).
+    Thesis(FlightComputer<ThesisEstimator<AnyPredictor>, Law>),
+    /// ESKF with IMU biases + Kalman predictor + LQI.
+    Eskf(FlightComputer<EskfEstimator<AnyPredictor>, Law>),
+}
+
+impl SensorComputer {
+    /// One control sample from a sensor frame (see [`FlightComputer::step`]).
+    #[inline]
+    pub fn step(
+        &mut self,
+        frame: &SensorFrame,
+        reference: &Reference,
+    ) -> Result<Telemetry, CoreError> {
+        match self {
+            SensorComputer::Thesis(c) => c.step(frame, reference),
+            SensorComputer::Eskf(c) => c.step(frame, reference),
+        }
+    }
+
+    /// Clears the law's integrators (entering automatic flight).
+    pub fn reset_feedback(&mut self) {
+        match self {
+            SensorComputer::Thesis(c) => c.feedback.reset(),
+            SensorComputer::Eskf(c) => c.feedback.reset(),
+        }
+    }
+
+    /// The estimator's short name, as configurations spell it.
+    pub fn estimator_kind(&self) -> &'static str {
+        match self {
+            SensorComputer::Thesis(_) => "thesis",
+            SensorComputer::Eskf(_) => "eskf",
+        }
     }
 }

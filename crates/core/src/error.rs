@@ -22,6 +22,20 @@ pub enum CoreError {
     },
     /// The estimate left the finite numbers (the estimator diverged).
     NonFiniteEstimate,
+    /// A gain schedule cannot be flown (grid, sizes, mixed designs).
+    InvalidSchedule {
+        /// Which part.
+        what: &'static str,
+        /// The rule broken.
+        rule: &'static str,
+    },
+    /// A reference trajectory is not valid.
+    InvalidReference {
+        /// Which channel.
+        what: &'static str,
+        /// The rule broken.
+        rule: &'static str,
+    },
 }
 
 impl std::fmt::Display for CoreError {
@@ -33,6 +47,8 @@ impl std::fmt::Display for CoreError {
                 write!(f, "non-finite measurement: {what}")
             }
             CoreError::NonFiniteEstimate => write!(f, "the state estimate became non-finite"),
+            CoreError::InvalidSchedule { what, rule } => write!(f, "gain schedule: {what} {rule}"),
+            CoreError::InvalidReference { what, rule } => write!(f, "reference `{what}`: {rule}"),
         }
     }
 }

@@ -38,7 +38,7 @@
 //! allocates nothing (fixed-size nalgebra).
 
 use crate::error::CoreError;
-use crate::estimator::{Estimate, Estimator, KalmanPredictor};
+use crate::estimator::{Estimate, Estimator, KalmanPredictor, Predictor};
 use crate::frames::wrap_pi;
 use crate::fusion::FusionError;
 use crate::gains::GainSet;
@@ -778,11 +778,11 @@ impl Eskf {
 /// gives the nine measured states (attitude, body velocity, bias-corrected
 /// rates), the predictor the flapping, servo and the other reduced states.
 #[derive(Debug, Clone)]
-pub struct EskfEstimator {
+pub struct EskfEstimator<P = KalmanPredictor> {
     /// The navigation.
     pub navigation: Eskf,
-    /// The steady-state Kalman predictor.
-    pub predictor: KalmanPredictor,
+    /// The Kalman predictor (one design, or a gain schedule's).
+    pub predictor: P,
 }
 
 impl EskfEstimator {
@@ -796,7 +796,7 @@ impl EskfEstimator {
     }
 }
 
-impl Estimator for EskfEstimator {
+impl<P: Predictor> Estimator for EskfEstimator<P> {
     type Measurement = SensorFrame;
 
     #[inline]

@@ -90,18 +90,36 @@ pub trait Estimator {
     fn predict(&mut self, applied: &Input) -> Result<(), CoreError>;
 }
 
+/// A state predictor fed the nine measured states: the second stage of the
+/// thesis's chain ([`ThesisEstimator`]). No allocation in either method.
+pub trait Predictor {
+    /// Absorb the nine measured states; returns the absolute estimate x̂(k|k−1).
+    fn absorb(&mut self, measured: &MeasuredStates) -> Result<ReducedState, CoreError>;
+    /// Advance with the applied commands and the last absorbed measurement.
+    fn advance(&mut self, applied: &Input) -> Result<(), CoreError>;
+}
+
+impl Predictor for KalmanPredictor {
+    fn absorb(&mut self, measured: &MeasuredStates) -> Result<ReducedState, CoreError> {
+        KalmanPredictor::absorb(self, measured)
+    }
+    fn advance(&mut self, applied: &Input) -> Result<(), CoreError> {
+        KalmanPredictor::advance(self, applied)
+    }
+}
+
 /// The steady-state Kalman predictor (15.8) on the nine measured states:
 /// x̂(k+1) = Φ x̂(k) + Γ (u(k) − u_trim) + K (y_m(k) − Hm x̂(k)), deviations
 /// from trim, yaw innovation wrapped.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KalmanPredictor {
-    phi: SMatrix<f64, NX_REDUCED, NX_REDUCED>,
-    gamma: SMatrix<f64, NX_REDUCED, NU>,
-    k: SMatrix<f64, NX_REDUCED, NM>,
-    x_trim: ReducedState,
-    u_trim: Input,
+    pub(crate) phi: SMatrix<f64, NX_REDUCED, NX_REDUCED>,
+    pub(crate) gamma: SMatrix<f64, NX_REDUCED, NU>,
+    pub(crate) k: SMatrix<f64, NX_REDUCED, NM>,
+    pub(crate) x_trim: ReducedState,
+    pub(crate) u_trim: Input,
     /// x̂(k): predicted deviation from trim.
-    x_hat: ReducedState,
+    pub(crate) x_hat: ReducedState,
     /// y_m(k), kept between `update` and `predict`.
     y_m: MeasuredStates,
 }
@@ -172,16 +190,17 @@ impl Estimator for KalmanPredictor {
     }
 }
 
-/// The thesis's estimation chain: navigation, then the Kalman predictor.
+/// The thesis's estimation chain: navigation, then the Kalman predictor (or
+/// any [`Predictor`], e.g. the gain-scheduled one).
 #[derive(Debug, Clone)]
-pub struct ThesisEstimator {
+pub struct ThesisEstimator<P = KalmanPredictor> {
     /// Attitude determination + GPS/IMU fusion.
     pub navigation: NavigationFilter,
     /// The steady-state Kalman predictor.
-    pub predictor: KalmanPredictor,
+    pub predictor: P,
 }
 
-impl Estimator for ThesisEstimator {
+impl<P: Predictor> Estimator for ThesisEstimator<P> {
     type Measurement = SensorFrame;
 
     #[inline]

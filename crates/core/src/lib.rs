@@ -22,6 +22,10 @@
 //!   the Kalman predictor alone, the truth feed;
 //! - [`lqi`]: the [`StateFeedback`] extension point; the LQR with integral action;
 //! - [`gains`]: the fixed-size [`GainSet`] a design produces;
+//! - [`schedule`]: gain scheduling over the envelope ([`GainSchedule`],
+//!   [`ScheduledLqi`], [`ScheduledPredictor`]);
+//! - [`trajectory`]: jerk-limited references (S-curves, a mission of speed,
+//!   yaw rate and climb);
 //! - [`computer`]: [`FlightComputer`] and its [`Telemetry`].
 //!
 //! To add a sensor: a field in [`SensorFrame`] and its use in an estimator.
@@ -38,19 +42,24 @@ pub mod fusion;
 pub mod gains;
 pub mod lqi;
 pub mod navigation;
+pub mod schedule;
 pub mod sensor;
 pub mod state;
+pub mod trajectory;
 
-pub use computer::{FlightComputer, Telemetry};
+pub use computer::{FlightComputer, SensorComputer, Telemetry};
 pub use error::CoreError;
 pub use eskf::{Eskf, EskfConfig, EskfDiagnostics, EskfEstimator, ImuNoise};
 pub use estimator::{
-    Estimate, Estimator, KalmanPredictor, StateMeasurement, ThesisEstimator, Timestamped,
-    TruthFeed, TruthMeasurement,
+    Estimate, Estimator, KalmanPredictor, Predictor, StateMeasurement, ThesisEstimator,
+    Timestamped, TruthFeed, TruthMeasurement,
 };
 pub use gains::{GainSet, LqiOptions, ServoLimits};
 pub use lqi::{Command, Lqi, Reference, StateFeedback};
 pub use navigation::{ImuBiasEstimate, NavigationConfig, NavigationFilter, NavigationSolution};
+pub use schedule::{
+    AnyPredictor, GainSchedule, Law, ScheduleAxes, ScheduledLqi, ScheduledPredictor,
+};
 pub use sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
 
 /// The thesis's on-board chain: navigation + Kalman predictor + LQI.

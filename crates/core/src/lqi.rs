@@ -55,10 +55,10 @@ pub trait StateFeedback {
 /// The thesis's LQR with integral action (fixed-size; no allocation).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Lqi {
-    ls: SMatrix<f64, NU, NX_REDUCED>,
-    li: SMatrix<f64, NU, NY>,
-    x_trim: ReducedState,
-    u_trim: Input,
+    pub(crate) ls: SMatrix<f64, NU, NX_REDUCED>,
+    pub(crate) li: SMatrix<f64, NU, NY>,
+    pub(crate) x_trim: ReducedState,
+    pub(crate) u_trim: Input,
     limits: ServoLimits,
     options: LqiOptions,
     enabled: bool,

@@ -37,6 +37,7 @@
 //! ```
 
 use helicon_model::config_error::ConfigError;
+use helicon_sim::scenario::EstimatorSection;
 use helicon_sim::sensors::SensorConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -189,6 +190,10 @@ pub struct OnboardConfig {
     /// Navigation tuning.
     #[serde(default)]
     pub navigation: helicon_core::NavigationConfig,
+    /// Which navigation flies (`kind = "thesis" | "eskf"`) and the ESKF's
+    /// tuning, as in scenarios.
+    #[serde(default, skip_serializing_if = "EstimatorSection::is_default")]
+    pub estimator: EstimatorSection,
     /// Sensor stale limits.
     #[serde(default)]
     pub stale: StaleLimits,
@@ -330,6 +335,13 @@ impl OnboardConfig {
             file: file.to_string(),
             message: format!("[navigation]: {e}"),
         })?;
+        self.estimator
+            .eskf
+            .validate()
+            .map_err(|e| ConfigError::Parse {
+                file: file.to_string(),
+                message: format!("[estimator.eskf]: {e}"),
+            })?;
         Ok(())
     }
 }

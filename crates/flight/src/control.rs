@@ -1,12 +1,12 @@
 //! The control task's work for one sample, independent of how it is paced
 //! (a 400 Hz clock on board, sensor arrival in lock-step SITL): the safety
 //! supervisor decides the mode, the flight computer (the very
-//! `ThesisFlightComputer` `helicon sim` flies) computes the law, the mode
+//! `SensorComputer` `helicon sim` flies) computes the law, the mode
 //! picks what goes to the servos. Allocation-free.
 
 use crate::safety::{Health, Mode, RcInput, SafetyEvent, Supervisor};
 use helicon_core::state::Input;
-use helicon_core::{Reference, SensorFrame, StateFeedback, Telemetry, ThesisFlightComputer};
+use helicon_core::{Reference, SensorComputer, SensorFrame, Telemetry};
 
 /// What the control task is given for one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -40,7 +40,7 @@ pub struct ControlOutput {
 /// The control task: the flight computer under the safety supervisor.
 #[derive(Debug, Clone)]
 pub struct ControlTask {
-    computer: ThesisFlightComputer,
+    computer: SensorComputer,
     supervisor: Supervisor,
     u_trim: Input,
     law: Input,
@@ -52,7 +52,7 @@ pub struct ControlTask {
 impl ControlTask {
     /// A control task flying `computer` (disarmed until the receiver arms
     /// it), holding `u_trim` when the law is not flying.
-    pub fn new(computer: ThesisFlightComputer, supervisor: Supervisor, u_trim: Input) -> Self {
+    pub fn new(computer: SensorComputer, supervisor: Supervisor, u_trim: Input) -> Self {
         ControlTask {
             computer,
             supervisor,
@@ -94,7 +94,7 @@ impl ControlTask {
         if let Some(ev) = &event
             && ev.to == Mode::Auto
         {
-            self.computer.feedback.reset();
+            self.computer.reset_feedback();
         }
         self.nav_failed = false;
         let mut telemetry = None;

@@ -2,8 +2,9 @@
 //!
 //! The on-board program of the thesis's helicopter (chapter 3, Figure 3.5)
 //! around the very flight software `helicon sim` flies
-//! (`helicon_core::ThesisFlightComputer`, built by
-//! `helicon_sim::closed_loop::thesis_flight_computer`):
+//! (`helicon_core::SensorComputer`: the thesis's navigation or the ESKF,
+//! one design or a gain schedule, built by
+//! `helicon_sim::closed_loop::flight_computer`):
 //!
 //! - [`config`]: `onboard.toml` (devices, parameter and gains files, stale
 //!   limits, failsafes, log folder, real-time options), checked field by field;

@@ -16,7 +16,7 @@ use helicon_devices::{Geodetic, LocalNed};
 use helicon_gnc::design::Gains;
 use helicon_model::Params;
 use helicon_model::config_error::ConfigError;
-use helicon_sim::closed_loop::{OnBoardSetup, thesis_flight_computer};
+use helicon_sim::closed_loop::{OnBoardSetup, flight_computer};
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
 use nalgebra::Vector3;
@@ -171,12 +171,14 @@ pub fn run(
             }
         }
     };
-    let computer = thesis_flight_computer(&OnBoardSetup {
+    let computer = flight_computer(&OnBoardSetup {
         params: &params,
         gains: &gains.set,
+        schedule: None,
         trim_x: &gains.set.x_trim,
         sensors: &cfg.sensors,
         navigation: &cfg.navigation,
+        estimator: &cfg.estimator,
         feedback: true,
         x0: &x0,
     })?;
@@ -187,7 +189,7 @@ pub fn run(
         u_trim,
     );
     let mission = match &mission_scenario {
-        Some(s) => Mission::Schedule(s.reference_schedule()),
+        Some(s) => Mission::Schedule(Box::new(s.reference_schedule())),
         None => Mission::Hold(Reference {
             velocity_ned_m_s: Vector3::zeros(),
             yaw_rad: x0[ix::PSI],

@@ -122,7 +122,7 @@ pub struct RuntimeOptions {
 #[derive(Debug, Clone)]
 pub enum Mission {
     /// A schedule of reference changes (a scenario's `[[reference]]`).
-    Schedule(ReferenceSchedule),
+    Schedule(Box<ReferenceSchedule>),
     /// One constant reference.
     Hold(Reference),
 }

@@ -30,7 +30,7 @@ use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, RcInput as RcFrame};
 use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCommon};
 use helicon_sim::closed_loop::{
-    ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, thesis_flight_computer,
+    ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, flight_computer,
 };
 use helicon_sim::log_csv::{LogCsvError, LogWriter};
 use helicon_sim::scenario::Scenario;
@@ -178,12 +178,14 @@ pub fn run(
     let ts = hw.sample_time_s();
     let x0 = *hw.state();
     let p = prepared.model.params();
-    let computer = thesis_flight_computer(&OnBoardSetup {
+    let computer = flight_computer(&OnBoardSetup {
         params: p,
         gains: &prepared.gains.set,
+        schedule: prepared.schedule.as_ref(),
         trim_x: &prepared.trim.x,
         sensors: &scenario.sensors,
         navigation: &scenario.navigation,
+        estimator: &scenario.estimator,
         feedback: scenario.controller.feedback,
         x0: &x0,
     })?;
@@ -235,7 +237,7 @@ pub fn run(
     };
     let handle = runtime::spawn(
         task,
-        Mission::Schedule(scenario.reference_schedule()),
+        Mission::Schedule(Box::new(scenario.reference_schedule())),
         sensors,
         receiver,
         DeviceServos::new(av_port),

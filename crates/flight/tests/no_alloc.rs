@@ -13,7 +13,7 @@ use helicon_flight::config::{FailsafeConfig, StaleLimits};
 use helicon_flight::control::{ControlTask, Tick};
 use helicon_flight::records::{FlightRecord, step_records, write_record};
 use helicon_flight::safety::{RcInput, Supervisor};
-use helicon_sim::closed_loop::{Hardware, OnBoardSetup, prepare, thesis_flight_computer};
+use helicon_sim::closed_loop::{Hardware, OnBoardSetup, flight_computer, prepare};
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::messages::Timing;
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
@@ -27,12 +27,14 @@ fn a_control_step_and_its_log_allocate_nothing() {
     let prepared = prepare(&s).unwrap();
     let mut hw = Hardware::new(&s, &prepared).unwrap();
     let x0 = *hw.state();
-    let computer = thesis_flight_computer(&OnBoardSetup {
+    let computer = flight_computer(&OnBoardSetup {
         params: prepared.model.params(),
         gains: &prepared.gains.set,
+        schedule: prepared.schedule.as_ref(),
         trim_x: &prepared.trim.x,
         sensors: &s.sensors,
         navigation: &s.navigation,
+        estimator: &s.estimator,
         feedback: true,
         x0: &x0,
     })

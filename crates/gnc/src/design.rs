@@ -295,7 +295,41 @@ pub fn design(
     sample_time_s: f64,
     config: &ControllerConfig,
 ) -> Result<Gains, DesignError> {
+    design_with_outputs(
+        phi,
+        gamma,
+        &output_matrix(),
+        x_trim,
+        u_trim,
+        sample_time_s,
+        config,
+    )
+}
+
+/// As [`design`] with the tracked outputs y = `hs` x (4×27) instead of
+/// Hs = [ψ, u, v, w] (14.4): the gain schedule passes the linearisation of
+/// what the on-board law integrates — ψ and the NED velocity rotated into
+/// body axes — which at speed also depends on the attitude (a pitch change
+/// δθ tilts the velocity vector by V δθ). At hover it is Hs.
+pub fn design_with_outputs(
+    phi: &DMatrix<f64>,
+    gamma: &DMatrix<f64>,
+    hs: &DMatrix<f64>,
+    x_trim: &ReducedState,
+    u_trim: &Input,
+    sample_time_s: f64,
+    config: &ControllerConfig,
+) -> Result<Gains, DesignError> {
     config.validate()?;
+    if hs.shape() != (NY, NX_REDUCED) {
+        return Err(DesignError::Shape {
+            what: "Hs",
+            rows: hs.nrows(),
+            cols: hs.ncols(),
+            er: NY,
+            ec: NX_REDUCED,
+        });
+    }
     if !(sample_time_s.is_finite() && sample_time_s > 0.0) {
         return Err(DesignError::SampleTime(sample_time_s));
     }
@@ -305,15 +339,14 @@ pub fn design(
         Some(ts) => alpha_from_settling_time(sample_time_s, ts)?,
         None => 1.0,
     };
-    let hs = output_matrix();
     let qe = bryson(&config.output_max)?;
     let qi = &qe * config.integral_weight;
     let q2 = bryson(&config.input_max)?;
     let (ls, li, poles) = if config.integral_action {
-        let lqr = dlqr_integral(phi, gamma, &hs, &qe, &qi, &q2, config.rho, alpha)?;
+        let lqr = dlqr_integral(phi, gamma, hs, &qe, &qi, &q2, config.rho, alpha)?;
         (lqr.ls, lqr.li, lqr.poles)
     } else {
-        let mut q1 = hs.transpose() * &qe * &hs;
+        let mut q1 = hs.transpose() * &qe * hs;
         q1 = (&q1 + q1.transpose()) * 0.5;
         let lqr = dlqr_pincer(phi, gamma, &q1, &(q2 * config.rho), None, alpha)?;
         (lqr.k, DMatrix::zeros(NU, NY), lqr.poles)

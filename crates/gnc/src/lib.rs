@@ -10,5 +10,7 @@
 //! nalgebra only.
 
 pub mod design;
+pub mod schedule;
 
 pub use design::{ControllerConfig, DesignError, Gains, design};
+pub use schedule::{EnvelopeConfig, Schedule, ScheduleError, design_schedule, frozen_point_check};

@@ -7,11 +7,13 @@
 //!   (14.38)–(14.42) and Dryden turbulence;
 //! - [`sensors`]: IMU, magnetometer and GPS models with a seeded RNG;
 //! - [`trajectory`]: a scripted smooth trajectory to drive the sensors;
+//! - [`envelope`]: jerk-limited mission references and the gain schedule a scenario flies;
 //! - [`log_csv`]: the `log.csv` column table, streaming writer and typed reader;
 //! - [`output`]: the run folder (log, summary, gains, scenario, figures, report);
 //! - [`plot`]: time-series line plots and multi-panel figures to PNG and SVG.
 
 pub mod closed_loop;
+pub mod envelope;
 pub mod log_csv;
 pub mod mc;
 pub mod metrics;

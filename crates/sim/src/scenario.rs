@@ -112,6 +112,15 @@ pub struct ControllerSection {
     /// Inflow of the linearization used for the design.
     #[serde(default)]
     pub design_inflow: DesignInflow,
+    /// Fly a gain schedule designed from this envelope file (relative to
+    /// the scenario; designed on the envelope's own, nominal, model) instead
+    /// of the single design at `[trim]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub schedule: Option<PathBuf>,
+    /// Fly this gain-schedule file (`helicon design --schedule` output,
+    /// relative to the scenario).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub schedule_file: Option<PathBuf>,
 }
 
 fn yes() -> bool {
@@ -127,6 +136,8 @@ impl Default for ControllerSection {
             fusion: false,
             gains_file: None,
             design_inflow: DesignInflow::Converged,
+            schedule: None,
+            schedule_file: None,
         }
     }
 }
@@ -241,6 +252,10 @@ pub struct Scenario {
     /// Reference changes.
     #[serde(default)]
     pub reference: Vec<ReferenceChange>,
+    /// Jerk-limited mission references instead of `[[reference]]`
+    /// ([`crate::envelope::TrajectorySection`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trajectory: Option<crate::envelope::TrajectorySection>,
     /// Wind.
     #[serde(default)]
     pub wind: WindConfig,
@@ -294,12 +309,20 @@ pub struct ReferenceSchedule {
     start: [f64; 4],
     /// (t_s, output index, value, ramp_s), sorted by time.
     changes: Vec<(f64, usize, f64, f64)>,
+    /// The `[trajectory]` mission, which replaces the changes.
+    mission: Option<helicon_core::trajectory::Mission>,
 }
 
 impl ReferenceSchedule {
     /// The reference (vn, ve, vd, psi) at time `t_s`: each change ramps (or
-    /// steps) from the value before it. Does not allocate.
+    /// steps) from the value before it, or the `[trajectory]` mission's
+    /// jerk-limited reference. Does not allocate.
     pub fn at(&self, t_s: f64) -> [f64; 4] {
+        if let Some(m) = &self.mission {
+            let r = m.at(t_s);
+            let v = r.velocity_ned_m_s;
+            return [v.x, v.y, v.z, r.yaw_rad];
+        }
         let mut r = self.start;
         for &(t0, i, value, ramp) in &self.changes {
             if t_s < t0 {
@@ -648,6 +671,7 @@ impl Scenario {
         self.sensors
             .validate(file)
             .map_err(|e| e.within(file, "sensors"))?;
+        self.validate_envelope(file)?;
         crate::wind::Wind::from_config(&self.wind).map_err(|e| e.within(file, "wind"))?;
         Ok(())
     }
@@ -688,6 +712,36 @@ impl Scenario {
         Ok(())
     }
 
+    /// The additive envelope options: `[trajectory]` (not with
+    /// `[[reference]]`) and one of `controller.schedule`,
+    /// `controller.schedule_file`, `controller.gains_file`.
+    fn validate_envelope(&self, file: &str) -> Result<(), ScenarioError> {
+        if let Some(t) = &self.trajectory {
+            if !self.reference.is_empty() {
+                return Err(ScenarioError::Parse {
+                    file: file.to_string(),
+                    message: "[trajectory] replaces [[reference]]: give one of them".into(),
+                });
+            }
+            t.mission(self, file)?;
+        }
+        let c = &self.controller;
+        let given = [
+            c.schedule.is_some(),
+            c.schedule_file.is_some(),
+            c.gains_file.is_some(),
+        ];
+        if given.iter().filter(|g| **g).count() > 1 {
+            return Err(ScenarioError::Parse {
+                file: file.to_string(),
+                message: "[controller]: give at most one of `schedule`, `schedule_file` and \
+                          `gains_file`"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
+
     /// The reference changes sorted by time, ready for allocation-free
     /// lookups in the flight loop.
     pub fn reference_schedule(&self) -> ReferenceSchedule {
@@ -713,6 +767,11 @@ impl Scenario {
                 t.yaw_rad,
             ],
             changes,
+            // validated with the scenario (`validate_envelope`)
+            mission: self
+                .trajectory
+                .as_ref()
+                .and_then(|tr| tr.mission(self, "").ok()),
         }
     }
 

@@ -4,7 +4,7 @@
 //! differs from `helicon sim` only by what its transports do to the numbers.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
-use helicon_sim::closed_loop::{Hardware, OnBoardSetup, fly, prepare, thesis_flight_computer};
+use helicon_sim::closed_loop::{Hardware, OnBoardSetup, flight_computer, fly, prepare};
 use helicon_sim::scenario::Scenario;
 use std::path::Path;
 
@@ -24,12 +24,14 @@ fn hardware_steps_reproduce_fly_bit_for_bit() {
     let mut hw = Hardware::new(&scenario, &prepared).unwrap();
     let x0 = *hw.state();
     let p = prepared.model.params();
-    let mut computer = thesis_flight_computer(&OnBoardSetup {
+    let mut computer = flight_computer(&OnBoardSetup {
         params: p,
         gains: &prepared.gains.set,
+        schedule: prepared.schedule.as_ref(),
         trim_x: &prepared.trim.x,
         sensors: &scenario.sensors,
         navigation: &scenario.navigation,
+        estimator: &scenario.estimator,
         feedback: scenario.controller.feedback,
         x0: &x0,
     })

@@ -22,8 +22,7 @@ use helicon_core::frames::{EulerTrig, wrap_pi};
 use helicon_core::navigation::{NavigationConfig, NavigationFilter};
 use helicon_core::{
     CoreError, FlightComputer, GainSet, KalmanPredictor, Lqi, Reference, ServoLimits,
-    StateMeasurement, Telemetry, ThesisEstimator, ThesisFlightComputer, TruthFeed,
-    TruthMeasurement,
+    StateMeasurement, Telemetry, ThesisEstimator, TruthFeed, TruthMeasurement,
 };
 use helicon_gnc::design::{Gains, design};
 use helicon_model::integrate::rk4;
@@ -40,7 +39,7 @@ mod summary;
 
 pub use hardware::{Hardware, HardwareSample, HardwareStep};
 use stages::{OnBoard, Plant, check_limits};
-pub use stages::{OnBoardSetup, servo_limits, thesis_flight_computer};
+pub use stages::{OnBoardSetup, flight_computer, servo_limits};
 use summary::summarize;
 pub use summary::{METRIC_TRACE_CAP, Outcome, Summary, SummaryAccumulator, Termination};
 
@@ -62,6 +61,9 @@ pub enum ClosedLoopError {
     /// Controller design or gains file.
     #[error(transparent)]
     Design(#[from] helicon_gnc::design::DesignError),
+    /// Gain-schedule design or file.
+    #[error(transparent)]
+    Schedule(#[from] helicon_gnc::schedule::ScheduleError),
     /// Wind or sensor configuration (the one configuration error shape).
     #[error(transparent)]
     Config(#[from] helicon_model::ConfigError),
@@ -113,8 +115,11 @@ pub struct Prepared {
     pub model: Model,
     /// The design trim.
     pub trim: Trim,
-    /// The gains flown.
+    /// The gains flown (with a schedule: its design point nearest the trim,
+    /// for the sample time and the summary's design figures).
     pub gains: Gains,
+    /// The gain schedule flown instead of `gains`, when the scenario names one.
+    pub schedule: Option<std::sync::Arc<helicon_core::GainSchedule>>,
 }
 
 /// Trim, linearize, discretize and design (or load) the gains for a scenario.
@@ -141,6 +146,29 @@ pub fn prepare_with_params(
     // can hold (inputs within the servo range, blades unstalled, …)
     let t = trim(&model, &target, &TrimOptions::default())?.require_physical(&model)?;
     let ts = model.params().control.sample_time_s;
+    if let Some(s) = crate::envelope::scenario_schedule(scenario)? {
+        let (schedule, core) = &*s;
+        if schedule.sample_time_s() != ts {
+            return Err(ClosedLoopError::SampleTimeMismatch {
+                file: format!("gain schedule `{}`", schedule.name),
+                gains_s: schedule.sample_time_s(),
+                params_s: ts,
+            });
+        }
+        let sigma = helicon_core::schedule::heading_axes(target.yaw_rad, &target.velocity_ned_m_s);
+        let nearest = (0..schedule.points.len())
+            .min_by(|&a, &b| {
+                let d = |i: usize| (Vector3::from(schedule.operating_point(i)) - sigma).norm();
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap_or(0);
+        return Ok(Prepared {
+            model,
+            trim: t,
+            gains: schedule.points[nearest].clone(),
+            schedule: Some(std::sync::Arc::new(core.clone())),
+        });
+    }
     let gains = match &scenario.controller.gains_file {
         Some(f) => {
             let path = scenario.resolve(f);
@@ -172,6 +200,7 @@ pub fn prepare_with_params(
         model,
         trim: t,
         gains,
+        schedule: None,
     })
 }
 

@@ -4,8 +4,10 @@
 
 use super::*;
 use crate::navigation::eskf_at;
-use crate::scenario::EstimatorKind;
-use helicon_core::{EskfEstimator, EskfFlightComputer};
+use crate::scenario::{EstimatorKind, EstimatorSection};
+use helicon_core::schedule::{AnyPredictor, Law, ScheduledLqi, ScheduledPredictor};
+use helicon_core::{EskfEstimator, GainSchedule, SensorComputer};
+use std::sync::Arc;
 
 /// The plant: the nonlinear model integrated with RK4 between controller
 /// samples, inputs and wind held, inflow warm-started from the last solution.
@@ -122,20 +124,25 @@ fn estimator_start(trim_x: &ReducedState, x0: &State) -> ReducedState {
     x0_est
 }
 
-/// What the thesis's on-board chain is built from, wherever it flies.
+/// What the on-board chain is built from, wherever it flies.
 #[derive(Debug, Clone, Copy)]
 pub struct OnBoardSetup<'a> {
     /// The helicopter's parameters (servo range, gravity).
     pub params: &'a Params,
-    /// The gains flown (their sample time is the control period).
+    /// The gains flown (their sample time is the control period); with a
+    /// schedule, its design point nearest the trim.
     pub gains: &'a GainSet,
+    /// The gain schedule flown instead of `gains`, when one is configured.
+    pub schedule: Option<&'a Arc<GainSchedule>>,
     /// The trim the predictor starts from for the states not measured.
     pub trim_x: &'a ReducedState,
     /// The sensors' noise figures and local magnetic field (the navigation's
     /// measurement model).
     pub sensors: &'a SensorConfig,
-    /// The navigation tuning.
+    /// The thesis navigation's tuning.
     pub navigation: &'a NavigationConfig,
+    /// Which navigation flies (thesis chain or ESKF) and the ESKF's tuning.
+    pub estimator: &'a EstimatorSection,
     /// Feedback on (off: trim inputs held).
     pub feedback: bool,
     /// The full state the navigation and the predictor start from (after
@@ -143,49 +150,79 @@ pub struct OnBoardSetup<'a> {
     pub x0: &'a State,
 }
 
-/// The thesis's on-board chain (navigation + Kalman predictor + LQI) exactly
-/// as the simulator flies it with `fusion = true`: `helicon sim`, `helicon
-/// sitl` and `helicon onboard` build their flight computer here.
-pub fn thesis_flight_computer(
-    setup: &OnBoardSetup<'_>,
-) -> Result<ThesisFlightComputer, ClosedLoopError> {
-    let set = setup.gains;
-    let ts = set.sample_time_s;
+impl OnBoardSetup<'_> {
+    /// The control law: one design's LQI or the schedule's.
+    fn law(&self) -> Result<Law, ClosedLoopError> {
+        let limits = servo_limits(self.params);
+        Ok(match self.schedule {
+            Some(s) => Law::Scheduled(ScheduledLqi::new(Arc::clone(s), limits, self.feedback)?),
+            None => Law::Fixed(Lqi::new(self.gains, limits, self.feedback)?),
+        })
+    }
+
+    /// The Kalman predictor, started from the measured states of `x0` and
+    /// the trim for the rest: one design's or the schedule's.
+    fn predictor(&self) -> Result<AnyPredictor, ClosedLoopError> {
+        let x0_est = estimator_start(self.trim_x, self.x0);
+        Ok(match self.schedule {
+            Some(s) => AnyPredictor::Scheduled(ScheduledPredictor::new(Arc::clone(s), &x0_est)?),
+            None => AnyPredictor::Fixed(KalmanPredictor::new(self.gains, &x0_est)?),
+        })
+    }
+}
+
+/// The sensor-fed on-board chain (navigation + Kalman predictor + LQI, the
+/// navigation being the thesis's or the ESKF as configured) exactly as the
+/// simulator flies it with `fusion = true`: `helicon sim`, `helicon sitl`
+/// and `helicon onboard` all build their flight computer here.
+pub fn flight_computer(setup: &OnBoardSetup<'_>) -> Result<SensorComputer, ClosedLoopError> {
+    let ts = setup.gains.sample_time_s;
     let g = setup.params.environment.g_m_s2;
-    let law = Lqi::new(set, servo_limits(setup.params), setup.feedback)?;
-    let navigation = navigation_filter_at(setup.sensors, setup.navigation, ts, g, setup.x0)?;
-    let estimator = ThesisEstimator {
-        navigation,
-        predictor: KalmanPredictor::new(set, &estimator_start(setup.trim_x, setup.x0))?,
-    };
-    Ok(FlightComputer::new(estimator, law))
+    let law = setup.law()?;
+    let predictor = setup.predictor()?;
+    Ok(match setup.estimator.kind {
+        EstimatorKind::Thesis => {
+            let navigation =
+                navigation_filter_at(setup.sensors, setup.navigation, ts, g, setup.x0)?;
+            SensorComputer::Thesis(FlightComputer::new(
+                ThesisEstimator {
+                    navigation,
+                    predictor,
+                },
+                law,
+            ))
+        }
+        EstimatorKind::Eskf => {
+            let navigation = eskf_at(setup.sensors, &setup.estimator.eskf, ts, g, setup.x0)?;
+            SensorComputer::Eskf(FlightComputer::new(
+                EskfEstimator {
+                    navigation,
+                    predictor,
+                },
+                law,
+            ))
+        }
+    })
 }
 
 /// The on-board software flown in the loop, as the scenario's switches
 /// compose it from the core's parts.
 pub(super) enum OnBoard {
-    /// Sensor models feeding the thesis's whole chain (`fusion = true`).
-    Thesis {
+    /// Sensor models feeding the navigation chosen in `[estimator]`, the
+    /// predictor and the law (`fusion = true`).
+    Sensed {
         /// The world's sensors.
         suite: Box<SensorSuite>,
-        /// Navigation + predictor + LQI.
-        computer: Box<ThesisFlightComputer>,
-    },
-    /// Sensor models feeding the ESKF navigation + the Kalman predictor
-    /// (`[estimator] kind = "eskf"`).
-    Eskf {
-        /// The world's sensors.
-        suite: Box<SensorSuite>,
-        /// ESKF + predictor + LQI.
-        computer: Box<EskfFlightComputer>,
+        /// Navigation + predictor + LQI (fixed or scheduled).
+        computer: Box<SensorComputer>,
     },
     /// Ideal navigation: the predictor is given the nine measured states.
-    IdealNavigation(Box<FlightComputer<KalmanPredictor, Lqi>>),
+    IdealNavigation(Box<FlightComputer<AnyPredictor, Law>>),
     /// The thesis's "estimator off" switch: the law is fed the true state;
     /// with `fusion = true` the navigation still runs and is logged.
     Truth {
         /// Truth feed + LQI.
-        computer: Box<FlightComputer<TruthFeed, Lqi>>,
+        computer: Box<FlightComputer<TruthFeed, Law>>,
         /// Sensors and navigation run alongside, for the log.
         navigation: Option<(Box<SensorSuite>, Box<NavigationFilter>)>,
     },
@@ -201,9 +238,18 @@ impl OnBoard {
         let set = &prepared.gains.set;
         let ts = set.sample_time_s;
         let g = p.environment.g_m_s2;
-        let law = Lqi::new(set, servo_limits(p), scenario.controller.feedback)?;
-        let x0_est = estimator_start(&prepared.trim.x, x0);
         let c = &scenario.controller;
+        let setup = OnBoardSetup {
+            params: p,
+            gains: set,
+            schedule: prepared.schedule.as_ref(),
+            trim_x: &prepared.trim.x,
+            sensors: &scenario.sensors,
+            navigation: &scenario.navigation,
+            estimator: &scenario.estimator,
+            feedback: c.feedback,
+            x0,
+        };
         let sensed = || -> Result<_, ClosedLoopError> {
             Ok((
                 Box::new(sensor_suite_at(&scenario.sensors, ts, g)?),
@@ -217,33 +263,16 @@ impl OnBoard {
             ))
         };
         Ok(match (c.estimator, c.fusion) {
-            (true, true) if scenario.estimator.kind == EstimatorKind::Eskf => {
-                let suite = Box::new(sensor_suite_at(&scenario.sensors, ts, g)?);
-                let navigation = eskf_at(&scenario.sensors, &scenario.estimator.eskf, ts, g, x0)?;
-                let estimator = EskfEstimator::new(navigation, set, &x0_est)?;
-                OnBoard::Eskf {
-                    suite,
-                    computer: Box::new(FlightComputer::new(estimator, law)),
-                }
-            }
-            (true, true) => OnBoard::Thesis {
+            (true, true) => OnBoard::Sensed {
                 suite: Box::new(sensor_suite_at(&scenario.sensors, ts, g)?),
-                computer: Box::new(thesis_flight_computer(&OnBoardSetup {
-                    params: p,
-                    gains: set,
-                    trim_x: &prepared.trim.x,
-                    sensors: &scenario.sensors,
-                    navigation: &scenario.navigation,
-                    feedback: c.feedback,
-                    x0,
-                })?),
+                computer: Box::new(flight_computer(&setup)?),
             },
             (true, false) => OnBoard::IdealNavigation(Box::new(FlightComputer::new(
-                KalmanPredictor::new(set, &x0_est)?,
-                law,
+                setup.predictor()?,
+                setup.law()?,
             ))),
             (false, fusion) => OnBoard::Truth {
-                computer: Box::new(FlightComputer::new(TruthFeed, law)),
+                computer: Box::new(FlightComputer::new(TruthFeed, setup.law()?)),
                 navigation: if fusion { Some(sensed()?) } else { None },
             },
         })
@@ -271,11 +300,7 @@ impl OnBoard {
             frame
         };
         match self {
-            OnBoard::Thesis { suite, computer } => {
-                let frame = sense(suite);
-                computer.step(&frame, reference)
-            }
-            OnBoard::Eskf { suite, computer } => {
+            OnBoard::Sensed { suite, computer } => {
                 let frame = sense(suite);
                 computer.step(&frame, reference)
             }

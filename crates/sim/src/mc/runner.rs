@@ -145,6 +145,7 @@ impl Campaign {
                         model,
                         trim: t,
                         gains: nominal.gains.clone(),
+                        schedule: nominal.schedule.clone(),
                     })
                     .map_err(ClosedLoopError::from)
             }

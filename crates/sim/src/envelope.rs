@@ -1,0 +1,296 @@
+//! Flying the envelope: the scenario's optional `[trajectory]` section
+//! (jerk-limited references built on [`helicon_core::trajectory::Mission`])
+//! and the gain schedule a scenario flies (`[controller] schedule` /
+//! `schedule_file`).
+//!
+//! ```toml
+//! [trajectory]                  # replaces [[reference]]
+//! max_accel_m_s2 = 1.0          # speed channel: |dV/dt| and |d²V/dt²|
+//! max_jerk_m_s3 = 0.5
+//! max_yaw_accel_rad_s2 = 0.05   # yaw-rate channel
+//! max_yaw_jerk_rad_s3 = 0.05
+//! max_vertical_accel_m_s2 = 0.5 # down-velocity channel
+//! max_vertical_jerk_m_s3 = 0.5
+//! [[trajectory.speed]]          # ground speed along the heading (m/s)
+//! t_s = 5.0
+//! value = 15.0
+//! [[trajectory.yaw_rate]]       # rad/s; the heading integrates it
+//! t_s = 30.0
+//! value = 0.2
+//! [[trajectory.down]]           # down velocity (m/s)
+//! ```
+//!
+//! Each channel starts at the trim (speed: the trim's forward speed; yaw
+//! rate 0; down: the trim's down velocity) and moves to each leg's value
+//! along the time-optimal S-curve; a leg must start after the previous one
+//! of its channel has arrived. The velocity reference points along the
+//! heading (coordinated flight).
+
+use crate::scenario::{MAX_SPEED_M_S, Scenario, ScenarioError, num};
+use helicon_core::schedule::{GainSchedule, heading_axes};
+use helicon_core::trajectory::{Channel, MAX_LEGS, Mission};
+use helicon_gnc::schedule::{EnvelopeConfig, Schedule, ScheduleError, design_schedule};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+/// Largest |yaw rate| of a trajectory leg (rad/s): a standard-rate turn is
+/// 0.05 rad/s; 2 rad/s is far beyond any coordinated turn.
+pub const MAX_YAW_RATE_RAD_S: f64 = 2.0;
+
+/// One leg of a channel: at `t_s` start moving to `value`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LegSection {
+    /// Start time (s).
+    pub t_s: f64,
+    /// Target value (m/s or rad/s).
+    pub value: f64,
+}
+
+/// The `[trajectory]` section.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrajectorySection {
+    /// Speed channel: largest |acceleration| (m/s²).
+    pub max_accel_m_s2: f64,
+    /// Speed channel: largest |jerk| (m/s³).
+    pub max_jerk_m_s3: f64,
+    /// Yaw-rate channel: largest |yaw acceleration| (rad/s²).
+    pub max_yaw_accel_rad_s2: f64,
+    /// Yaw-rate channel: largest |yaw jerk| (rad/s³).
+    pub max_yaw_jerk_rad_s3: f64,
+    /// Down channel: largest |vertical acceleration| (m/s²).
+    pub max_vertical_accel_m_s2: f64,
+    /// Down channel: largest |vertical jerk| (m/s³).
+    pub max_vertical_jerk_m_s3: f64,
+    /// Ground-speed legs.
+    pub speed: Vec<LegSection>,
+    /// Yaw-rate legs.
+    pub yaw_rate: Vec<LegSection>,
+    /// Down-velocity legs.
+    pub down: Vec<LegSection>,
+}
+
+impl Default for TrajectorySection {
+    fn default() -> Self {
+        TrajectorySection {
+            max_accel_m_s2: 1.0,
+            max_jerk_m_s3: 0.5,
+            max_yaw_accel_rad_s2: 0.05,
+            max_yaw_jerk_rad_s3: 0.05,
+            max_vertical_accel_m_s2: 0.5,
+            max_vertical_jerk_m_s3: 0.5,
+            speed: Vec::new(),
+            yaw_rate: Vec::new(),
+            down: Vec::new(),
+        }
+    }
+}
+
+impl TrajectorySection {
+    /// The mission starting from the scenario's trim; errors name the file
+    /// and the field.
+    pub fn mission(&self, scenario: &Scenario, file: &str) -> Result<Mission, ScenarioError> {
+        let t = &scenario.trim;
+        let v = heading_axes(t.yaw_rad, &Vector3::from(t.velocity_ned_m_s));
+        if v.y.abs() > 1e-9 {
+            return Err(ScenarioError::invalid(
+                file,
+                "trim.velocity_ned_m_s",
+                v.y,
+                "with [trajectory] the trim velocity must point along the heading \
+                 (the trajectory starts from the trim's forward speed)",
+            ));
+        }
+        let channel = |field: &'static str,
+                       initial: f64,
+                       legs: &[LegSection],
+                       limit: f64,
+                       rate: f64,
+                       jerk: f64|
+         -> Result<Channel, ScenarioError> {
+            for (i, l) in legs.iter().enumerate() {
+                if !(l.t_s.is_finite() && l.t_s >= 0.0) {
+                    return Err(ScenarioError::invalid(
+                        file,
+                        format!("trajectory.{field}[{i}].t_s"),
+                        l.t_s,
+                        "must be finite and >= 0 s",
+                    ));
+                }
+                if !(l.value.is_finite() && l.value.abs() <= limit) {
+                    return Err(ScenarioError::invalid(
+                        file,
+                        format!("trajectory.{field}[{i}].value"),
+                        l.value,
+                        format!("must be finite and within +-{}", num(limit)),
+                    ));
+                }
+            }
+            if legs.len() > MAX_LEGS {
+                return Err(ScenarioError::invalid(
+                    file,
+                    format!("trajectory.{field}"),
+                    legs.len() as f64,
+                    "at most 32 legs",
+                ));
+            }
+            let pairs: Vec<(f64, f64)> = legs.iter().map(|l| (l.t_s, l.value)).collect();
+            Channel::new(field, initial, &pairs, rate, jerk).map_err(|e| ScenarioError::Invalid {
+                file: file.to_string(),
+                field: format!("trajectory.{field}"),
+                value: format!("{} legs", legs.len()),
+                rule: e.to_string(),
+            })
+        };
+        for (f, v) in [
+            ("trajectory.max_accel_m_s2", self.max_accel_m_s2),
+            ("trajectory.max_jerk_m_s3", self.max_jerk_m_s3),
+            ("trajectory.max_yaw_accel_rad_s2", self.max_yaw_accel_rad_s2),
+            ("trajectory.max_yaw_jerk_rad_s3", self.max_yaw_jerk_rad_s3),
+            (
+                "trajectory.max_vertical_accel_m_s2",
+                self.max_vertical_accel_m_s2,
+            ),
+            (
+                "trajectory.max_vertical_jerk_m_s3",
+                self.max_vertical_jerk_m_s3,
+            ),
+        ] {
+            if !(v.is_finite() && v > 0.0 && v <= 100.0) {
+                return Err(ScenarioError::invalid(
+                    file,
+                    f,
+                    v,
+                    "must be finite, > 0 and <= 100",
+                ));
+            }
+        }
+        Ok(Mission {
+            speed_m_s: channel(
+                "speed",
+                v.x,
+                &self.speed,
+                MAX_SPEED_M_S,
+                self.max_accel_m_s2,
+                self.max_jerk_m_s3,
+            )?,
+            yaw_rate_rad_s: channel(
+                "yaw_rate",
+                0.0,
+                &self.yaw_rate,
+                MAX_YAW_RATE_RAD_S,
+                self.max_yaw_accel_rad_s2,
+                self.max_yaw_jerk_rad_s3,
+            )?,
+            down_m_s: channel(
+                "down",
+                v.z,
+                &self.down,
+                MAX_SPEED_M_S,
+                self.max_vertical_accel_m_s2,
+                self.max_vertical_jerk_m_s3,
+            )?,
+            yaw0_rad: t.yaw_rad,
+        })
+    }
+}
+
+/// Designed schedules of this process, keyed by the envelope file's path
+/// and text (a Monte Carlo campaign designs once, an edited file again).
+type Cache = Vec<(PathBuf, String, Arc<(Schedule, GainSchedule)>)>;
+static CACHE: Mutex<Cache> = Mutex::new(Vec::new());
+
+/// The gain schedule a scenario flies, when it names one: `schedule` (an
+/// envelope file, designed here on its own model — the nominal helicopter —
+/// and cached per process) or `schedule_file` (a `helicon design` output).
+pub fn scenario_schedule(
+    scenario: &Scenario,
+) -> Result<Option<Arc<(Schedule, GainSchedule)>>, ScheduleError> {
+    let c = &scenario.controller;
+    if let Some(f) = &c.schedule_file {
+        let path = scenario.resolve(f);
+        let s = Schedule::load(&path)?;
+        let gs = s.gain_schedule(&path.display().to_string())?;
+        return Ok(Some(Arc::new((s, gs))));
+    }
+    let Some(env) = &c.schedule else {
+        return Ok(None);
+    };
+    let path = scenario.resolve(env);
+    let text = std::fs::read_to_string(&path).map_err(|source| {
+        ScheduleError::Config(ScenarioError::Io {
+            file: path.display().to_string(),
+            action: "read",
+            source,
+        })
+    })?;
+    if let Ok(cache) = CACHE.lock()
+        && let Some((_, _, s)) = cache.iter().find(|(p, t, _)| *p == path && *t == text)
+    {
+        return Ok(Some(Arc::clone(s)));
+    }
+    let s = design_envelope(&path, &text)?;
+    if let Ok(mut cache) = CACHE.lock() {
+        cache.push((path, text, Arc::clone(&s)));
+    }
+    Ok(Some(s))
+}
+
+fn design_envelope(
+    path: &Path,
+    text: &str,
+) -> Result<Arc<(Schedule, GainSchedule)>, ScheduleError> {
+    let file = path.display().to_string();
+    let mut cfg = EnvelopeConfig::from_toml_str(text, &file)?;
+    cfg.base_dir = path.parent().map(Path::to_path_buf);
+    let model = cfg.model()?;
+    let s = design_schedule(&model, &cfg, &mut |_, _| {})?;
+    let gs = s.gain_schedule(&file)?;
+    Ok(Arc::new((s, gs)))
+}
+
+/// Tracking of one time segment of a flight.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SegmentRms {
+    /// Segment start (s).
+    pub t0_s: f64,
+    /// Segment end (s).
+    pub t1_s: f64,
+    /// Kept log rows in the segment.
+    pub rows: usize,
+    /// RMS of the horizontal velocity error |r_h − v_h| (m/s).
+    pub horizontal_m_s: f64,
+    /// RMS of the down-velocity error (m/s).
+    pub vertical_m_s: f64,
+    /// RMS of the heading error, wrapped (rad).
+    pub heading_rad: f64,
+}
+
+/// The tracking RMS of the log rows with `t0_s <= t < t1_s` (reference −
+/// true output); `None` when no row falls inside (e.g. the flight stopped
+/// before the segment).
+pub fn segment_rms(log: &[crate::closed_loop::LogRow], t0_s: f64, t1_s: f64) -> Option<SegmentRms> {
+    let mut acc = [0.0f64; 3];
+    let mut n = 0usize;
+    for r in log.iter().filter(|r| r.t_s >= t0_s && r.t_s < t1_s) {
+        let (dn, de) = (r.reference[0] - r.output[0], r.reference[1] - r.output[1]);
+        acc[0] += dn * dn + de * de;
+        acc[1] += (r.reference[2] - r.output[2]).powi(2);
+        acc[2] += helicon_core::frames::wrap_pi(r.reference[3] - r.output[3]).powi(2);
+        n += 1;
+    }
+    (n > 0).then(|| {
+        let m = |s: f64| (s / n as f64).sqrt();
+        SegmentRms {
+            t0_s,
+            t1_s,
+            rows: n,
+            horizontal_m_s: m(acc[0]),
+            vertical_m_s: m(acc[1]),
+            heading_rad: m(acc[2]),
+        }
+    })
+}
