@@ -20,6 +20,8 @@
 //!   the Kalman predictor alone, the truth feed;
 //! - [`lqi`]: the [`StateFeedback`] extension point; the LQR with integral action;
 //! - [`gains`]: the fixed-size [`GainSet`] a design produces;
+//! - [`imu_health`]: vibration level and likely hidden accelerometer
+//!   saturation from the IMU output (thesis Appendix A);
 //! - [`computer`]: [`FlightComputer`] and its [`Telemetry`].
 //!
 //! To add a sensor: a field in [`SensorFrame`] and its use in an estimator.
@@ -33,6 +35,7 @@ pub mod estimator;
 pub mod frames;
 pub mod fusion;
 pub mod gains;
+pub mod imu_health;
 pub mod lqi;
 pub mod navigation;
 pub mod sensor;
@@ -45,6 +48,7 @@ pub use estimator::{
     TruthFeed, TruthMeasurement,
 };
 pub use gains::{GainSet, LqiOptions, ServoLimits};
+pub use imu_health::{ImuHealth, ImuHealthConfig, ImuHealthMonitor};
 pub use lqi::{Command, Lqi, Reference, StateFeedback};
 pub use navigation::{NavigationConfig, NavigationFilter, NavigationSolution};
 pub use sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
