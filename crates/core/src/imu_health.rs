@@ -176,7 +176,10 @@ impl ImuHealthMonitor {
             self.low = *f;
         }
         self.samples += 1;
-        self.mean += (f - self.mean) * self.alpha_mean;
+        // the plain average of the samples so far until it is as long as
+        // the time constant: the first sample's vibration is not kept
+        let alpha = self.alpha_mean.max(1.0 / self.samples as f64);
+        self.mean += (f - self.mean) * alpha;
         self.low += (f - self.low) * self.alpha_corner;
         let residue = f - self.low;
         self.residue_ms += (residue.norm_squared() - self.residue_ms) * self.alpha_residue;
@@ -249,7 +252,10 @@ mod tests {
         // passes 95 % of it)
         let h = run(|t| Vector3::new(0.0, 0.0, -9.82 + 2.0 * (2.0 * 3.14159 * 16.0 * t).sin()));
         assert!(h.has(ImuHealth::VIBRATION), "{h:?}");
-        assert!((h.vibration_rms_m_s2 - 2.0 / 2f64.sqrt()).abs() < 0.15, "{h:?}");
+        assert!(
+            (h.vibration_rms_m_s2 - 2.0 / 2f64.sqrt()).abs() < 0.15,
+            "{h:?}"
+        );
         assert!(!h.has(ImuHealth::GRAVITY_DEFICIT));
     }
 

@@ -249,7 +249,7 @@ pub struct VibrationConfig {
 impl Default for VibrationConfig {
     /// Off; when switched on, an illustrative hard-mounted IMU on a gasoline
     /// helicopter (docs/vibration.md): engine firing 1.5 g and its second
-    /// harmonic 0.8 g vertically, rotor lines 0.2–0.5 g, half that in x and
+    /// harmonic 0.8 g vertically, rotor and tail-rotor lines 0.1–0.3 g, half that in x and
     /// y; angular lines 0.01–0.05 rad/s. Not a measurement: the thesis gives
     /// no spectrum ("lack of knowledge about the exact frequency").
     fn default() -> Self {
@@ -259,8 +259,8 @@ impl Default for VibrationConfig {
             reference_rotor_speed_rad_s: 100.0,
             engine_gear_ratio: 8.0,
             engine_firings_per_rev: 2.0,
-            main_1p: VibrationLine::hard_mounted(0.3, 0.05),
-            main_bp: VibrationLine::hard_mounted(0.5, 0.03),
+            main_1p: VibrationLine::hard_mounted(0.1, 0.05),
+            main_bp: VibrationLine::hard_mounted(0.2, 0.03),
             tail_1p: VibrationLine::hard_mounted(0.2, 0.01),
             tail_bp: VibrationLine::hard_mounted(0.3, 0.01),
             engine_1f: VibrationLine::hard_mounted(1.5, 0.02),

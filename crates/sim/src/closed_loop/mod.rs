@@ -16,11 +16,11 @@ use crate::navigation::{navigation_filter_at, sensor_suite_at};
 use crate::scenario::{DesignInflow, OUTPUTS, PlantInflow, Scenario};
 use crate::sensor_log::{LoggedTruth, SensorLogRow};
 use crate::sensors::SensorSuite;
-use crate::vibration::RotorSpeeds;
-use helicon_core::imu_health::{ImuHealthConfig, ImuHealthMonitor};
 use crate::trajectory::TruthSample;
+use crate::vibration::RotorSpeeds;
 use crate::wind::{Wind, WindModel};
 use helicon_core::frames::{EulerTrig, wrap_pi};
+use helicon_core::imu_health::{ImuHealthConfig, ImuHealthMonitor};
 use helicon_core::navigation::NavigationFilter;
 use helicon_core::{
     CoreError, FlightComputer, KalmanPredictor, Lqi, Reference, ServoLimits, StateMeasurement,
