@@ -3,11 +3,15 @@
 //! closed form of a clipped sinusoid through a linear filter.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+#![allow(unsafe_code)] // the shared counting allocator forwards to System
 
 use helicon_sim::closed_loop::{fly, prepare};
 use helicon_sim::scenario::Scenario;
 use helicon_sim::sensor_log::SensorLogWriter;
 use std::path::{Path, PathBuf};
+
+#[path = "../../core/tests/common/counting_alloc.rs"]
+mod counting_alloc;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -198,4 +202,75 @@ fn two_g_part_loses_the_vertical_channel_twenty_g_flies() {
         assert!(vd2 > 3.0 * vd20, "±2 g: vd RMS {vd2} vs {vd20}");
         assert!(def2 > 0.8 && def20 < 0.05, "{def2} {def20}");
     }
+}
+
+/// Sampling the IMU with the vibration chain on allocates nothing (the
+/// chain is fixed-size: six lines, six axes, at most four sections each).
+#[test]
+fn vibration_chain_does_not_allocate() {
+    use helicon_sim::sensors::SensorSuite;
+    use helicon_sim::trajectory::ScriptedTrajectory;
+    let mut cfg = SensorConfig::default();
+    cfg.imu.vibration.enabled = true;
+    cfg.gps.latency_s = 0.0;
+    let mut suite = SensorSuite::new(cfg, G).unwrap();
+    let traj = ScriptedTrajectory::default();
+    let truths: Vec<_> = (0..2000)
+        .map(|k| traj.truth(f64::from(k) / 400.0))
+        .collect();
+    let before = counting_alloc::allocations();
+    let mut acc = 0.0;
+    for t in &truths {
+        acc += suite.sample(t).imu.specific_force_body_m_s2.z;
+    }
+    let after = counting_alloc::allocations();
+    assert!(acc.is_finite());
+    assert_eq!(after - before, 0, "sampling with vibration allocated");
+}
+
+/// Bad vibration and stage settings are errors naming the file and field.
+#[test]
+fn vibration_config_errors_name_the_field() {
+    for (text, field) in [
+        (
+            "[imu.vibration]\nenabled = true\noversample = 0\n",
+            "imu.vibration.oversample",
+        ),
+        (
+            "[imu.vibration]\nenabled = true\noversample = 1000\n",
+            "imu.vibration.oversample",
+        ),
+        (
+            "[imu.vibration]\nenabled = true\nengine_gear_ratio = nan\n",
+            "imu.vibration.engine_gear_ratio",
+        ),
+        (
+            "[imu.vibration]\nenabled = true\n[imu.vibration.main_1p]\naccel_m_s2 = [0.0, -1.0, 0.0]\n",
+            "imu.vibration.main_1p.accel_m_s2",
+        ),
+        (
+            "[imu.vibration]\nenabled = true\n[imu.accel_stage]\nfilter_order = 9\n",
+            "imu.accel_stage.filter_order",
+        ),
+        (
+            "[imu.vibration]\nenabled = true\n[imu.gyro_stage]\nmechanical_bandwidth_hz = 4000.0\n",
+            "imu.gyro_stage.mechanical_bandwidth_hz",
+        ),
+        (
+            "[imu.vibration]\nenabled = true\n[imu.accel_stage]\nmechanical_range = -2.0\n",
+            "imu.accel_stage.mechanical_range",
+        ),
+    ] {
+        let e = SensorConfig::from_toml_str(text, "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("s.toml") && e.contains(field), "{text}: {e}");
+    }
+    // off: the stage settings are not used, so not checked against the rate
+    let ok = "[imu]\nrate_hz = 10.0\n[mag]\nrate_hz = 10.0\n";
+    assert!(SensorConfig::from_toml_str(ok, "s.toml").is_ok());
+    // the defaults print and read back
+    let cfg = SensorConfig::default();
+    let back = SensorConfig::from_toml_str(&cfg.to_toml().unwrap(), "d.toml").unwrap();
+    assert_eq!(back, cfg);
 }
