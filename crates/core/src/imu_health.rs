@@ -250,7 +250,13 @@ mod tests {
     fn in_band_vibration_is_measured() {
         // 2 m/s² at 16 Hz on z: RMS 2/√2 (the 5 Hz first-order high-pass
         // passes 95 % of it)
-        let h = run(|t| Vector3::new(0.0, 0.0, -9.82 + 2.0 * (2.0 * std::f64::consts::PI * 16.0 * t).sin()));
+        let h = run(|t| {
+            Vector3::new(
+                0.0,
+                0.0,
+                -9.82 + 2.0 * (2.0 * std::f64::consts::PI * 16.0 * t).sin(),
+            )
+        });
         assert!(h.has(ImuHealth::VIBRATION), "{h:?}");
         assert!(
             (h.vibration_rms_m_s2 - 2.0 / 2f64.sqrt()).abs() < 0.15,
