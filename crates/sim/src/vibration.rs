@@ -232,6 +232,14 @@ pub struct VibrationConfig {
     pub engine_gear_ratio: f64,
     /// Engine firings per engine revolution (two-stroke twin: 2).
     pub engine_firings_per_rev: f64,
+    /// Natural frequency of a vibration isolator between the airframe and
+    /// the IMU (Hz): each line is scaled by the mount's transmissibility
+    /// `|T| = √((1 + (2ζr)²) / ((1 − r²)² + (2ζr)²))`, `r = f / f_n`.
+    /// Absent: hard mounted. Rigid-body motion passes unchanged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub isolator_natural_frequency_hz: Option<f64>,
+    /// Damping ratio ζ of the isolator, (0, 10].
+    pub isolator_damping_ratio: f64,
     /// Main rotor, once per revolution (imbalance), Ω.
     pub main_1p: VibrationLine,
     /// Main rotor, blade passage, b·Ω.
@@ -259,6 +267,8 @@ impl Default for VibrationConfig {
             reference_rotor_speed_rad_s: 100.0,
             engine_gear_ratio: 8.0,
             engine_firings_per_rev: 2.0,
+            isolator_natural_frequency_hz: None,
+            isolator_damping_ratio: 0.1,
             main_1p: VibrationLine::hard_mounted(0.1, 0.05),
             main_bp: VibrationLine::hard_mounted(0.2, 0.03),
             tail_1p: VibrationLine::hard_mounted(0.2, 0.01),
@@ -280,6 +290,18 @@ impl VibrationConfig {
             ("engine_1f", &self.engine_1f),
             ("engine_2f", &self.engine_2f),
         ]
+    }
+
+    /// The isolator's transmissibility at `f_hz` (1 when hard mounted).
+    pub fn transmissibility(&self, f_hz: f64) -> f64 {
+        match self.isolator_natural_frequency_hz {
+            None => 1.0,
+            Some(fn_hz) => {
+                let r = f_hz / fn_hz;
+                let d = 2.0 * self.isolator_damping_ratio * r;
+                ((1.0 + d * d) / ((1.0 - r * r).powi(2) + d * d)).sqrt()
+            }
+        }
     }
 
     /// The six line frequencies (Hz) at these rotor speeds.
@@ -345,6 +367,13 @@ impl VibrationConfig {
         )?;
         positive("engine_gear_ratio", self.engine_gear_ratio)?;
         positive("engine_firings_per_rev", self.engine_firings_per_rev)?;
+        if let Some(f) = self.isolator_natural_frequency_hz {
+            positive("isolator_natural_frequency_hz", f)?;
+        }
+        let z = self.isolator_damping_ratio;
+        if !(z.is_finite() && z > 0.0 && z <= 10.0) {
+            return bad("imu.vibration.isolator_damping_ratio".into(), z, "(0, 10]");
+        }
         for (name, line) in self.lines() {
             for (what, v) in [
                 ("accel_m_s2", line.accel_m_s2),
@@ -585,6 +614,7 @@ impl VibrationChain {
         let mut accel_iq = [[(0.0, 0.0); 3]; 6];
         let mut gyro_iq = [[(0.0, 0.0); 3]; 6];
         for (l, (_, line)) in vib.lines().iter().enumerate() {
+            let scale = scale * vib.transmissibility(freqs[l]);
             for i in 0..3 {
                 let pa = 2.0 * PI * phases();
                 let pg = 2.0 * PI * phases();
@@ -766,6 +796,28 @@ mod tests {
         assert!(
             (amplitude / expected - 1.0).abs() < 1e-3,
             "{amplitude} vs {expected}"
+        );
+
+        // on an isolator at 100 Hz, ζ = 0.1: scaled by its transmissibility
+        vib.isolator_natural_frequency_hz = Some(100.0);
+        let mut isolated = VibrationChain::new(&vib, &stage, &stage, &setup, || 0.25).unwrap();
+        let (r, z2r) = (f / 100.0, 0.2 * f / 100.0);
+        let t = ((1.0 + z2r * z2r) / ((1.0 - r * r).powi(2) + z2r * z2r)).sqrt();
+        let (mut re, mut im) = (0.0, 0.0);
+        for k in 0..20_000 {
+            let (a, _) = isolated.step(&Vector3::zeros(), &Vector3::zeros());
+            if k >= 1000 {
+                let w = 2.0 * PI * f * f64::from(k) / fs;
+                re += a.z * w.cos();
+                im += a.z * w.sin();
+            }
+        }
+        let isolated_amplitude = 2.0 * (re * re + im * im).sqrt() / n;
+        assert!(t < 0.1, "{t}"); // 0.057: the line is isolated
+        assert!(
+            (isolated_amplitude / (expected * t) - 1.0).abs() < 1e-3,
+            "{isolated_amplitude} vs {}",
+            expected * t
         );
     }
 }

@@ -249,6 +249,14 @@ fn vibration_config_errors_name_the_field() {
             "imu.vibration.main_1p.accel_m_s2",
         ),
         (
+            "[imu.vibration]\nenabled = true\nisolator_damping_ratio = 0.0\n",
+            "imu.vibration.isolator_damping_ratio",
+        ),
+        (
+            "[imu.vibration]\nenabled = true\nisolator_natural_frequency_hz = -25.0\n",
+            "imu.vibration.isolator_natural_frequency_hz",
+        ),
+        (
             "[imu.vibration]\nenabled = true\n[imu.accel_stage]\nfilter_order = 9\n",
             "imu.accel_stage.filter_order",
         ),
