@@ -116,6 +116,7 @@ fn run() -> anyhow::Result<()> {
         Command::Sensors(a) => match a.command {
             sensors::SensorsCommand::Simulate(s) => sensors::run_simulate(&s),
             sensors::SensorsCommand::Config => sensors::run_sensors_config(),
+            sensors::SensorsCommand::Shaker(s) => sensors::run_shaker(&s),
         },
         Command::Fuse(a) => sensors::run_fuse(&a),
         Command::Log(a) => log_cmd::run(&a),

@@ -645,6 +645,30 @@ const CORPUS: &[Case] = &[
         &["o/s.csv"],
     ),
     ok("sensors", "config", "sensors config", &[]),
+    fail(
+        "sensors",
+        "shaker frequency 0",
+        "sensors shaker --freq-hz 0 --amplitude-g 1 --out o/sh",
+        &["freq_hz"],
+    ),
+    fail(
+        "sensors",
+        "shaker amplitude 1e300",
+        "sensors shaker --freq-hz 200 --amplitude-g 1e300 --out o/sh",
+        &["amplitude"],
+    ),
+    fail(
+        "sensors",
+        "shaker config rate 0",
+        "sensors shaker --freq-hz 200 --amplitude-g 1 --config sensors_bad.toml --out o/sh",
+        &["sensors_bad.toml", "imu.rate_hz"],
+    ),
+    ok(
+        "sensors",
+        "shaker short",
+        "sensors shaker --freq-hz 200 --amplitude-g 2 --duration-s 1 --no-sweep --out o/sh",
+        &["o/sh/summary.json", "o/sh/shaker.csv"],
+    ),
     // --- fuse
     fail(
         "fuse",

@@ -22,6 +22,8 @@
 //!   the Kalman predictor alone, the truth feed;
 //! - [`lqi`]: the [`StateFeedback`] extension point; the LQR with integral action;
 //! - [`gains`]: the fixed-size [`GainSet`] a design produces;
+//! - [`imu_health`]: vibration level and likely hidden accelerometer
+//!   saturation from the IMU output (thesis Appendix A);
 //! - [`schedule`]: gain scheduling over the envelope ([`GainSchedule`],
 //!   [`ScheduledLqi`], [`ScheduledPredictor`]);
 //! - [`trajectory`]: jerk-limited references (S-curves, a mission of speed,
@@ -40,6 +42,7 @@ pub mod estimator;
 pub mod frames;
 pub mod fusion;
 pub mod gains;
+pub mod imu_health;
 pub mod lqi;
 pub mod navigation;
 pub mod schedule;
@@ -55,6 +58,7 @@ pub use estimator::{
     Timestamped, TruthFeed, TruthMeasurement,
 };
 pub use gains::{GainSet, LqiOptions, ServoLimits};
+pub use imu_health::{ImuHealth, ImuHealthConfig, ImuHealthMonitor};
 pub use lqi::{Command, Lqi, Reference, StateFeedback};
 pub use navigation::{ImuBiasEstimate, NavigationConfig, NavigationFilter, NavigationSolution};
 pub use schedule::{

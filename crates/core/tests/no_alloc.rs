@@ -103,3 +103,23 @@ fn eskf_step_does_not_allocate() {
         after - before
     );
 }
+
+#[test]
+fn imu_health_update_does_not_allocate() {
+    use helicon_core::imu_health::{ImuHealthConfig, ImuHealthMonitor};
+    use helicon_core::sensor::ImuSample;
+    let mut m = ImuHealthMonitor::new(ImuHealthConfig::new(9.82, 0.0025, 98.2)).unwrap();
+    let before = allocations();
+    let mut acc = 0.0;
+    for k in 0..4000 {
+        let t = f64::from(k) * 0.0025;
+        let h = m.update(&ImuSample {
+            specific_force_body_m_s2: Vector3::new(0.0, 0.0, -9.82 + (100.0 * t).sin()),
+            gyro_body_rad_s: Vector3::zeros(),
+        });
+        acc += h.vibration_rms_m_s2;
+    }
+    let after = allocations();
+    assert!(acc.is_finite());
+    assert_eq!(after - before, 0, "ImuHealthMonitor::update allocated");
+}

@@ -6,6 +6,9 @@
 //! - [`wind`]: steady wind, 1-cosine gust, the thesis wind model
 //!   (14.38)–(14.42) and Dryden turbulence;
 //! - [`sensors`]: IMU, magnetometer and GPS models with a seeded RNG;
+//! - [`vibration`]: vibration at the IMU and the sensors' internal stages
+//!   (mechanical range and bandwidth, internal low-pass; thesis Appendix A);
+//! - [`shaker`]: the shaker experiment of Appendix A (hidden saturation);
 //! - [`trajectory`]: a scripted smooth trajectory to drive the sensors;
 //! - [`envelope`]: jerk-limited mission references and the gain schedule a scenario flies;
 //! - [`log_csv`]: the `log.csv` column table, streaming writer and typed reader;
@@ -24,6 +27,8 @@ pub mod resources;
 pub mod scenario;
 pub mod sensor_log;
 pub mod sensors;
+pub mod shaker;
 pub mod spectral;
 pub mod trajectory;
+pub mod vibration;
 pub mod wind;

@@ -13,7 +13,7 @@
 //!   (plain notation for 1e-4 ≤ |v| < 1e9, exponent notation otherwise), so a
 //!   log is an exact record of the run.
 //!
-//! The columns of a helicon run are [`LOG_SCHEMA`] (76, SI units). The reader
+//! The columns of a helicon run are [`LOG_SCHEMA`] (79, SI units). The reader
 //! matches columns by name: a file with extra columns, or another order, reads
 //! as well, so tools can require only the columns they use
 //! ([`read_log_csv_with`]).
@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 
 /// Version of the `log.csv` layout: raised when a column of [`LOG_SCHEMA`]
 /// is renamed, removed, reordered or changes unit or meaning.
-pub const LOG_FORMAT_VERSION: u32 = 1;
+pub const LOG_FORMAT_VERSION: u32 = 2;
 
 /// The nine measured states of the thesis (15.2), in order.
 pub const MEASURED_NAMES: [&str; 9] = ["phi", "theta", "psi", "u", "v", "w", "p", "q", "r"];
@@ -60,6 +60,9 @@ pub enum LogSource {
     Inflow(usize),
     /// `[main-rotor thrust −hFz, tail-rotor side force tFy][i]`.
     RotorForce(usize),
+    /// The flight software's IMU health `[vibration RMS, gravity residual,
+    /// flags][i]` (zeros without sensor models).
+    ImuHealth(usize),
 }
 
 impl LogSource {
@@ -78,6 +81,7 @@ impl LogSource {
             LogSource::Wind(i) => r.wind_ned[i],
             LogSource::Inflow(i) => r.lambda[i],
             LogSource::RotorForce(i) => r.thrust[i],
+            LogSource::ImuHealth(i) => r.imu_health[i],
         }
     }
 }
@@ -114,7 +118,7 @@ const fn col(name: &'static str, unit: &'static str, source: LogSource) -> LogCo
 use LogSource as S;
 
 /// Number of columns of `log.csv`.
-pub const LOG_COLUMNS: usize = 76;
+pub const LOG_COLUMNS: usize = 79;
 
 /// The columns of `log.csv`, in order: the one table the header, every row,
 /// the reader's units and the documentation come from.
@@ -203,6 +207,10 @@ pub static LOG_SCHEMA: [LogColumn; LOG_COLUMNS] = [
     col("lambda_tr", "1", S::Inflow(1)),
     col("thrust_mr_n", "N", S::RotorForce(0)),
     col("force_tr_y_n", "N", S::RotorForce(1)),
+    // the flight software's IMU health (helicon_core::imu_health)
+    col("imu_vib_rms_m_s2", "m/s^2", S::ImuHealth(0)),
+    col("imu_gravity_residual_m_s2", "m/s^2", S::ImuHealth(1)),
+    col("imu_health_flags", "1", S::ImuHealth(2)),
 ];
 
 /// The `log.csv` header, in column order.

@@ -15,6 +15,9 @@
 //! slowly correlated errors; not modelled).
 
 use crate::trajectory::TruthSample;
+use crate::vibration::{
+    ChainSetup, RotorSpeeds, StageConfig, StageDiagnostics, VibrationChain, VibrationConfig,
+};
 use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame};
 use nalgebra::Vector3;
 use rand::{RngExt, SeedableRng};
@@ -60,6 +63,13 @@ pub struct ImuConfig {
     pub accel: InertialConfig,
     /// Gyro (rad/s).
     pub gyro: InertialConfig,
+    /// Vibration at the sensor (`[imu.vibration]`, off by default: the
+    /// model above exactly).
+    pub vibration: VibrationConfig,
+    /// The accelerometer's internal stages (used with vibration on).
+    pub accel_stage: StageConfig,
+    /// The gyro's internal stages (used with vibration on).
+    pub gyro_stage: StageConfig,
 }
 
 impl Default for ImuConfig {
@@ -87,6 +97,9 @@ impl Default for ImuConfig {
                 range: gyro_range,
                 resolution: 2.0 * gyro_range / 65536.0,
             },
+            vibration: VibrationConfig::default(),
+            accel_stage: StageConfig::default(),
+            gyro_stage: StageConfig::default(),
         }
     }
 }
@@ -346,26 +359,35 @@ impl SensorConfig {
         if !(p.is_finite() && (0.0..=1.0).contains(&p)) {
             return Err(bad("gps.dropout_probability".into(), p, "0..=1"));
         }
-        Ok(())
+        let imu = &self.imu;
+        imu.vibration
+            .validate([&imu.accel_stage, &imu.gyro_stage], imu.rate_hz, file)
     }
 }
 
+/// One inertial triad's output stage: scale factor, bias (turn-on + random
+/// walk), white noise, quantisation and output range.
 #[derive(Debug, Clone)]
-struct InertialState {
+pub(crate) struct InertialState {
     cfg: InertialConfig,
     scale: Vector3<f64>,
     bias: Vector3<f64>,
 }
 
 impl InertialState {
-    fn new(cfg: InertialConfig, rng: &mut ChaCha8Rng) -> Self {
+    pub(crate) fn new(cfg: InertialConfig, rng: &mut ChaCha8Rng) -> Self {
         let mut n = || -> f64 { StandardNormal.sample(rng) };
         let scale = Vector3::new(n(), n(), n()) * cfg.scale_factor_sigma;
         let bias = Vector3::new(n(), n(), n()) * cfg.initial_bias_sigma;
         Self { cfg, scale, bias }
     }
 
-    fn measure(&mut self, x: &Vector3<f64>, rate_hz: f64, rng: &mut ChaCha8Rng) -> Vector3<f64> {
+    pub(crate) fn measure(
+        &mut self,
+        x: &Vector3<f64>,
+        rate_hz: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> Vector3<f64> {
         let dt = 1.0 / rate_hz;
         let sigma_white = self.cfg.noise_density * rate_hz.sqrt();
         let mut y = Vector3::zeros();
@@ -400,6 +422,57 @@ pub struct SensorSuite {
     next_gps_epoch_s: f64,
     pending_gps: VecDeque<(f64, Vector3<f64>, Vector3<f64>)>,
     rng_gps_vel: ChaCha8Rng,
+    /// The vibration and the sensors' internal stages (vibration on).
+    vibration: Option<VibrationChain>,
+}
+
+/// The vibration chain of `config` at `rotor`, its random phases from the
+/// sensor seed's own stream (the other streams are untouched).
+fn vibration_chain(
+    config: &SensorConfig,
+    rotor: RotorSpeeds,
+) -> Result<Option<VibrationChain>, SensorConfigError> {
+    let imu = &config.imu;
+    if !imu.vibration.enabled {
+        return Ok(None);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
+    rng.set_stream(14);
+    let setup = ChainSetup {
+        imu_rate_hz: imu.rate_hz,
+        output_range: (imu.accel.range, imu.gyro.range),
+        rotor,
+    };
+    let speeds = [
+        rotor.main_rad_s,
+        rotor.tail_rad_s,
+        rotor.main_blades,
+        rotor.tail_blades,
+    ];
+    if !speeds.iter().all(|v| v.is_finite() && *v >= 0.0) {
+        return Err(SensorConfigError::invalid(
+            "<parameters>",
+            "main_rotor.omega_rad_s",
+            rotor.main_rad_s,
+            "rotor speeds and blade counts must be finite and >= 0",
+        ));
+    }
+    VibrationChain::new(
+        &imu.vibration,
+        &imu.accel_stage,
+        &imu.gyro_stage,
+        &setup,
+        || rng.random::<f64>(),
+    )
+    .map(Some)
+    .ok_or_else(|| {
+        SensorConfigError::invalid(
+            "<sensor config>",
+            "imu.vibration",
+            imu.rate_hz,
+            "a stage frequency is out of range at this IMU rate",
+        )
+    })
 }
 
 impl SensorSuite {
@@ -440,7 +513,21 @@ impl SensorSuite {
                 (config.gps.latency_s * config.gps.rate_hz).ceil() as usize + 4,
             ),
             rng_gps_vel: stream(13),
+            vibration: vibration_chain(&config, RotorSpeeds::default())?,
         })
+    }
+
+    /// The suite with the vibration frequencies of these rotors (the
+    /// helicopter's; default the Bergen Twin's). No effect with vibration off.
+    pub fn with_rotor(mut self, rotor: RotorSpeeds) -> Result<Self, SensorConfigError> {
+        self.vibration = vibration_chain(&self.config, rotor)?;
+        Ok(self)
+    }
+
+    /// What the sensors' mechanical stages saw over the last sample (truth,
+    /// for analysis); `None` with vibration off.
+    pub fn stage_diagnostics(&self) -> Option<StageDiagnostics> {
+        self.vibration.as_ref().map(VibrationChain::diagnostics)
     }
 
     /// The configuration.
@@ -471,10 +558,12 @@ impl SensorSuite {
         let body_from_ned = truth.body_from_ned();
         let f_true =
             body_from_ned * (truth.acc_ned_m_s2 - Vector3::new(0.0, 0.0, self.gravity_m_s2));
-        let specific_force = self.accel.measure(&f_true, rate, &mut self.rng_imu);
-        let gyro = self
-            .gyro
-            .measure(&truth.omega_body_rad_s, rate, &mut self.rng_imu);
+        let (f_sensed, omega_sensed) = match self.vibration.as_mut() {
+            Some(chain) => chain.step(&f_true, &truth.omega_body_rad_s),
+            None => (f_true, truth.omega_body_rad_s),
+        };
+        let specific_force = self.accel.measure(&f_sensed, rate, &mut self.rng_imu);
+        let gyro = self.gyro.measure(&omega_sensed, rate, &mut self.rng_imu);
         let mag_body = if self.step_index % self.mag_every == 0 {
             let m = body_from_ned * Vector3::from(self.config.mag.field_ned);
             let s = self.config.mag.noise_sigma;

@@ -145,6 +145,9 @@ impl<'a> Hardware<'a> {
             lambda: [step.aux.lambda_mr, step.aux.lambda_tr],
             thrust: [-step.aux.force_mr_hub_n.z, step.aux.force_tr_y_n],
             inflow_residual: step.aux.inflow_residual,
+            // The IMU health monitor is flight software: the on-board side
+            // does not report it through the hardware (zeros, as without sensors).
+            imu_health: [0.0; 3],
         };
         if let Some(tel) = downlink {
             row = LogRow::new(t, &x_start, tel, r, &wind_ned, &step.aux);

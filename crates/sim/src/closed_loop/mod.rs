@@ -17,8 +17,10 @@ use crate::scenario::{DesignInflow, OUTPUTS, PlantInflow, Scenario};
 use crate::sensor_log::{LoggedTruth, SensorLogRow};
 use crate::sensors::{SensorConfig, SensorSuite};
 use crate::trajectory::TruthSample;
+use crate::vibration::RotorSpeeds;
 use crate::wind::{Wind, WindModel};
 use helicon_core::frames::{EulerTrig, wrap_pi};
+use helicon_core::imu_health::{ImuHealthConfig, ImuHealthMonitor};
 use helicon_core::navigation::{NavigationConfig, NavigationFilter};
 use helicon_core::{
     CoreError, FlightComputer, GainSet, KalmanPredictor, Lqi, Reference, ServoLimits,
@@ -230,6 +232,10 @@ pub struct LogRow {
     /// |g(λ)| of the momentum equations (7.33)/(7.56) at the λ used [main,
     /// tail]: ~1e-13 when converged; large when the thesis iteration is off its root.
     pub inflow_residual: [f64; 2],
+    /// The flight software's IMU health after this sample: in-band
+    /// vibration RMS (m/s²), |mean f| − g (m/s²) and the flags
+    /// (`helicon_core::ImuHealth`); zeros without sensor models.
+    pub imu_health: [f64; 3],
 }
 
 /// A finished flight: the log and the summary.
@@ -340,6 +346,34 @@ fn check_log_memory(rows: usize, row_bytes: usize) -> Result<(), ClosedLoopError
     Ok(())
 }
 
+/// The flight software's IMU health monitor, when sensor models fly.
+fn imu_health_monitor(
+    scenario: &Scenario,
+    prepared: &Prepared,
+) -> Result<Option<ImuHealthMonitor>, ClosedLoopError> {
+    if !scenario.controller.fusion {
+        return Ok(None);
+    }
+    let cfg = ImuHealthConfig::new(
+        prepared.model.params().environment.g_m_s2,
+        prepared.gains.set.sample_time_s,
+        scenario.sensors.imu.accel.range,
+    );
+    match ImuHealthMonitor::new(cfg) {
+        Some(m) => Ok(Some(m)),
+        None => Err(helicon_model::ConfigError::invalid(
+            "<scenario>",
+            "sensors.imu.accel.range",
+            cfg.accel_range_m_s2,
+            format!(
+                "the IMU health monitor's `{}` must be finite and > 0",
+                cfg.first_invalid().unwrap_or("setting")
+            ),
+        )
+        .into()),
+    }
+}
+
 fn fly_with(
     scenario: &Scenario,
     prepared: &Prepared,
@@ -362,6 +396,7 @@ fn fly_with(
     let mut plant = Plant::new(scenario, prepared, ts);
     let mut onboard = OnBoard::new(scenario, prepared, &plant.x)?;
     let mut wind = Wind::from_config(&scenario.wind)?;
+    let mut health = imu_health_monitor(scenario, prepared)?;
     let schedule = scenario.reference_schedule();
     let mut acc = SummaryAccumulator::new(prepared);
     let mut sensors = Vec::new();
@@ -379,7 +414,7 @@ fn fly_with(
             yaw_rad: r[3],
         };
         let record = record_sensors.then_some(&mut sensors);
-        let tel = match onboard.step(t, &plant, &reference, record) {
+        let tel = match onboard.step(t, &plant, &reference, record, health.as_mut()) {
             Ok(tel) => tel,
             Err(e) => {
                 reason = Some((
@@ -393,7 +428,14 @@ fn fly_with(
         let step = plant.advance(&tel.command, &wind_ned);
         // the log keeps every `decimation`-th sample (and the last one)
         if k % decimation == 0 || k == n {
-            let row = LogRow::new(t, &x_start, &tel, r, &wind_ned, &step.aux);
+            let mut row = LogRow::new(t, &x_start, &tel, r, &wind_ned, &step.aux);
+            if let Some(h) = health.as_ref().map(ImuHealthMonitor::health) {
+                row.imu_health = [
+                    h.vibration_rms_m_s2,
+                    h.gravity_residual_m_s2,
+                    f64::from(h.flags),
+                ];
+            }
             acc.push(&row);
             match stream.as_deref_mut() {
                 Some(w) => w.write(&row)?,
@@ -452,6 +494,7 @@ impl LogRow {
             lambda: [aux.lambda_mr, aux.lambda_tr],
             thrust: [-aux.force_mr_hub_n.z, aux.force_tr_y_n],
             inflow_residual: aux.inflow_residual,
+            imu_health: [0.0; 3],
         }
     }
 }

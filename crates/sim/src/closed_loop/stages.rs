@@ -252,7 +252,10 @@ impl OnBoard {
         };
         let sensed = || -> Result<_, ClosedLoopError> {
             Ok((
-                Box::new(sensor_suite_at(&scenario.sensors, ts, g)?),
+                Box::new(
+                    sensor_suite_at(&scenario.sensors, ts, g)?
+                        .with_rotor(RotorSpeeds::from_params(p))?,
+                ),
                 Box::new(navigation_filter_at(
                     &scenario.sensors,
                     &scenario.navigation,
@@ -286,11 +289,15 @@ impl OnBoard {
         plant: &Plant<'_>,
         reference: &Reference,
         record: Option<&mut Vec<SensorLogRow>>,
+        health: Option<&mut ImuHealthMonitor>,
     ) -> Result<Telemetry, CoreError> {
         let xr: ReducedState = reduce(&plant.x);
         let sense = |suite: &mut SensorSuite| {
             let truth = plant.truth(t_s);
             let frame = suite.sample(&truth);
+            if let Some(h) = health {
+                h.update(&frame.imu);
+            }
             if let Some(rec) = record {
                 rec.push(SensorLogRow {
                     frame,

@@ -352,6 +352,7 @@ mod tests {
             lambda: [0.0; 2],
             thrust: [0.0; 2],
             inflow_residual: [0.0; 2],
+            imu_health: [0.0; 3],
         }
     }
 
