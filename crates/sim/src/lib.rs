@@ -22,6 +22,6 @@ pub mod resources;
 pub mod scenario;
 pub mod sensor_log;
 pub mod sensors;
-pub mod spectral;
+pub use helicon_ident::spectral;
 pub mod trajectory;
 pub mod wind;
