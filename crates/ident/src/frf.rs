@@ -10,9 +10,10 @@
 //! (one-sided density per Hz; the DC and Nyquist FFT bins are not doubled),
 //! each segment's mean removed, so H = G_xy / G_xx. Coherences are γ²
 //! (0 … 1). The random error ε is the normalised standard deviation of |H|
-//! (Bendat & Piersol): ε = √(1 − γ²_{y:x}) / (|γ_{iy·r}| √(2 (n_d − q + 1)))
-//! with γ²_{y:x} the multiple coherence, γ²_{iy·r} the partial coherence of
-//! input i, q the number of inputs and n_d the effective number of
+//! (Bendat & Piersol): ε = √(1 − γ²_{iy·r}) / (|γ_{iy·r}| √(2 (n_d − q + 1)))
+//! with γ²_{iy·r} the partial coherence of input i given the others (the
+//! ordinary coherence for one input), q the number of inputs and n_d the
+//! effective number of
 //! independent averages of the overlapped windows (Welch 1967). The phase
 //! error is ε rad; the magnitude error is ≈ 8.686 ε dB.
 
@@ -23,22 +24,55 @@ use rustfft::FftPlanner;
 use rustfft::num_complex::Complex64;
 use std::f64::consts::PI;
 
+/// The taper applied to each window.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Taper {
+    /// Periodic Hann, each window's mean removed (the default: overlapped
+    /// windows of random or multi-sine data).
+    Hann,
+    /// None, and the mean kept: for one window over a whole record that
+    /// starts and ends at rest
+    /// (a sweep with fades), where Y = H·X holds exactly and a taper would
+    /// only bias the estimate (a Hann taper varies across the system's
+    /// memory: ~1 % near a lightly damped resonance, measured in the tests).
+    Rectangular,
+}
+
 /// The analysis window: `len` samples, consecutive windows sharing `overlap`
-/// samples (CIFER and Welch use half: `len / 2`).
+/// samples (CIFER and Welch use half: `len / 2`), tapered by `taper`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct WindowSpec {
     /// Window length, samples (≥ 4).
     pub len: usize,
     /// Samples shared by consecutive windows (< `len`).
     pub overlap: usize,
+    /// The taper.
+    pub taper: Taper,
 }
 
 impl WindowSpec {
-    /// A window of `len` samples with half overlap.
+    /// A Hann window of `len` samples with half overlap.
     pub fn half_overlap(len: usize) -> Self {
         Self {
             len,
             overlap: len / 2,
+            taper: Taper::Hann,
+        }
+    }
+
+    /// One untapered window over a whole record of `len` samples.
+    pub fn whole_record(len: usize) -> Self {
+        Self {
+            len,
+            overlap: 0,
+            taper: Taper::Rectangular,
+        }
+    }
+
+    fn weights(&self) -> Vec<f64> {
+        match self.taper {
+            Taper::Hann => hann(self.len),
+            Taper::Rectangular => vec![1.0; self.len],
         }
     }
 }
@@ -109,7 +143,12 @@ fn prepare(channels: &[&[f64]], dt_s: f64, spec: WindowSpec) -> Result<(Vec<usiz
     let mut means = Vec::with_capacity(starts.len() * channels.len());
     for &s in &starts {
         for x in channels {
-            means.push(x[s..s + spec.len].iter().sum::<f64>() / spec.len as f64);
+            // The whole-record window keeps the mean: removing it would break
+            // Y = H·X off the FFT bins.
+            means.push(match spec.taper {
+                Taper::Hann => x[s..s + spec.len].iter().sum::<f64>() / spec.len as f64,
+                Taper::Rectangular => 0.0,
+            });
         }
     }
     Ok((starts, means))
@@ -152,7 +191,7 @@ pub fn cross_spectra_fft(channels: &[&[f64]], dt_s: f64, spec: WindowSpec) -> Re
     let (starts, means) = prepare(channels, dt_s, spec)?;
     let (l, nc) = (spec.len, channels.len());
     let nf = l / 2 + 1;
-    let w = hann(l);
+    let w = spec.weights();
     let wss: f64 = w.iter().map(|v| v * v).sum();
     let plan = FftPlanner::new().plan_fft_forward(l);
     let mut bufs = vec![Complex64::new(0.0, 0.0); l * nc];
@@ -214,7 +253,7 @@ pub fn cross_spectra_grid(
         ));
     }
     let (l, nc) = (spec.len, channels.len());
-    let w = hann(l);
+    let w = spec.weights();
     let wss: f64 = w.iter().map(|v| v * v).sum();
     let (mut kr, mut ki) = (vec![0.0; l], vec![0.0; l]);
     let mut g = vec![Complex64::new(0.0, 0.0); omega_rad_s.len() * nc * nc];
@@ -386,7 +425,7 @@ pub fn conditioned(cs: &CrossSpectra, inputs: &[usize], output: usize) -> Result
                 }
             };
             let partial = (h[a].norm_sqr() * g_aa_r / gyy_r).clamp(0.0, 1.0);
-            let eps = (1.0 - gamma_mult).max(0.0).sqrt() / (partial.sqrt() * (2.0 * dof).sqrt());
+            let eps = (1.0 - partial).sqrt() / (partial.sqrt() * (2.0 * dof).sqrt());
             if h[a].re.is_finite() && h[a].im.is_finite() && partial.is_finite() && eps.is_finite() {
                 let f = &mut out[a];
                 f.omega_rad_s.push(om);

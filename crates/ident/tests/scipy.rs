@@ -5,7 +5,7 @@
 //! differences are ~1e-15).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use helicon_ident::frf::{WindowSpec, cross_spectra_fft, cross_spectra_grid, siso};
+use helicon_ident::frf::{Taper, WindowSpec, cross_spectra_fft, cross_spectra_grid, siso};
 use serde_json::Value;
 
 fn arr(v: &Value) -> Vec<f64> {
@@ -37,6 +37,7 @@ fn spectra_and_coherence_agree_with_scipy_to_1e_9() {
         let spec = WindowSpec {
             len: c["nperseg"].as_u64().unwrap() as usize,
             overlap: c["noverlap"].as_u64().unwrap() as usize,
+            taper: Taper::Hann,
         };
         let cs = cross_spectra_fft(&[&x, &y], dt, spec).unwrap();
         let n = cs.omega_rad_s.len();
