@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 mod console;
 mod control;
 mod demo;
+mod ident_cmd;
 mod mc_cmd;
 mod model_cmd;
 mod sensors;
@@ -45,6 +46,8 @@ enum Command {
     Bench(mc_cmd::BenchArgs),
     /// Fly a closed-loop scenario (TOML): log.csv, summary.json, gains, plots, report.
     Sim(sim_cmd::SimArgs),
+    /// Frequency-domain system identification: frequency responses from logs, transfer-function fits.
+    Ident(ident_cmd::IdentArgs),
 }
 
 /// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
@@ -108,6 +111,7 @@ fn run() -> anyhow::Result<()> {
         Command::Mc(a) => mc_cmd::run_mc(&a),
         Command::Bench(a) => mc_cmd::run_bench(&a),
         Command::Sim(a) => sim_cmd::run(&a),
+        Command::Ident(a) => ident_cmd::run(&a),
     }
 }
 
