@@ -103,6 +103,39 @@ impl CrossSpectra {
     }
 }
 
+impl CrossSpectra {
+    /// The spectra of several records of the same channels on the same grid
+    /// (separate experiments: one sweep per input, each from rest) merged as
+    /// one average over all their windows. This is how correlated or
+    /// one-at-a-time inputs become separable: each record alone may have a
+    /// singular input matrix (a single whole-record window is rank one).
+    pub fn merge(parts: &[CrossSpectra]) -> Result<CrossSpectra> {
+        let first = parts
+            .first()
+            .ok_or_else(|| IdentError::data("merge", "no spectra given"))?;
+        if parts.iter().any(|p| p.omega_rad_s != first.omega_rad_s || p.n_channels != first.n_channels) {
+            return Err(IdentError::data(
+                "merge",
+                "the spectra differ in frequency grid or channel count",
+            ));
+        }
+        let total: usize = parts.iter().map(|p| p.segments).sum();
+        let mut g = vec![Complex64::new(0.0, 0.0); first.g.len()];
+        for p in parts {
+            let wgt = p.segments as f64 / total as f64;
+            g.iter_mut().zip(&p.g).for_each(|(a, b)| *a += b * wgt);
+        }
+        Ok(CrossSpectra {
+            omega_rad_s: first.omega_rad_s.clone(),
+            n_channels: first.n_channels,
+            g,
+            segments: total,
+            n_d: parts.iter().map(|p| p.n_d).sum(),
+            window_s: parts.iter().map(|p| p.window_s).fold(0.0, f64::max),
+        })
+    }
+}
+
 /// Check the channels and window; the segment starts and per-segment means.
 fn prepare(channels: &[&[f64]], dt_s: f64, spec: WindowSpec) -> Result<(Vec<usize>, Vec<f64>)> {
     if !(dt_s.is_finite() && dt_s > 0.0) {
