@@ -6,7 +6,9 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::{Args, Subcommand};
 use helicon_ident::Complex64;
 use helicon_ident::fit::{CostOptions, TfFit, TfStructure, fit_tf};
-use helicon_ident::frf::{Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid, unwrap_deg};
+use helicon_ident::frf::{
+    Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid, unwrap_deg,
+};
 use helicon_sim::plot::{Figure, HLine, Panel, Series};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -109,10 +111,18 @@ fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
         .trim(csv::Trim::All)
         .from_path(path)
         .with_context(|| format!("{file}: cannot read"))?;
-    let header = rdr.headers().with_context(|| format!("{file}: no header row"))?.clone();
+    let header = rdr
+        .headers()
+        .with_context(|| format!("{file}: no header row"))?
+        .clone();
     let mut idx = Vec::with_capacity(names.len());
     for n in names {
-        let found: Vec<usize> = header.iter().enumerate().filter(|(_, h)| h == n).map(|(i, _)| i).collect();
+        let found: Vec<usize> = header
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| h == n)
+            .map(|(i, _)| i)
+            .collect();
         match found.as_slice() {
             [i] => idx.push(*i),
             [] => bail!(
@@ -129,16 +139,25 @@ fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
         for (c, &i) in idx.iter().enumerate() {
             let text = rec.get(i).unwrap_or("");
             let v: f64 = text.parse().map_err(|_| {
-                anyhow!("{file}: line {line}, column `{}`: `{text}` is not a number", names[c])
+                anyhow!(
+                    "{file}: line {line}, column `{}`: `{text}` is not a number",
+                    names[c]
+                )
             })?;
             if !v.is_finite() {
-                bail!("{file}: line {line}, column `{}`: {text} is not finite", names[c]);
+                bail!(
+                    "{file}: line {line}, column `{}`: {text} is not finite",
+                    names[c]
+                );
             }
             columns[c].push(v);
         }
     }
     if columns[0].len() < 16 {
-        bail!("{file}: {} data rows; at least 16 are needed", columns[0].len());
+        bail!(
+            "{file}: {} data rows; at least 16 are needed",
+            columns[0].len()
+        );
     }
     Ok(Table { columns })
 }
@@ -148,8 +167,13 @@ fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
 /// stderr), and refused when it goes backwards or has a gap over 5 steps.
 fn uniform(file: &str, time: &str, t: &[f64], cols: &mut [Vec<f64>]) -> Result<f64> {
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    if let Some(i) = steps.iter().position(|d| !(*d > 0.0)) {
-        bail!("{file}: column `{time}` does not increase at data row {} ({} then {})", i + 2, t[i], t[i + 1]);
+    if let Some(i) = steps.iter().position(|d| d.is_nan() || *d <= 0.0) {
+        bail!(
+            "{file}: column `{time}` does not increase at data row {} ({} then {})",
+            i + 2,
+            t[i],
+            t[i + 1]
+        );
     }
     steps.sort_by(f64::total_cmp);
     let dt = steps[steps.len() / 2];
@@ -182,7 +206,15 @@ fn uniform(file: &str, time: &str, t: &[f64], cols: &mut [Vec<f64>]) -> Result<f
 }
 
 fn file_stem(name: &str) -> String {
-    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// `helicon ident frf`.
@@ -199,7 +231,9 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
     names.extend(a.output.iter().map(String::as_str));
     for (i, n) in names.iter().enumerate() {
         if names[..i].contains(n) {
-            bail!("column `{n}` is named twice among --time, --input, --conditioned-on and --output");
+            bail!(
+                "column `{n}` is named twice among --time, --input, --conditioned-on and --output"
+            );
         }
     }
     let table = read_columns(&a.log, &names)?;
@@ -208,11 +242,16 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
     let dt = uniform(&file, &a.time, &t, &mut cols)?;
     let n = cols[0].len();
     let record_s = n as f64 * dt;
-    let lens: Vec<usize> = (1..=a.windows).map(|k| n >> k).filter(|l| *l >= 32).collect();
+    let lens: Vec<usize> = (1..=a.windows)
+        .map(|k| n >> k)
+        .filter(|l| *l >= 32)
+        .collect();
     if lens.is_empty() {
         bail!("{file}: {n} samples: too short for a 32-sample window");
     }
-    let omega_min = a.omega_min.unwrap_or(4.0 * std::f64::consts::PI / (lens[0] as f64 * dt));
+    let omega_min = a
+        .omega_min
+        .unwrap_or(4.0 * std::f64::consts::PI / (lens[0] as f64 * dt));
     let omega_max = a.omega_max.unwrap_or(0.4 * std::f64::consts::PI / dt);
     let grid = log_grid(omega_min, omega_max, a.points)
         .with_context(|| format!("--omega-min {omega_min} and --omega-max {omega_max}"))?;
@@ -230,33 +269,62 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
         }
     }
     let secs: Vec<f64> = lens.iter().map(|l| *l as f64 * dt).collect();
-    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("{}: cannot create", a.out.display()))?;
     let csv_path = a.out.join("frf.csv");
     let mut w = std::io::BufWriter::new(
-        std::fs::File::create(&csv_path).with_context(|| format!("{}: cannot create", csv_path.display()))?,
+        std::fs::File::create(&csv_path)
+            .with_context(|| format!("{}: cannot create", csv_path.display()))?,
     );
-    writeln!(w, "output,omega_rad_s,mag_db,phase_deg,coherence,random_error")?;
+    writeln!(
+        w,
+        "output,omega_rad_s,mag_db,phase_deg,coherence,random_error"
+    )?;
     println!(
         "{file}: {n} samples every {dt} s ({record_s:.3} s), windows {} s, input `{}`{}",
-        secs.iter().map(|s| format!("{s:.3}")).collect::<Vec<_>>().join("/"),
+        secs.iter()
+            .map(|s| format!("{s:.3}"))
+            .collect::<Vec<_>>()
+            .join("/"),
         a.input,
-        if a.conditioned_on.is_empty() { String::new() } else { format!(" conditioned on {}", a.conditioned_on.join(",")) }
+        if a.conditioned_on.is_empty() {
+            String::new()
+        } else {
+            format!(" conditioned on {}", a.conditioned_on.join(","))
+        }
     );
     for (o, parts) in per_output.iter().enumerate() {
         let name = &a.output[o];
         let f = composite(parts, &secs).with_context(|| format!("{file}: `{name}`"))?;
         let (mag, ph) = (f.mag_db(), f.phase_deg());
         for k in 0..f.len() {
-            let row = [f.omega_rad_s[k], mag[k], ph[k], f.coherence[k], f.random_error[k]];
+            let row = [
+                f.omega_rad_s[k],
+                mag[k],
+                ph[k],
+                f.coherence[k],
+                f.random_error[k],
+            ];
             if row.iter().any(|v| !v.is_finite()) {
-                bail!("`{name}` at {} rad/s: a non-finite value (zero response?)", f.omega_rad_s[k]);
+                bail!(
+                    "`{name}` at {} rad/s: a non-finite value (zero response?)",
+                    f.omega_rad_s[k]
+                );
             }
-            writeln!(w, "{name},{},{},{},{},{}", row[0], row[1], row[2], row[3], row[4])?;
+            writeln!(
+                w,
+                "{name},{},{},{},{},{}",
+                row[0], row[1], row[2], row[3], row[4]
+            )?;
         }
         let good = f.coherence.iter().filter(|c| **c > 0.6).count();
         let png = a.out.join(format!("bode_{}.png", file_stem(name)));
         write_bode(&png, &format!("{name} / {}", a.input), &f, None)?;
-        println!("  {name}: {} points, {good} with γ² > 0.6; {}", f.len(), png.display());
+        println!(
+            "  {name}: {} points, {good} with γ² > 0.6; {}",
+            f.len(),
+            png.display()
+        );
     }
     w.flush()?;
     println!("  {}", csv_path.display());
@@ -266,7 +334,13 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
 /// Write magnitude, phase and coherence against log10 ω, with an optional
 /// fit (magnitude and phase curves) overlaid, to `path`.
 fn write_bode(path: &Path, title: &str, f: &Frf, fit: Option<&[Vec<(f64, f64)>; 2]>) -> Result<()> {
-    let lw = |v: &[f64]| -> Vec<(f64, f64)> { f.omega_rad_s.iter().zip(v).map(|(w, y)| (w.log10(), *y)).collect() };
+    let lw = |v: &[f64]| -> Vec<(f64, f64)> {
+        f.omega_rad_s
+            .iter()
+            .zip(v)
+            .map(|(w, y)| (w.log10(), *y))
+            .collect()
+    };
     let (mag, ph, coh) = (lw(&f.mag_db()), lw(&f.phase_deg()), lw(&f.coherence));
     let mut pm = Panel::new("magnitude [dB]").series(Series::new("estimate", &mag));
     let mut pp = Panel::new("phase [deg]").series(Series::new("estimate", &ph));
@@ -275,7 +349,11 @@ fn write_bode(path: &Path, title: &str, f: &Frf, fit: Option<&[Vec<(f64, f64)>; 
         pp = pp.series(Series::new("fit", &fit[1]).dashed());
     }
     let mut pc = Panel::new("coherence γ² [-]").series(Series::new("γ²", &coh));
-    pc.hlines.push(HLine { y: 0.6, label: "0.6".into(), color: [127, 127, 127] });
+    pc.hlines.push(HLine {
+        y: 0.6,
+        label: "0.6".into(),
+        color: [127, 127, 127],
+    });
     pc.y_include = vec![0.0, 1.0];
     Figure::new(title, "log10 ω [rad/s]")
         .panel(pm)
@@ -293,12 +371,33 @@ fn read_frf(path: &Path, output: &str) -> Result<Frf> {
         .trim(csv::Trim::All)
         .from_path(path)
         .with_context(|| format!("{file}: cannot read"))?;
-    let header: Vec<String> = rdr.headers().with_context(|| format!("{file}: no header row"))?.iter().map(str::to_string).collect();
-    let want = ["output", "omega_rad_s", "mag_db", "phase_deg", "coherence", "random_error"];
+    let header: Vec<String> = rdr
+        .headers()
+        .with_context(|| format!("{file}: no header row"))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let want = [
+        "output",
+        "omega_rad_s",
+        "mag_db",
+        "phase_deg",
+        "coherence",
+        "random_error",
+    ];
     if header != want {
-        bail!("{file}: header `{}` is not a frf.csv header `{}`", header.join(","), want.join(","));
+        bail!(
+            "{file}: header `{}` is not a frf.csv header `{}`",
+            header.join(","),
+            want.join(",")
+        );
     }
-    let mut f = Frf { omega_rad_s: Vec::new(), h: Vec::new(), coherence: Vec::new(), random_error: Vec::new() };
+    let mut f = Frf {
+        omega_rad_s: Vec::new(),
+        h: Vec::new(),
+        coherence: Vec::new(),
+        random_error: Vec::new(),
+    };
     let mut seen = Vec::<String>::new();
     for rec in rdr.records() {
         let rec = rec.with_context(|| format!("{file}: malformed CSV"))?;
@@ -317,21 +416,39 @@ fn read_frf(path: &Path, output: &str) -> Result<Frf> {
                 .parse::<f64>()
                 .ok()
                 .filter(|x| x.is_finite())
-                .ok_or_else(|| anyhow!("{file}: line {line}, column `{}`: `{text}` is not a finite number", want[c + 1]))?;
+                .ok_or_else(|| {
+                    anyhow!(
+                        "{file}: line {line}, column `{}`: `{text}` is not a finite number",
+                        want[c + 1]
+                    )
+                })?;
         }
-        if !(v[0] > 0.0) || f.omega_rad_s.last().is_some_and(|w| *w >= v[0]) {
-            bail!("{file}: line {line}, column `omega_rad_s`: {} must be > 0 and increasing", v[0]);
+        if v[0] <= 0.0 || f.omega_rad_s.last().is_some_and(|w| *w >= v[0]) {
+            bail!(
+                "{file}: line {line}, column `omega_rad_s`: {} must be > 0 and increasing",
+                v[0]
+            );
         }
         if !(0.0..=1.0).contains(&v[3]) || v[4] < 0.0 {
-            bail!("{file}: line {line}: coherence {} must be in [0, 1] and random_error {} ≥ 0", v[3], v[4]);
+            bail!(
+                "{file}: line {line}: coherence {} must be in [0, 1] and random_error {} ≥ 0",
+                v[3],
+                v[4]
+            );
         }
         f.omega_rad_s.push(v[0]);
-        f.h.push(Complex64::from_polar(10f64.powf(v[1] / 20.0), v[2].to_radians()));
+        f.h.push(Complex64::from_polar(
+            10f64.powf(v[1] / 20.0),
+            v[2].to_radians(),
+        ));
         f.coherence.push(v[3]);
         f.random_error.push(v[4]);
     }
     if f.is_empty() {
-        bail!("{file}: no rows for output `{output}` (outputs: {})", seen.join(", "));
+        bail!(
+            "{file}: no rows for output `{output}` (outputs: {})",
+            seen.join(", ")
+        );
     }
     Ok(f)
 }
@@ -342,10 +459,19 @@ pub fn run_tf(a: &TfArgs) -> Result<()> {
         bail!("--min-coherence {}: must be in [0, 1)", a.min_coherence);
     }
     let f = read_frf(&a.frf, &a.output)?;
-    let st = TfStructure { num_order: a.num, den_order: a.den, delay: a.delay };
-    let opts = CostOptions { min_coherence: a.min_coherence, ..CostOptions::default() };
-    let fit = fit_tf(&f, st, &opts, None).with_context(|| format!("{}: `{}`", a.frf.display(), a.output))?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("{}: cannot create", a.out.display()))?;
+    let st = TfStructure {
+        num_order: a.num,
+        den_order: a.den,
+        delay: a.delay,
+    };
+    let opts = CostOptions {
+        min_coherence: a.min_coherence,
+        ..CostOptions::default()
+    };
+    let fit = fit_tf(&f, st, &opts, None)
+        .with_context(|| format!("{}: `{}`", a.frf.display(), a.output))?;
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("{}: cannot create", a.out.display()))?;
     let stem = file_stem(&a.output);
     let json_path = a.out.join(format!("tf_{stem}.json"));
     let params: Vec<serde_json::Value> = (0..fit.params.len())
@@ -373,9 +499,18 @@ pub fn run_tf(a: &TfArgs) -> Result<()> {
         .with_context(|| format!("{}: cannot write", json_path.display()))?;
     let overlay = fit_curves(&f, &fit);
     let png = a.out.join(format!("tf_{stem}.png"));
-    let title = format!("{}: fit num {} den {}{}", a.output, a.num, a.den, if a.delay { " + delay" } else { "" });
+    let title = format!(
+        "{}: fit num {} den {}{}",
+        a.output,
+        a.num,
+        a.den,
+        if a.delay { " + delay" } else { "" }
+    );
     write_bode(&png, &title, &f, Some(&overlay))?;
-    println!("{}: J = {:.3} over {} points", a.output, fit.cost, fit.n_points);
+    println!(
+        "{}: J = {:.3} over {} points",
+        a.output, fit.cost, fit.n_points
+    );
     for i in 0..fit.params.len() {
         println!(
             "  {:>6} = {:<14.6e} CR {:6.2} %  I {:6.2} %",
@@ -397,7 +532,10 @@ fn fit_curves(f: &Frf, fit: &TfFit) -> [Vec<(f64, f64)>; 2] {
     }
     let x: Vec<f64> = f.omega_rad_s.iter().map(|w| w.log10()).collect();
     [
-        x.iter().zip(&h).map(|(x, v)| (*x, 20.0 * v.norm().log10())).collect(),
+        x.iter()
+            .zip(&h)
+            .map(|(x, v)| (*x, 20.0 * v.norm().log10()))
+            .collect(),
         x.iter().zip(ph).map(|(x, p)| (*x, p)).collect(),
     ]
 }

@@ -16,7 +16,10 @@ fn tmpdir(name: &str) -> PathBuf {
 }
 
 fn helicon(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_helicon")).args(args).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .args(args)
+        .output()
+        .unwrap();
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -47,8 +50,14 @@ fn write_log(dir: &Path, jitter: f64) -> String {
             };
             let s0 = j as f64 / 10.0;
             let k1 = f(x, ui(s0));
-            let k2 = f([x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]], ui(s0 + 0.05));
-            let k3 = f([x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]], ui(s0 + 0.05));
+            let k2 = f(
+                [x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]],
+                ui(s0 + 0.05),
+            );
+            let k3 = f(
+                [x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]],
+                ui(s0 + 0.05),
+            );
             let k4 = f([x[0] + h * k3[0], x[1] + h * k3[1]], ui(s0 + 0.1));
             for c in 0..2 {
                 x[c] += h / 6.0 * (k1[c] + 2.0 * k2[c] + 2.0 * k3[c] + k4[c]);
@@ -66,13 +75,29 @@ fn frf_then_tf_recover_a_known_system() {
     let log = write_log(&dir, 0.0);
     let out = dir.join("out").display().to_string();
     let (ok, so, se) = helicon(&[
-        "ident", "frf", &log, "--input", "servo", "--output", "rate", "--omega-min", "1", "--omega-max", "30",
-        "--points", "120", "--out", &out,
+        "ident",
+        "frf",
+        &log,
+        "--input",
+        "servo",
+        "--output",
+        "rate",
+        "--omega-min",
+        "1",
+        "--omega-max",
+        "30",
+        "--points",
+        "120",
+        "--out",
+        &out,
     ]);
     assert!(ok, "{so}{se}");
     let frf = std::fs::read_to_string(dir.join("out/frf.csv")).unwrap();
     let mut lines = frf.lines();
-    assert_eq!(lines.next().unwrap(), "output,omega_rad_s,mag_db,phase_deg,coherence,random_error");
+    assert_eq!(
+        lines.next().unwrap(),
+        "output,omega_rad_s,mag_db,phase_deg,coherence,random_error"
+    );
     let rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').skip(1).map(|v| v.parse().unwrap()).collect())
         .collect();
@@ -83,28 +108,64 @@ fn frf_then_tf_recover_a_known_system() {
         let dmag = r[1] - 20.0 * h.norm().log10();
         let dph = r[2] - h.arg().to_degrees();
         // Noise-free: Hann leakage of the sweep only (< 0.3 dB, 2°).
-        assert!(dmag.abs() < 0.3 && dph.abs() < 2.0, "{r:?}: {dmag} dB {dph}°");
+        assert!(
+            dmag.abs() < 0.3 && dph.abs() < 2.0,
+            "{r:?}: {dmag} dB {dph}°"
+        );
         assert!(r[3] > 0.95 && r[3] <= 1.0);
     }
     assert!(dir.join("out/bode_rate.png").exists());
     let (ok, so, se) = helicon(&[
-        "ident", "tf", &dir.join("out/frf.csv").display().to_string(), "--output", "rate", "--num", "0", "--den", "2",
-        "--out", &out,
+        "ident",
+        "tf",
+        &dir.join("out/frf.csv").display().to_string(),
+        "--output",
+        "rate",
+        "--num",
+        "0",
+        "--den",
+        "2",
+        "--out",
+        &out,
     ]);
     assert!(ok, "{so}{se}");
     let fit: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("out/tf_rate.json")).unwrap()).unwrap();
-    let den: Vec<f64> = fit["den"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/tf_rate.json")).unwrap())
+            .unwrap();
+    let den: Vec<f64> = fit["den"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
     let num = fit["num"][0].as_f64().unwrap();
     // Within 2 % (the leakage bias above; the fit of the analytic response is
     // exact, see the ident crate's tests).
-    assert!((den[1] - 4.8).abs() < 0.02 * 4.8 && (den[2] - 64.0).abs() < 0.02 * 64.0, "{den:?}");
+    assert!(
+        (den[1] - 4.8).abs() < 0.02 * 4.8 && (den[2] - 64.0).abs() < 0.02 * 64.0,
+        "{den:?}"
+    );
     assert!((num - 64.0).abs() < 0.02 * 64.0, "{num}");
     assert_eq!(fit["parameters"].as_array().unwrap().len(), 3);
     assert!(dir.join("out/tf_rate.png").exists());
     // Unknown output: the outputs available are named.
-    let (ok, _, se) = helicon(&["ident", "tf", &dir.join("out/frf.csv").display().to_string(), "--output", "nope", "--num", "0", "--den", "2", "--out", &out]);
-    assert!(!ok && se.contains("no rows for output `nope`") && se.contains("rate"), "{se}");
+    let (ok, _, se) = helicon(&[
+        "ident",
+        "tf",
+        &dir.join("out/frf.csv").display().to_string(),
+        "--output",
+        "nope",
+        "--num",
+        "0",
+        "--den",
+        "2",
+        "--out",
+        &out,
+    ]);
+    assert!(
+        !ok && se.contains("no rows for output `nope`") && se.contains("rate"),
+        "{se}"
+    );
 }
 
 #[test]
@@ -112,7 +173,19 @@ fn irregular_time_is_resampled_and_stated() {
     let dir = tmpdir("jitter");
     let log = write_log(&dir, 0.2);
     let out = dir.join("out").display().to_string();
-    let (ok, so, se) = helicon(&["ident", "frf", &log, "--input", "servo", "--output", "rate", "--omega-max", "20", "--out", &out]);
+    let (ok, so, se) = helicon(&[
+        "ident",
+        "frf",
+        &log,
+        "--input",
+        "servo",
+        "--output",
+        "rate",
+        "--omega-max",
+        "20",
+        "--out",
+        &out,
+    ]);
     assert!(ok, "{so}{se}");
     assert!(se.contains("resampled by linear interpolation"), "{se}");
 }
@@ -122,21 +195,34 @@ fn bad_logs_are_refused_with_file_column_and_line() {
     let dir = tmpdir("bad");
     let mut text = String::from("t_s,servo,rate\n");
     for i in 0..100 {
-        let r = if i == 50 { "abc".to_string() } else { format!("{}", i as f64 * 0.1) };
+        let r = if i == 50 {
+            "abc".to_string()
+        } else {
+            format!("{}", i as f64 * 0.1)
+        };
         writeln!(text, "{},{},{}", i as f64 * 0.01, (i as f64).sin(), r).unwrap();
     }
     let p = dir.join("bad.csv");
     std::fs::write(&p, &text).unwrap();
     let ps = p.display().to_string();
     let out = dir.join("out").display().to_string();
-    let (ok, _, se) = helicon(&["ident", "frf", &ps, "--input", "servo", "--output", "rate", "--out", &out]);
-    assert!(!ok && se.contains("bad.csv") && se.contains("line 52") && se.contains("`rate`"), "{se}");
-    let (ok, _, se) = helicon(&["ident", "frf", &ps, "--input", "servo", "--output", "pitch", "--out", &out]);
+    let (ok, _, se) = helicon(&[
+        "ident", "frf", &ps, "--input", "servo", "--output", "rate", "--out", &out,
+    ]);
+    assert!(
+        !ok && se.contains("bad.csv") && se.contains("line 52") && se.contains("`rate`"),
+        "{se}"
+    );
+    let (ok, _, se) = helicon(&[
+        "ident", "frf", &ps, "--input", "servo", "--output", "pitch", "--out", &out,
+    ]);
     assert!(!ok && se.contains("no column `pitch`"), "{se}");
     // NaN and a time gap.
     let nan = text.replace("abc", "NaN");
     std::fs::write(&p, nan).unwrap();
-    let (ok, _, se) = helicon(&["ident", "frf", &ps, "--input", "servo", "--output", "rate", "--out", &out]);
+    let (ok, _, se) = helicon(&[
+        "ident", "frf", &ps, "--input", "servo", "--output", "rate", "--out", &out,
+    ]);
     assert!(!ok && se.contains("not finite"), "{se}");
     let gap: String = text
         .replace("abc", "1")
@@ -146,8 +232,12 @@ fn bad_logs_are_refused_with_file_column_and_line() {
         .map(|(_, l)| format!("{l}\n"))
         .collect();
     std::fs::write(&p, gap).unwrap();
-    let (ok, _, se) = helicon(&["ident", "frf", &ps, "--input", "servo", "--output", "rate", "--out", &out]);
+    let (ok, _, se) = helicon(&[
+        "ident", "frf", &ps, "--input", "servo", "--output", "rate", "--out", &out,
+    ]);
     assert!(!ok && se.contains("gap"), "{se}");
-    let (ok, _, se) = helicon(&["ident", "frf", &ps, "--input", "servo", "--output", "servo", "--out", &out]);
+    let (ok, _, se) = helicon(&[
+        "ident", "frf", &ps, "--input", "servo", "--output", "servo", "--out", &out,
+    ]);
     assert!(!ok && se.contains("named twice"), "{se}");
 }

@@ -9,7 +9,9 @@
 #![allow(missing_docs, clippy::unwrap_used)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use helicon_ident::frf::{WindowSpec, composite, cross_spectra_fft, cross_spectra_grid, log_grid, siso};
+use helicon_ident::frf::{
+    WindowSpec, composite, cross_spectra_fft, cross_spectra_grid, log_grid, siso,
+};
 use std::hint::black_box;
 
 /// The log of tools/bench_ident_scipy.py: x a logarithmic sweep 0.05 → 5 Hz
@@ -52,7 +54,15 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             let parts: Vec<_> = lens
                 .iter()
-                .map(|&l| siso(&cross_spectra_grid(&[&x, &y], dt, WindowSpec::half_overlap(l), &grid).unwrap(), 0, 1).unwrap())
+                .map(|&l| {
+                    siso(
+                        &cross_spectra_grid(&[&x, &y], dt, WindowSpec::half_overlap(l), &grid)
+                            .unwrap(),
+                        0,
+                        1,
+                    )
+                    .unwrap()
+                })
                 .collect();
             black_box(composite(&parts, &secs).unwrap())
         })

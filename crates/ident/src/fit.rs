@@ -96,7 +96,8 @@ impl TfFit {
 
 /// Σ c_i s^{len−1−i} (highest power first), Horner.
 fn poly(c: &[f64], s: Complex64) -> Complex64 {
-    c.iter().fold(Complex64::new(0.0, 0.0), |acc, v| acc * s + v)
+    c.iter()
+        .fold(Complex64::new(0.0, 0.0), |acc, v| acc * s + v)
 }
 
 /// The selected points of the response: ω, the measured log-response
@@ -124,7 +125,11 @@ impl Problem<'_> {
         let num = self.theta.as_slice()[..m].to_vec();
         let mut den = vec![1.0];
         den.extend_from_slice(&self.theta.as_slice()[m..m + n]);
-        let tau = if self.st.delay { self.theta[m + n] } else { 0.0 };
+        let tau = if self.st.delay {
+            self.theta[m + n]
+        } else {
+            0.0
+        };
         (num, den, tau)
     }
 }
@@ -243,18 +248,20 @@ fn levy_start(pts: &Points, st: TfStructure) -> Option<Vec<f64>> {
             b[2 * k + 1] = rhs.im;
         }
         let sol = a.svd(true, true).solve(&b, 1e-12).ok()?;
-        den_prev = std::iter::once(1.0).chain(sol.iter().skip(m).copied()).collect();
+        den_prev = std::iter::once(1.0)
+            .chain(sol.iter().skip(m).copied())
+            .collect();
         theta = sol.iter().copied().collect();
     }
     // Unscale: s' = s/ω_ref. Numerator b'_i s'^i / (s'^n + a'_j s'^j) =
     // (b'_i ω_ref^{n−i}) s^i / (s^n + a'_j ω_ref^{n−j} s^j).
+    // Exponents n − i ≥ 0, at most 12: repeated products, no casts.
+    let pow = |e: usize| (0..e).fold(1.0, |acc, _| acc * wref);
     for j in 0..m {
-        let power = (m - 1 - j) as i32;
-        theta[j] *= wref.powi(n as i32 - power);
+        theta[j] *= pow(n - (m - 1 - j));
     }
     for j in 0..n {
-        let power = (n - 1 - j) as i32;
-        theta[m + j] *= wref.powi(n as i32 - power);
+        theta[m + j] *= pow(n - (n - 1 - j));
     }
     theta.iter().all(|v| v.is_finite()).then_some(theta)
 }
@@ -264,7 +271,12 @@ fn levy_start(pts: &Points, st: TfStructure) -> Option<Vec<f64>> {
 /// from the linear fit. Errors: a structure that is improper or needs more
 /// parameters than points, no point above the coherence threshold, a
 /// failed start, a non-finite or singular result.
-pub fn fit_tf(frf: &Frf, st: TfStructure, opts: &CostOptions, start: Option<&[f64]>) -> Result<TfFit> {
+pub fn fit_tf(
+    frf: &Frf,
+    st: TfStructure,
+    opts: &CostOptions,
+    start: Option<&[f64]>,
+) -> Result<TfFit> {
     if st.den_order == 0 || st.num_order > st.den_order || st.den_order > 12 {
         return Err(IdentError::Fit(format!(
             "numerator order {} and denominator order {}: need 1 ≤ den ≤ 12 and num ≤ den",
@@ -302,7 +314,9 @@ pub fn fit_tf(frf: &Frf, st: TfStructure, opts: &CostOptions, start: Option<&[f6
         st,
         theta: DVector::from_vec(std::mem::take(&mut theta)),
     };
-    let (problem, report) = LevenbergMarquardt::new().with_patience(400).minimize(problem);
+    let (problem, report) = LevenbergMarquardt::new()
+        .with_patience(400)
+        .minimize(problem);
     if report.termination.was_usage_issue() {
         return Err(IdentError::Fit(format!("{:?}", report.termination)));
     }
@@ -322,8 +336,16 @@ pub fn fit_tf(frf: &Frf, st: TfStructure, opts: &CostOptions, start: Option<&[f6
         delay_s: tau,
         cost,
         names: names(st),
-        cramer_rao_pct: cr.iter().zip(&params).map(|(c, p)| 100.0 * c / p.abs()).collect(),
-        insensitivity_pct: ins.iter().zip(&params).map(|(c, p)| 100.0 * c / p.abs()).collect(),
+        cramer_rao_pct: cr
+            .iter()
+            .zip(&params)
+            .map(|(c, p)| 100.0 * c / p.abs())
+            .collect(),
+        insensitivity_pct: ins
+            .iter()
+            .zip(&params)
+            .map(|(c, p)| 100.0 * c / p.abs())
+            .collect(),
         cramer_rao: cr,
         params,
         n_points: pts.omega.len(),
@@ -358,9 +380,9 @@ fn accuracy(jac: &DMatrix<f64>, cost: f64, params: &[f64]) -> Result<(Vec<f64>, 
         ));
     }
     let ms = DMatrix::from_fn(np, np, |i, j| m[(i, j)] / (d[i] * d[j]));
-    let inv = ms
-        .try_inverse()
-        .ok_or_else(|| IdentError::Fit("singular information matrix: parameters not separable".into()))?;
+    let inv = ms.try_inverse().ok_or_else(|| {
+        IdentError::Fit("singular information matrix: parameters not separable".into())
+    })?;
     let cr: Vec<f64> = (0..np).map(|i| (s2 * inv[(i, i)]).sqrt() / d[i]).collect();
     let ins: Vec<f64> = (0..np).map(|i| s2.sqrt() / d[i]).collect();
     if cr.iter().chain(&ins).chain(params).any(|v| !v.is_finite()) {
@@ -373,13 +395,19 @@ fn accuracy(jac: &DMatrix<f64>, cost: f64, params: &[f64]) -> Result<(Vec<f64>, 
 /// from rest: controllable canonical form, zero-order hold (exact for a held
 /// input), the delay applied by linear interpolation of the input at t − τ.
 pub fn simulate(fit: &TfFit, u: &[f64], dt_s: f64) -> Result<Vec<f64>> {
-    if fit.den.len() < 2 || fit.den[0] != 1.0 || fit.num.len() > fit.den.len() || fit.num.is_empty() {
+    if fit.den.len() < 2 || fit.den[0] != 1.0 || fit.num.len() > fit.den.len() || fit.num.is_empty()
+    {
         return Err(IdentError::Fit(
-            "simulation needs a proper transfer function with a monic denominator of order ≥ 1".into(),
+            "simulation needs a proper transfer function with a monic denominator of order ≥ 1"
+                .into(),
         ));
     }
     if !(fit.delay_s.is_finite() && fit.delay_s >= 0.0) {
-        return Err(IdentError::invalid("delay_s", fit.delay_s, "must be finite and ≥ 0"));
+        return Err(IdentError::invalid(
+            "delay_s",
+            fit.delay_s,
+            "must be finite and ≥ 0",
+        ));
     }
     let n = fit.den.len() - 1;
     // Proper: T = d + (N − d·D)/D.
@@ -398,7 +426,8 @@ pub fn simulate(fit: &TfFit, u: &[f64], dt_s: f64) -> Result<Vec<f64>> {
     // y = Σ rem coefficients on states: x_1 = z, x_{i+1} = z^{(i)}; rem is
     // highest power first, so state i takes rem[n − 1 − i].
     let c: Vec<f64> = (0..n).map(|i| rem[n - 1 - i]).collect();
-    let (phi, gamma) = helicon_lti::c2d(&a, &b, dt_s).map_err(|e| IdentError::Fit(format!("simulation: {e}")))?;
+    let (phi, gamma) =
+        helicon_lti::c2d(&a, &b, dt_s).map_err(|e| IdentError::Fit(format!("simulation: {e}")))?;
     let shift = fit.delay_s / dt_s;
     let delayed = |k: usize| {
         let t = k as f64 - shift;
@@ -420,7 +449,9 @@ pub fn simulate(fit: &TfFit, u: &[f64], dt_s: f64) -> Result<Vec<f64>> {
     if y.iter().all(|v| v.is_finite()) {
         Ok(y)
     } else {
-        Err(IdentError::Fit("the fitted system diverges on this input".into()))
+        Err(IdentError::Fit(
+            "the fitted system diverges on this input".into(),
+        ))
     }
 }
 
@@ -442,6 +473,9 @@ pub fn theil(measured: &[f64], simulated: &[f64]) -> Result<f64> {
     if u.is_finite() {
         Ok(u)
     } else {
-        Err(IdentError::data("Theil coefficient", "both signals are zero"))
+        Err(IdentError::data(
+            "Theil coefficient",
+            "both signals are zero",
+        ))
     }
 }

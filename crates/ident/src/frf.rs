@@ -113,7 +113,10 @@ impl CrossSpectra {
         let first = parts
             .first()
             .ok_or_else(|| IdentError::data("merge", "no spectra given"))?;
-        if parts.iter().any(|p| p.omega_rad_s != first.omega_rad_s || p.n_channels != first.n_channels) {
+        if parts
+            .iter()
+            .any(|p| p.omega_rad_s != first.omega_rad_s || p.n_channels != first.n_channels)
+        {
             return Err(IdentError::data(
                 "merge",
                 "the spectra differ in frequency grid or channel count",
@@ -200,7 +203,12 @@ fn effective_averages(w: &[f64], step: usize, k: usize) -> f64 {
         if s >= w.len() {
             break;
         }
-        let rho: f64 = w[..w.len() - s].iter().zip(&w[s..]).map(|(a, b)| a * b).sum::<f64>() / wss;
+        let rho: f64 = w[..w.len() - s]
+            .iter()
+            .zip(&w[s..])
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            / wss;
         sum += 2.0 * (1.0 - m as f64 / k as f64) * rho * rho;
     }
     k as f64 / sum
@@ -252,7 +260,9 @@ pub fn cross_spectra_fft(channels: &[&[f64]], dt_s: f64, spec: WindowSpec) -> Re
         }
     }
     Ok(CrossSpectra {
-        omega_rad_s: (0..nf).map(|k| 2.0 * PI * k as f64 / (l as f64 * dt_s)).collect(),
+        omega_rad_s: (0..nf)
+            .map(|k| 2.0 * PI * k as f64 / (l as f64 * dt_s))
+            .collect(),
         n_channels: nc,
         g,
         segments: starts.len(),
@@ -301,7 +311,10 @@ pub fn cross_spectra_grid(
 ) -> Result<CrossSpectra> {
     let (starts, means) = prepare(channels, dt_s, spec)?;
     let nyquist = PI / dt_s;
-    if let Some(w) = omega_rad_s.iter().find(|w| !(w.is_finite() && **w >= 0.0 && **w <= nyquist)) {
+    if let Some(w) = omega_rad_s
+        .iter()
+        .find(|w| !(w.is_finite() && **w >= 0.0 && **w <= nyquist))
+    {
         return Err(IdentError::invalid(
             "omega_rad_s",
             *w,
@@ -317,7 +330,13 @@ pub fn cross_spectra_grid(
     g.par_chunks_mut(nc * nc)
         .zip(omega_rad_s.par_iter())
         .for_each_init(
-            || (vec![0.0; l], vec![0.0; l], vec![Complex64::new(0.0, 0.0); nc]),
+            || {
+                (
+                    vec![0.0; l],
+                    vec![0.0; l],
+                    vec![Complex64::new(0.0, 0.0); nc],
+                )
+            },
             |(kr, ki, xk), (gk, &om)| {
                 let theta = om * dt_s;
                 let (ds, dc) = theta.sin_cos();
@@ -375,7 +394,13 @@ impl Frf {
     /// ∠H in degrees, unwrapped along the frequency axis (the first point in
     /// (−180, 180]).
     pub fn phase_deg(&self) -> Vec<f64> {
-        unwrap_deg(&self.h.iter().map(|h| h.arg().to_degrees()).collect::<Vec<_>>())
+        unwrap_deg(
+            &self
+                .h
+                .iter()
+                .map(|h| h.arg().to_degrees())
+                .collect::<Vec<_>>(),
+        )
     }
 
     /// Number of points.
@@ -423,13 +448,19 @@ const SINGULAR_RCOND: f64 = 1e-12;
 /// correlated), or where a result is not finite, are left out of that
 /// response. Errors on bad channel indices, repeated inputs or too few
 /// averages (n_d < q).
-pub fn conditioned(cs: &CrossSpectra, inputs: &[usize], output: usize) -> Result<(Vec<Frf>, Vec<f64>)> {
+pub fn conditioned(
+    cs: &CrossSpectra,
+    inputs: &[usize],
+    output: usize,
+) -> Result<(Vec<Frf>, Vec<f64>)> {
     let q = inputs.len();
     let nc = cs.n_channels;
     if q == 0 || inputs.iter().chain([&output]).any(|&c| c >= nc) {
         return Err(IdentError::data(
             "frequency response",
-            format!("inputs {inputs:?} and output {output} must be distinct channels of the {nc} given"),
+            format!(
+                "inputs {inputs:?} and output {output} must be distinct channels of the {nc} given"
+            ),
         ));
     }
     for (a, i) in inputs.iter().enumerate() {
@@ -441,10 +472,13 @@ pub fn conditioned(cs: &CrossSpectra, inputs: &[usize], output: usize) -> Result
         }
     }
     let dof = cs.n_d - q as f64 + 1.0;
-    if !(dof >= 1.0) {
+    if dof.is_nan() || dof < 1.0 {
         return Err(IdentError::data(
             "frequency response",
-            format!("{:.2} effective averages for {q} inputs: use shorter windows or a longer record", cs.n_d),
+            format!(
+                "{:.2} effective averages for {q} inputs: use shorter windows or a longer record",
+                cs.n_d
+            ),
         ));
     }
     let mut out: Vec<Frf> = (0..q)
@@ -466,7 +500,11 @@ pub fn conditioned(cs: &CrossSpectra, inputs: &[usize], output: usize) -> Result
         };
         let h = &inv * &gxy;
         let gamma_mult = (gxy.dotc(&h).re / gyy).clamp(0.0, 1.0);
-        multiple.push(if gamma_mult.is_finite() { gamma_mult } else { 0.0 });
+        multiple.push(if gamma_mult.is_finite() {
+            gamma_mult
+        } else {
+            0.0
+        });
         for a in 0..q {
             // Input a conditioned on the others: G_aa·r = 1/(G_xx⁻¹)_aa; the
             // output conditioned on the others: G_yy·r = G_yy − g_ryᴴ G_rr⁻¹ g_ry.
@@ -484,7 +522,8 @@ pub fn conditioned(cs: &CrossSpectra, inputs: &[usize], output: usize) -> Result
             };
             let partial = (h[a].norm_sqr() * g_aa_r / gyy_r).clamp(0.0, 1.0);
             let eps = (1.0 - partial).sqrt() / (partial.sqrt() * (2.0 * dof).sqrt());
-            if h[a].re.is_finite() && h[a].im.is_finite() && partial.is_finite() && eps.is_finite() {
+            if h[a].re.is_finite() && h[a].im.is_finite() && partial.is_finite() && eps.is_finite()
+            {
                 let f = &mut out[a];
                 f.omega_rad_s.push(om);
                 f.h.push(h[a]);
@@ -504,12 +543,16 @@ fn checked_inverse(m: &DMatrix<Complex64>) -> Option<DMatrix<Complex64>> {
     }
     let lu = m.clone().lu();
     let u = lu.u();
-    let dmin = (0..u.nrows()).map(|i| u[(i, i)].norm()).fold(f64::INFINITY, f64::min);
-    if !(dmin > SINGULAR_RCOND * scale) {
+    let dmin = (0..u.nrows())
+        .map(|i| u[(i, i)].norm())
+        .fold(f64::INFINITY, f64::min);
+    if dmin.is_nan() || dmin <= SINGULAR_RCOND * scale {
         return None;
     }
     let inv = lu.try_inverse()?;
-    inv.iter().all(|v| v.re.is_finite() && v.im.is_finite()).then_some(inv)
+    inv.iter()
+        .all(|v| v.re.is_finite() && v.im.is_finite())
+        .then_some(inv)
 }
 
 /// The composite of responses estimated with several window lengths on one
@@ -524,10 +567,17 @@ pub fn composite(parts: &[Frf], window_s: &[f64]) -> Result<Frf> {
     if parts.is_empty() || parts.len() != window_s.len() {
         return Err(IdentError::data(
             "composite",
-            format!("{} responses for {} window lengths", parts.len(), window_s.len()),
+            format!(
+                "{} responses for {} window lengths",
+                parts.len(),
+                window_s.len()
+            ),
         ));
     }
-    let mut grid: Vec<f64> = parts.iter().flat_map(|p| p.omega_rad_s.iter().copied()).collect();
+    let mut grid: Vec<f64> = parts
+        .iter()
+        .flat_map(|p| p.omega_rad_s.iter().copied())
+        .collect();
     grid.sort_by(f64::total_cmp);
     grid.dedup();
     let mut out = Frf {

@@ -79,7 +79,10 @@ impl Sweep {
             IdentError::invalid(
                 "sweep.duration_s",
                 self.duration_s,
-                format!("the record must last ≥ 5 periods of omega_min ({:.6} s)", 5.0 * t_low),
+                format!(
+                    "the record must last ≥ 5 periods of omega_min ({:.6} s)",
+                    5.0 * t_low
+                ),
             )
         })?;
         check_range("sweep.low_periods", self.low_periods, 0.0, 4.0)?;
@@ -228,13 +231,20 @@ impl Multisine {
             1e5,
         )?;
         if self.repeats == 0 || self.repeats > 10_000 {
-            return Err(IdentError::invalid("multisine.repeats", self.repeats as f64, "1 … 10000"));
+            return Err(IdentError::invalid(
+                "multisine.repeats",
+                self.repeats as f64,
+                "1 … 10000",
+            ));
         }
         if self.axes == 0 || self.axes > 16 || self.axis >= self.axes {
             return Err(IdentError::invalid(
                 "multisine.axis",
                 self.axis as f64,
-                format!("axes in 1 … 16 and axis in 0 … axes−1 (axes = {})", self.axes),
+                format!(
+                    "axes in 1 … 16 and axis in 0 … axes−1 (axes = {})",
+                    self.axes
+                ),
             ));
         }
         let w0 = 2.0 * PI / self.period_s;
@@ -267,8 +277,11 @@ impl Multisine {
         let peak = (0..n)
             .map(|i| self.raw(self.period_s * i as f64 / n as f64).abs())
             .fold(0.0, f64::max);
-        if !(peak > 0.0) {
-            return Err(IdentError::data("multisine", "the signal is identically zero"));
+        if peak.is_nan() || peak <= 0.0 {
+            return Err(IdentError::data(
+                "multisine",
+                "the signal is identically zero",
+            ));
         }
         self.scale = 1.0 / peak;
         Ok(())

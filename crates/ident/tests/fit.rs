@@ -12,8 +12,16 @@ use helicon_ident::frf::{Frf, WindowSpec, composite, cross_spectra_grid, log_gri
 use helicon_ident::inputs::{Doublet, Sweep};
 
 const DT: f64 = 0.01;
-const SYS: SecondOrder = SecondOrder { wn: 8.0, zeta: 0.3, delay_s: 0.05 };
-const ST: TfStructure = TfStructure { num_order: 0, den_order: 2, delay: true };
+const SYS: SecondOrder = SecondOrder {
+    wn: 8.0,
+    zeta: 0.3,
+    delay_s: 0.05,
+};
+const ST: TfStructure = TfStructure {
+    num_order: 0,
+    den_order: 2,
+    delay: true,
+};
 
 /// [b0, a1, a0, τ] of SYS.
 fn truth() -> [f64; 4] {
@@ -46,7 +54,11 @@ fn analytic_response_gives_back_the_coefficients() {
     assert_eq!(fit.names, vec!["b0", "a1", "a0", "tau_s"]);
     assert_eq!(fit.den[0], 1.0);
     // Improper or over-parameterised structures are refused.
-    let bad = TfStructure { num_order: 3, den_order: 2, delay: false };
+    let bad = TfStructure {
+        num_order: 3,
+        den_order: 2,
+        delay: false,
+    };
     assert!(fit_tf(&frf, bad, &CostOptions::default(), None).is_err());
 }
 
@@ -55,12 +67,23 @@ fn noisy_sweep_frf(seed: u64) -> (Frf, Vec<f64>, Vec<f64>) {
     let n = (160.0 / DT) as usize + 1;
     let x: Vec<f64> = (0..n).map(|i| sweep.value(i as f64 * DT)).collect();
     let clean = SYS.simulate(&|t| sweep.value(t), DT, n, 10);
-    let y: Vec<f64> = clean.iter().zip(noise(seed, 0.05, n)).map(|(a, b)| a + b).collect();
+    let y: Vec<f64> = clean
+        .iter()
+        .zip(noise(seed, 0.05, n))
+        .map(|(a, b)| a + b)
+        .collect();
     let grid = log_grid(0.7, 40.0, 150).unwrap();
     let lens = [8000usize, 4000, 2000, 1000];
     let parts: Vec<Frf> = lens
         .iter()
-        .map(|&l| siso(&cross_spectra_grid(&[&x, &y], DT, WindowSpec::half_overlap(l), &grid).unwrap(), 0, 1).unwrap())
+        .map(|&l| {
+            siso(
+                &cross_spectra_grid(&[&x, &y], DT, WindowSpec::half_overlap(l), &grid).unwrap(),
+                0,
+                1,
+            )
+            .unwrap()
+        })
         .collect();
     let secs: Vec<f64> = lens.iter().map(|l| *l as f64 * DT).collect();
     (composite(&parts, &secs).unwrap(), x, y)
@@ -85,17 +108,28 @@ fn noisy_sweep_fit_is_within_its_cramer_rao_bounds() {
         }
         let j_truth = 20.0 * jt / nn as f64;
         assert_eq!(nn, fit.n_points);
-        assert!(fit.cost <= j_truth * (1.0 + 1e-9), "{} > {j_truth}", fit.cost);
+        assert!(
+            fit.cost <= j_truth * (1.0 + 1e-9),
+            "{} > {j_truth}",
+            fit.cost
+        );
         for (i, t) in truth().iter().enumerate() {
             let z = (fit.params[i] - t).abs() / fit.cramer_rao[i];
             worst = worst.max(z);
             println!(
                 "seed {seed} {}: {:.5} ± {:.5} (CR {:.2} %, I {:.2} %) truth {t}, {z:.2} bounds",
-                fit.names[i], fit.params[i], fit.cramer_rao[i], fit.cramer_rao_pct[i], fit.insensitivity_pct[i]
+                fit.names[i],
+                fit.params[i],
+                fit.cramer_rao[i],
+                fit.cramer_rao_pct[i],
+                fit.insensitivity_pct[i]
             );
             assert!(fit.insensitivity_pct[i] <= fit.cramer_rao_pct[i] + 1e-12);
         }
-        println!("seed {seed}: J = {:.3} (truth {j_truth:.3}), {} points", fit.cost, fit.n_points);
+        println!(
+            "seed {seed}: J = {:.3} (truth {j_truth:.3}), {} points",
+            fit.cost, fit.n_points
+        );
     }
     // Within 3 bounds for every parameter of every seed.
     assert!(worst < 3.0, "{worst}");
@@ -105,13 +139,20 @@ fn noisy_sweep_fit_is_within_its_cramer_rao_bounds() {
 fn doublet_verification_tells_a_good_fit_from_a_wrong_one() {
     let (frf, _, _) = noisy_sweep_frf(31);
     let fit = fit_tf(&frf, ST, &CostOptions::default(), None).unwrap();
-    let d = Doublet { amplitude: 1.0, pulse_s: 0.4 };
+    let d = Doublet {
+        amplitude: 1.0,
+        pulse_s: 0.4,
+    };
     let n = 600;
     // The doublet held over each sample (as the simulation holds it), measured with noise.
     let u: Vec<f64> = (0..n).map(|i| d.value(i as f64 * DT - 0.5)).collect();
     let held = |t: f64| d.value((t / DT).floor() * DT - 0.5);
     let y_true = SYS.simulate(&held, DT, n, 10);
-    let y: Vec<f64> = y_true.iter().zip(noise(32, 0.02, n)).map(|(a, b)| a + b).collect();
+    let y: Vec<f64> = y_true
+        .iter()
+        .zip(noise(32, 0.02, n))
+        .map(|(a, b)| a + b)
+        .collect();
     let good = theil(&y, &simulate(&fit, &u, DT).unwrap()).unwrap();
     // The noise alone: Theil of the true response against the measurement.
     let floor = theil(&y, &y_true).unwrap();

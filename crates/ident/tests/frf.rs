@@ -20,7 +20,11 @@ use helicon_ident::inputs::Sweep;
 
 const DT: f64 = 0.01;
 
-fn normalised_errors(f: &helicon_ident::frf::Frf, truth: impl Fn(f64) -> Complex64, min_coh: f64) -> Vec<f64> {
+fn normalised_errors(
+    f: &helicon_ident::frf::Frf,
+    truth: impl Fn(f64) -> Complex64,
+    min_coh: f64,
+) -> Vec<f64> {
     (0..f.len())
         .filter(|&k| f.coherence[k] > min_coh)
         .map(|k| {
@@ -31,13 +35,21 @@ fn normalised_errors(f: &helicon_ident::frf::Frf, truth: impl Fn(f64) -> Complex
 }
 
 fn sweep_record(noise_sigma: f64, seed: u64) -> (SecondOrder, Vec<f64>, Vec<f64>) {
-    let sys = SecondOrder { wn: 8.0, zeta: 0.3, delay_s: 0.05 };
+    let sys = SecondOrder {
+        wn: 8.0,
+        zeta: 0.3,
+        delay_s: 0.05,
+    };
     let sweep = Sweep::new(1.0, 0.5, 40.0, 160.0).unwrap();
     // 5 s at rest after the sweep: the output rings down (e^{−ζωn·5} = 6e-6).
     let n = (165.0 / DT) as usize + 1;
     let x: Vec<f64> = (0..n).map(|i| sweep.value(i as f64 * DT)).collect();
     let clean = sys.simulate(&|t| sweep.value(t), DT, n, 10);
-    let y: Vec<f64> = clean.iter().zip(noise(seed, noise_sigma, n)).map(|(a, b)| a + b).collect();
+    let y: Vec<f64> = clean
+        .iter()
+        .zip(noise(seed, noise_sigma, n))
+        .map(|(a, b)| a + b)
+        .collect();
     (sys, x, y)
 }
 
@@ -59,7 +71,10 @@ fn second_order_plus_delay_from_a_noisy_sweep_is_within_its_random_error() {
     // Coherence high where the sweep excites, low above ω_max = 40 rad/s
     // where only noise is left.
     let coh = |lo: f64, hi: f64| {
-        let v: Vec<f64> = (0..f.len()).filter(|&k| (lo..hi).contains(&f.omega_rad_s[k])).map(|k| f.coherence[k]).collect();
+        let v: Vec<f64> = (0..f.len())
+            .filter(|&k| (lo..hi).contains(&f.omega_rad_s[k]))
+            .map(|k| f.coherence[k])
+            .collect();
         percentile(&v, 0.5)
     };
     let (c_low, c_high) = (coh(1.0, 15.0), coh(60.0, 120.0));
@@ -73,7 +88,12 @@ fn noise_free_sweep_recovers_the_analytic_response() {
     let (sys, x, y) = sweep_record(0.0, 0);
     let grid = log_grid(1.0, 30.0, 100).unwrap();
     let rel = |spec: WindowSpec| {
-        let f = siso(&cross_spectra_grid(&[&x, &y], DT, spec, &grid).unwrap(), 0, 1).unwrap();
+        let f = siso(
+            &cross_spectra_grid(&[&x, &y], DT, spec, &grid).unwrap(),
+            0,
+            1,
+        )
+        .unwrap();
         assert!(f.coherence.iter().all(|c| *c > 0.99));
         (0..f.len())
             .map(|k| (f.h[k] - sys.h(f.omega_rad_s[k])).norm() / sys.h(f.omega_rad_s[k]).norm())
@@ -98,7 +118,14 @@ fn composite_of_five_windows_is_within_its_error_bound() {
     let lens = [8000usize, 4000, 2000, 1000, 500];
     let parts: Vec<_> = lens
         .iter()
-        .map(|&l| siso(&cross_spectra_grid(&[&x, &y], DT, WindowSpec::half_overlap(l), &grid).unwrap(), 0, 1).unwrap())
+        .map(|&l| {
+            siso(
+                &cross_spectra_grid(&[&x, &y], DT, WindowSpec::half_overlap(l), &grid).unwrap(),
+                0,
+                1,
+            )
+            .unwrap()
+        })
         .collect();
     let secs: Vec<f64> = lens.iter().map(|l| *l as f64 * DT).collect();
     let c = composite(&parts, &secs).unwrap();
@@ -106,16 +133,27 @@ fn composite_of_five_windows_is_within_its_error_bound() {
     assert_eq!(c.len(), 200);
     let e = normalised_errors(&c, |w| sys.h(w), 0.6);
     let p95 = percentile(&e, 0.95);
-    println!("composite: {} points, median {:.3}, p95 {p95:.3}", e.len(), percentile(&e, 0.5));
+    println!(
+        "composite: {} points, median {:.3}, p95 {p95:.3}",
+        e.len(),
+        percentile(&e, 0.5)
+    );
     // ε of the composite is an upper bound: 95 % of points within 3.5 bounds.
     assert!(p95 < 3.5, "{p95}");
     // The composite is no worse than the longest window's estimate alone.
     let single = normalised_errors(&parts[0], |w| sys.h(w), 0.6);
     let rel = |f: &helicon_ident::frf::Frf| {
-        let v: Vec<f64> = (0..f.len()).map(|k| (f.h[k] - sys.h(f.omega_rad_s[k])).norm() / sys.h(f.omega_rad_s[k]).norm()).collect();
+        let v: Vec<f64> = (0..f.len())
+            .map(|k| (f.h[k] - sys.h(f.omega_rad_s[k])).norm() / sys.h(f.omega_rad_s[k]).norm())
+            .collect();
         percentile(&v, 0.5)
     };
-    println!("median relative error: composite {:.4}, 80 s window {:.4} ({} pts)", rel(&c), rel(&parts[0]), single.len());
+    println!(
+        "median relative error: composite {:.4}, 80 s window {:.4} ({} pts)",
+        rel(&c),
+        rel(&parts[0]),
+        single.len()
+    );
     assert!(rel(&c) <= 1.2 * rel(&parts[0]));
 }
 
@@ -142,7 +180,8 @@ fn conditioned_responses_recover_each_path_of_correlated_inputs() {
     }
     // From two periods per 10 s window up to 0.8 Nyquist.
     let grid = log_grid(1.3, 250.0, 120).unwrap();
-    let cs = cross_spectra_grid(&[&u1, &u2, &y], DT, WindowSpec::half_overlap(1000), &grid).unwrap();
+    let cs =
+        cross_spectra_grid(&[&u1, &u2, &y], DT, WindowSpec::half_overlap(1000), &grid).unwrap();
     let (fr, mult) = conditioned(&cs, &[0, 1], 2).unwrap();
     assert!(mult.iter().all(|g| *g > 0.5), "multiple coherence");
     assert_eq!((fr[0].len(), fr[1].len()), (120, 120));
@@ -150,7 +189,11 @@ fn conditioned_responses_recover_each_path_of_correlated_inputs() {
     // formula is a small-error approximation).
     let e1 = normalised_errors(&fr[0], |w| paths(w).0, 0.6);
     let e2 = normalised_errors(&fr[1], |w| paths(w).1, 0.6);
-    println!("points with partial γ² > 0.6: {} and {}", e1.len(), e2.len());
+    println!(
+        "points with partial γ² > 0.6: {} and {}",
+        e1.len(),
+        e2.len()
+    );
     assert!(e1.len() > 60 && e2.len() > 60);
     for (name, e) in [("H1", &e1), ("H2", &e2)] {
         let (p50, p95) = (percentile(e, 0.5), percentile(e, 0.95));
@@ -165,6 +208,17 @@ fn conditioned_responses_recover_each_path_of_correlated_inputs() {
     println!("single-input H1: median normalised error {p50:.1}");
     assert!(p50 > 10.0, "{p50}");
     // Fully correlated inputs: no point is estimable, none is returned.
-    let (fr, _) = conditioned(&cross_spectra_grid(&[&u1, &u1.clone(), &y], DT, WindowSpec::half_overlap(1000), &grid).unwrap(), &[0, 1], 2).unwrap();
+    let (fr, _) = conditioned(
+        &cross_spectra_grid(
+            &[&u1, &u1.clone(), &y],
+            DT,
+            WindowSpec::half_overlap(1000),
+            &grid,
+        )
+        .unwrap(),
+        &[0, 1],
+        2,
+    )
+    .unwrap();
     assert!(fr[0].is_empty() && fr[1].is_empty());
 }

@@ -14,13 +14,21 @@ use helicon_ident::inputs::Sweep;
 use nalgebra::{DMatrix, DVector};
 
 fn read_named_csv(name: &str) -> DMatrix<f64> {
-    let path = format!("{}/../lti/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
+    let path = format!(
+        "{}/../lti/tests/fixtures/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    );
     let text = std::fs::read_to_string(path).unwrap();
     let rows: Vec<Vec<f64>> = text
         .lines()
         .skip(1)
         .filter(|l| !l.trim().is_empty())
-        .map(|l| l.split(',').skip(1).map(|c| c.trim().parse().unwrap()).collect())
+        .map(|l| {
+            l.split(',')
+                .skip(1)
+                .map(|c| c.trim().parse().unwrap())
+                .collect()
+        })
         .collect();
     DMatrix::from_fn(rows.len(), rows[0].len(), |i, j| rows[i][j])
 }
@@ -31,7 +39,10 @@ const SERVOS: [&str; 4] = ["S_col", "S_lat", "S_lon", "S_tr"];
 
 #[test]
 fn servo_sweeps_in_closed_loop_recover_the_hover_model_responses() {
-    let (a, b) = (read_named_csv("thesis_A.csv"), read_named_csv("thesis_B.csv"));
+    let (a, b) = (
+        read_named_csv("thesis_A.csv"),
+        read_named_csv("thesis_B.csv"),
+    );
     let dt = 1.0 / 400.0;
     let (phi, gamma) = helicon_lti::c2d(&a, &b, dt).unwrap();
     let q = DMatrix::identity(27, 27);
@@ -44,7 +55,7 @@ fn servo_sweeps_in_closed_loop_recover_the_hover_model_responses() {
     let mut parts = Vec::new();
     for servo in 0..4 {
         let mut x = DVector::zeros(27);
-        let mut ch: Vec<Vec<f64>> = vec![Vec::with_capacity(n); 8];
+        let mut ch: Vec<Vec<f64>> = (0..8).map(|_| Vec::with_capacity(n)).collect();
         let mut peak = 0.0_f64;
         for i in 0..n {
             let mut u = -(&k * &x);
@@ -56,7 +67,11 @@ fn servo_sweeps_in_closed_loop_recover_the_hover_model_responses() {
             x = &phi * &x + &gamma * &u;
             peak = peak.max(x.amax());
         }
-        assert!(x.amax() < 1e-9 * peak, "servo {servo}: not at rest at the end ({:e})", x.amax() / peak);
+        assert!(
+            x.amax() < 1e-9 * peak,
+            "servo {servo}: not at rest at the end ({:e})",
+            x.amax() / peak
+        );
         let refs: Vec<&[f64]> = ch.iter().map(Vec::as_slice).collect();
         parts.push(cross_spectra_grid(&refs, dt, WindowSpec::whole_record(n), &grid).unwrap());
     }
@@ -73,7 +88,8 @@ fn servo_sweeps_in_closed_loop_recover_the_hover_model_responses() {
                 .map(|w| {
                     let z = Complex64::from_polar(1.0, w * dt);
                     let m = DMatrix::from_fn(27, 27, |i, j| {
-                        (if i == j { z } else { Complex64::new(0.0, 0.0) }) - Complex64::new(phi[(i, j)], 0.0)
+                        (if i == j { z } else { Complex64::new(0.0, 0.0) })
+                            - Complex64::new(phi[(i, j)], 0.0)
                     });
                     let g = DVector::from_fn(27, |i, _| Complex64::new(gamma[(i, s)], 0.0));
                     m.lu().solve(&g).unwrap()[*row]

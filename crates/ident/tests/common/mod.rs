@@ -48,8 +48,14 @@ impl SecondOrder {
             for j in 0..sub {
                 let t = i as f64 * dt + j as f64 * h;
                 let k1 = f(t, x);
-                let k2 = f(t + h / 2.0, [x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]]);
-                let k3 = f(t + h / 2.0, [x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]]);
+                let k2 = f(
+                    t + h / 2.0,
+                    [x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]],
+                );
+                let k3 = f(
+                    t + h / 2.0,
+                    [x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]],
+                );
                 let k4 = f(t + h, [x[0] + h * k3[0], x[1] + h * k3[1]]);
                 for c in 0..2 {
                     x[c] += h / 6.0 * (k1[c] + 2.0 * k2[c] + 2.0 * k3[c] + k4[c]);
