@@ -87,6 +87,20 @@ pub struct TfArgs {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+    /// Time-domain verification on another log (a doublet, a 3211): the fit
+    /// is simulated on `--verify-input` and compared with `--verify-output`
+    /// (both taken as perturbations from their first sample), Theil coefficient.
+    #[arg(long, requires_all = ["verify_input", "verify_output"])]
+    pub verify: Option<PathBuf>,
+    /// Input column of the verification log.
+    #[arg(long)]
+    pub verify_input: Option<String>,
+    /// Output column of the verification log.
+    #[arg(long)]
+    pub verify_output: Option<String>,
+    /// Time column of the verification log.
+    #[arg(long, default_value = "t_s")]
+    pub verify_time: String,
 }
 
 /// Run `helicon ident`.
@@ -494,6 +508,7 @@ pub fn run_tf(a: &TfArgs) -> Result<()> {
         "n_points": fit.n_points,
         "min_coherence": a.min_coherence,
         "parameters": params,
+        "verification": verify(a, &fit, &stem)?,
     });
     std::fs::write(&json_path, serde_json::to_string_pretty(&doc)? + "\n")
         .with_context(|| format!("{}: cannot write", json_path.display()))?;
@@ -538,4 +553,41 @@ fn fit_curves(f: &Frf, fit: &TfFit) -> [Vec<(f64, f64)>; 2] {
             .collect(),
         x.iter().zip(ph).map(|(x, p)| (*x, p)).collect(),
     ]
+}
+
+/// The time-domain verification of `--verify`: the Theil coefficient and a
+/// plot `DIR/verify_<output>.png`; JSON `null` without `--verify`.
+fn verify(a: &TfArgs, fit: &TfFit, stem: &str) -> Result<serde_json::Value> {
+    let (Some(log), Some(inp), Some(out)) = (&a.verify, &a.verify_input, &a.verify_output) else {
+        return Ok(serde_json::Value::Null);
+    };
+    let file = log.display().to_string();
+    let table = read_columns(log, &[a.verify_time.as_str(), inp.as_str(), out.as_str()])?;
+    let mut cols = table.columns;
+    let t = cols.remove(0);
+    let dt = uniform(&file, &a.verify_time, &t, &mut cols)?;
+    let perturb = |v: &[f64]| -> Vec<f64> { v.iter().map(|x| x - v[0]).collect() };
+    let (u, y) = (perturb(&cols[0]), perturb(&cols[1]));
+    let sim = helicon_ident::fit::simulate(fit, &u, dt)
+        .with_context(|| format!("{file}: simulating the fit"))?;
+    let tic = helicon_ident::fit::theil(&y, &sim).with_context(|| format!("{file}: `{out}`"))?;
+    let tt: Vec<(f64, f64)> = (0..y.len()).map(|k| (k as f64 * dt, y[k])).collect();
+    let ts: Vec<(f64, f64)> = (0..sim.len()).map(|k| (k as f64 * dt, sim[k])).collect();
+    let png = a.out.join(format!("verify_{stem}.png"));
+    Figure::new(
+        &format!("{out}: fit on {file}, Theil {tic:.4}"),
+        "time from the first sample [s]",
+    )
+    .panel(
+        Panel::new(&format!("{out} − initial"))
+            .series(Series::new("measured", &tt))
+            .series(Series::new("fit", &ts).dashed()),
+    )
+    .write(&png)
+    .with_context(|| png.display().to_string())?;
+    println!(
+        "  verification on {file}: Theil inequality coefficient {tic:.4}; {}",
+        png.display()
+    );
+    Ok(serde_json::json!({ "log": file, "input": inp, "output": out, "theil": tic }))
 }

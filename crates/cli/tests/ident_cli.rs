@@ -147,6 +147,38 @@ fn frf_then_tf_recover_a_known_system() {
     );
     assert!((num - 64.0).abs() < 0.02 * 64.0, "{num}");
     assert_eq!(fit["parameters"].as_array().unwrap().len(), 3);
+    assert!(fit["verification"].is_null());
+    // Verification on another log of the same system (here: the sweep log itself
+    // with a jittered clock): Theil well below the 0.25 of a good fit.
+    let other = dir.join("other");
+    std::fs::create_dir_all(&other).unwrap();
+    let vlog = write_log(&other, 0.2);
+    let (ok, so, se) = helicon(&[
+        "ident",
+        "tf",
+        &dir.join("out/frf.csv").display().to_string(),
+        "--output",
+        "rate",
+        "--num",
+        "0",
+        "--den",
+        "2",
+        "--out",
+        &out,
+        "--verify",
+        &vlog,
+        "--verify-input",
+        "servo",
+        "--verify-output",
+        "rate",
+    ]);
+    assert!(ok, "{so}{se}");
+    let fit: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/tf_rate.json")).unwrap())
+            .unwrap();
+    let tic = fit["verification"]["theil"].as_f64().unwrap();
+    assert!(tic < 0.05, "{tic}");
+    assert!(dir.join("out/verify_rate.png").exists());
     assert!(dir.join("out/tf_rate.png").exists());
     // Unknown output: the outputs available are named.
     let (ok, _, se) = helicon(&[
