@@ -237,8 +237,8 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
     if a.windows == 0 || a.windows > 8 {
         bail!("--windows {}: must be 1 … 8", a.windows);
     }
-    if a.points < 2 || a.points > 100_000 {
-        bail!("--points {}: must be 2 … 100000", a.points);
+    if a.points < 2 || a.points > 10_000 {
+        bail!("--points {}: must be 2 … 10000", a.points);
     }
     let mut names: Vec<&str> = vec![a.time.as_str(), a.input.as_str()];
     names.extend(a.conditioned_on.iter().map(String::as_str));

@@ -185,6 +185,10 @@ pub struct Multisine {
     scale: f64,
 }
 
+/// Most harmonics one multisine axis may carry (flight-test multisines use
+/// tens to hundreds; the bound keeps the peak search under ~0.3 s).
+pub const MAX_HARMONICS: usize = 1000;
+
 fn default_repeats() -> u32 {
     1
 }
@@ -250,15 +254,25 @@ impl Multisine {
         let w0 = 2.0 * PI / self.period_s;
         let k_lo = (self.omega_min_rad_s / w0).ceil().max(1.0) as u64;
         let k_hi = (self.omega_max_rad_s / w0).floor() as u64;
-        let ks: Vec<u64> = (k_lo..=k_hi)
-            .filter(|k| (k - k_lo) % u64::from(self.axes) == u64::from(self.axis))
-            .collect();
-        if ks.is_empty() || ks.len() > 100_000 {
+        // Refuse a huge band before enumerating it (no hang, no huge allocation).
+        if k_hi >= k_lo && (k_hi - k_lo) / u64::from(self.axes) >= MAX_HARMONICS as u64 {
             return Err(IdentError::invalid(
                 "multisine.omega_max_rad_s",
                 self.omega_max_rad_s,
                 format!(
-                    "the band must hold 1 … 100000 harmonics of 2π/period = {w0:.6} rad/s for this axis"
+                    "more than {MAX_HARMONICS} harmonics of 2π/period = {w0:.6} rad/s per axis"
+                ),
+            ));
+        }
+        let ks: Vec<u64> = (k_lo..=k_hi)
+            .filter(|k| (k - k_lo) % u64::from(self.axes) == u64::from(self.axis))
+            .collect();
+        if ks.is_empty() || ks.len() > MAX_HARMONICS {
+            return Err(IdentError::invalid(
+                "multisine.omega_max_rad_s",
+                self.omega_max_rad_s,
+                format!(
+                    "the band must hold 1 … {MAX_HARMONICS} harmonics of 2π/period = {w0:.6} rad/s for this axis"
                 ),
             ));
         }
@@ -272,7 +286,7 @@ impl Multisine {
             })
             .collect();
         // Peak over one period on a grid of 16 samples per period of the top harmonic.
-        let n = (16 * k_hi.max(1)).clamp(256, 1 << 20) as usize;
+        let n = (16 * k_hi.max(1)).clamp(256, 1 << 18) as usize;
         self.scale = 1.0;
         let peak = (0..n)
             .map(|i| self.raw(self.period_s * i as f64 / n as f64).abs())
