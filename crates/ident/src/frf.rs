@@ -299,7 +299,7 @@ const REANCHOR: usize = 256;
 
 /// The cross-spectral matrix on any frequency grid `omega_rad_s` (each ≥ 0,
 /// below the Nyquist frequency π/dt): each window's DFT evaluated directly at
-/// the grid frequencies, X(ω) = Σ w[n](x[n] − x̄) e^{−iωn·dt}, so that on the
+/// the grid frequencies, `X(ω) = Σ w[n](x[n] − x̄) e^{−iωn·dt}`, so that on the
 /// FFT bins it equals [`cross_spectra_fft`] (every ω > 0 counted one-sided).
 /// Cost ∝ grid points × samples × channels: a 200-point grid is as fast as
 /// a chirp-z transform would be and needs no padding or interpolation.

@@ -8,7 +8,7 @@ use rustfft::num_complex::Complex64;
 use std::f64::consts::PI;
 
 /// The periodic Hann window of `n` samples (SciPy's `get_window("hann", n)`):
-/// w[i] = 0.5 − 0.5 cos(2π i / n).
+/// `w[i] = 0.5 − 0.5 cos(2π i / n)`.
 pub fn hann(n: usize) -> Vec<f64> {
     (0..n)
         .map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / n as f64).cos())
