@@ -28,6 +28,54 @@ pub enum IdentCommand {
     Frf(FrfArgs),
     /// Fit a transfer function (CIFER cost) to one response of a frf.csv: DIR/tf_<output>.json and an overlay plot.
     Tf(TfArgs),
+    /// Sample a flight-test input (sweep, multisine, doublet, 3211) from a TOML file to CSV `t_s,value`.
+    Input(InputArgs),
+}
+
+/// `helicon ident input`.
+#[derive(Args, Debug)]
+pub struct InputArgs {
+    /// The input (TOML: `kind` = sweep | multisine | doublet | 3211 and its fields, see docs/ident.md).
+    pub input: PathBuf,
+    /// Sample time, s.
+    #[arg(long, default_value_t = 0.0025, allow_negative_numbers = true)]
+    pub dt: f64,
+    /// Output CSV file.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `helicon ident input`.
+pub fn run_input(a: &InputArgs) -> Result<()> {
+    let file = a.input.display().to_string();
+    let text = std::fs::read_to_string(&a.input).with_context(|| format!("{file}: cannot read"))?;
+    let mut input: helicon_ident::inputs::Input =
+        toml::from_str(&text).map_err(|e| anyhow!("{file}: {}", e.to_string().trim_end()))?;
+    input.prepare().with_context(|| file.clone())?;
+    if !(a.dt.is_finite() && a.dt > 0.0) || input.duration_s() / a.dt > 1e8 {
+        bail!(
+            "--dt {}: must be finite, > 0 and give at most 1e8 samples over {} s",
+            a.dt,
+            input.duration_s()
+        );
+    }
+    let mut w = std::io::BufWriter::new(
+        std::fs::File::create(&a.out)
+            .with_context(|| format!("{}: cannot create", a.out.display()))?,
+    );
+    writeln!(w, "t_s,value")?;
+    let v = input.sample(a.dt);
+    for (i, x) in v.iter().enumerate() {
+        writeln!(w, "{},{x}", i as f64 * a.dt)?;
+    }
+    w.flush()?;
+    println!(
+        "{file}: {} samples over {} s -> {}",
+        v.len(),
+        input.duration_s(),
+        a.out.display()
+    );
+    Ok(())
 }
 
 /// `helicon ident frf`.
@@ -108,6 +156,7 @@ pub fn run(args: &IdentArgs) -> Result<()> {
     match &args.command {
         IdentCommand::Frf(a) => run_frf(a),
         IdentCommand::Tf(a) => run_tf(a),
+        IdentCommand::Input(a) => run_input(a),
     }
 }
 

@@ -273,3 +273,37 @@ fn bad_logs_are_refused_with_file_column_and_line() {
     ]);
     assert!(!ok && se.contains("named twice"), "{se}");
 }
+
+#[test]
+fn input_command_samples_a_toml_input() {
+    let dir = tmpdir("input");
+    let p = dir.join("d.toml");
+    std::fs::write(&p, "kind = \"3211\"\namplitude = 0.05\npulse_s = 0.5\n").unwrap();
+    let out = dir.join("d.csv").display().to_string();
+    let (ok, so, se) = helicon(&[
+        "ident",
+        "input",
+        &p.display().to_string(),
+        "--dt",
+        "0.01",
+        "--out",
+        &out,
+    ]);
+    assert!(ok, "{so}{se}");
+    let text = std::fs::read_to_string(&out).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 351);
+    let integral: f64 = rows.iter().map(|r| r[1]).sum::<f64>() * 0.01;
+    // 3211: (3 − 2 + 1 − 1) × 0.5 s × 0.05 = 0.025.
+    assert!((integral - 0.025).abs() < 1e-3, "{integral}");
+    std::fs::write(&p, "kind = \"sweep\"\namplitude = 0.1\nomega_min_rad_s = 1\nomega_max_rad_s = 10\nduration_s = 10\n").unwrap();
+    let (ok, _, se) = helicon(&["ident", "input", &p.display().to_string(), "--out", &out]);
+    assert!(
+        !ok && se.contains("d.toml") && se.contains("sweep.duration_s"),
+        "{se}"
+    );
+}
