@@ -6,6 +6,7 @@ mod console;
 mod control;
 mod demo;
 mod design_cmd;
+mod ident_cmd;
 mod log_cmd;
 mod mc_cmd;
 mod model_cmd;
@@ -57,6 +58,8 @@ enum Command {
     Sitl(sitl_cmd::SitlArgs),
     /// The on-board program: device drivers, 400 Hz control task, avionics, ULog logger.
     Onboard(onboard_cmd::OnboardArgs),
+    /// Frequency-domain system identification: frequency responses from logs, transfer-function fits.
+    Ident(ident_cmd::IdentArgs),
 }
 
 /// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
@@ -125,6 +128,7 @@ fn run() -> anyhow::Result<()> {
         Command::Sim(a) => sim_cmd::run(&a),
         Command::Sitl(a) => sitl_cmd::run(&a),
         Command::Onboard(a) => onboard_cmd::run(&a),
+        Command::Ident(a) => ident_cmd::run(&a),
     }
 }
 

@@ -28,7 +28,7 @@ pub mod scenario;
 pub mod sensor_log;
 pub mod sensors;
 pub mod shaker;
-pub mod spectral;
+pub use helicon_ident::spectral;
 pub mod trajectory;
 pub mod vibration;
 pub mod wind;

@@ -1,0 +1,642 @@
+//! `helicon ident frf` and `helicon ident tf`: frequency responses from any
+//! CSV log with a time column, and transfer-function fits to them (see
+//! docs/ident.md).
+
+use anyhow::{Context, Result, anyhow, bail};
+use clap::{Args, Subcommand};
+use helicon_ident::Complex64;
+use helicon_ident::fit::{CostOptions, TfFit, TfStructure, fit_tf};
+use helicon_ident::frf::{
+    Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid, unwrap_deg,
+};
+use helicon_sim::plot::{Figure, HLine, Panel, Series};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// `helicon ident`.
+#[derive(Args, Debug)]
+pub struct IdentArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: IdentCommand,
+}
+
+/// The `ident` subcommands.
+#[derive(Subcommand, Debug)]
+pub enum IdentCommand {
+    /// Frequency responses (composite windows, coherence, random error) from a CSV log: DIR/frf.csv and Bode plots.
+    Frf(FrfArgs),
+    /// Fit a transfer function (CIFER cost) to one response of a frf.csv: DIR/tf_<output>.json and an overlay plot.
+    Tf(TfArgs),
+    /// Sample a flight-test input (sweep, multisine, doublet, 3211) from a TOML file to CSV `t_s,value`.
+    Input(InputArgs),
+}
+
+/// `helicon ident input`.
+#[derive(Args, Debug)]
+pub struct InputArgs {
+    /// The input (TOML: `kind` = sweep | multisine | doublet | 3211 and its fields, see docs/ident.md).
+    pub input: PathBuf,
+    /// Sample time, s.
+    #[arg(long, default_value_t = 0.0025, allow_negative_numbers = true)]
+    pub dt: f64,
+    /// Output CSV file.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `helicon ident input`.
+pub fn run_input(a: &InputArgs) -> Result<()> {
+    let file = a.input.display().to_string();
+    let text = std::fs::read_to_string(&a.input).with_context(|| format!("{file}: cannot read"))?;
+    let mut input: helicon_ident::inputs::Input =
+        toml::from_str(&text).map_err(|e| anyhow!("{file}: {}", e.to_string().trim_end()))?;
+    input.prepare().with_context(|| file.clone())?;
+    if !(a.dt.is_finite() && a.dt > 0.0) || input.duration_s() / a.dt > 1e8 {
+        bail!(
+            "--dt {}: must be finite, > 0 and give at most 1e8 samples over {} s",
+            a.dt,
+            input.duration_s()
+        );
+    }
+    let mut w = std::io::BufWriter::new(
+        std::fs::File::create(&a.out)
+            .with_context(|| format!("{}: cannot create", a.out.display()))?,
+    );
+    writeln!(w, "t_s,value")?;
+    let v = input.sample(a.dt);
+    for (i, x) in v.iter().enumerate() {
+        writeln!(w, "{},{x}", i as f64 * a.dt)?;
+    }
+    w.flush()?;
+    println!(
+        "{file}: {} samples over {} s -> {}",
+        v.len(),
+        input.duration_s(),
+        a.out.display()
+    );
+    Ok(())
+}
+
+/// `helicon ident frf`.
+#[derive(Args, Debug)]
+pub struct FrfArgs {
+    /// The log (CSV with a header row; `#` lines are comments).
+    pub log: PathBuf,
+    /// Input column.
+    #[arg(long)]
+    pub input: String,
+    /// Output column(s), comma separated.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub output: Vec<String>,
+    /// Time column, s.
+    #[arg(long, default_value = "t_s")]
+    pub time: String,
+    /// Lowest frequency, rad/s (default: two periods in the longest window).
+    #[arg(long, allow_negative_numbers = true)]
+    pub omega_min: Option<f64>,
+    /// Highest frequency, rad/s (default: 0.4 × the Nyquist frequency).
+    #[arg(long, allow_negative_numbers = true)]
+    pub omega_max: Option<f64>,
+    /// Frequency points (log spaced).
+    #[arg(long, default_value_t = 200)]
+    pub points: usize,
+    /// Window lengths composited: record/2, record/4, … (1 … 8).
+    #[arg(long, default_value_t = 5)]
+    pub windows: usize,
+    /// Other input columns to condition on (correlated inputs: other servos, closed loop).
+    #[arg(long, value_delimiter = ',')]
+    pub conditioned_on: Vec<String>,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `helicon ident tf`.
+#[derive(Args, Debug)]
+pub struct TfArgs {
+    /// A frf.csv written by `helicon ident frf`.
+    pub frf: PathBuf,
+    /// The response to fit (its `output` column value).
+    #[arg(long)]
+    pub output: String,
+    /// Numerator order.
+    #[arg(long)]
+    pub num: usize,
+    /// Denominator order (monic).
+    #[arg(long)]
+    pub den: usize,
+    /// Fit a time delay.
+    #[arg(long)]
+    pub delay: bool,
+    /// Points with a coherence γ² at or below this are left out.
+    #[arg(long, default_value_t = 0.6, allow_negative_numbers = true)]
+    pub min_coherence: f64,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Time-domain verification on another log (a doublet, a 3211): the fit
+    /// is simulated on `--verify-input` and compared with `--verify-output`
+    /// (both taken as perturbations from their first sample), Theil coefficient.
+    #[arg(long, requires_all = ["verify_input", "verify_output"])]
+    pub verify: Option<PathBuf>,
+    /// Input column of the verification log.
+    #[arg(long)]
+    pub verify_input: Option<String>,
+    /// Output column of the verification log.
+    #[arg(long)]
+    pub verify_output: Option<String>,
+    /// Time column of the verification log.
+    #[arg(long, default_value = "t_s")]
+    pub verify_time: String,
+}
+
+/// Run `helicon ident`.
+pub fn run(args: &IdentArgs) -> Result<()> {
+    match &args.command {
+        IdentCommand::Frf(a) => run_frf(a),
+        IdentCommand::Tf(a) => run_tf(a),
+        IdentCommand::Input(a) => run_input(a),
+    }
+}
+
+/// Columns read from a CSV by name: their values, row by row.
+struct Table {
+    columns: Vec<Vec<f64>>,
+}
+
+/// Read the named columns of `path`; every value must be a finite number
+/// (errors name the file, the column and the line).
+fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
+    let file = path.display().to_string();
+    let mut rdr = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("{file}: cannot read"))?;
+    let header = rdr
+        .headers()
+        .with_context(|| format!("{file}: no header row"))?
+        .clone();
+    let mut idx = Vec::with_capacity(names.len());
+    for n in names {
+        let found: Vec<usize> = header
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| h == n)
+            .map(|(i, _)| i)
+            .collect();
+        match found.as_slice() {
+            [i] => idx.push(*i),
+            [] => bail!(
+                "{file}: no column `{n}` (columns: {})",
+                header.iter().collect::<Vec<_>>().join(", ")
+            ),
+            _ => bail!("{file}: column `{n}` appears {} times", found.len()),
+        }
+    }
+    let mut columns = vec![Vec::new(); names.len()];
+    for rec in rdr.records() {
+        let rec = rec.with_context(|| format!("{file}: malformed CSV"))?;
+        let line = rec.position().map_or(0, |p| p.line());
+        for (c, &i) in idx.iter().enumerate() {
+            let text = rec.get(i).unwrap_or("");
+            let v: f64 = text.parse().map_err(|_| {
+                anyhow!(
+                    "{file}: line {line}, column `{}`: `{text}` is not a number",
+                    names[c]
+                )
+            })?;
+            if !v.is_finite() {
+                bail!(
+                    "{file}: line {line}, column `{}`: {text} is not finite",
+                    names[c]
+                );
+            }
+            columns[c].push(v);
+        }
+    }
+    if columns[0].len() < 16 {
+        bail!(
+            "{file}: {} data rows; at least 16 are needed",
+            columns[0].len()
+        );
+    }
+    Ok(Table { columns })
+}
+
+/// The sample time of the time column; an irregular column is resampled by
+/// linear interpolation onto a uniform grid at its median step (said on
+/// stderr), and refused when it goes backwards or has a gap over 5 steps.
+fn uniform(file: &str, time: &str, t: &[f64], cols: &mut [Vec<f64>]) -> Result<f64> {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    if let Some(i) = steps.iter().position(|d| d.is_nan() || *d <= 0.0) {
+        bail!(
+            "{file}: column `{time}` does not increase at data row {} ({} then {})",
+            i + 2,
+            t[i],
+            t[i + 1]
+        );
+    }
+    steps.sort_by(f64::total_cmp);
+    let dt = steps[steps.len() / 2];
+    let (lo, hi) = (steps[0], steps[steps.len() - 1]);
+    if hi > 5.0 * dt {
+        bail!(
+            "{file}: column `{time}` has a gap of {hi} s (the median step is {dt} s): a drop-out the spectra cannot bridge; cut the log"
+        );
+    }
+    if hi - lo <= 1e-6 * dt {
+        return Ok(dt);
+    }
+    let n = ((t[t.len() - 1] - t[0]) / dt).floor() as usize + 1;
+    for c in cols.iter_mut() {
+        let old = std::mem::take(c);
+        let mut j = 0;
+        for k in 0..n {
+            let tk = t[0] + k as f64 * dt;
+            while j + 2 < t.len() && t[j + 1] < tk {
+                j += 1;
+            }
+            let f = ((tk - t[j]) / (t[j + 1] - t[j])).clamp(0.0, 1.0);
+            c.push(old[j] + f * (old[j + 1] - old[j]));
+        }
+    }
+    eprintln!(
+        "{file}: `{time}` steps range {lo} … {hi} s: resampled by linear interpolation to {n} samples every {dt} s (the median step)"
+    );
+    Ok(dt)
+}
+
+fn file_stem(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// `helicon ident frf`.
+pub fn run_frf(a: &FrfArgs) -> Result<()> {
+    let file = a.log.display().to_string();
+    if a.windows == 0 || a.windows > 8 {
+        bail!("--windows {}: must be 1 … 8", a.windows);
+    }
+    if a.points < 2 || a.points > 10_000 {
+        bail!("--points {}: must be 2 … 10000", a.points);
+    }
+    let mut names: Vec<&str> = vec![a.time.as_str(), a.input.as_str()];
+    names.extend(a.conditioned_on.iter().map(String::as_str));
+    names.extend(a.output.iter().map(String::as_str));
+    for (i, n) in names.iter().enumerate() {
+        if names[..i].contains(n) {
+            bail!(
+                "column `{n}` is named twice among --time, --input, --conditioned-on and --output"
+            );
+        }
+    }
+    let table = read_columns(&a.log, &names)?;
+    let mut cols = table.columns;
+    let t = cols.remove(0);
+    let dt = uniform(&file, &a.time, &t, &mut cols)?;
+    let n = cols[0].len();
+    let record_s = n as f64 * dt;
+    let lens: Vec<usize> = (1..=a.windows)
+        .map(|k| n >> k)
+        .filter(|l| *l >= 32)
+        .collect();
+    if lens.is_empty() {
+        bail!("{file}: {n} samples: too short for a 32-sample window");
+    }
+    let omega_min = a
+        .omega_min
+        .unwrap_or(4.0 * std::f64::consts::PI / (lens[0] as f64 * dt));
+    let omega_max = a.omega_max.unwrap_or(0.4 * std::f64::consts::PI / dt);
+    let grid = log_grid(omega_min, omega_max, a.points)
+        .with_context(|| format!("--omega-min {omega_min} and --omega-max {omega_max}"))?;
+    let chans: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    let nin = 1 + a.conditioned_on.len();
+    let inputs: Vec<usize> = (0..nin).collect();
+    let mut per_output: Vec<Vec<Frf>> = vec![Vec::new(); a.output.len()];
+    for &l in &lens {
+        let cs = cross_spectra_grid(&chans, dt, WindowSpec::half_overlap(l), &grid)
+            .with_context(|| format!("{file}: window of {l} samples"))?;
+        for (o, parts) in per_output.iter_mut().enumerate() {
+            let (mut f, _) = conditioned(&cs, &inputs, nin + o)
+                .with_context(|| format!("{file}: `{}`", a.output[o]))?;
+            parts.push(f.swap_remove(0));
+        }
+    }
+    let secs: Vec<f64> = lens.iter().map(|l| *l as f64 * dt).collect();
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("{}: cannot create", a.out.display()))?;
+    let csv_path = a.out.join("frf.csv");
+    let mut w = std::io::BufWriter::new(
+        std::fs::File::create(&csv_path)
+            .with_context(|| format!("{}: cannot create", csv_path.display()))?,
+    );
+    writeln!(
+        w,
+        "output,omega_rad_s,mag_db,phase_deg,coherence,random_error"
+    )?;
+    println!(
+        "{file}: {n} samples every {dt} s ({record_s:.3} s), windows {} s, input `{}`{}",
+        secs.iter()
+            .map(|s| format!("{s:.3}"))
+            .collect::<Vec<_>>()
+            .join("/"),
+        a.input,
+        if a.conditioned_on.is_empty() {
+            String::new()
+        } else {
+            format!(" conditioned on {}", a.conditioned_on.join(","))
+        }
+    );
+    for (o, parts) in per_output.iter().enumerate() {
+        let name = &a.output[o];
+        let f = composite(parts, &secs).with_context(|| format!("{file}: `{name}`"))?;
+        let (mag, ph) = (f.mag_db(), f.phase_deg());
+        for k in 0..f.len() {
+            let row = [
+                f.omega_rad_s[k],
+                mag[k],
+                ph[k],
+                f.coherence[k],
+                f.random_error[k],
+            ];
+            if row.iter().any(|v| !v.is_finite()) {
+                bail!(
+                    "`{name}` at {} rad/s: a non-finite value (zero response?)",
+                    f.omega_rad_s[k]
+                );
+            }
+            writeln!(
+                w,
+                "{name},{},{},{},{},{}",
+                row[0], row[1], row[2], row[3], row[4]
+            )?;
+        }
+        let good = f.coherence.iter().filter(|c| **c > 0.6).count();
+        let png = a.out.join(format!("bode_{}.png", file_stem(name)));
+        write_bode(&png, &format!("{name} / {}", a.input), &f, None)?;
+        println!(
+            "  {name}: {} points, {good} with γ² > 0.6; {}",
+            f.len(),
+            png.display()
+        );
+    }
+    w.flush()?;
+    println!("  {}", csv_path.display());
+    Ok(())
+}
+
+/// Write magnitude, phase and coherence against log10 ω, with an optional
+/// fit (magnitude and phase curves) overlaid, to `path`.
+fn write_bode(path: &Path, title: &str, f: &Frf, fit: Option<&[Vec<(f64, f64)>; 2]>) -> Result<()> {
+    let lw = |v: &[f64]| -> Vec<(f64, f64)> {
+        f.omega_rad_s
+            .iter()
+            .zip(v)
+            .map(|(w, y)| (w.log10(), *y))
+            .collect()
+    };
+    let (mag, ph, coh) = (lw(&f.mag_db()), lw(&f.phase_deg()), lw(&f.coherence));
+    let mut pm = Panel::new("magnitude [dB]").series(Series::new("estimate", &mag));
+    let mut pp = Panel::new("phase [deg]").series(Series::new("estimate", &ph));
+    if let Some(fit) = fit {
+        pm = pm.series(Series::new("fit", &fit[0]).dashed());
+        pp = pp.series(Series::new("fit", &fit[1]).dashed());
+    }
+    let mut pc = Panel::new("coherence γ² [-]").series(Series::new("γ²", &coh));
+    pc.hlines.push(HLine {
+        y: 0.6,
+        label: "0.6".into(),
+        color: [127, 127, 127],
+    });
+    pc.y_include = vec![0.0, 1.0];
+    Figure::new(title, "log10 ω [rad/s]")
+        .panel(pm)
+        .panel(pp)
+        .panel(pc)
+        .write(path)
+        .with_context(|| path.display().to_string())
+}
+
+/// Read the rows of `output` from a frf.csv.
+fn read_frf(path: &Path, output: &str) -> Result<Frf> {
+    let file = path.display().to_string();
+    let mut rdr = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("{file}: cannot read"))?;
+    let header: Vec<String> = rdr
+        .headers()
+        .with_context(|| format!("{file}: no header row"))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let want = [
+        "output",
+        "omega_rad_s",
+        "mag_db",
+        "phase_deg",
+        "coherence",
+        "random_error",
+    ];
+    if header != want {
+        bail!(
+            "{file}: header `{}` is not a frf.csv header `{}`",
+            header.join(","),
+            want.join(",")
+        );
+    }
+    let mut f = Frf {
+        omega_rad_s: Vec::new(),
+        h: Vec::new(),
+        coherence: Vec::new(),
+        random_error: Vec::new(),
+    };
+    let mut seen = Vec::<String>::new();
+    for rec in rdr.records() {
+        let rec = rec.with_context(|| format!("{file}: malformed CSV"))?;
+        let line = rec.position().map_or(0, |p| p.line());
+        let name = rec.get(0).unwrap_or("");
+        if !seen.iter().any(|s| s == name) {
+            seen.push(name.to_string());
+        }
+        if name != output {
+            continue;
+        }
+        let mut v = [0.0; 5];
+        for (c, slot) in v.iter_mut().enumerate() {
+            let text = rec.get(c + 1).unwrap_or("");
+            *slot = text
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    anyhow!(
+                        "{file}: line {line}, column `{}`: `{text}` is not a finite number",
+                        want[c + 1]
+                    )
+                })?;
+        }
+        if v[0] <= 0.0 || f.omega_rad_s.last().is_some_and(|w| *w >= v[0]) {
+            bail!(
+                "{file}: line {line}, column `omega_rad_s`: {} must be > 0 and increasing",
+                v[0]
+            );
+        }
+        if !(0.0..=1.0).contains(&v[3]) || v[4] < 0.0 {
+            bail!(
+                "{file}: line {line}: coherence {} must be in [0, 1] and random_error {} ≥ 0",
+                v[3],
+                v[4]
+            );
+        }
+        f.omega_rad_s.push(v[0]);
+        f.h.push(Complex64::from_polar(
+            10f64.powf(v[1] / 20.0),
+            v[2].to_radians(),
+        ));
+        f.coherence.push(v[3]);
+        f.random_error.push(v[4]);
+    }
+    if f.is_empty() {
+        bail!(
+            "{file}: no rows for output `{output}` (outputs: {})",
+            seen.join(", ")
+        );
+    }
+    Ok(f)
+}
+
+/// `helicon ident tf`.
+pub fn run_tf(a: &TfArgs) -> Result<()> {
+    if !(0.0..1.0).contains(&a.min_coherence) {
+        bail!("--min-coherence {}: must be in [0, 1)", a.min_coherence);
+    }
+    let f = read_frf(&a.frf, &a.output)?;
+    let st = TfStructure {
+        num_order: a.num,
+        den_order: a.den,
+        delay: a.delay,
+    };
+    let opts = CostOptions {
+        min_coherence: a.min_coherence,
+        ..CostOptions::default()
+    };
+    let fit = fit_tf(&f, st, &opts, None)
+        .with_context(|| format!("{}: `{}`", a.frf.display(), a.output))?;
+    std::fs::create_dir_all(&a.out)
+        .with_context(|| format!("{}: cannot create", a.out.display()))?;
+    let stem = file_stem(&a.output);
+    let json_path = a.out.join(format!("tf_{stem}.json"));
+    let params: Vec<serde_json::Value> = (0..fit.params.len())
+        .map(|i| {
+            serde_json::json!({
+                "name": fit.names[i],
+                "value": fit.params[i],
+                "cramer_rao": fit.cramer_rao[i],
+                "cramer_rao_pct": fit.cramer_rao_pct[i],
+                "insensitivity_pct": fit.insensitivity_pct[i],
+            })
+        })
+        .collect();
+    let doc = serde_json::json!({
+        "output": a.output,
+        "num": fit.num,
+        "den": fit.den,
+        "delay_s": fit.delay_s,
+        "cost": fit.cost,
+        "n_points": fit.n_points,
+        "min_coherence": a.min_coherence,
+        "parameters": params,
+        "verification": verify(a, &fit, &stem)?,
+    });
+    std::fs::write(&json_path, serde_json::to_string_pretty(&doc)? + "\n")
+        .with_context(|| format!("{}: cannot write", json_path.display()))?;
+    let overlay = fit_curves(&f, &fit);
+    let png = a.out.join(format!("tf_{stem}.png"));
+    let title = format!(
+        "{}: fit num {} den {}{}",
+        a.output,
+        a.num,
+        a.den,
+        if a.delay { " + delay" } else { "" }
+    );
+    write_bode(&png, &title, &f, Some(&overlay))?;
+    println!(
+        "{}: J = {:.3} over {} points",
+        a.output, fit.cost, fit.n_points
+    );
+    for i in 0..fit.params.len() {
+        println!(
+            "  {:>6} = {:<14.6e} CR {:6.2} %  I {:6.2} %",
+            fit.names[i], fit.params[i], fit.cramer_rao_pct[i], fit.insensitivity_pct[i]
+        );
+    }
+    println!("  {}\n  {}", json_path.display(), png.display());
+    Ok(())
+}
+
+/// The fit's magnitude and phase on the response's grid, the phase shifted by
+/// whole turns to start within 180° of the estimate.
+fn fit_curves(f: &Frf, fit: &TfFit) -> [Vec<(f64, f64)>; 2] {
+    let h: Vec<Complex64> = f.omega_rad_s.iter().map(|w| fit.eval(*w)).collect();
+    let mut ph = unwrap_deg(&h.iter().map(|v| v.arg().to_degrees()).collect::<Vec<_>>());
+    if let (Some(p0), Some(d0)) = (ph.first().copied(), f.phase_deg().first().copied()) {
+        let turns = ((d0 - p0) / 360.0).round() * 360.0;
+        ph.iter_mut().for_each(|p| *p += turns);
+    }
+    let x: Vec<f64> = f.omega_rad_s.iter().map(|w| w.log10()).collect();
+    [
+        x.iter()
+            .zip(&h)
+            .map(|(x, v)| (*x, 20.0 * v.norm().log10()))
+            .collect(),
+        x.iter().zip(ph).map(|(x, p)| (*x, p)).collect(),
+    ]
+}
+
+/// The time-domain verification of `--verify`: the Theil coefficient and a
+/// plot `DIR/verify_<output>.png`; JSON `null` without `--verify`.
+fn verify(a: &TfArgs, fit: &TfFit, stem: &str) -> Result<serde_json::Value> {
+    let (Some(log), Some(inp), Some(out)) = (&a.verify, &a.verify_input, &a.verify_output) else {
+        return Ok(serde_json::Value::Null);
+    };
+    let file = log.display().to_string();
+    let table = read_columns(log, &[a.verify_time.as_str(), inp.as_str(), out.as_str()])?;
+    let mut cols = table.columns;
+    let t = cols.remove(0);
+    let dt = uniform(&file, &a.verify_time, &t, &mut cols)?;
+    let perturb = |v: &[f64]| -> Vec<f64> { v.iter().map(|x| x - v[0]).collect() };
+    let (u, y) = (perturb(&cols[0]), perturb(&cols[1]));
+    let sim = helicon_ident::fit::simulate(fit, &u, dt)
+        .with_context(|| format!("{file}: simulating the fit"))?;
+    let tic = helicon_ident::fit::theil(&y, &sim).with_context(|| format!("{file}: `{out}`"))?;
+    let tt: Vec<(f64, f64)> = (0..y.len()).map(|k| (k as f64 * dt, y[k])).collect();
+    let ts: Vec<(f64, f64)> = (0..sim.len()).map(|k| (k as f64 * dt, sim[k])).collect();
+    let png = a.out.join(format!("verify_{stem}.png"));
+    Figure::new(
+        &format!("{out}: fit on {file}, Theil {tic:.4}"),
+        "time from the first sample [s]",
+    )
+    .panel(
+        Panel::new(&format!("{out} − initial"))
+            .series(Series::new("measured", &tt))
+            .series(Series::new("fit", &ts).dashed()),
+    )
+    .write(&png)
+    .with_context(|| png.display().to_string())?;
+    println!(
+        "  verification on {file}: Theil inequality coefficient {tic:.4}; {}",
+        png.display()
+    );
+    Ok(serde_json::json!({ "log": file, "input": inp, "output": out, "theil": tic }))
+}
