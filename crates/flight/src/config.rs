@@ -26,6 +26,10 @@
 //! overrun_limit = 8                       # consecutive deadline misses → hold
 //! [log]
 //! dir = "flight-logs"
+//! [home]                                  # origin of the local NED frame (WGS-84)
+//! latitude_deg = 57.0146
+//! longitude_deg = 9.9869
+//! height_m = 20.0
 //! [realtime]
 //! sched_fifo = true
 //! priority = 80                           # 1..=99
@@ -121,6 +125,29 @@ impl Default for LogConfig {
     }
 }
 
+/// The origin of the local NED frame the GPS positions are given in.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HomeConfig {
+    /// WGS-84 latitude (degrees, −90..=90).
+    pub latitude_deg: f64,
+    /// WGS-84 longitude (degrees, −180..=180).
+    pub longitude_deg: f64,
+    /// Height above the ellipsoid (m).
+    pub height_m: f64,
+}
+
+impl Default for HomeConfig {
+    /// A field near Aalborg (the thesis's flights).
+    fn default() -> Self {
+        HomeConfig {
+            latitude_deg: 57.0146,
+            longitude_deg: 9.9869,
+            height_m: 20.0,
+        }
+    }
+}
+
 /// Real-time options: each is tried and, when the system does not permit
 /// it, the program warns and runs without.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -171,6 +198,14 @@ pub struct OnboardConfig {
     /// Log folder.
     #[serde(default)]
     pub log: LogConfig,
+    /// The local NED frame's origin.
+    #[serde(default)]
+    pub home: HomeConfig,
+    /// A mission: a scenario file whose `[trim]` and `[[reference]]` give
+    /// the references against time since arming (relative to this file);
+    /// without it the helicopter holds a hover at the heading of alignment.
+    #[serde(default)]
+    pub mission: Option<PathBuf>,
     /// Real-time options.
     #[serde(default)]
     pub realtime: RealtimeConfig,
@@ -240,12 +275,12 @@ impl OnboardConfig {
                     rule: "a device path is required".into(),
                 });
             }
-            if !(1200..=4_000_000).contains(&d.baud) {
+            if !crate::ports::BAUDS.contains(&d.baud) {
                 return Err(ConfigError::invalid(
                     file,
                     format!("devices.{name}.baud"),
                     f64::from(d.baud),
-                    "must be 1200..=4000000 bit/s",
+                    format!("must be one of {:?} bit/s", crate::ports::BAUDS),
                 ));
             }
         }
@@ -272,6 +307,22 @@ impl OnboardConfig {
                 "must be 1..=99 (SCHED_FIFO)",
             ));
         }
+        let h = &self.home;
+        let range = |field: &str, v: f64, lo: f64, hi: f64| {
+            if v.is_finite() && (lo..=hi).contains(&v) {
+                Ok(())
+            } else {
+                Err(ConfigError::invalid(
+                    file,
+                    field,
+                    v,
+                    format!("must be finite and within {lo}..={hi}"),
+                ))
+            }
+        };
+        range("home.latitude_deg", h.latitude_deg, -90.0, 90.0)?;
+        range("home.longitude_deg", h.longitude_deg, -180.0, 180.0)?;
+        range("home.height_m", h.height_m, -1000.0, 10_000.0)?;
         self.sensors
             .validate(file)
             .map_err(|e| e.within(file, "sensors"))?;
@@ -328,11 +379,16 @@ mod tests {
         );
         assert!(err("[sensors.gps]\nrate_hz = -5.0\n").starts_with("o.toml: `sensors.gps.rate_hz`"));
         assert!(err("[stale]\nbogus = 1\n").contains("bogus"));
+        assert_eq!(
+            err("[home]\nlatitude_deg = 91.0\n"),
+            "o.toml: `home.latitude_deg` = 91: must be finite and within -90..=90"
+        );
         let bad_baud = MIN.replace("baud = 921600", "baud = 7");
         let e = OnboardConfig::from_toml_str(&bad_baud, "o.toml").unwrap_err();
         assert_eq!(
             e.to_string(),
-            "o.toml: `devices.imu.baud` = 7: must be 1200..=4000000 bit/s"
+            "o.toml: `devices.imu.baud` = 7: must be one of [9600, 19200, 38400, 57600, \
+             115200, 230400, 460800, 921600, 1000000] bit/s"
         );
     }
 }

@@ -17,6 +17,7 @@
 
 pub mod config;
 pub mod control;
+pub mod onboard;
 pub mod realtime;
 pub mod records;
 pub mod runtime;

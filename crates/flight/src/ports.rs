@@ -138,7 +138,8 @@ pub struct DeviceSensors {
     last_imu_ns: Option<u64>,
     pending_gps: Option<helicon_devices::NavPvt>,
     pending_mag: Option<nalgebra::Vector3<f64>>,
-    ready: Option<Arrival>,
+    receiver: Option<DeviceRc>,
+    pending_rc: Option<RcInput>,
     buf: [u8; 512],
 }
 
@@ -156,9 +157,30 @@ impl DeviceSensors {
             last_imu_ns: None,
             pending_gps: None,
             pending_mag: None,
-            ready: None,
+            receiver: None,
+            pending_rc: None,
             buf: [0; 512],
         }
+    }
+
+    /// Also read the receiver (a handle of the avionics port), drained
+    /// before each IMU frame is assembled, as the GPS is: lock-step SITL,
+    /// where the receiver's frames then reach the control step they
+    /// precede. On board the receiver has its own thread (manual must work
+    /// without the IMU).
+    #[must_use]
+    pub fn with_receiver(mut self, rc: DeviceRc) -> Self {
+        self.receiver = Some(rc);
+        self
+    }
+
+    fn drain_rc(&mut self) -> Result<(), PortError> {
+        if let Some(rc) = self.receiver.as_mut() {
+            while let Next::Item(r) = rc.next(Duration::ZERO)? {
+                self.pending_rc = Some(r);
+            }
+        }
+        Ok(())
     }
 
     /// Bytes rejected by the decoders so far (IMU, GPS).
@@ -199,6 +221,7 @@ impl DeviceSensors {
             return Some(Arrival {
                 frame: None,
                 arrived_ns,
+                rc: self.pending_rc.take(),
             });
         }
         self.last_imu_ns = Some(ns);
@@ -216,49 +239,30 @@ impl DeviceSensors {
                 gps,
             }),
             arrived_ns,
+            rc: self.pending_rc.take(),
         })
     }
 }
 
 impl SensorPort for DeviceSensors {
     fn next(&mut self, timeout: Duration) -> Result<Next<Arrival>, PortError> {
-        if let Some(a) = self.ready.take() {
-            return Ok(Next::Item(a));
-        }
         let n = self.imu.read_timeout(&mut self.buf, timeout)?;
         if n == 0 {
             // the GPS keeps being read while the IMU is silent
             self.drain_gps()?;
             return Ok(Next::Timeout);
         }
-        let mut chunk = [0u8; 512];
-        chunk[..n].copy_from_slice(&self.buf[..n]);
-        let mut first: Option<helicon_devices::VnCommon> = None;
-        let mut more = 0usize;
-        let mut msgs = [helicon_devices::VnCommon::default(); 4];
-        self.vn.push_with(&chunk[..n], |m| {
-            if more < msgs.len() {
-                msgs[more] = m;
-                more += 1;
-            }
-            first.get_or_insert(m);
-        });
-        if more == 0 {
+        // the newest complete IMU message of the read (a reader that fell
+        // behind keeps the newest sample)
+        let mut newest = None;
+        let buf = self.buf;
+        self.vn.push_with(&buf[..n], |m| newest = Some(m));
+        let Some(m) = newest else {
             return Ok(Next::Timeout);
-        }
+        };
         self.drain_gps()?;
-        let mut out = None;
-        for m in &msgs[..more] {
-            if let Some(a) = self.assemble(m) {
-                if out.is_none() {
-                    out = Some(a);
-                } else {
-                    // two messages in one read (a late reader): keep the newest
-                    out = Some(a);
-                }
-            }
-        }
-        Ok(out.map_or(Next::Timeout, Next::Item))
+        self.drain_rc()?;
+        Ok(self.assemble(&m).map_or(Next::Timeout, Next::Item))
     }
 }
 

@@ -2,8 +2,12 @@
 //! message set, plus the supervisor's events with their precise reason,
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
-use crate::safety::{Mode, Reason, SafetyEvent};
-use helicon_ulog::messages::{Failsafe, FailsafeReason, FlightMode, Mode as ModeRecord};
+use crate::control::{ControlOutput, Tick};
+use crate::safety::{Mode, RcInput, Reason, SafetyEvent};
+use helicon_ulog::messages::{
+    Control, Failsafe, FailsafeReason, FlightMode, Mode as ModeRecord, Navigation,
+    RcInput as RcRecord, ServoOutput, Timing,
+};
 use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, timestamp_us};
 use std::io::Write;
 
@@ -39,7 +43,7 @@ pub fn flight_mode(m: Mode) -> FlightMode {
 /// failsafe).
 pub fn failsafe_reason(r: Reason) -> Option<FailsafeReason> {
     match r {
-        Reason::ImuStale | Reason::GpsStale | Reason::MagStale => {
+        Reason::ImuStale | Reason::GpsStale | Reason::MagStale | Reason::ImuRecovered => {
             Some(FailsafeReason::SensorTimeout)
         }
         Reason::Overrun => Some(FailsafeReason::DeadlineMiss),
@@ -125,5 +129,70 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
             let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("watchdog");
             log.writer_mut().log(LogLevel::Emergency, ts, s)
         }
+    }
+}
+
+/// Everything one control step logs, handed to `push` in order: the frame
+/// (`sensor_imu`, `sensor_mag`, `sensor_gps`), the receiver's frame, the
+/// change of mode, the control step (`control`, `navigation`), the servo
+/// command and the timing. No allocation.
+pub fn step_records(
+    tick: &Tick,
+    out: &ControlOutput,
+    timing: Timing,
+    push: &mut impl FnMut(FlightRecord),
+) -> Result<(), WriteError> {
+    let ts = timestamp_us(tick.now_s, "control step")?;
+    if let Some(f) = &tick.frame {
+        let (imu, mag, gps) = helicon_ulog::messages::frame_records(f)?;
+        push(FlightRecord::Log(LogRecord::Imu(imu)));
+        if let Some(m) = mag {
+            push(FlightRecord::Log(LogRecord::Mag(m)));
+        }
+        if let Some(g) = gps {
+            push(FlightRecord::Log(LogRecord::Gps(g)));
+        }
+    }
+    if let Some(rc) = &tick.rc {
+        push(FlightRecord::Log(LogRecord::Rc(rc_record(ts, rc))));
+    }
+    if let Some(ev) = out.event {
+        push(FlightRecord::Event(ev));
+    }
+    if let Some(t) = &out.telemetry {
+        push(FlightRecord::Log(LogRecord::Control(Control::from_telemetry(t)?)));
+        if let Some(n) = &t.navigation {
+            push(FlightRecord::Log(LogRecord::Navigation(
+                Navigation::from_solution(t.t_s, n)?,
+            )));
+        }
+    }
+    push(FlightRecord::Log(LogRecord::Servo(ServoOutput {
+        timestamp: ts,
+        command: out.servo.into(),
+        source: match out.mode {
+            Mode::Auto => 0,
+            Mode::Manual => 1,
+            _ => 2,
+        },
+    })));
+    push(FlightRecord::Log(LogRecord::Timing(timing)));
+    Ok(())
+}
+
+/// The receiver's frame as a log record: the sticks in the first four
+/// channels as pulse widths (the receiver's mapping,
+/// [`crate::ports::stick_us`]).
+fn rc_record(ts: u64, rc: &RcInput) -> RcRecord {
+    let mut channels_us = [0u16; 16];
+    for i in 0..4 {
+        channels_us[i] = crate::ports::stick_us(rc.servo[i]);
+    }
+    RcRecord {
+        timestamp: ts,
+        channels_us,
+        channel_count: 4,
+        manual_switch: rc.manual,
+        signal_lost: false,
     }
 }

@@ -18,15 +18,15 @@
 //! on-board time is k·Ts from the first message). Either way each step is
 //! the [`ControlTask`]'s and sends exactly one servo frame.
 
-use crate::control::{ControlOutput, ControlTask, Tick};
+use crate::control::{ControlTask, Tick};
 use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
-use crate::records::{FlightRecord, write_record};
+use crate::records::{FlightRecord, step_records, write_record};
 use crate::safety::{Mode, RcInput};
 use helicon_core::state::Input;
 use helicon_core::{Reference, SensorFrame, Telemetry};
 use helicon_sim::scenario::ReferenceSchedule;
-use helicon_ulog::messages::{Control, Navigation, RcInput as RcRecord, ServoOutput, Timing};
-use helicon_ulog::{FlightLog, LogRecord, WriteError, timestamp_us};
+use helicon_ulog::messages::Timing;
+use helicon_ulog::{FlightLog, timestamp_us};
 use nalgebra::Vector3;
 use std::io::Write;
 use std::sync::Arc;
@@ -64,6 +64,10 @@ pub struct Arrival {
     pub frame: Option<SensorFrame>,
     /// When the message was decoded (`CLOCK_MONOTONIC`, ns).
     pub arrived_ns: u64,
+    /// The receiver's newest frame, when the sensor server also reads the
+    /// receiver (lock-step: its frames written before the IMU message then
+    /// reach the same control step, deterministically).
+    pub rc: Option<RcInput>,
 }
 
 /// The sensor devices (IMU with magnetometer, GPS) read together.
@@ -211,8 +215,9 @@ const SERVO_RING: usize = 64;
 const LOG_RING: usize = 16_384;
 const POLL: Duration = Duration::from_millis(50);
 
-/// Spawn the runtime: sensor server, receiver, control task, avionics-out
-/// and logger threads. `log` is owned by the logger thread and finished
+/// Spawn the runtime: sensor server, receiver (when `rc` is given; else
+/// the sensor port reports the receiver's frames), control task,
+/// avionics-out and logger threads. `log` is owned by the logger thread and finished
 /// when the runtime ends; `downlink`, when given, receives each step's
 /// telemetry (the ground link; SITL fills the truth log's estimate columns
 /// from it).
@@ -220,7 +225,7 @@ pub fn spawn<S, R, V, W>(
     task: ControlTask,
     mission: Mission,
     sensors: S,
-    rc: R,
+    rc: Option<R>,
     servos: V,
     log: FlightLog<W>,
     downlink: Option<rtrb::Producer<Telemetry>>,
@@ -329,15 +334,18 @@ where
                 sensor_loop(sensors, frame_tx, &stop, &closed, wake)
             })
     };
-    let receiver = {
+    let receiver = rc.map(|rc| {
         let stop = stop.clone();
         thread::Builder::new()
             .name("receiver".into())
             .spawn(move || receiver_loop(rc, rc_tx, &stop))
-    };
+    });
     let mut others = Vec::new();
     let mut wakers = Vec::new();
-    for h in [sensor, receiver, avionics, logger] {
+    for h in [Some(sensor), receiver, Some(avionics), Some(logger)]
+        .into_iter()
+        .flatten()
+    {
         match h {
             Ok(h) => {
                 wakers.push(h.thread().clone());
@@ -374,6 +382,11 @@ where
 }
 
 impl RuntimeHandle {
+    /// The real-time warnings of the start (privileges refused).
+    pub fn warnings(&self) -> Vec<String> {
+        self.realtime.warnings.clone()
+    }
+
     /// Ask every thread to stop.
     pub fn stop(&self) {
         self.stop.store(true, Ordering::SeqCst);
@@ -511,76 +524,6 @@ struct ControlCtx<'a> {
     options: RuntimeOptions,
 }
 
-/// Everything one step logs: timing, the frame, the control step, the
-/// servo command, the receiver frame and the event.
-fn log_step(
-    ctx: &mut ControlCtx<'_>,
-    tick: &Tick,
-    out: &ControlOutput,
-    timing: Timing,
-) -> Result<u64, WriteError> {
-    let mut dropped = 0;
-    let mut push = |r: FlightRecord| {
-        if ctx.log.push(r).is_err() {
-            dropped += 1;
-        }
-    };
-    let ts = timestamp_us(tick.now_s, "control step")?;
-    if let Some(f) = &tick.frame {
-        let (imu, mag, gps) = helicon_ulog::messages::frame_records(f)?;
-        push(FlightRecord::Log(LogRecord::Imu(imu)));
-        if let Some(m) = mag {
-            push(FlightRecord::Log(LogRecord::Mag(m)));
-        }
-        if let Some(g) = gps {
-            push(FlightRecord::Log(LogRecord::Gps(g)));
-        }
-    }
-    if let Some(rc) = &tick.rc {
-        push(FlightRecord::Log(LogRecord::Rc(rc_record(ts, rc))));
-    }
-    if let Some(ev) = out.event {
-        push(FlightRecord::Event(ev));
-    }
-    if let Some(t) = &out.telemetry {
-        push(FlightRecord::Log(LogRecord::Control(Control::from_telemetry(t)?)));
-        if let Some(n) = &t.navigation {
-            push(FlightRecord::Log(LogRecord::Navigation(
-                Navigation::from_solution(t.t_s, n)?,
-            )));
-        }
-    }
-    push(FlightRecord::Log(LogRecord::Servo(ServoOutput {
-        timestamp: ts,
-        command: out.servo.into(),
-        source: match out.mode {
-            Mode::Auto => 0,
-            Mode::Manual => 1,
-            _ => 2,
-        },
-    })));
-    push(FlightRecord::Log(LogRecord::Timing(timing)));
-    Ok(dropped)
-}
-
-/// The receiver's frame as a log record: the sticks as servo commands are
-/// carried in the first four channels as pulse widths
-/// (1500 µs + 1000 µs per unit of servo command, clamped to 800..2200 µs).
-fn rc_record(ts: u64, rc: &RcInput) -> RcRecord {
-    let mut channels_us = [0u16; 16];
-    for i in 0..4 {
-        let us = (1500.0 + 1000.0 * rc.servo[i]).clamp(800.0, 2200.0);
-        channels_us[i] = us as u16;
-    }
-    RcRecord {
-        timestamp: ts,
-        channels_us,
-        channel_count: 4,
-        manual_switch: rc.manual,
-        signal_lost: false,
-    }
-}
-
 #[allow(clippy::too_many_lines)] // one loop: wait, gather, step, hand over, log
 fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_>) -> ControlResult {
     let ts_s = ctx.options.sample_time_s;
@@ -640,7 +583,7 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
             Pacing::Clock => (wake_ns - t0_ns) as f64 * 1e-9,
             Pacing::Sensor => steps as f64 * ts_s,
         };
-        let mut rc = None;
+        let mut rc = arrival.and_then(|a| a.rc);
         while let Ok(r) = ctx.rc.pop() {
             rc = Some(r);
         }
@@ -688,10 +631,14 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
             deadline_misses: u32::try_from(misses).unwrap_or(u32::MAX),
             log_dropped: u32::try_from(log_dropped).unwrap_or(u32::MAX),
         };
-        match log_step(&mut ctx, &tick, &out, timing) {
-            Ok(d) => log_dropped += d,
-            Err(_) => log_dropped += 1,
-        }
+        let ring = &mut ctx.log;
+        let mut dropped = 0;
+        let res = step_records(&tick, &out, timing, &mut |r| {
+            if ring.push(r).is_err() {
+                dropped += 1;
+            }
+        });
+        log_dropped += dropped + u64::from(res.is_err());
         if let Some(t) = &ctx.wake_log {
             t.unpark();
         }

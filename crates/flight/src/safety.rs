@@ -82,6 +82,8 @@ pub enum Reason {
     Overrun,
     /// `failsafe.hold_s` in hold elapsed: descending.
     HoldElapsed,
+    /// The IMU delivers again (or the navigation recovered): auto.
+    ImuRecovered,
 }
 
 impl Reason {
@@ -98,10 +100,11 @@ impl Reason {
             Reason::MagStale => "mag_stale",
             Reason::Overrun => "overrun",
             Reason::HoldElapsed => "hold_elapsed",
+            Reason::ImuRecovered => "imu_recovered",
         }
     }
 
-    /// A small code for binary logs (0..=9, in declaration order).
+    /// A small code for binary logs (0..=10, in declaration order).
     pub fn code(self) -> u8 {
         self as u8
     }
@@ -234,13 +237,16 @@ impl Supervisor {
                 self.nav_failed = false;
             }
         }
-        let imu_lost = h.now_s - self.last_imu_s > self.stale.imu_s || self.nav_failed;
+        // older than the limit by more than 1 ns: k·Ts sums do not flip a
+        // sample early by rounding
+        let stale = |last: f64, limit: f64| h.now_s - last > limit + 1e-9;
+        let imu_lost = stale(self.last_imu_s, self.stale.imu_s) || self.nav_failed;
         if !self.armed {
             self.latched = None;
         } else if self.latched.is_none() && !self.manual {
-            self.latched = if h.now_s - self.last_gps_s > self.stale.gps_s {
+            self.latched = if stale(self.last_gps_s, self.stale.gps_s) {
                 Some(Reason::GpsStale)
-            } else if h.now_s - self.last_mag_s > self.stale.mag_s {
+            } else if stale(self.last_mag_s, self.stale.mag_s) {
                 Some(Reason::MagStale)
             } else if self.misses >= self.failsafe.overrun_limit {
                 Some(Reason::Overrun)
@@ -270,6 +276,7 @@ impl Supervisor {
         } else {
             let r = match self.mode {
                 Mode::Manual => Reason::PilotAuto,
+                Mode::ImuLost => Reason::ImuRecovered,
                 _ => Reason::Armed,
             };
             (Mode::Auto, r)

@@ -200,6 +200,14 @@ pub fn run(
     let av_port = TtyPort::open(wires.avionics.slave_path(), 115_200).map_err(dev("avionics"))?;
     let rc_port = av_port.try_clone().map_err(dev("avionics"))?;
     let sensors = DeviceSensors::new(imu_port, gps_port, home, scenario.sensors.gps.latency_s);
+    let lockstep = options.speed == Speed::Max;
+    // lock-step: the sensor server reads the receiver too (deterministic);
+    // real time: the receiver has its own thread, as on board
+    let (sensors, receiver) = if lockstep {
+        (sensors.with_receiver(DeviceRc::new(rc_port)), None)
+    } else {
+        (sensors, Some(DeviceRc::new(rc_port)))
+    };
     let ulog = options.out_dir.join("flight.ulg");
     let info = LogInfo {
         sys_name: format!("helicon sitl {}", scenario.name),
@@ -212,7 +220,6 @@ pub fn run(
         }
     })?;
     let (downlink_tx, mut downlink) = rtrb::RingBuffer::new(1024);
-    let lockstep = options.speed == Speed::Max;
     let realtime = if lockstep {
         RealtimeConfig {
             sched_fifo: false,
@@ -226,7 +233,7 @@ pub fn run(
         task,
         Mission::Schedule(scenario.reference_schedule()),
         sensors,
-        DeviceRc::new(rc_port),
+        receiver,
         DeviceServos::new(av_port),
         log,
         Some(downlink_tx),

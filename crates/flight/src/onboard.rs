@@ -1,0 +1,235 @@
+//! The on-board program: read the configuration, the parameters and the
+//! gains, open the devices, align on the ground from the sensors, build the
+//! flight computer exactly as the simulator does, and run the runtime on the
+//! clock.
+
+use crate::config::OnboardConfig;
+use crate::control::ControlTask;
+use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort};
+use crate::runtime::{self, Mission, Next, Pacing, RunReport, RuntimeOptions, SensorPort};
+use crate::safety::Supervisor;
+use helicon_core::attitude::{VectorObservation, gravity_observation, q_method};
+use helicon_core::frames::body_from_ned;
+use helicon_core::state::{ReducedState, State, expand, ix};
+use helicon_core::{Reference, SensorFrame};
+use helicon_devices::{Geodetic, LocalNed};
+use helicon_gnc::design::Gains;
+use helicon_model::Params;
+use helicon_model::config_error::ConfigError;
+use helicon_sim::closed_loop::{OnBoardSetup, thesis_flight_computer};
+use helicon_sim::scenario::Scenario;
+use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
+use nalgebra::Vector3;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+/// Errors of the on-board program before it flies.
+#[derive(Debug, thiserror::Error)]
+pub enum OnboardError {
+    /// The configuration, the mission or a file they name.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// The parameter file.
+    #[error(transparent)]
+    Params(#[from] helicon_model::ParamError),
+    /// The gains file.
+    #[error(transparent)]
+    Gains(#[from] helicon_gnc::design::DesignError),
+    /// Gains designed for another sample time than the parameters'.
+    #[error(
+        "{file}: the gains were designed for a sample time of {gains_s} s but the parameters' \
+         `control.sample_time_s` is {params_s} s: redesign for this helicopter"
+    )]
+    SampleTime {
+        /// The gains file.
+        file: String,
+        /// Its sample time (s).
+        gains_s: f64,
+        /// The parameters' (s).
+        params_s: f64,
+    },
+    /// A device.
+    #[error(transparent)]
+    Port(#[from] runtime::PortError),
+    /// No alignment within the time allowed.
+    #[error("alignment: {0}")]
+    Alignment(String),
+    /// Building the flight software.
+    #[error(transparent)]
+    Build(#[from] helicon_sim::closed_loop::ClosedLoopError),
+    /// The flight log.
+    #[error("{path}: {message}")]
+    Log {
+        /// The file.
+        path: String,
+        /// What failed.
+        message: String,
+    },
+}
+
+/// The ground alignment: the state the navigation and the predictor start
+/// from, from the first frame with a magnetometer sample and a 3-D GPS fix
+/// after the first IMU sample: attitude by the q-method (gravity from the
+/// accelerometer, the magnetometer against the local field), position and
+/// velocity from the fix, rates from the gyro; the rest of the state the
+/// trim's.
+pub fn align(
+    frame: &SensorFrame,
+    mag_field_ned: &Vector3<f64>,
+    trim_x: &ReducedState,
+) -> Option<State> {
+    let mag = frame.mag_body?;
+    let fix = frame.gps.filter(|g| g.is_valid())?;
+    let obs = [
+        gravity_observation(1.0, &frame.imu.specific_force_body_m_s2, None),
+        VectorObservation::new(1.0, mag, *mag_field_ned),
+    ];
+    let euler = q_method(&obs).ok()?.euler();
+    let mut x = expand(trim_x, fix.position_ned_m.into());
+    x[ix::PHI] = euler.x;
+    x[ix::THETA] = euler.y;
+    x[ix::PSI] = euler.z;
+    let v_body = body_from_ned(euler.x, euler.y, euler.z)
+        * fix.velocity_ned_m_s.unwrap_or_else(Vector3::zeros);
+    x[ix::U] = v_body.x;
+    x[ix::V] = v_body.y;
+    x[ix::W] = v_body.z;
+    x[ix::P] = frame.imu.gyro_body_rad_s.x;
+    x[ix::Q] = frame.imu.gyro_body_rad_s.y;
+    x[ix::R] = frame.imu.gyro_body_rad_s.z;
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// Run the on-board program of `cfg` for `duration` (until the IMU port
+/// closes when `None`); the log and `timing.json` go to the configured
+/// folder. Returns the runtime's report and the log's path.
+#[allow(clippy::too_many_lines)] // the program's steps in order
+pub fn run(
+    cfg: &OnboardConfig,
+    duration: Option<Duration>,
+    sched_fifo: bool,
+) -> Result<(RunReport, PathBuf), OnboardError> {
+    let params = match &cfg.params {
+        Some(p) => Params::from_file(&cfg.resolve(p))?,
+        None => Params::bergen_twin(),
+    };
+    let gains_path = cfg.resolve(&cfg.gains);
+    let gains = Gains::load(&gains_path)?;
+    let ts = params.control.sample_time_s;
+    if gains.set.sample_time_s != ts {
+        return Err(OnboardError::SampleTime {
+            file: gains_path.display().to_string(),
+            gains_s: gains.set.sample_time_s,
+            params_s: ts,
+        });
+    }
+    let mission_scenario = match &cfg.mission {
+        Some(m) => Some(Scenario::from_file(&cfg.resolve(m))?),
+        None => None,
+    };
+    let d = &cfg.devices;
+    let imu = TtyPort::open(&d.imu.path, d.imu.baud)?;
+    let gps = TtyPort::open(&d.gps.path, d.gps.baud)?;
+    let avionics = TtyPort::open(&d.avionics.path, d.avionics.baud)?;
+    let rc = avionics.try_clone()?;
+    let h = &cfg.home;
+    let home = Geodetic::new(h.latitude_deg, h.longitude_deg, h.height_m)
+        .map_err(|e| OnboardError::Alignment(format!("home: {e}")))?;
+    let mut sensors = DeviceSensors::new(imu, gps, LocalNed::new(home), cfg.sensors.gps.latency_s);
+
+    // ground alignment: wait for a frame with the magnetometer and a fix
+    let field = Vector3::from(cfg.sensors.mag.field_ned);
+    let start = Instant::now();
+    let limit = Duration::from_secs(60);
+    let mut mag = None;
+    let x0 = loop {
+        if start.elapsed() > limit {
+            return Err(OnboardError::Alignment(format!(
+                "no IMU sample with a magnetometer sample and a 3-D GPS fix within {} s \
+                 (check {} and {})",
+                limit.as_secs(),
+                d.imu.path.display(),
+                d.gps.path.display()
+            )));
+        }
+        match sensors.next(Duration::from_millis(100))? {
+            Next::Item(a) => {
+                if let Some(mut f) = a.frame {
+                    mag = f.mag_body.or(mag);
+                    f.mag_body = mag;
+                    if let Some(x) = align(&f, &field, &gains.set.x_trim) {
+                        break x;
+                    }
+                }
+            }
+            Next::Timeout => {}
+            Next::Closed => {
+                return Err(OnboardError::Alignment(format!(
+                    "{} closed",
+                    d.imu.path.display()
+                )));
+            }
+        }
+    };
+    let computer = thesis_flight_computer(&OnBoardSetup {
+        params: &params,
+        gains: &gains.set,
+        trim_x: &gains.set.x_trim,
+        sensors: &cfg.sensors,
+        navigation: &cfg.navigation,
+        feedback: true,
+        x0: &x0,
+    })?;
+    let u_trim = gains.set.u_trim;
+    let task = ControlTask::new(
+        computer,
+        Supervisor::new(cfg.stale, cfg.failsafe, 0.0),
+        u_trim,
+    );
+    let mission = match &mission_scenario {
+        Some(s) => Mission::Schedule(s.reference_schedule()),
+        None => Mission::Hold(Reference {
+            velocity_ned_m_s: Vector3::zeros(),
+            yaw_rad: x0[ix::PSI],
+        }),
+    };
+    let dir = cfg.resolve(&cfg.log.dir);
+    std::fs::create_dir_all(&dir).map_err(|e| OnboardError::Log {
+        path: dir.display().to_string(),
+        message: format!("cannot create: {e}"),
+    })?;
+    let stamp = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs())
+        .unwrap_or(0);
+    let path = dir.join(format!("flight-{stamp}.ulg"));
+    let log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).map_err(
+        |e| OnboardError::Log {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        },
+    )?;
+    let mut realtime = cfg.realtime;
+    realtime.sched_fifo &= sched_fifo;
+    let handle = runtime::spawn(
+        task,
+        mission,
+        sensors,
+        Some(DeviceRc::new(rc)),
+        DeviceServos::new(avionics),
+        log,
+        None,
+        RuntimeOptions {
+            sample_time_s: ts,
+            pacing: Pacing::Clock,
+            max_steps: duration.map(|d| (d.as_secs_f64() / ts).round() as u64),
+            realtime,
+            watchdog_s: 0.05,
+            u_trim,
+        },
+    );
+    for w in &handle.warnings() {
+        eprintln!("warning: {w}");
+    }
+    Ok((handle.join(), path))
+}

@@ -1,0 +1,87 @@
+//! The control task's hot path allocates nothing in steady state: the
+//! supervisor, the flight computer, the log records of the step, the rings
+//! to the logger, and the logger's ULog encoding (counted per thread with a
+//! wrapping allocator, over the 4400 samples after the first second).
+#![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; the shared counter only forwards to System
+
+#[path = "../../core/tests/common/counting_alloc.rs"]
+mod counting_alloc;
+
+use counting_alloc::allocations;
+use helicon_flight::config::{FailsafeConfig, StaleLimits};
+use helicon_flight::control::{ControlTask, Tick};
+use helicon_flight::records::{FlightRecord, step_records, write_record};
+use helicon_flight::safety::{RcInput, Supervisor};
+use helicon_sim::closed_loop::{Hardware, OnBoardSetup, prepare, thesis_flight_computer};
+use helicon_sim::scenario::Scenario;
+use helicon_ulog::messages::Timing;
+use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
+use std::path::Path;
+
+#[test]
+fn a_control_step_and_its_log_allocate_nothing() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/demo.toml");
+    let mut s = Scenario::from_file(&path).unwrap();
+    s.duration_s = 12.0;
+    let prepared = prepare(&s).unwrap();
+    let mut hw = Hardware::new(&s, &prepared).unwrap();
+    let x0 = *hw.state();
+    let computer = thesis_flight_computer(&OnBoardSetup {
+        params: prepared.model.params(),
+        gains: &prepared.gains.set,
+        trim_x: &prepared.trim.x,
+        sensors: &s.sensors,
+        navigation: &s.navigation,
+        feedback: true,
+        x0: &x0,
+    })
+    .unwrap();
+    let mut sup = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
+    sup.arm();
+    let mut task = ControlTask::new(computer, sup, prepared.gains.set.u_trim);
+    let (mut tx, mut rx) = rtrb::RingBuffer::<FlightRecord>::new(4096);
+    let mut log = FlightLog::new(std::io::sink(), &LogInfo::default(), FlushPolicy::default()).unwrap();
+    let rc = RcInput {
+        servo: prepared.gains.set.u_trim,
+        manual: false,
+        armed: true,
+    };
+    let mut counted = 0;
+    let mut steps = 0;
+    let mut records = 0;
+    while let Some(sample) = hw.sense() {
+        let tick = Tick {
+            now_s: sample.t_s,
+            frame: Some(sample.frame),
+            deadline_missed: false,
+            rc: (sample.k % 8 == 0).then_some(rc),
+            reference: sample.reference,
+        };
+        let before = allocations();
+        let out = task.step(&tick);
+        let timing = Timing {
+            timestamp: (sample.t_s * 1e6).round() as u64,
+            sample: steps,
+            ..Timing::default()
+        };
+        step_records(&tick, &out, timing, &mut |r| tx.push(r).unwrap()).unwrap();
+        while let Ok(r) = rx.pop() {
+            write_record(&mut log, &r).unwrap();
+            records += 1;
+        }
+        // the first second warms up (the writer's buffer reaches its size)
+        if sample.t_s >= 1.0 {
+            counted += allocations() - before;
+        }
+        steps += 1;
+        let step = hw.actuate(&out.servo, out.telemetry.as_ref()).unwrap();
+        if step.end.is_some() {
+            break;
+        }
+    }
+    assert_eq!(steps, 4801);
+    // per step: IMU, control, navigation, servo, timing; magnetometer at
+    // 100 Hz, GPS at 5 Hz, receiver at 50 Hz
+    assert!(records > 5 * 4800, "{records} records");
+    assert_eq!(counted, 0, "allocations in 4400 steady-state control steps");
+}
