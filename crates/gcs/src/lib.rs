@@ -14,10 +14,11 @@
 //! - [`params`]: the parameter table (typed, validated).
 //! - [`server`]: the MAVLink 2 server (common dialect, UDP) on its own thread.
 
-//pub mod geo;
-//pub mod link;
+pub mod geo;
+pub mod link;
 pub mod navigator;
-//pub mod params;
-//pub mod server;
+pub mod params;
+pub mod server;
 
 pub use navigator::{NavMode, Navigator, NavigatorConfig};
+pub use mavlink;

@@ -174,6 +174,27 @@ impl NavigatorConfig {
         ]
     }
 
+    /// A tuning from the numeric fields (in the order of
+    /// [`NavigatorConfig::RANGES`]) and the link-loss action; not validated.
+    pub fn from_values(v: [f64; 13], link_loss_action: LinkLossAction) -> Self {
+        NavigatorConfig {
+            cruise_speed_m_s: v[0],
+            max_speed_m_s: v[1],
+            max_accel_m_s2: v[2],
+            climb_speed_m_s: v[3],
+            descent_speed_m_s: v[4],
+            position_gain_1_s: v[5],
+            yaw_rate_max_rad_s: v[6],
+            acceptance_radius_m: v[7],
+            takeoff_height_m: v[8],
+            landed_height_m: v[9],
+            guided_timeout_s: v[10],
+            link_loss_timeout_s: v[11],
+            link_loss_hold_s: v[12],
+            link_loss_action,
+        }
+    }
+
     /// Check every field against its range, and the cruise speed against
     /// the largest speed.
     pub fn validate(&self) -> Result<(), ConfigRangeError> {
