@@ -40,11 +40,18 @@ fn err(seq: u16, rule: &'static str, result: MavMissionResult) -> MissionError {
 }
 
 /// The NED position (m) of an item's x, y, z in its frame.
-pub fn item_position_ned_m(home: &LocalNed, it: &MISSION_ITEM_INT_DATA) -> Result<Vector3<f64>, MissionError> {
+pub fn item_position_ned_m(
+    home: &LocalNed,
+    it: &MISSION_ITEM_INT_DATA,
+) -> Result<Vector3<f64>, MissionError> {
     let seq = it.seq;
     let z = f64::from(it.z);
     if !z.is_finite() {
-        return Err(err(seq, "z is not finite", MavMissionResult::MAV_MISSION_INVALID_PARAM7));
+        return Err(err(
+            seq,
+            "z is not finite",
+            MavMissionResult::MAV_MISSION_INVALID_PARAM7,
+        ));
     }
     let h0 = home.home().height_m;
     let global = |height_m: f64| {
@@ -52,7 +59,13 @@ pub fn item_position_ned_m(home: &LocalNed, it: &MISSION_ITEM_INT_DATA) -> Resul
         let lon = f64::from(it.y) * 1e-7;
         Geodetic::new(lat, lon, height_m)
             .map(|g| home.to_ned_m(&g))
-            .map_err(|_| err(seq, "latitude, longitude or height out of range", MavMissionResult::MAV_MISSION_INVALID_PARAM5_X))
+            .map_err(|_| {
+                err(
+                    seq,
+                    "latitude, longitude or height out of range",
+                    MavMissionResult::MAV_MISSION_INVALID_PARAM5_X,
+                )
+            })
     };
     match it.frame {
         MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT => {
@@ -64,7 +77,11 @@ pub fn item_position_ned_m(home: &LocalNed, it: &MISSION_ITEM_INT_DATA) -> Resul
             f64::from(it.y) * 1e-4,
             z,
         )),
-        _ => Err(err(seq, "unsupported frame", MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME)),
+        _ => Err(err(
+            seq,
+            "unsupported frame",
+            MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME,
+        )),
     }
 }
 
@@ -83,7 +100,11 @@ pub fn plan_of(home: &LocalNed, items: &[MISSION_ITEM_INT_DATA]) -> Result<Plan,
                     continue;
                 }
                 if !(s.is_finite() && s > 0.0 && s <= 15.0) {
-                    return Err(err(seq, "speed must be in (0, 15] m/s", MavMissionResult::MAV_MISSION_INVALID_PARAM2));
+                    return Err(err(
+                        seq,
+                        "speed must be in (0, 15] m/s",
+                        MavMissionResult::MAV_MISSION_INVALID_PARAM2,
+                    ));
                 }
                 speed = Some(s);
                 continue;
@@ -92,13 +113,23 @@ pub fn plan_of(home: &LocalNed, items: &[MISSION_ITEM_INT_DATA]) -> Result<Plan,
             MavCmd::MAV_CMD_NAV_WAYPOINT => ItemKind::Waypoint,
             MavCmd::MAV_CMD_NAV_LAND => ItemKind::Land,
             MavCmd::MAV_CMD_NAV_RETURN_TO_LAUNCH => ItemKind::Return,
-            _ => return Err(err(seq, "unsupported command", MavMissionResult::MAV_MISSION_UNSUPPORTED)),
+            _ => {
+                return Err(err(
+                    seq,
+                    "unsupported command",
+                    MavMissionResult::MAV_MISSION_UNSUPPORTED,
+                ));
+            }
         };
         let position = match kind {
             ItemKind::Takeoff => {
                 let z = p(it.z);
                 if !(z.is_finite() && z > 0.0 && z <= 100.0) {
-                    return Err(err(seq, "takeoff height must be in (0, 100] m", MavMissionResult::MAV_MISSION_INVALID_PARAM7));
+                    return Err(err(
+                        seq,
+                        "takeoff height must be in (0, 100] m",
+                        MavMissionResult::MAV_MISSION_INVALID_PARAM7,
+                    ));
                 }
                 Vector3::new(last_ned.x, last_ned.y, -z)
             }
@@ -106,16 +137,28 @@ pub fn plan_of(home: &LocalNed, items: &[MISSION_ITEM_INT_DATA]) -> Result<Plan,
             ItemKind::Return => Vector3::zeros(),
             _ => item_position_ned_m(home, it)?,
         };
-        let hold_s = if kind == ItemKind::Waypoint { p(it.param1) } else { 0.0 };
+        let hold_s = if kind == ItemKind::Waypoint {
+            p(it.param1)
+        } else {
+            0.0
+        };
         if !(hold_s.is_finite() && (0.0..=3600.0).contains(&hold_s)) {
-            return Err(err(seq, "hold time must be in [0, 3600] s", MavMissionResult::MAV_MISSION_INVALID_PARAM1));
+            return Err(err(
+                seq,
+                "hold time must be in [0, 3600] s",
+                MavMissionResult::MAV_MISSION_INVALID_PARAM1,
+            ));
         }
         let radius = p(it.param2);
         let acceptance_m = match kind {
             ItemKind::Waypoint if radius > 0.0 && radius.is_finite() => Some(radius),
             ItemKind::Waypoint if radius == 0.0 => None,
             ItemKind::Waypoint => {
-                return Err(err(seq, "acceptance radius must be finite and ≥ 0", MavMissionResult::MAV_MISSION_INVALID_PARAM2));
+                return Err(err(
+                    seq,
+                    "acceptance radius must be finite and ≥ 0",
+                    MavMissionResult::MAV_MISSION_INVALID_PARAM2,
+                ));
             }
             _ => None,
         };
@@ -134,7 +177,11 @@ pub fn plan_of(home: &LocalNed, items: &[MISSION_ITEM_INT_DATA]) -> Result<Plan,
             hold_s,
         };
         if !plan.push(item) {
-            return Err(err(seq, "too many items", MavMissionResult::MAV_MISSION_NO_SPACE));
+            return Err(err(
+                seq,
+                "too many items",
+                MavMissionResult::MAV_MISSION_NO_SPACE,
+            ));
         }
         last_ned = position;
     }

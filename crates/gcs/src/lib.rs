@@ -20,5 +20,5 @@ pub mod navigator;
 pub mod params;
 pub mod server;
 
-pub use navigator::{NavMode, Navigator, NavigatorConfig};
 pub use mavlink;
+pub use navigator::{NavMode, Navigator, NavigatorConfig};

@@ -156,6 +156,7 @@ pub struct Vehicle {
     status_every: u64,
     samples: u64,
     dropped: u64,
+    sent: u64,
 }
 
 impl Vehicle {
@@ -177,6 +178,7 @@ impl Vehicle {
             status_every: status_every.max(1),
             samples: 0,
             dropped: 0,
+            sent: 0,
         }
     }
 
@@ -195,9 +197,17 @@ impl Vehicle {
         self.dropped
     }
 
+    /// Statuses and events handed to the server (for lock-step runs: the
+    /// server's [`crate::server::ServerHandle::processed`] catches up).
+    pub fn sent(&self) -> u64 {
+        self.sent
+    }
+
     fn send(&mut self, d: Downlink) {
         if self.end.downlink.push(d).is_err() {
             self.dropped += 1;
+        } else {
+            self.sent += 1;
         }
     }
 
@@ -299,9 +309,7 @@ impl Vehicle {
         load: f64,
     ) -> VehicleStatus {
         let plan = self.nav.plan();
-        let current = plan
-            .get(self.nav.current_index())
-            .map_or(0, |i| i.seq);
+        let current = plan.get(self.nav.current_index()).map_or(0, |i| i.seq);
         let nav = telemetry.and_then(|t| t.navigation);
         let est = telemetry.map(|t| t.estimate);
         VehicleStatus {

@@ -9,20 +9,62 @@ use crate::navigator::{LinkLossAction, NavigatorConfig};
 /// The parameters: name (≤ 16 characters, as MAVLink carries them), the
 /// navigator field it sets, unit and meaning.
 pub const PARAMS: [(&str, &str); 14] = [
-    ("NAV_CRUISE_SPD", "cruise_speed_m_s: horizontal speed of legs without their own (m/s)"),
-    ("NAV_MAX_SPD", "max_speed_m_s: largest horizontal speed (m/s)"),
-    ("NAV_MAX_ACC", "max_accel_m_s2: largest change of the velocity reference (m/s²)"),
-    ("NAV_CLIMB_SPD", "climb_speed_m_s: largest upward speed (m/s)"),
-    ("NAV_DESC_SPD", "descent_speed_m_s: largest downward and landing speed (m/s)"),
-    ("NAV_POS_GAIN", "position_gain_1_s: velocity per metre of position error (1/s)"),
-    ("NAV_YAWRATE_MAX", "yaw_rate_max_rad_s: largest heading rate (rad/s)"),
-    ("NAV_ACC_RAD", "acceptance_radius_m: default waypoint acceptance radius (m)"),
-    ("NAV_TKOFF_ALT", "takeoff_height_m: takeoff height when a command gives none (m)"),
-    ("NAV_LANDED_ALT", "landed_height_m: height at which a landing is complete (m)"),
-    ("NAV_GUIDED_TO", "guided_timeout_s: age after which a guided velocity is dropped (s)"),
-    ("FS_LINK_TO", "link_loss_timeout_s: heartbeat silence that is a link loss (s)"),
-    ("FS_LINK_HOLD", "link_loss_hold_s: hold before the link-loss action (s)"),
-    ("FS_LINK_ACT", "link_loss_action: 0 hold, 1 return and land, 2 land"),
+    (
+        "NAV_CRUISE_SPD",
+        "cruise_speed_m_s: horizontal speed of legs without their own (m/s)",
+    ),
+    (
+        "NAV_MAX_SPD",
+        "max_speed_m_s: largest horizontal speed (m/s)",
+    ),
+    (
+        "NAV_MAX_ACC",
+        "max_accel_m_s2: largest change of the velocity reference (m/s²)",
+    ),
+    (
+        "NAV_CLIMB_SPD",
+        "climb_speed_m_s: largest upward speed (m/s)",
+    ),
+    (
+        "NAV_DESC_SPD",
+        "descent_speed_m_s: largest downward and landing speed (m/s)",
+    ),
+    (
+        "NAV_POS_GAIN",
+        "position_gain_1_s: velocity per metre of position error (1/s)",
+    ),
+    (
+        "NAV_YAWRATE_MAX",
+        "yaw_rate_max_rad_s: largest heading rate (rad/s)",
+    ),
+    (
+        "NAV_ACC_RAD",
+        "acceptance_radius_m: default waypoint acceptance radius (m)",
+    ),
+    (
+        "NAV_TKOFF_ALT",
+        "takeoff_height_m: takeoff height when a command gives none (m)",
+    ),
+    (
+        "NAV_LANDED_ALT",
+        "landed_height_m: height at which a landing is complete (m)",
+    ),
+    (
+        "NAV_GUIDED_TO",
+        "guided_timeout_s: age after which a guided velocity is dropped (s)",
+    ),
+    (
+        "FS_LINK_TO",
+        "link_loss_timeout_s: heartbeat silence that is a link loss (s)",
+    ),
+    (
+        "FS_LINK_HOLD",
+        "link_loss_hold_s: hold before the link-loss action (s)",
+    ),
+    (
+        "FS_LINK_ACT",
+        "link_loss_action: 0 hold, 1 return and land, 2 land",
+    ),
 ];
 
 /// A refused parameter set.

@@ -20,12 +20,11 @@ use helicon_devices::{Geodetic, LocalNed};
 use mavlink::dialects::common::*;
 use mavlink::{
     ConnectionAddress, MAVLinkMessageRaw, MavConnection, MavHeader, MavlinkVersion, Message,
-    MessageData,
-    SigningConfig, SigningData,
+    MessageData, SigningConfig, SigningData,
 };
 use nalgebra::Vector3;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
@@ -95,10 +94,16 @@ pub struct ServerReport {
 /// The running server.
 pub struct ServerHandle {
     stop: Arc<AtomicBool>,
+    processed: Arc<AtomicU64>,
     thread: JoinHandle<ServerReport>,
 }
 
 impl ServerHandle {
+    /// Statuses and events the server has handled (sent on) so far.
+    pub fn processed(&self) -> u64 {
+        self.processed.load(Ordering::Acquire)
+    }
+
     /// Stop the server and wait for its thread.
     pub fn stop(self) -> ServerReport {
         self.stop.store(true, Ordering::SeqCst);
@@ -127,26 +132,32 @@ pub fn spawn(config: ServerConfig, end: ServerEnd) -> Result<ServerHandle, GcsEr
             message: "only UDP is offered".into(),
         });
     };
-    let conn = mavlink::Connectable::connect::<MavMessage>(
-        &udp.read_timeout(Duration::from_millis(2)),
-    )
-    .map_err(|e| GcsError::Address {
-        address: config.address.clone(),
-        message: e.to_string(),
-    })?;
+    let conn =
+        mavlink::Connectable::connect::<MavMessage>(&udp.read_timeout(Duration::from_millis(2)))
+            .map_err(|e| GcsError::Address {
+                address: config.address.clone(),
+                message: e.to_string(),
+            })?;
     let stop = Arc::new(AtomicBool::new(false));
     let stop2 = stop.clone();
+    let processed = Arc::new(AtomicU64::new(0));
+    let processed2 = processed.clone();
     let thread = std::thread::Builder::new()
         .name("gcs".into())
         .spawn(move || {
             let mut s = Server::new(config, end, conn);
             while !stop2.load(Ordering::Relaxed) {
-                s.poll();
+                let n = s.poll();
+                processed2.fetch_add(n, Ordering::Release);
             }
             s.report
         })
         .map_err(|e| GcsError::Thread(e.to_string()))?;
-    Ok(ServerHandle { stop, thread })
+    Ok(ServerHandle {
+        stop,
+        processed,
+        thread,
+    })
 }
 
 enum Upload {
@@ -178,11 +189,7 @@ fn interval_of(rate_hz: f64) -> Option<f64> {
 }
 
 impl Server {
-    fn new(
-        config: ServerConfig,
-        end: ServerEnd,
-        conn: mavlink::Connection<MavMessage>,
-    ) -> Self {
+    fn new(config: ServerConfig, end: ServerEnd, conn: mavlink::Connection<MavMessage>) -> Self {
         let signing = config
             .signing_key
             .map(|k| SigningData::from_config(SigningConfig::new(k, 0, false, false)));
@@ -235,19 +242,23 @@ impl Server {
 
     /// One turn: messages in (up to the read timeout), then the vehicle's
     /// statuses and events out.
-    fn poll(&mut self) {
+    /// Returns the statuses and events handled.
+    fn poll(&mut self) -> u64 {
         for _ in 0..32 {
             match self.conn.recv_raw() {
                 Ok(raw) => self.receive(&raw),
                 Err(_) => break,
             }
         }
+        let mut n = 0;
         while let Ok(d) = self.end.downlink.pop() {
             match d {
                 Downlink::Status(s) => self.on_status(&s),
                 Downlink::Event(t, e) => self.on_event(t, e),
             }
+            n += 1;
         }
+        n
     }
 
     fn on_status(&mut self, s: &VehicleStatus) {
@@ -265,7 +276,9 @@ impl Server {
             self.last_flight_mode = s.flight_mode.name;
         }
         for i in 0..STREAMS.len() {
-            let Some(iv) = self.intervals_s[i] else { continue };
+            let Some(iv) = self.intervals_s[i] else {
+                continue;
+            };
             if s.t_s + 1e-9 >= self.next_due_s[i] {
                 self.send_stream(STREAMS[i].0, s);
                 // stay on the grid; resynchronise after a gap
@@ -281,14 +294,23 @@ impl Server {
     fn on_event(&mut self, t_s: f64, e: VehicleEvent) {
         match e {
             VehicleEvent::Armed(a) => {
-                self.text(MavSeverity::MAV_SEVERITY_INFO, if a { "armed" } else { "disarmed" });
+                self.text(
+                    MavSeverity::MAV_SEVERITY_INFO,
+                    if a { "armed" } else { "disarmed" },
+                );
             }
             VehicleEvent::FlightMode(name, reason) => {
-                self.text(MavSeverity::MAV_SEVERITY_WARNING, &format!("{name}: {reason}"));
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    &format!("{name}: {reason}"),
+                );
             }
             VehicleEvent::Nav(n) => match n {
                 NavEvent::Mode(m) => {
-                    self.text(MavSeverity::MAV_SEVERITY_INFO, &format!("mode {}", m.as_str()));
+                    self.text(
+                        MavSeverity::MAV_SEVERITY_INFO,
+                        &format!("mode {}", m.as_str()),
+                    );
                 }
                 NavEvent::Current(seq) => {
                     let total = self.mission.len() as u16;
@@ -300,9 +322,9 @@ impl Server {
                     }));
                 }
                 NavEvent::Reached(seq) => {
-                    self.send(&MavMessage::MISSION_ITEM_REACHED(MISSION_ITEM_REACHED_DATA {
-                        seq,
-                    }));
+                    self.send(&MavMessage::MISSION_ITEM_REACHED(
+                        MISSION_ITEM_REACHED_DATA { seq },
+                    ));
                 }
                 NavEvent::Landed => self.text(MavSeverity::MAV_SEVERITY_INFO, "landed"),
                 NavEvent::LinkLost => self.text(
@@ -310,7 +332,10 @@ impl Server {
                     &format!("failsafe: ground-station link lost at {t_s:.1} s"),
                 ),
                 NavEvent::LinkRegained => {
-                    self.text(MavSeverity::MAV_SEVERITY_NOTICE, "ground-station link regained");
+                    self.text(
+                        MavSeverity::MAV_SEVERITY_NOTICE,
+                        "ground-station link regained",
+                    );
                 }
             },
         }
@@ -328,8 +353,7 @@ impl Server {
         } else if s.flight_mode.name == "manual" {
             base |= MavModeFlag::MAV_MODE_FLAG_MANUAL_INPUT_ENABLED;
         }
-        let system_status = if s.link_lost || !matches!(s.flight_mode.name, "auto" | "disarmed")
-        {
+        let system_status = if s.link_lost || !matches!(s.flight_mode.name, "auto" | "disarmed") {
             MavState::MAV_STATE_CRITICAL
         } else if s.armed {
             MavState::MAV_STATE_ACTIVE
@@ -357,7 +381,8 @@ impl Server {
         let v = s.velocity_ned_m_s;
         let cm = |x: f64| (x * 100.0).clamp(-32767.0, 32767.0) as i16;
         let heading_deg = s.attitude_rad.z.to_degrees().rem_euclid(360.0);
-        let servo_us = |u: f64| (1500.0 + u.to_degrees() * 500.0 / 30.0).clamp(800.0, 2200.0) as u16;
+        let servo_us =
+            |u: f64| (1500.0 + u.to_degrees() * 500.0 / 30.0).clamp(800.0, 2200.0) as u16;
         let msg = match id {
             HEARTBEAT_DATA::ID => MavMessage::HEARTBEAT(self.heartbeat(s)),
             SYS_STATUS_DATA::ID => {
@@ -411,15 +436,17 @@ impl Server {
                     hdg: (heading_deg * 100.0) as u16,
                 })
             }
-            LOCAL_POSITION_NED_DATA::ID => MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
-                time_boot_ms: ms,
-                x: s.position_ned_m.x as f32,
-                y: s.position_ned_m.y as f32,
-                z: s.position_ned_m.z as f32,
-                vx: v.x as f32,
-                vy: v.y as f32,
-                vz: v.z as f32,
-            }),
+            LOCAL_POSITION_NED_DATA::ID => {
+                MavMessage::LOCAL_POSITION_NED(LOCAL_POSITION_NED_DATA {
+                    time_boot_ms: ms,
+                    x: s.position_ned_m.x as f32,
+                    y: s.position_ned_m.y as f32,
+                    z: s.position_ned_m.z as f32,
+                    vx: v.x as f32,
+                    vy: v.y as f32,
+                    vz: v.z as f32,
+                })
+            }
             GPS_RAW_INT_DATA::ID => MavMessage::GPS_RAW_INT(GPS_RAW_INT_DATA {
                 time_usec: (s.t_s * 1e6).max(0.0) as u64,
                 lat,
@@ -531,7 +558,9 @@ impl Server {
                 }
             }
             MavMessage::COMMAND_LONG(c) => {
-                let p = [c.param1, c.param2, c.param3, c.param4, c.param5, c.param6, c.param7];
+                let p = [
+                    c.param1, c.param2, c.param3, c.param4, c.param5, c.param6, c.param7,
+                ];
                 let r = self.command(c.command, p);
                 self.ack(c.command, r);
             }
@@ -668,7 +697,10 @@ impl Server {
         };
         if arm == 1.0 {
             if !s.navigation_ok {
-                self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: no navigation solution");
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    "refused: no navigation solution",
+                );
                 return MavResult::MAV_RESULT_DENIED;
             }
             self.accepted(Uplink::Arm(true))
@@ -676,7 +708,10 @@ impl Server {
             // disarming in the air stops the law: only on the ground, or forced
             let on_ground = s.nav_mode == NavMode::Idle;
             if !on_ground && force != 21196.0 {
-                self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: disarm in flight (force with 21196)");
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    "refused: disarm in flight (force with 21196)",
+                );
                 return MavResult::MAV_RESULT_DENIED;
             }
             self.accepted(Uplink::Arm(false))
@@ -758,7 +793,9 @@ impl Server {
     }
 
     fn param_value(&mut self, i: usize) {
-        let Some((name, value)) = self.params.get(i) else { return };
+        let Some((name, value)) = self.params.get(i) else {
+            return;
+        };
         self.send(&MavMessage::PARAM_VALUE(PARAM_VALUE_DATA {
             param_value: value,
             param_count: PARAMS.len() as u16,
@@ -769,14 +806,22 @@ impl Server {
     }
 
     fn param_set(&mut self, p: &PARAM_SET_DATA) {
-        let name = p.param_id.to_str().unwrap_or("").trim_end_matches('\0').to_string();
+        let name = p
+            .param_id
+            .to_str()
+            .unwrap_or("")
+            .trim_end_matches('\0')
+            .to_string();
         match self.params.set(&name, p.param_value) {
             Ok(i) => {
                 self.uplink(Uplink::Config(*self.params.config()));
                 self.param_value(i);
             }
             Err(ParamError::Unknown(_)) => {
-                self.text(MavSeverity::MAV_SEVERITY_WARNING, &format!("no parameter {name}"));
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    &format!("no parameter {name}"),
+                );
             }
             Err(e @ ParamError::Rejected { .. }) => {
                 self.text(MavSeverity::MAV_SEVERITY_WARNING, &format!("refused {e}"));
@@ -852,7 +897,10 @@ impl Server {
                 self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED);
             }
             Err(MissionError { seq, rule, result }) => {
-                self.text(MavSeverity::MAV_SEVERITY_WARNING, &format!("mission refused: item {seq}: {rule}"));
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    &format!("mission refused: item {seq}: {rule}"),
+                );
                 self.mission_ack(result);
             }
         }
@@ -863,7 +911,10 @@ impl Server {
             return;
         }
         if t.coordinate_frame != MavFrame::MAV_FRAME_LOCAL_NED {
-            self.text(MavSeverity::MAV_SEVERITY_WARNING, "guided: only MAV_FRAME_LOCAL_NED");
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                "guided: only MAV_FRAME_LOCAL_NED",
+            );
             return;
         }
         let m = t.type_mask;

@@ -210,7 +210,11 @@ fn heading_turns_the_short_way_at_the_rate_limit() {
     s.run(0.4, no_link);
     // short way: from 3.0 up through π (2π − 6.0 = 0.283 rad), at 0.5 rad/s
     let expected = 3.0 + 0.5 * 0.4;
-    assert!((s.prev_yaw - expected).abs() < 0.5 * DT * 2.0, "{}", s.prev_yaw);
+    assert!(
+        (s.prev_yaw - expected).abs() < 0.5 * DT * 2.0,
+        "{}",
+        s.prev_yaw
+    );
     s.run(2.0, no_link);
     assert!((helicon_core::frames::wrap_pi(s.prev_yaw + 3.0)).abs() < 1e-9);
 }
@@ -286,11 +290,16 @@ fn guided_velocity_followed_then_times_out_to_hold() {
         );
         s.run(0.5, no_link);
     }
-    assert!((s.prev_ref.x - c.max_speed_m_s).abs() < 1e-9, "{}", s.prev_ref);
     assert!(
-        !s.nav
-            .guided(&s.at(), GuidedTarget::Velocity(Vector3::new(f64::NAN, 0.0, 0.0), None), &mut ev)
+        (s.prev_ref.x - c.max_speed_m_s).abs() < 1e-9,
+        "{}",
+        s.prev_ref
     );
+    assert!(!s.nav.guided(
+        &s.at(),
+        GuidedTarget::Velocity(Vector3::new(f64::NAN, 0.0, 0.0), None),
+        &mut ev
+    ));
 }
 
 #[test]
@@ -313,7 +322,10 @@ fn invalid_tuning_refused_and_old_kept() {
         cruise_speed_m_s: 6.0,
         ..NavigatorConfig::default()
     };
-    assert_eq!(nav.set_config(c).unwrap_err().rule, "greater than max_speed_m_s");
+    assert_eq!(
+        nav.set_config(c).unwrap_err().rule,
+        "greater than max_speed_m_s"
+    );
     assert_eq!(*nav.config(), NavigatorConfig::default());
 }
 
