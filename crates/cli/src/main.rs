@@ -7,8 +7,10 @@ mod control;
 mod demo;
 mod mc_cmd;
 mod model_cmd;
+mod onboard_cmd;
 mod sensors;
 mod sim_cmd;
+mod sitl_cmd;
 mod trim_cmd;
 
 /// helicon: model, trim, linearize, estimate and control miniature helicopters.
@@ -45,6 +47,10 @@ enum Command {
     Bench(mc_cmd::BenchArgs),
     /// Fly a closed-loop scenario (TOML): log.csv, summary.json, gains, plots, report.
     Sim(sim_cmd::SimArgs),
+    /// Software in the loop: the simulator as the hardware on pseudo-terminals, the on-board runtime flying it.
+    Sitl(sitl_cmd::SitlArgs),
+    /// The on-board program: device drivers, 400 Hz control task, avionics, ULog logger.
+    Onboard(onboard_cmd::OnboardArgs),
 }
 
 /// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
@@ -108,6 +114,8 @@ fn run() -> anyhow::Result<()> {
         Command::Mc(a) => mc_cmd::run_mc(&a),
         Command::Bench(a) => mc_cmd::run_bench(&a),
         Command::Sim(a) => sim_cmd::run(&a),
+        Command::Sitl(a) => sitl_cmd::run(&a),
+        Command::Onboard(a) => onboard_cmd::run(&a),
     }
 }
 

@@ -392,3 +392,17 @@ mod tests {
         );
     }
 }
+
+#[cfg(test)]
+mod example_tests {
+    use super::*;
+
+    #[test]
+    fn the_shipped_example_reads() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/onboard.toml");
+        let c = OnboardConfig::from_file(&path).unwrap();
+        assert_eq!(c.devices.imu.baud, 921_600);
+        assert_eq!(c.failsafe.hold_s, 5.0);
+        assert!(c.resolve(&c.gains).ends_with("out/demo/gains.json"));
+    }
+}

@@ -12,8 +12,10 @@
 //! counts it. Threads waiting for work park and are unparked by the producer.
 //!
 //! The control task is paced either by the clock ([`Pacing::Clock`]: absolute
-//! deadlines k·Ts on `CLOCK_MONOTONIC`; the frame that arrived since the last
-//! deadline is used, none means no fresh IMU sample) or by sensor arrival
+//! deadlines on `CLOCK_MONOTONIC`, one period apart and phase-locked to
+//! 250 µs after the IMU's arrivals; the frame that arrived since the last
+//! deadline is used, none means no fresh IMU sample; a silent IMU leaves
+//! the deadlines running) or by sensor arrival
 //! ([`Pacing::Sensor`]: one step per IMU message, the lock-step of SITL, where
 //! on-board time is k·Ts from the first message). Either way each step is
 //! the [`ControlTask`]'s and sends exactly one servo frame.
@@ -214,6 +216,11 @@ const RC_RING: usize = 64;
 const SERVO_RING: usize = 64;
 const LOG_RING: usize = 16_384;
 const POLL: Duration = Duration::from_millis(50);
+/// The logger's own wake-up period (at 400 Hz about 60 records pile up).
+const LOG_POLL: Duration = Duration::from_millis(10);
+/// Clock pacing: how long after the IMU message's arrival the control task
+/// wakes (the phase it locks to).
+const SENSOR_LAG_NS: u64 = 250_000;
 
 /// Spawn the runtime: sensor server, receiver (when `rc` is given; else
 /// the sensor port reports the receiver's frames), control task,
@@ -639,12 +646,31 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
             }
         });
         log_dropped += dropped + u64::from(res.is_err());
-        if let Some(t) = &ctx.wake_log {
+        // the logger wakes on its own every LOG_POLL; it is woken early
+        // only when its ring fills past a quarter (one wake-up less per step)
+        if ctx.log.slots() < LOG_RING * 3 / 4
+            && let Some(t) = &ctx.wake_log
+        {
             t.unpark();
         }
         steps += 1;
         if ctx.options.pacing == Pacing::Clock {
             deadline_ns += period_ns;
+            // phase lock to the IMU: the deadline follows the IMU's arrival
+            // by SENSOR_LAG_NS (a first-order loop, 1/8 of the error per
+            // step, at most 50 µs a step), so each step finds exactly one
+            // fresh sample and the servo frame leaves within the period
+            if let Some(a) = arrival {
+                // the error wrapped into (−Ts/2, Ts/2]: a sample that arrived
+                // just after the last deadline reads as late, not early
+                let period = i128::from(period_ns);
+                let lag = wake_ns as i128 - i128::from(a.arrived_ns);
+                let err = (lag - i128::from(SENSOR_LAG_NS) + period / 2).rem_euclid(period)
+                    - period / 2;
+                let shift = (err / 8).clamp(-50_000, 50_000);
+                let shifted = i128::from(deadline_ns) - shift;
+                deadline_ns = u64::try_from(shifted).unwrap_or(deadline_ns);
+            }
             // after a long stall, skip the deadlines already past (counted)
             let now = realtime::monotonic_ns();
             while deadline_ns + period_ns < now {
@@ -748,7 +774,7 @@ fn logger_loop<W: Write>(
             break;
         }
         if !any {
-            thread::park_timeout(POLL);
+            thread::park_timeout(LOG_POLL);
         }
     }
     if let Err(e) = log.finish() {

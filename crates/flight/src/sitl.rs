@@ -115,6 +115,8 @@ pub struct SitlResult {
     pub ulog: PathBuf,
     /// The truth log.
     pub log_csv: PathBuf,
+    /// Its rows.
+    pub log_rows: usize,
 }
 
 /// Errors of a SITL run (a divergence is an outcome, not an error).
@@ -247,6 +249,14 @@ pub fn run(
         },
     );
 
+    // real time: the hardware is a real-time task too (devices keep their
+    // rate), one priority above the on-board control task
+    if !lockstep
+        && options.realtime.sched_fifo
+        && let Err(e) = crate::realtime::set_fifo(options.realtime.priority.saturating_add(1).min(99))
+    {
+        eprintln!("warning: SCHED_FIFO for the simulated hardware not permitted ({e})");
+    }
     let log_csv = options.out_dir.join("log.csv");
     let mut writer = LogWriter::create(&log_csv)?;
     let mut servo_in = wires.avionics.try_clone_master().map_err(dev("avionics"))?;
@@ -381,7 +391,7 @@ pub fn run(
     let wall_s = wall0.elapsed().as_secs_f64();
     handle.stop();
     let onboard = handle.join();
-    writer.finish()?;
+    let log_rows = writer.finish()?;
     if let Some(e) = failure {
         return Err(e);
     }
@@ -400,6 +410,7 @@ pub fn run(
         received,
         ulog,
         log_csv,
+        log_rows,
     })
 }
 

@@ -1,0 +1,61 @@
+//! `helicon onboard --config onboard.toml [--duration S]`: the on-board
+//! program. Opens the devices of the configuration, aligns on the ground
+//! from the sensors, and runs the sensor server, the 400 Hz control task,
+//! the avionics and the logger until the IMU port closes (or `--duration`);
+//! writes the ULog flight log and `timing.json` into the log folder.
+
+use crate::console::Console;
+use anyhow::{Context, Result};
+use clap::Args;
+use helicon_flight::config::OnboardConfig;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// `helicon onboard`.
+#[derive(Args, Debug)]
+pub struct OnboardArgs {
+    /// The on-board configuration (TOML; see docs/onboard.md and examples/onboard.toml).
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Stop after this many seconds of control (finite, > 0).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub duration: Option<f64>,
+    /// Do not ask for SCHED_FIFO for the control task.
+    #[arg(long)]
+    pub no_sched_fifo: bool,
+}
+
+/// Run `helicon onboard`.
+pub fn run(a: &OnboardArgs) -> Result<()> {
+    let duration = match a.duration {
+        Some(d) if d.is_finite() && d > 0.0 && d <= 1e7 => Some(Duration::from_secs_f64(d)),
+        Some(d) => anyhow::bail!("--duration {d}: must be finite, > 0 and <= 1e7 s"),
+        None => None,
+    };
+    let cfg = OnboardConfig::from_file(&a.config)?;
+    let (report, log) = helicon_flight::onboard::run(&cfg, duration, !a.no_sched_fifo)
+        .with_context(|| format!("{}: on-board program", a.config.display()))?;
+    let dir = log.parent().map(PathBuf::from).unwrap_or_default();
+    let path = dir.join("timing.json");
+    let text = serde_json::to_string_pretty(&report).context("timing.json")?;
+    std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))?;
+    let mut con = Console::stdout();
+    writeln!(
+        con,
+        "{} control steps, {} deadline misses, final mode {}; wake-up jitter p50 {:.0} µs \
+         p99 {:.0} µs max {:.0} µs; sensor-to-servo p99 {:.0} µs",
+        report.steps,
+        report.deadline_misses,
+        report.final_mode,
+        report.wakeup_jitter.p50_us,
+        report.wakeup_jitter.p99_us,
+        report.wakeup_jitter.max_us,
+        report.sensor_to_servo.p99_us
+    );
+    writeln!(con, "wrote {} and {}", log.display(), path.display());
+    if let Some(e) = &report.error {
+        anyhow::bail!("the on-board program stopped: {e}");
+    }
+    con.finish()?;
+    Ok(())
+}

@@ -1,0 +1,160 @@
+//! `helicon sitl SCENARIO.toml --out DIR [--speed max|realtime] [--duration S]`:
+//! fly a scenario software-in-the-loop: the simulator plays the hardware on
+//! pseudo-terminals, the on-board runtime flies it through its device
+//! drivers. Writes the on-board `flight.ulg`, the truth `log.csv`,
+//! `timing.json`, and the run folder of `helicon sim` (summary, gains,
+//! scenario, plots, report).
+
+use crate::console::Console;
+use crate::sim_cmd::{folder_name, overrides_from, overrides_label, prepare_step};
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
+use helicon_flight::sitl::{self, Faults, Pilot, SitlOptions, Speed};
+use helicon_sim::output::finish_run;
+use helicon_sim::scenario::{OUTPUTS, Scenario};
+use std::path::PathBuf;
+
+/// How fast the simulator runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SpeedArg {
+    /// Lock-step: each IMU sample waits for its servo frame; as fast as the CPU allows.
+    Max,
+    /// The wall clock: the on-board control task runs on its own 400 Hz clock.
+    Realtime,
+}
+
+/// `helicon sitl`.
+#[derive(Args, Debug)]
+pub struct SitlArgs {
+    /// Scenario file (TOML, as for `helicon sim`; the sensor models and the
+    /// whole navigation always fly).
+    pub scenario: PathBuf,
+    /// Output folder (default `out/sitl-<scenario name>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Lock-step (`max`) or wall clock (`realtime`).
+    #[arg(long, value_enum, default_value = "max")]
+    pub speed: SpeedArg,
+    /// Flight duration in seconds (overrides the scenario's `duration_s`).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub duration: Option<f64>,
+    /// Real time: do not ask for SCHED_FIFO for the control task.
+    #[arg(long)]
+    pub no_sched_fifo: bool,
+    /// Inject a GPS loss from this time on (s).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub gps_loss_at: Option<f64>,
+    /// The pilot's switch goes to manual at this time (s).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub manual_at: Option<f64>,
+}
+
+fn check_time(flag: &str, v: Option<f64>) -> Result<()> {
+    if let Some(t) = v
+        && !(t.is_finite() && t >= 0.0)
+    {
+        anyhow::bail!("{flag} {t}: must be a finite time >= 0 s");
+    }
+    Ok(())
+}
+
+/// Run `helicon sitl`.
+pub fn run(a: &SitlArgs) -> Result<()> {
+    check_time("--gps-loss-at", a.gps_loss_at)?;
+    check_time("--manual-at", a.manual_at)?;
+    let o = overrides_from(None, None, a.duration)?;
+    let source = format!("{}{}", a.scenario.display(), overrides_label(&o));
+    let base = Scenario::from_file(&a.scenario)?.with_overrides(&o, &source)?;
+    let root = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(format!("sitl-{}", folder_name(&base.name))));
+    let cases = base.cases();
+    let mut con = Console::stdout();
+    for mut case in cases.iter().cloned() {
+        case.controller.fusion = true;
+        let out = if cases.len() > 1 {
+            root.join(folder_name(&case.name))
+        } else {
+            root.clone()
+        };
+        let (prepared, _) = prepare_step(&case)?;
+        case.check_work(&source, prepared.gains.set.sample_time_s)?;
+        let options = SitlOptions {
+            speed: match a.speed {
+                SpeedArg::Max => Speed::Max,
+                SpeedArg::Realtime => Speed::Realtime,
+            },
+            out_dir: out.clone(),
+            faults: Faults {
+                gps_lost_from_s: a.gps_loss_at,
+                imu_frozen_s: None,
+            },
+            pilot: Pilot {
+                manual_from_s: a.manual_at,
+            },
+            stale: StaleLimits::default(),
+            failsafe: FailsafeConfig::default(),
+            realtime: RealtimeConfig {
+                sched_fifo: !a.no_sched_fifo,
+                ..RealtimeConfig::default()
+            },
+            keep_frames: false,
+        };
+        let r = sitl::run(&case, &prepared, &options)
+            .with_context(|| format!("scenario `{}`: software in the loop", case.name))?;
+        for w in &r.onboard.realtime.warnings {
+            eprintln!("warning: {w}");
+        }
+        let timing = sitl::timing_json(&r, options.speed);
+        sitl::write_timing(&out, &timing)?;
+        finish_run(&out, &case, &prepared, &r.summary, r.log_rows)
+            .with_context(|| format!("writing the run outputs to {}", out.display()))?;
+        let s = &r.summary;
+        writeln!(
+            con,
+            
+            "{}: {} at t = {:.3} s{}; {} control steps, {:.1}x real time, final mode {}",
+            case.name,
+            s.termination,
+            s.t_end_s,
+            s.reason.as_deref().map_or(String::new(), |r| format!(" ({r})")),
+            r.onboard.steps,
+            r.speed_x,
+            r.onboard.final_mode
+        );
+        for name in OUTPUTS {
+            if let Some(m) = s.metrics.get(name) {
+                writeln!(
+            con,
+            
+                    "  {name:<4} RMS error {:.4}, max {:.4}",
+                    m.rms_error, m.max_abs_error
+                );
+            }
+        }
+        let t = &r.onboard;
+        writeln!(
+            con,
+            
+            "  timing: compute p50 {:.0} µs p99 {:.0} µs max {:.0} µs; sensor-to-servo p99 {:.0} µs; \
+             wake-up jitter p99 {:.0} µs max {:.0} µs; {} deadline misses",
+            t.compute.p50_us,
+            t.compute.p99_us,
+            t.compute.max_us,
+            t.sensor_to_servo.p99_us,
+            t.wakeup_jitter.p99_us,
+            t.wakeup_jitter.max_us,
+            t.deadline_misses
+        );
+        writeln!(
+            con,
+            
+            "  wrote flight.ulg, log.csv, timing.json, summary.json, plots to {}",
+            out.display()
+        );
+    }
+    con.finish()?;
+    Ok(())
+}
