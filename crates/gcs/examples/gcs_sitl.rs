@@ -25,7 +25,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let max_speed = args.iter().any(|a| a == "--max-speed");
     let free: Vec<&String> = args.iter().filter(|a| !a.starts_with("--")).collect();
-    let address = free.first().map_or(DEFAULT_ADDRESS.to_string(), |a| (*a).clone());
+    let address = free
+        .first()
+        .map_or(DEFAULT_ADDRESS.to_string(), |a| (*a).clone());
     parse_address(&address)?;
     let seconds: f64 = match free.get(1) {
         Some(s) => s.parse().map_err(|e| format!("SECONDS `{s}`: {e}"))?,
@@ -46,7 +48,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut h = Harness::new(&s, &prepared, config, NavigatorConfig::default(), 4);
     println!(
         "SITL: helicopter at home (57.0146 N, 9.9869 E), MAVLink on {address}, {seconds} s{}",
-        if max_speed { ", lock-step" } else { ", real time" }
+        if max_speed {
+            ", lock-step"
+        } else {
+            ", real time"
+        }
     );
     let period = Duration::from_secs_f64(0.0025);
     let start = Instant::now();
@@ -71,6 +77,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
     }
-    println!("ended: {:?}; server {:?}", h.ended, h.stop());
+    let report = h.stop();
+    println!("ended: {:?}; server {report:?}", h.ended);
     Ok(())
 }

@@ -216,14 +216,12 @@ impl Vehicle {
         let flying = self.armed;
         match u {
             Uplink::GcsHeartbeat => self.last_heartbeat_s = Some(at.t_s),
-            Uplink::Arm(a) => {
-                if a != self.armed {
-                    self.armed = a;
-                    if !a {
-                        self.nav.idle(&at, events);
-                    }
-                    return Some(a);
+            Uplink::Arm(a) if a != self.armed => {
+                self.armed = a;
+                if !a {
+                    self.nav.idle(&at, events);
                 }
+                return Some(a);
             }
             Uplink::Takeoff(h) if flying => {
                 self.nav.takeoff(&at, h, events);

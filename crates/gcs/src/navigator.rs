@@ -618,13 +618,13 @@ impl Navigator {
                 self.link_lost_at_s = None;
                 events.push(NavEvent::LinkRegained);
             }
-            (Some(t0), true) if self.mode == NavMode::Hold => {
-                if at.t_s - t0 >= self.config.link_loss_hold_s {
-                    match self.config.link_loss_action {
-                        LinkLossAction::Hold => {}
-                        LinkLossAction::Return => self.return_home(at, events),
-                        LinkLossAction::Land => self.land(at, events),
-                    }
+            (Some(t0), true)
+                if self.mode == NavMode::Hold && at.t_s - t0 >= self.config.link_loss_hold_s =>
+            {
+                match self.config.link_loss_action {
+                    LinkLossAction::Hold => {}
+                    LinkLossAction::Return => self.return_home(at, events),
+                    LinkLossAction::Land => self.land(at, events),
                 }
             }
             _ => {}

@@ -552,10 +552,8 @@ impl Server {
 
     fn dispatch(&mut self, msg: &MavMessage) {
         match msg {
-            MavMessage::HEARTBEAT(h) => {
-                if h.mavtype == MavType::MAV_TYPE_GCS {
-                    self.uplink(Uplink::GcsHeartbeat);
-                }
+            MavMessage::HEARTBEAT(h) if h.mavtype == MavType::MAV_TYPE_GCS => {
+                self.uplink(Uplink::GcsHeartbeat);
             }
             MavMessage::COMMAND_LONG(c) => {
                 let p = [

@@ -2,6 +2,7 @@
 //! reference with a first-order lag (τ = 0.3 s, about the LQI's velocity
 //! response): every limit is checked on the reference itself, every arrival
 //! on the vehicle's position.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 use helicon_gcs::navigator::{
     Events, GuidedTarget, Item, ItemKind, LinkLossAction, NavEvent, NavInput, NavMode, Navigator,
@@ -249,7 +250,7 @@ fn link_loss_holds_then_returns_and_lands() {
 #[test]
 fn no_failsafe_before_first_contact_nor_on_the_ground() {
     let mut s = Sim::new(NavigatorConfig::default());
-    s.run(10.0, |t| Some(t));
+    s.run(10.0, Some);
     assert!(s.has(NavEvent::LinkLost).is_none());
     let mut ev = Events::default();
     s.nav.hold(&s.at(), &mut ev);

@@ -2,6 +2,7 @@
 //! a MAVLink client in the test: the simulation pauses while the client
 //! waits for an answer, and the server streams on on-board time, so every
 //! figure here is per simulated second.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 mod common;
 

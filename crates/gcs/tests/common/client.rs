@@ -3,6 +3,7 @@
 //! free local port, the server sends to it (`udpout:`), it answers the
 //! server.
 #![allow(dead_code)]
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 use helicon_gcs::mavlink::dialects::common::*;
 use helicon_gcs::mavlink::{

@@ -5,6 +5,7 @@
 //! takes the navigator's reference; the MAVLink server runs on its own
 //! thread over real UDP. Shared by the tests and the `gcs_sitl` example.
 #![allow(dead_code)]
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 use helicon_core::Telemetry;
 use helicon_core::state::Input;
