@@ -4,7 +4,7 @@
 Start the SITL first (real time), then this script:
 
     cargo run --release -p helicon-gcs --example gcs_sitl -- udpout:127.0.0.1:14550 120 &
-    python3 tools/gcs_pymavlink_check.py
+    python3 tools/gcs_pymavlink_check.py [PORT]
 
 It checks: a HEARTBEAT of a helicopter, the full parameter list, a rejected
 PARAM_SET answered with the unchanged value, arm, takeoff to 5 m, land,
@@ -17,7 +17,8 @@ from pymavlink import mavutil
 
 
 def main() -> int:
-    m = mavutil.mavlink_connection("udpin:127.0.0.1:14550", source_system=255)
+    port = int(sys.argv[1]) if len(sys.argv) > 1 else 14550
+    m = mavutil.mavlink_connection(f"udpin:127.0.0.1:{port}", source_system=255)
     hb = m.wait_heartbeat(timeout=20)
     if hb is None:
         print("no heartbeat")
@@ -41,7 +42,10 @@ def main() -> int:
 
     m.mav.param_set_send(m.target_system, m.target_component, b"NAV_MAX_ACC", 100.0,
                          mavutil.mavlink.MAV_PARAM_TYPE_REAL32)
-    p = m.recv_match(type="PARAM_VALUE", blocking=True, timeout=5)
+    p = None
+    deadline = time.time() + 5
+    while time.time() < deadline and (p is None or p.param_id != "NAV_MAX_ACC"):
+        p = m.recv_match(type="PARAM_VALUE", blocking=True, timeout=1)
     assert p is not None and p.param_id == "NAV_MAX_ACC" and p.param_value == params["NAV_MAX_ACC"], p
     print(f"rejected set answered with {p.param_value}")
 

@@ -181,6 +181,9 @@ struct Server {
     mission: Vec<MISSION_ITEM_INT_DATA>,
     upload: Upload,
     last_flight_mode: &'static str,
+    /// An arm/disarm sent on and not yet seen in a status: the commands
+    /// that follow it in the ring find the vehicle in that state.
+    arm_requested: Option<bool>,
     report: ServerReport,
 }
 
@@ -203,6 +206,7 @@ impl Server {
             mission: Vec::new(),
             upload: Upload::Idle,
             last_flight_mode: "",
+            arm_requested: None,
             report: ServerReport::default(),
             config,
             end,
@@ -263,6 +267,9 @@ impl Server {
 
     fn on_status(&mut self, s: &VehicleStatus) {
         self.status = Some(*s);
+        if self.arm_requested == Some(s.armed) {
+            self.arm_requested = None;
+        }
         if s.flight_mode.name != self.last_flight_mode {
             if !self.last_flight_mode.is_empty() {
                 let text = format!("flight mode {}", s.flight_mode.name);
@@ -625,7 +632,8 @@ impl Server {
     }
 
     fn armed(&self) -> bool {
-        self.status.is_some_and(|s| s.armed)
+        self.arm_requested
+            .unwrap_or(self.status.is_some_and(|s| s.armed))
     }
 
     fn accepted(&mut self, u: Uplink) -> MavResult {
@@ -701,7 +709,11 @@ impl Server {
                 );
                 return MavResult::MAV_RESULT_DENIED;
             }
-            self.accepted(Uplink::Arm(true))
+            let r = self.accepted(Uplink::Arm(true));
+            if r == MavResult::MAV_RESULT_ACCEPTED {
+                self.arm_requested = Some(true);
+            }
+            r
         } else if arm == 0.0 {
             // disarming in the air stops the law: only on the ground, or forced
             let on_ground = s.nav_mode == NavMode::Idle;
@@ -712,7 +724,11 @@ impl Server {
                 );
                 return MavResult::MAV_RESULT_DENIED;
             }
-            self.accepted(Uplink::Arm(false))
+            let r = self.accepted(Uplink::Arm(false));
+            if r == MavResult::MAV_RESULT_ACCEPTED {
+                self.arm_requested = Some(false);
+            }
+            r
         } else {
             MavResult::MAV_RESULT_DENIED
         }
