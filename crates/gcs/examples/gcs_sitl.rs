@@ -44,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         home: Geodetic::new(57.0146, 9.9869, 20.0).map_err(|e| e.to_string())?,
         navigator: NavigatorConfig::default(),
         signing_key: None,
+        rates_hz: helicon_gcs::server::default_rates_hz(),
     };
     let mut h = Harness::new(&s, &prepared, config, NavigatorConfig::default(), 4);
     println!(

@@ -60,6 +60,14 @@ pub struct ServerConfig {
     /// MAVLink 2 signing key: when set, commands (COMMAND_LONG/INT, SET_MODE,
     /// PARAM_SET, mission upload, guided targets) must be signed with it.
     pub signing_key: Option<[u8; 32]>,
+    /// Start-up rate of each of [`STREAMS`] (Hz, 0: off, at most 100);
+    /// the ground station changes them.
+    pub rates_hz: [f64; STREAMS.len()],
+}
+
+/// The default rates of [`STREAMS`].
+pub fn default_rates_hz() -> [f64; STREAMS.len()] {
+    STREAMS.map(|(_, _, r)| r)
 }
 
 /// Errors starting the server.
@@ -188,7 +196,7 @@ struct Server {
 }
 
 fn interval_of(rate_hz: f64) -> Option<f64> {
-    (rate_hz > 0.0).then(|| 1.0 / rate_hz)
+    (rate_hz.is_finite() && rate_hz > 0.0).then(|| 1.0 / rate_hz)
 }
 
 impl Server {
@@ -200,7 +208,7 @@ impl Server {
             home: LocalNed::new(config.home),
             params: ParamTable::new(config.navigator),
             signing,
-            intervals_s: STREAMS.map(|(_, _, r)| interval_of(r)),
+            intervals_s: config.rates_hz.map(|r| interval_of(r.min(100.0))),
             next_due_s: [0.0; STREAMS.len()],
             status: None,
             mission: Vec::new(),

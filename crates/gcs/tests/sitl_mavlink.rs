@@ -31,6 +31,7 @@ fn server_config(client: &Client, key: Option<[u8; 32]>) -> ServerConfig {
         home: home(),
         navigator: NavigatorConfig::default(),
         signing_key: key,
+        rates_hz: helicon_gcs::server::default_rates_hz(),
     }
 }
 
