@@ -13,7 +13,9 @@
 //!   (lock-free `rtrb` rings), and the vehicle-side half ([`link::Vehicle`]).
 //! - [`params`]: the parameter table (typed, validated).
 //! - [`server`]: the MAVLink 2 server (common dialect, UDP) on its own thread.
+//! - [`config`]: the `[gcs]` section of the on-board configuration.
 
+pub mod config;
 pub mod geo;
 pub mod link;
 pub mod navigator;

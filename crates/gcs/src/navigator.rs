@@ -28,7 +28,8 @@ use nalgebra::Vector3;
 pub const MAX_MISSION_ITEMS: usize = 64;
 
 /// What the navigator does when the ground station's heartbeat is lost.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum LinkLossAction {
     /// Hold position (until the link returns and the operator acts).
     Hold,
@@ -59,8 +60,11 @@ impl LinkLossAction {
     }
 }
 
-/// The navigator's tuning (the ground station's parameters).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The navigator's tuning (the ground station's parameters; the
+/// `[gcs.navigator]` section of the on-board configuration, every field
+/// optional).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct NavigatorConfig {
     /// Horizontal speed of mission legs without a speed of their own (m/s).
     pub cruise_speed_m_s: f64,

@@ -352,3 +352,50 @@ fn plan_refuses_non_finite_items_and_overflow() {
     }
     assert!(!plan.push(ok));
 }
+
+#[test]
+fn gcs_section_checked_field_by_field() {
+    use helicon_gcs::config::GcsSection;
+    let home = helicon_devices::Geodetic::new(57.0, 10.0, 20.0).unwrap();
+    let ok = GcsSection::from_toml_str(
+        "address = \"udpin:0.0.0.0:14550\"\nsigning_key_hex = \"000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f\"\n[rates_hz]\nATTITUDE = 50.0\n[navigator]\ncruise_speed_m_s = 3.0\nlink_loss_action = \"land\"\n",
+        "onboard.toml",
+    )
+    .unwrap();
+    let c = ok.server_config(home, "onboard.toml").unwrap();
+    assert_eq!(c.signing_key.unwrap()[31], 31);
+    assert_eq!(c.rates_hz[2], 50.0);
+    assert_eq!(c.navigator.cruise_speed_m_s, 3.0);
+    assert_eq!(c.navigator.link_loss_action, LinkLossAction::Land);
+    for (text, field) in [
+        ("address = \"tcp:1.2.3.4:5\"", "gcs.address"),
+        ("system_id = 255", "gcs.system_id"),
+        ("signing_key_hex = \"00zz\"", "gcs.signing_key_hex"),
+        ("[rates_hz]\nATTITUDE = 1000.0", "gcs.rates_hz.ATTITUDE"),
+        ("[rates_hz]\nBOGUS = 1.0", "gcs.rates_hz.BOGUS"),
+        (
+            "[navigator]\nmax_accel_m_s2 = 0.0",
+            "gcs.navigator.max_accel_m_s2",
+        ),
+    ] {
+        let e = GcsSection::from_toml_str(text, "onboard.toml")
+            .unwrap()
+            .server_config(home, "onboard.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("onboard.toml: `") && e.contains(field),
+            "{text}: {e}"
+        );
+    }
+    for text in [
+        "adress = \"x\"",
+        "[navigator]\nlink_loss_action = \"fly\"",
+        "[navigator]\nspeed = 1.0",
+    ] {
+        let e = GcsSection::from_toml_str(text, "onboard.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("onboard.toml: [gcs]"), "{text}: {e}");
+    }
+}
