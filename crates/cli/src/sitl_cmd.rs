@@ -114,21 +114,26 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         let s = &r.summary;
         writeln!(
             con,
-            
-            "{}: {} at t = {:.3} s{}; {} control steps, {:.1}x real time, final mode {}",
+            "{}: {} at t = {:.3} s{}; {} control steps, {:.1}x real time ({:.0}x per CPU second), final mode {}",
             case.name,
             s.termination,
             s.t_end_s,
-            s.reason.as_deref().map_or(String::new(), |r| format!(" ({r})")),
+            s.reason
+                .as_deref()
+                .map_or(String::new(), |r| format!(" ({r})")),
             r.onboard.steps,
             r.speed_x,
+            if r.cpu_s > 0.0 {
+                r.samples as f64 * r.sample_time_s / r.cpu_s
+            } else {
+                0.0
+            },
             r.onboard.final_mode
         );
         for name in OUTPUTS {
             if let Some(m) = s.metrics.get(name) {
                 writeln!(
-            con,
-            
+                    con,
                     "  {name:<4} RMS error {:.4}, max {:.4}",
                     m.rms_error, m.max_abs_error
                 );
@@ -137,7 +142,6 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         let t = &r.onboard;
         writeln!(
             con,
-            
             "  timing: compute p50 {:.0} µs p99 {:.0} µs max {:.0} µs; sensor-to-servo p99 {:.0} µs; \
              wake-up jitter p99 {:.0} µs max {:.0} µs; {} deadline misses",
             t.compute.p50_us,
@@ -150,7 +154,6 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         );
         writeln!(
             con,
-            
             "  wrote flight.ulg, log.csv, timing.json, summary.json, plots to {}",
             out.display()
         );

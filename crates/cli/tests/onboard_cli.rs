@@ -44,33 +44,82 @@ fn fails_with(d: &Path, args: &[&str], needles: &[&str]) {
 #[test]
 fn onboard_bad_input_names_the_file_and_field() {
     let d = dir("bad");
-    fails_with(&d, &["onboard", "--config", "missing.toml"], &["missing.toml", "cannot read"]);
-    std::fs::write(d.join("stale.toml"), format!("gains = \"g.json\"\n{DEVICES}[stale]\ngps_s = -1.0\n")).unwrap();
-    fails_with(&d, &["onboard", "--config", "stale.toml"], &["stale.toml", "stale.gps_s", "-1"]);
-    std::fs::write(d.join("baud.toml"), format!("gains = \"g.json\"\n{}", DEVICES.replace("921600", "7"))).unwrap();
-    fails_with(&d, &["onboard", "--config", "baud.toml"], &["baud.toml", "devices.imu.baud"]);
-    std::fs::write(d.join("nogains.toml"), format!("gains = \"g.json\"\n{DEVICES}")).unwrap();
+    fails_with(
+        &d,
+        &["onboard", "--config", "missing.toml"],
+        &["missing.toml", "cannot read"],
+    );
+    std::fs::write(
+        d.join("stale.toml"),
+        format!("gains = \"g.json\"\n{DEVICES}[stale]\ngps_s = -1.0\n"),
+    )
+    .unwrap();
+    fails_with(
+        &d,
+        &["onboard", "--config", "stale.toml"],
+        &["stale.toml", "stale.gps_s", "-1"],
+    );
+    std::fs::write(
+        d.join("baud.toml"),
+        format!("gains = \"g.json\"\n{}", DEVICES.replace("921600", "7")),
+    )
+    .unwrap();
+    fails_with(
+        &d,
+        &["onboard", "--config", "baud.toml"],
+        &["baud.toml", "devices.imu.baud"],
+    );
+    std::fs::write(
+        d.join("nogains.toml"),
+        format!("gains = \"g.json\"\n{DEVICES}"),
+    )
+    .unwrap();
     fails_with(&d, &["onboard", "--config", "nogains.toml"], &["g.json"]);
-    fails_with(&d, &["onboard", "--config", "nogains.toml", "--duration", "nan"], &["--duration"]);
+    fails_with(
+        &d,
+        &["onboard", "--config", "nogains.toml", "--duration", "nan"],
+        &["--duration"],
+    );
     // a real gains file, then a device that is not there
     std::fs::write(d.join("ok.toml"), "name = \"ok\"\nduration_s = 0.1\n").unwrap();
     let (code, _, err) = helicon(&d, &["sim", "ok.toml", "--out", "g"]);
     assert_eq!(code, Some(0), "{err}");
-    std::fs::write(d.join("nodev.toml"), format!("gains = \"g/gains.json\"\n{DEVICES}")).unwrap();
-    fails_with(&d, &["onboard", "--config", "nodev.toml"], &["/dev/null-imu", "cannot open"]);
+    std::fs::write(
+        d.join("nodev.toml"),
+        format!("gains = \"g/gains.json\"\n{DEVICES}"),
+    )
+    .unwrap();
+    fails_with(
+        &d,
+        &["onboard", "--config", "nodev.toml"],
+        &["/dev/null-imu", "cannot open"],
+    );
 }
 
 #[test]
 fn sitl_bad_flags_and_a_short_run() {
     let d = dir("sitl");
     std::fs::write(d.join("ok.toml"), "name = \"ok\"\nduration_s = 0.5\n").unwrap();
-    fails_with(&d, &["sitl", "ok.toml", "--gps-loss-at", "nan"], &["--gps-loss-at"]);
+    fails_with(
+        &d,
+        &["sitl", "ok.toml", "--gps-loss-at", "nan"],
+        &["--gps-loss-at"],
+    );
     fails_with(&d, &["sitl", "ok.toml", "--duration", "0"], &["duration_s"]);
     fails_with(&d, &["sitl", "missing.toml"], &["missing.toml"]);
     let (code, out, err) = helicon(&d, &["sitl", "ok.toml", "--out", "o"]);
     assert_eq!(code, Some(0), "{err}");
-    assert!(out.contains("ok: completed at t = 0.500 s; 201 control steps"), "{out}");
-    for f in ["flight.ulg", "log.csv", "timing.json", "summary.json", "outputs.png"] {
+    assert!(
+        out.contains("ok: completed at t = 0.500 s; 201 control steps"),
+        "{out}"
+    );
+    for f in [
+        "flight.ulg",
+        "log.csv",
+        "timing.json",
+        "summary.json",
+        "outputs.png",
+    ] {
         assert!(d.join("o").join(f).exists(), "{f}");
     }
     let timing: serde_json::Value =

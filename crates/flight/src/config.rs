@@ -326,12 +326,10 @@ impl OnboardConfig {
         self.sensors
             .validate(file)
             .map_err(|e| e.within(file, "sensors"))?;
-        self.navigation
-            .validate()
-            .map_err(|e| ConfigError::Parse {
-                file: file.to_string(),
-                message: format!("[navigation]: {e}"),
-            })?;
+        self.navigation.validate().map_err(|e| ConfigError::Parse {
+            file: file.to_string(),
+            message: format!("[navigation]: {e}"),
+        })?;
         Ok(())
     }
 }
@@ -377,7 +375,9 @@ mod tests {
             err("[failsafe]\noverrun_limit = 0\n"),
             "o.toml: `failsafe.overrun_limit` = 0: must be 1..=10000 samples"
         );
-        assert!(err("[sensors.gps]\nrate_hz = -5.0\n").starts_with("o.toml: `sensors.gps.rate_hz`"));
+        assert!(
+            err("[sensors.gps]\nrate_hz = -5.0\n").starts_with("o.toml: `sensors.gps.rate_hz`")
+        );
         assert!(err("[stale]\nbogus = 1\n").contains("bogus"));
         assert_eq!(
             err("[home]\nlatitude_deg = 91.0\n"),

@@ -120,7 +120,9 @@ impl ControlTask {
             }
         }
         ControlOutput {
-            servo: self.supervisor.servo(&self.law, &self.u_trim, self.rc.as_ref()),
+            servo: self
+                .supervisor
+                .servo(&self.law, &self.u_trim, self.rc.as_ref()),
             mode: self.supervisor.mode(),
             telemetry,
             event,

@@ -18,9 +18,9 @@
 pub mod config;
 pub mod control;
 pub mod onboard;
+pub mod ports;
 pub mod realtime;
 pub mod records;
 pub mod runtime;
-pub mod ports;
 pub mod safety;
 pub mod sitl;

@@ -203,12 +203,13 @@ pub fn run(
         .map(|d| d.as_secs())
         .unwrap_or(0);
     let path = dir.join(format!("flight-{stamp}.ulg"));
-    let log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).map_err(
-        |e| OnboardError::Log {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        },
-    )?;
+    let log =
+        FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).map_err(|e| {
+            OnboardError::Log {
+                path: path.display().to_string(),
+                message: e.to_string(),
+            }
+        })?;
     let mut realtime = cfg.realtime;
     realtime.sched_fifo &= sched_fifo;
     let handle = runtime::spawn(

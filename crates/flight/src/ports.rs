@@ -70,14 +70,16 @@ impl TtyPort {
             port: path.display().to_string(),
             message,
         };
-        let rate = baud_rate(baud).ok_or_else(|| err(format!("baud rate {baud} not one of {BAUDS:?}")))?;
+        let rate =
+            baud_rate(baud).ok_or_else(|| err(format!("baud rate {baud} not one of {BAUDS:?}")))?;
         let file = std::fs::OpenOptions::new()
             .read(true)
             .write(true)
             .custom_flags(nix::fcntl::OFlag::O_NOCTTY.bits())
             .open(path)
             .map_err(|e| err(format!("cannot open: {e}")))?;
-        let mut t = tcgetattr(file.as_fd()).map_err(|e| err(format!("not a serial device: {e}")))?;
+        let mut t =
+            tcgetattr(file.as_fd()).map_err(|e| err(format!("not a serial device: {e}")))?;
         cfmakeraw(&mut t);
         cfsetspeed(&mut t, rate).map_err(|e| err(format!("baud rate: {e}")))?;
         tcsetattr(file.as_fd(), SetArg::TCSANOW, &t).map_err(|e| err(format!("tcsetattr: {e}")))?;
@@ -90,7 +92,10 @@ impl TtyPort {
     /// A second handle on the same device (a reader and a writer thread).
     pub fn try_clone(&self) -> Result<Self, PortError> {
         Ok(TtyPort {
-            file: self.file.try_clone().map_err(|e| self.error(format!("cannot clone: {e}")))?,
+            file: self
+                .file
+                .try_clone()
+                .map_err(|e| self.error(format!("cannot clone: {e}")))?,
             path: self.path.clone(),
         })
     }

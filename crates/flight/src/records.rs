@@ -13,6 +13,7 @@ use std::io::Write;
 
 /// One item of a logger ring.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[allow(clippy::large_enum_variant)] // ring items stay inline: boxing would allocate per record
 pub enum FlightRecord {
     /// A record of the message set.
     Log(LogRecord),
@@ -160,7 +161,9 @@ pub fn step_records(
         push(FlightRecord::Event(ev));
     }
     if let Some(t) = &out.telemetry {
-        push(FlightRecord::Log(LogRecord::Control(Control::from_telemetry(t)?)));
+        push(FlightRecord::Log(LogRecord::Control(
+            Control::from_telemetry(t)?,
+        )));
         if let Some(n) = &t.navigation {
             push(FlightRecord::Log(LogRecord::Navigation(
                 Navigation::from_solution(t.t_s, n)?,

@@ -185,6 +185,9 @@ pub struct RuntimeHandle {
 }
 
 struct ControlResult {
+    /// Lock-step: the servo frames, latency and port error of the control
+    /// task's own I/O.
+    direct: Option<ThreadResult>,
     steps: u64,
     misses: u64,
     superseded: u64,
@@ -228,6 +231,7 @@ const SENSOR_LAG_NS: u64 = 250_000;
 /// when the runtime ends; `downlink`, when given, receives each step's
 /// telemetry (the ground link; SITL fills the truth log's estimate columns
 /// from it).
+#[allow(clippy::too_many_lines)] // the threads of Figure 3.5, started in order
 pub fn spawn<S, R, V, W>(
     task: ControlTask,
     mission: Mission,
@@ -275,16 +279,44 @@ where
     };
     let logger_thread = logger.as_ref().ok().map(|h| h.thread().clone());
 
+    // lock-step: the control task reads the sensors and writes the servos
+    // itself (the pacing is the sensor's anyway): two thread hand-overs per
+    // sample instead of four
+    let direct = options.pacing == Pacing::Sensor;
+    let mut sensors = Some(sensors);
+    let mut servos = Some(servos);
+    let direct_io: Option<(Box<dyn SensorPort>, Box<dyn ServoPort>)> = if direct {
+        match (sensors.take(), servos.take()) {
+            (Some(a), Some(b)) => Some((Box::new(a), Box::new(b))),
+            _ => None,
+        }
+    } else {
+        None
+    };
+
     // avionics-out
-    let avionics = {
+    let avionics = servos.take().map(|servos| {
         let stop = stop.clone();
         let last = last_output_ns.clone();
         let logger_thread = logger_thread.clone();
-        thread::Builder::new().name("avionics-out".into()).spawn(move || {
-            avionics_loop(servos, servo_rx, wlog_tx, &stop, &last, logger_thread, options)
-        })
-    };
-    let avionics_thread = avionics.as_ref().ok().map(|h| h.thread().clone());
+        thread::Builder::new()
+            .name("avionics-out".into())
+            .spawn(move || {
+                avionics_loop(
+                    servos,
+                    servo_rx,
+                    wlog_tx,
+                    &stop,
+                    &last,
+                    logger_thread,
+                    options,
+                )
+            })
+    });
+    let avionics_thread = avionics
+        .as_ref()
+        .and_then(|h| h.as_ref().ok())
+        .map(|h| h.thread().clone());
 
     // control task
     let (fifo_tx, fifo_rx) = std::sync::mpsc::channel::<Result<(), String>>();
@@ -294,27 +326,36 @@ where
         let last = last_output_ns.clone();
         let wake_out = avionics_thread.clone();
         let wake_log = logger_thread.clone();
-        thread::Builder::new().name("control".into()).spawn(move || {
-            if options.realtime.sched_fifo {
-                let _ = fifo_tx.send(realtime::set_fifo(options.realtime.priority));
-            } else {
-                let _ = fifo_tx.send(Ok(()));
-            }
-            let ctx = ControlCtx {
-                frames: frame_rx,
-                rc: rc_rx,
-                servo: servo_tx,
-                log: log_tx,
-                stop: &stop,
-                closed: &closed,
-                last_output_ns: &last,
-                wake_out,
-                wake_log,
-                downlink,
-                options,
-            };
-            control_loop(task, &mission, ctx)
-        })
+        thread::Builder::new()
+            .name("control".into())
+            .spawn(move || {
+                if options.realtime.sched_fifo {
+                    let _ = fifo_tx.send(realtime::set_fifo(options.realtime.priority));
+                } else {
+                    let _ = fifo_tx.send(Ok(()));
+                }
+                let ctx = ControlCtx {
+                    frames: frame_rx,
+                    rc: rc_rx,
+                    servo: servo_tx,
+                    log: log_tx,
+                    stop: &stop,
+                    closed: &closed,
+                    last_output_ns: &last,
+                    wake_out,
+                    wake_log,
+                    downlink,
+                    direct: direct_io.map(|(sensors, servos)| Direct {
+                        sensors,
+                        servos,
+                        latency: LatencyStats::new(),
+                        frames: 0,
+                        error: None,
+                    }),
+                    options,
+                };
+                control_loop(task, &mission, ctx)
+            })
     };
     match fifo_rx.recv() {
         Ok(Ok(())) => realtime.sched_fifo = options.realtime.sched_fifo,
@@ -328,7 +369,7 @@ where
     let control_thread = control.as_ref().ok().map(|h| h.thread().clone());
 
     // sensor server and receiver (SCHED_FIFO one below the control task)
-    let sensor = {
+    let sensor = sensors.take().map(|sensors| {
         let stop = stop.clone();
         let closed = sensors_closed.clone();
         let wake = control_thread.clone();
@@ -340,7 +381,7 @@ where
                 }
                 sensor_loop(sensors, frame_tx, &stop, &closed, wake)
             })
-    };
+    });
     let receiver = rc.map(|rc| {
         let stop = stop.clone();
         thread::Builder::new()
@@ -349,7 +390,7 @@ where
     });
     let mut others = Vec::new();
     let mut wakers = Vec::new();
-    for h in [Some(sensor), receiver, Some(avionics), Some(logger)]
+    for h in [sensor, receiver, avionics, Some(logger)]
         .into_iter()
         .flatten()
     {
@@ -358,7 +399,9 @@ where
                 wakers.push(h.thread().clone());
                 others.push(h);
             }
-            Err(e) => realtime.warnings.push(format!("a thread did not start: {e}")),
+            Err(e) => realtime
+                .warnings
+                .push(format!("a thread did not start: {e}")),
         }
     }
     let control = match control {
@@ -368,6 +411,7 @@ where
             stop.store(true, Ordering::SeqCst);
             realtime.warnings.push(format!("control task: {e}"));
             thread::spawn(|| ControlResult {
+                direct: None,
                 steps: 0,
                 misses: 0,
                 superseded: 0,
@@ -428,6 +472,13 @@ impl RuntimeHandle {
         };
         match c {
             Ok(c) => {
+                if let Some(d) = c.direct {
+                    report.servo_frames += d.servo_frames;
+                    if let Some(l) = d.latency {
+                        report.sensor_to_servo = l.summary();
+                    }
+                    report.error = d.error;
+                }
                 report.steps = c.steps;
                 report.deadline_misses = c.misses;
                 report.frames_superseded = c.superseded;
@@ -453,7 +504,9 @@ impl RuntimeHandle {
                     }
                 }
                 Err(_) => {
-                    report.error.get_or_insert_with(|| "a thread panicked".into());
+                    report
+                        .error
+                        .get_or_insert_with(|| "a thread panicked".into());
                 }
             }
         }
@@ -528,11 +581,25 @@ struct ControlCtx<'a> {
     wake_out: Option<Thread>,
     wake_log: Option<Thread>,
     downlink: Option<rtrb::Producer<Telemetry>>,
+    direct: Option<Direct>,
     options: RuntimeOptions,
 }
 
+/// The control task's own I/O in lock-step.
+struct Direct {
+    sensors: Box<dyn SensorPort>,
+    servos: Box<dyn ServoPort>,
+    latency: LatencyStats,
+    frames: u64,
+    error: Option<String>,
+}
+
 #[allow(clippy::too_many_lines)] // one loop: wait, gather, step, hand over, log
-fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_>) -> ControlResult {
+fn control_loop(
+    mut task: ControlTask,
+    mission: &Mission,
+    mut ctx: ControlCtx<'_>,
+) -> ControlResult {
     let ts_s = ctx.options.sample_time_s;
     let period_ns = (ts_s * 1e9).round() as u64;
     let mut jitter = LatencyStats::new();
@@ -570,6 +637,17 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
             }
             Pacing::Sensor => {
                 let a = loop {
+                    if let Some(d) = ctx.direct.as_mut() {
+                        match d.sensors.next(POLL) {
+                            Ok(Next::Item(a)) => break Some(a),
+                            Ok(Next::Timeout) if !ctx.stop.load(Ordering::Relaxed) => continue,
+                            Ok(_) => break None,
+                            Err(e) => {
+                                d.error.get_or_insert(e.to_string());
+                                break None;
+                            }
+                        }
+                    }
                     if let Ok(a) = ctx.frames.pop() {
                         break Some(a);
                     }
@@ -611,15 +689,28 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
         if let (Some(d), Some(t)) = (ctx.downlink.as_mut(), out.telemetry) {
             let _ = d.push(t);
         }
-        let item = ServoItem {
-            u: out.servo,
-            arrived_ns: arrival.map(|a| a.arrived_ns),
-        };
-        if ctx.servo.push(item).is_err() {
-            log_dropped += 1;
-        }
-        if let Some(t) = &ctx.wake_out {
-            t.unpark();
+        if let Some(d) = ctx.direct.as_mut() {
+            match d.servos.send(&out.servo) {
+                Ok(()) => d.frames += 1,
+                Err(e) => {
+                    d.error.get_or_insert(e.to_string());
+                }
+            }
+            if let Some(a) = arrival {
+                d.latency
+                    .push(realtime::monotonic_ns().saturating_sub(a.arrived_ns));
+            }
+        } else {
+            let item = ServoItem {
+                u: out.servo,
+                arrived_ns: arrival.map(|a| a.arrived_ns),
+            };
+            if ctx.servo.push(item).is_err() {
+                log_dropped += 1;
+            }
+            if let Some(t) = &ctx.wake_out {
+                t.unpark();
+            }
         }
         let done_ns = realtime::monotonic_ns();
         ctx.last_output_ns.store(done_ns, Ordering::Relaxed);
@@ -665,8 +756,8 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
                 // just after the last deadline reads as late, not early
                 let period = i128::from(period_ns);
                 let lag = wake_ns as i128 - i128::from(a.arrived_ns);
-                let err = (lag - i128::from(SENSOR_LAG_NS) + period / 2).rem_euclid(period)
-                    - period / 2;
+                let err =
+                    (lag - i128::from(SENSOR_LAG_NS) + period / 2).rem_euclid(period) - period / 2;
                 let shift = (err / 8).clamp(-50_000, 50_000);
                 let shifted = i128::from(deadline_ns) - shift;
                 deadline_ns = u64::try_from(shifted).unwrap_or(deadline_ns);
@@ -680,6 +771,12 @@ fn control_loop(mut task: ControlTask, mission: &Mission, mut ctx: ControlCtx<'_
         }
     }
     ControlResult {
+        direct: ctx.direct.map(|d| ThreadResult {
+            servo_frames: d.frames,
+            latency: Some(d.latency),
+            error: d.error,
+            ..ThreadResult::default()
+        }),
         steps,
         misses,
         superseded,

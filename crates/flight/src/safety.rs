@@ -230,7 +230,11 @@ impl Supervisor {
         if h.mag_fresh {
             self.last_mag_s = h.now_s;
         }
-        self.misses = if h.deadline_missed { self.misses + 1 } else { 0 };
+        self.misses = if h.deadline_missed {
+            self.misses + 1
+        } else {
+            0
+        };
         self.nav_failed |= h.navigation_failed;
         if let Some(rc) = rc {
             self.armed = rc.armed;
@@ -362,7 +366,10 @@ mod tests {
         let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
         let armed = rc(false, true);
         let ev = s.update(&health(0.0, true), Some(&armed), 0.3).unwrap();
-        assert_eq!((ev.from, ev.to, ev.reason), (Mode::Disarmed, Mode::Auto, Reason::Armed));
+        assert_eq!(
+            (ev.from, ev.to, ev.reason),
+            (Mode::Disarmed, Mode::Auto, Reason::Armed)
+        );
         // GPS last seen at 0.5 s; stale after 1.0 s more
         assert!(s.update(&health(0.5, true), None, 0.3).is_none());
         assert!(s.update(&health(1.5, false), None, 0.3).is_none());
@@ -381,9 +388,14 @@ mod tests {
         assert_eq!((ev.to, ev.reason), (Mode::Descent, Reason::HoldElapsed));
         assert_eq!(s.reference(&mission).velocity_ned_m_s.z, 0.5);
         // the pilot takes over and hands back: the mission resumes
-        let ev = s.update(&health(3.0, true), Some(&rc(true, true)), 0.7).unwrap();
+        let ev = s
+            .update(&health(3.0, true), Some(&rc(true, true)), 0.7)
+            .unwrap();
         assert_eq!((ev.to, ev.reason), (Mode::Manual, Reason::PilotManual));
-        assert_eq!(s.servo(&Input::zeros(), &Input::zeros(), Some(&rc(true, true)))[0], 0.1);
+        assert_eq!(
+            s.servo(&Input::zeros(), &Input::zeros(), Some(&rc(true, true)))[0],
+            0.1
+        );
         let ev = s.update(&health(3.1, true), Some(&armed), 0.7).unwrap();
         assert_eq!((ev.to, ev.reason), (Mode::Auto, Reason::PilotAuto));
         assert_eq!(s.reference(&mission), mission);
@@ -416,7 +428,9 @@ mod tests {
         let ev = s.update(&h, None, 0.0).unwrap();
         assert_eq!((ev.to, ev.reason), (Mode::Hold, Reason::Overrun));
         // disarmed: trim, nothing beyond
-        let ev = s.update(&health(0.05, true), Some(&rc(false, false)), 0.0).unwrap();
+        let ev = s
+            .update(&health(0.05, true), Some(&rc(false, false)), 0.0)
+            .unwrap();
         assert_eq!((ev.to, ev.reason), (Mode::Disarmed, Reason::Disarmed));
         assert_eq!(s.servo(&Input::repeat(9.0), &trim, None), trim);
     }

@@ -30,8 +30,7 @@ use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, RcInput as RcFrame};
 use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCommon};
 use helicon_sim::closed_loop::{
-    ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination,
-    thesis_flight_computer,
+    ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, thesis_flight_computer,
 };
 use helicon_sim::log_csv::{LogCsvError, LogWriter};
 use helicon_sim::scenario::Scenario;
@@ -103,10 +102,14 @@ pub struct SitlResult {
     pub onboard: RunReport,
     /// Control periods flown.
     pub samples: u64,
+    /// The control period (s).
+    pub sample_time_s: f64,
     /// Wall time of the flight (s).
     pub wall_s: f64,
     /// Simulated time per wall time.
     pub speed_x: f64,
+    /// CPU time of the process (both sides, all threads) during the flight (s).
+    pub cpu_s: f64,
     /// The frames the hardware sent (when kept), in order.
     pub sent: Vec<SensorFrame>,
     /// The servo commands the plant received, in order.
@@ -215,12 +218,11 @@ pub fn run(
         sys_name: format!("helicon sitl {}", scenario.name),
         ..LogInfo::default()
     };
-    let log = FlightLog::create(&ulog, &info, FlushPolicy::default()).map_err(|e| {
-        SitlError::Log {
+    let log =
+        FlightLog::create(&ulog, &info, FlushPolicy::default()).map_err(|e| SitlError::Log {
             path: ulog.display().to_string(),
             message: e.to_string(),
-        }
-    })?;
+        })?;
     let (downlink_tx, mut downlink) = rtrb::RingBuffer::new(1024);
     let realtime = if lockstep {
         RealtimeConfig {
@@ -241,7 +243,11 @@ pub fn run(
         Some(downlink_tx),
         RuntimeOptions {
             sample_time_s: ts,
-            pacing: if lockstep { Pacing::Sensor } else { Pacing::Clock },
+            pacing: if lockstep {
+                Pacing::Sensor
+            } else {
+                Pacing::Clock
+            },
             max_steps: None,
             realtime,
             watchdog_s: 0.1,
@@ -253,7 +259,8 @@ pub fn run(
     // rate), one priority above the on-board control task
     if !lockstep
         && options.realtime.sched_fifo
-        && let Err(e) = crate::realtime::set_fifo(options.realtime.priority.saturating_add(1).min(99))
+        && let Err(e) =
+            crate::realtime::set_fifo(options.realtime.priority.saturating_add(1).min(99))
     {
         eprintln!("warning: SCHED_FIFO for the simulated hardware not permitted ({e})");
     }
@@ -271,6 +278,7 @@ pub fn run(
     let timeout = Duration::from_secs(10);
     let t0 = crate::realtime::monotonic_ns();
     let wall0 = Instant::now();
+    let cpu0 = crate::realtime::process_cpu_s();
     let mut failure = None;
     while let Some(s) = hw.sense() {
         let t = s.t_s;
@@ -295,11 +303,18 @@ pub fn run(
                 .map_err(dev("avionics"))?;
         }
         // the GPS receiver
-        let gps_on = options.faults.gps_lost_from_s.is_none_or(|t_loss| t < t_loss);
+        let gps_on = options
+            .faults
+            .gps_lost_from_s
+            .is_none_or(|t_loss| t < t_loss);
         if let (Some(fix), true) = (&s.frame.gps, gps_on) {
             let itow_ms = ((TOW0_S + fix.epoch_s) * 1000.0).round() as u32;
-            let pvt = NavPvt::from_gps_fix(fix, &home, itow_ms, 0.0).map_err(dev("GPS encoding"))?;
-            wires.gps.write_all(pvt.encode().as_bytes()).map_err(dev("GPS"))?;
+            let pvt =
+                NavPvt::from_gps_fix(fix, &home, itow_ms, 0.0).map_err(dev("GPS encoding"))?;
+            wires
+                .gps
+                .write_all(pvt.encode().as_bytes())
+                .map_err(dev("GPS"))?;
         }
         // the IMU (and magnetometer): last, it paces the on-board software
         let frozen = options
@@ -389,6 +404,7 @@ pub fn run(
         }
     }
     let wall_s = wall0.elapsed().as_secs_f64();
+    let cpu_s = crate::realtime::process_cpu_s() - cpu0;
     handle.stop();
     let onboard = handle.join();
     let log_rows = writer.finish()?;
@@ -396,7 +412,10 @@ pub fn run(
         return Err(e);
     }
     if let Some(e) = &onboard.error {
-        hw.abort(Termination::NavigationFailure, format!("on-board program: {e}"));
+        hw.abort(
+            Termination::NavigationFailure,
+            format!("on-board program: {e}"),
+        );
     }
     let summary = hw.summary();
     let sim_s = samples as f64 * ts;
@@ -404,14 +423,23 @@ pub fn run(
         summary,
         onboard,
         samples,
+        sample_time_s: ts,
         wall_s,
         speed_x: if wall_s > 0.0 { sim_s / wall_s } else { 0.0 },
+        cpu_s,
         sent,
         received,
         ulog,
         log_csv,
         log_rows,
     })
+}
+
+impl SitlResult {
+    /// The control period flown (s).
+    pub fn onboard_sample_time_s(&self) -> f64 {
+        self.sample_time_s
+    }
 }
 
 /// `timing.json` of a SITL run.
@@ -421,6 +449,8 @@ pub fn timing_json(result: &SitlResult, speed: Speed) -> serde_json::Value {
         "samples": result.samples,
         "wall_s": result.wall_s,
         "speed_x_realtime": result.speed_x,
+        "cpu_s": result.cpu_s,
+        "speed_x_realtime_per_cpu_s": if result.cpu_s > 0.0 { result.samples as f64 * result.onboard_sample_time_s() / result.cpu_s } else { 0.0 },
         "onboard": result.onboard,
     })
 }

@@ -1,12 +1,13 @@
 //! The failsafes under lock-step SITL: GPS loss, a stuck IMU, the pilot's
 //! manual override mid-flight. Each: the expected behaviour of the
 //! helicopter (truth) and the on-board log's entries (read by `px4-ulog`).
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 mod common;
 
 use common::{Ulog, options, scenario};
-use helicon_flight::sitl;
 use helicon_flight::ports::{stick_command, stick_us};
+use helicon_flight::sitl;
 use helicon_sim::closed_loop::{Termination, prepare};
 use helicon_sim::log_csv::read_log_csv;
 
@@ -68,7 +69,10 @@ fn gps_loss_holds_then_descends() {
     };
     let before = mean(vn, 2.5, 2.7);
     let held = mean(vn, hold[0].0 + 2.5, descent[0].0);
-    eprintln!("vn before {before:.3}, in hold {held:.3}, vd at end {:.3}", mean(vd, 9.0, 10.0));
+    eprintln!(
+        "vn before {before:.3}, in hold {held:.3}, vd at end {:.3}",
+        mean(vd, 9.0, 10.0)
+    );
     // without GPS the velocity is dead-reckoned from the IMU: the hold
     // brings the estimate to zero, the truth keeps the drift (about
     // 1.3 m/s here, in the demo's turbulence)
@@ -94,14 +98,23 @@ fn a_stuck_imu_hands_the_servos_to_the_trim_until_it_recovers() {
     let back = log.texts_with("imu_recovered: imu_lost -> auto");
     assert_eq!(back.len(), 1, "{:?}", log.texts);
     assert!((back[0].0 - 2.25).abs() < 1e-6);
-    assert_eq!(log.u8s("failsafe", "reason"), vec![SENSOR_TIMEOUT, SENSOR_TIMEOUT]);
+    assert_eq!(
+        log.u8s("failsafe", "reason"),
+        vec![SENSOR_TIMEOUT, SENSOR_TIMEOUT]
+    );
     assert_eq!(log.bools("failsafe", "active"), vec![true, false]);
     // no control records while the IMU is stuck; the servos at the trim while lost
-    assert_eq!(log.u64s("control", "sample").len() as u64, r.onboard.steps - 100);
+    assert_eq!(
+        log.u64s("control", "sample").len() as u64,
+        r.onboard.steps - 100
+    );
     let trim = prepared.gains.set.u_trim;
     for k in 809..900 {
         for i in 0..4 {
-            assert!((r.received[k][i] - trim[i]).abs() <= 0.5e-4 + 1e-12, "k {k}");
+            assert!(
+                (r.received[k][i] - trim[i]).abs() <= 0.5e-4 + 1e-12,
+                "k {k}"
+            );
         }
     }
     assert!((0..4).any(|i| (r.received[905][i] - trim[i]).abs() > 1e-4));
@@ -119,7 +132,9 @@ fn the_pilots_switch_takes_the_servos_at_once() {
     // the receiver frame of 2.0 s precedes the IMU message of sample 800:
     // the servos are the pilot's from that very sample
     let first = (790..900)
-        .find(|&k| (0..4).all(|i| (r.received[k][i] - stick_command(stick_us(trim[i]))).abs() < 1e-9))
+        .find(|&k| {
+            (0..4).all(|i| (r.received[k][i] - stick_command(stick_us(trim[i]))).abs() < 1e-9)
+        })
         .unwrap();
     assert_eq!(first, 800);
     for k in first..r.received.len() {

@@ -2,6 +2,7 @@
 //! supervisor, the flight computer, the log records of the step, the rings
 //! to the logger, and the logger's ULog encoding (counted per thread with a
 //! wrapping allocator, over the 4400 samples after the first second).
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 #![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; the shared counter only forwards to System
 
 #[path = "../../core/tests/common/counting_alloc.rs"]
@@ -40,7 +41,8 @@ fn a_control_step_and_its_log_allocate_nothing() {
     sup.arm();
     let mut task = ControlTask::new(computer, sup, prepared.gains.set.u_trim);
     let (mut tx, mut rx) = rtrb::RingBuffer::<FlightRecord>::new(4096);
-    let mut log = FlightLog::new(std::io::sink(), &LogInfo::default(), FlushPolicy::default()).unwrap();
+    let mut log =
+        FlightLog::new(std::io::sink(), &LogInfo::default(), FlushPolicy::default()).unwrap();
     let rc = RcInput {
         servo: prepared.gains.set.u_trim,
         manual: false,

@@ -3,6 +3,7 @@
 //! the completed ones track within 2 % (+2 mm/s, 2 mrad) of the RMS error. SITL always flies the whole on-board chain
 //! from the sensor models (`fusion = true`); the comparison flies `helicon
 //! sim` the same way.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 mod common;
 
@@ -30,7 +31,10 @@ fn check(file: &str) {
             r.summary.t_end_s,
             r.speed_x
         );
-        assert_eq!(r.summary.termination, flown.summary.termination, "{file} case {i}");
+        assert_eq!(
+            r.summary.termination, flown.summary.termination,
+            "{file} case {i}"
+        );
         if r.summary.termination == helicon_sim::closed_loop::Termination::Completed {
             for o in OUTPUTS {
                 let (a, b) = (&r.summary.metrics[o], &flown.summary.metrics[o]);

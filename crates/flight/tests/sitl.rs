@@ -2,6 +2,7 @@
 //! simulator's devices over pseudo-terminals (VN-100 binary, UBX NAV-PVT,
 //! the avionics framed protocol) and its servo frames drive the plant. The
 //! on-board log is read back by `px4-ulog`, an independent reader.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 mod common;
 
@@ -79,7 +80,11 @@ fn sim_and_sitl_agree_up_to_the_transport_quantisation() {
         assert_eq!(p.len(), fixes.len());
         for (k, fix) in fixes.iter().enumerate() {
             let dp = (p[k] - fix.position_ned_m[i]).abs();
-            let bound = if i == 2 { GPS_VERTICAL_M } else { GPS_HORIZONTAL_M };
+            let bound = if i == 2 {
+                GPS_VERTICAL_M
+            } else {
+                GPS_HORIZONTAL_M
+            };
             assert!(dp <= bound, "fix {k} axis {i}: {dp} m > {bound} m");
             let vs = fix.velocity_ned_m_s.unwrap()[i];
             assert!((v[k] - vs).abs() <= GPS_VELOCITY_M_S, "velocity {k}");
@@ -123,9 +128,39 @@ fn the_onboard_log_has_every_control_step_at_400_hz() {
     assert!((rate / 400.0 - 1.0).abs() < 1e-3, "{rate} Hz");
     // one timing and one servo record per step
     assert_eq!(log.u64s("timing", "sample").len() as u64, r.onboard.steps);
-    assert_eq!(log.u64s("servo_output", "timestamp").len() as u64, r.onboard.steps);
+    assert_eq!(
+        log.u64s("servo_output", "timestamp").len() as u64,
+        r.onboard.steps
+    );
     assert_eq!(r.onboard.log_dropped, 0);
     // armed at the start: one mode change, standby -> automatic
     assert_eq!(log.u8s("mode", "mode"), vec![2]);
     assert_eq!(log.texts_with("armed: disarmed -> auto").len(), 1);
+}
+
+/// Real time exercises the threads of the on-board program (sensor server,
+/// receiver, control task on the clock, avionics-out, logger and their
+/// rings); no figure here depends on the wall clock: the run ends, every
+/// control step sent its servo frame, the log is complete and in order.
+#[test]
+fn a_real_time_run_uses_every_thread_and_logs_in_order() {
+    let s = scenario("demo.toml", 1.0);
+    let prepared = prepare(&s).unwrap();
+    let mut o = options("realtime");
+    o.speed = sitl::Speed::Realtime;
+    o.realtime.sched_fifo = false;
+    o.realtime.mlockall = false;
+    let r = sitl::run(&s, &prepared, &o).unwrap();
+    assert!(r.onboard.error.is_none(), "{:?}", r.onboard.error);
+    assert!(r.onboard.steps > 0);
+    assert_eq!(
+        r.onboard.servo_frames,
+        r.onboard.steps + r.onboard.watchdog_trips
+    );
+    let log = Ulog::read(&r.ulog);
+    let t = log.u64s("timing", "timestamp");
+    assert_eq!(t.len() as u64, r.onboard.steps);
+    assert!(t.windows(2).all(|w| w[1] > w[0]), "monotonic");
+    let samples = log.u64s("control", "sample");
+    assert!(samples.windows(2).all(|w| w[1] == w[0] + 1));
 }

@@ -2,10 +2,9 @@
 //! shared on-board constructor reproduces `fly` exactly: the same order of
 //! wind, sensors, flight software and plant, so a software-in-the-loop run
 //! differs from `helicon sim` only by what its transports do to the numbers.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
-use helicon_sim::closed_loop::{
-    Hardware, OnBoardSetup, fly, prepare, thesis_flight_computer,
-};
+use helicon_sim::closed_loop::{Hardware, OnBoardSetup, fly, prepare, thesis_flight_computer};
 use helicon_sim::scenario::Scenario;
 use std::path::Path;
 

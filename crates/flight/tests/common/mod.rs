@@ -1,6 +1,6 @@
 //! Shared helpers of the SITL tests: scenarios, options, and the on-board
 //! ULog read back by the PX4 organisation's independent reader (`px4-ulog`).
-#![allow(dead_code)]
+#![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
 
 use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
 use helicon_flight::sitl::{Faults, Pilot, SitlOptions, Speed};

@@ -21,8 +21,9 @@ use crate::wind::{Wind, WindModel};
 use helicon_core::frames::{EulerTrig, wrap_pi};
 use helicon_core::navigation::{NavigationConfig, NavigationFilter};
 use helicon_core::{
-    CoreError, FlightComputer, GainSet, KalmanPredictor, Lqi, Reference, ServoLimits, StateMeasurement,
-    Telemetry, ThesisEstimator, ThesisFlightComputer, TruthFeed, TruthMeasurement,
+    CoreError, FlightComputer, GainSet, KalmanPredictor, Lqi, Reference, ServoLimits,
+    StateMeasurement, Telemetry, ThesisEstimator, ThesisFlightComputer, TruthFeed,
+    TruthMeasurement,
 };
 use helicon_gnc::design::{Gains, design};
 use helicon_model::integrate::rk4;

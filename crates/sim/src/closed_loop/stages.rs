@@ -150,8 +150,7 @@ pub fn thesis_flight_computer(
     let ts = set.sample_time_s;
     let g = setup.params.environment.g_m_s2;
     let law = Lqi::new(set, servo_limits(setup.params), setup.feedback)?;
-    let navigation =
-        navigation_filter_at(setup.sensors, setup.navigation, ts, g, setup.x0)?;
+    let navigation = navigation_filter_at(setup.sensors, setup.navigation, ts, g, setup.x0)?;
     let estimator = ThesisEstimator {
         navigation,
         predictor: KalmanPredictor::new(set, &estimator_start(setup.trim_x, setup.x0))?,
