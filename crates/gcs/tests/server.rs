@@ -233,7 +233,8 @@ fn commands_reach_the_uplink_and_refusals_are_answered() {
         .filter(|x| *x != Uplink::GcsHeartbeat)
         .collect();
     assert_eq!(u, vec![Uplink::Hold, Uplink::Arm(false)]);
-    drop(h.stop());
+    let report = h.stop();
+    assert_eq!(report.send_errors, 0);
 }
 
 #[test]
@@ -338,5 +339,6 @@ fn missions_refused_with_their_reason_and_the_old_one_kept() {
         }
         other => panic!("{other:?}"),
     }
-    drop(h.stop());
+    let report = h.stop();
+    assert_eq!(report.send_errors, 0);
 }
