@@ -257,14 +257,20 @@ impl Vehicle {
         servo: &Input,
         load: f64,
     ) -> VehicleOutput {
+        // the navigator flies from the last finite estimate (the flight
+        // software refuses non-finite samples; this keeps it so here too)
         if let Some(t) = telemetry {
-            if let Some(n) = &t.navigation {
+            if let Some(n) = &t.navigation
+                && n.position_ned_m.iter().all(|v| v.is_finite())
+            {
                 self.at.position_ned_m = n.position_ned_m;
                 if n.gps_fused {
                     self.last_gps_s = Some(t_s);
                 }
             }
-            self.at.yaw_rad = t.estimate[2];
+            if t.estimate[2].is_finite() {
+                self.at.yaw_rad = t.estimate[2];
+            }
         }
         self.at.t_s = t_s;
         let mut events = Events::default();
