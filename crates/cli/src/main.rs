@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 mod console;
 mod control;
 mod demo;
+mod log_cmd;
 mod mc_cmd;
 mod model_cmd;
 mod onboard_cmd;
@@ -41,6 +42,8 @@ enum Command {
     Sensors(sensors::SensorsArgs),
     /// Replay a sensor log through attitude determination and the fusion filter (§13.3).
     Fuse(sensors::FuseArgs),
+    /// Flight logs (ULog): export to CSV, summarise.
+    Log(log_cmd::LogArgs),
     /// Monte Carlo campaign: dispersed parameters, wind and sensor seeds (rayon, shards, resume).
     Mc(mc_cmd::McArgs),
     /// Time the hot path on this machine: derivative, closed-loop step, real-time factor.
@@ -111,6 +114,7 @@ fn run() -> anyhow::Result<()> {
             sensors::SensorsCommand::Config => sensors::run_sensors_config(),
         },
         Command::Fuse(a) => sensors::run_fuse(&a),
+        Command::Log(a) => log_cmd::run(&a),
         Command::Mc(a) => mc_cmd::run_mc(&a),
         Command::Bench(a) => mc_cmd::run_bench(&a),
         Command::Sim(a) => sim_cmd::run(&a),

@@ -29,11 +29,12 @@ pub fn ubx_fletcher(data: &[u8]) -> (u8, u8) {
     })
 }
 
-/// Value of an ASCII hexadecimal digit (either case).
+/// Value of an upper-case ASCII hexadecimal digit, the form NMEA 0183 and
+/// VectorNav write checksums in. Lower case is refused: accepting it would
+/// let a flipped bit 5 (`B` ↔ `b`) pass unnoticed.
 pub(crate) fn hex_value(c: u8) -> Option<u8> {
     match c {
         b'0'..=b'9' => Some(c - b'0'),
-        b'a'..=b'f' => Some(c - b'a' + 10),
         b'A'..=b'F' => Some(c - b'A' + 10),
         _ => None,
     }

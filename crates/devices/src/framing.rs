@@ -8,6 +8,9 @@
 //! byte of the candidate and searches the rest of the buffer for the next
 //! start byte, so a real frame hidden behind a false start (garbage that
 //! happened to contain a sync byte, or a frame cut short) is still found.
+//! While a candidate is incomplete, a frame starting at a later sync byte
+//! that completes with a valid checksum is taken at once, so a false start
+//! declaring a long frame does not delay the real frames behind it.
 //! Nothing here allocates and no input can make it panic or loop: every
 //! step either consumes an input byte or shortens the buffer.
 
@@ -162,6 +165,32 @@ impl<P: Protocol> StreamDecoder<P> {
         self.len -= n;
     }
 
+    /// Look-ahead past a false start: while the candidate at the buffer's
+    /// start is still incomplete, a frame that starts at a later sync byte and
+    /// has just been completed by the last byte, with a valid checksum, is
+    /// taken at once (the bytes before it are discarded as a false start).
+    /// Without it a false start that declares a long frame would hold back
+    /// the real frames behind it until its declared length had arrived.
+    fn nested_frame(&mut self) -> Option<P::Message> {
+        let len = self.len;
+        for k in 1..len {
+            if !P::is_start(self.buf[k]) {
+                continue;
+            }
+            if P::status(&self.buf[k..len]) != FrameStatus::Complete(len - k) {
+                continue;
+            }
+            if let Ok(m) = P::decode(&self.buf[k..len]) {
+                self.stats.resyncs += 1;
+                self.stats.discarded_bytes += k as u64;
+                self.stats.messages += 1;
+                self.len = 0;
+                return Some(m);
+            }
+        }
+        None
+    }
+
     /// The next message from the buffer and `input` (advanced past what was
     /// consumed), or `None` once `input` is exhausted.
     fn next_message(&mut self, input: &mut &[u8]) -> Option<P::Message> {
@@ -203,7 +232,11 @@ impl<P: Protocol> StreamDecoder<P> {
                         self.resync();
                         continue;
                     }
-                    FrameStatus::Incomplete => {}
+                    FrameStatus::Incomplete => {
+                        if let Some(m) = self.nested_frame() {
+                            return Some(m);
+                        }
+                    }
                 }
             }
             let (&byte, rest) = input.split_first()?;

@@ -90,7 +90,9 @@ pub struct LocalNed {
 }
 
 impl LocalNed {
-    /// The frame at `home` (its origin; axes north, east, down).
+    /// The frame at `home` (its origin; axes north, east, down). Build
+    /// `home` with [`Geodetic::new`], which checks it: the fields are
+    /// public, and a non-finite home would give a non-finite frame.
     pub fn new(home: Geodetic) -> Self {
         let (sl, cl) = home.latitude_deg.to_radians().sin_cos();
         let (so, co) = home.longitude_deg.to_radians().sin_cos();

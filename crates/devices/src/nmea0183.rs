@@ -56,7 +56,8 @@ pub struct Gga {
 pub struct Rmc {
     /// UTC time (seconds of the day).
     pub utc_time_s: Option<f64>,
-    /// UTC date (year, month, day).
+    /// UTC date (year, month, day). RMC carries a two-digit year, read as
+    /// 1983–2082; the encoder refuses years outside that window.
     pub date: Option<(i32, u8, u8)>,
     /// Status `A` (valid).
     pub valid: bool,
@@ -283,10 +284,11 @@ impl Rmc {
         write_opt(&mut out, self.course_true_deg, 2)?;
         write!(out, ",").map_err(too_long)?;
         if let Some((y, m, d)) = self.date {
-            check_range("year", f64::from(y), 2000.0, 2099.0)?;
+            // the two-digit year reads back as 1983–2082 (the `nmea` crate's window)
+            check_range("year", f64::from(y), 1983.0, 2082.0)?;
             check_range("month", f64::from(m), 1.0, 12.0)?;
             check_range("day", f64::from(d), 1.0, 31.0)?;
-            write!(out, "{d:02}{m:02}{:02}", y - 2000).map_err(too_long)?;
+            write!(out, "{d:02}{m:02}{:02}", y.rem_euclid(100)).map_err(too_long)?;
         }
         let mode = if self.valid { 'A' } else { 'N' };
         write!(out, ",,,{mode}").map_err(too_long)?;

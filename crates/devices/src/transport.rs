@@ -45,6 +45,21 @@ impl SerialLink {
         })
     }
 
+    /// A second handle on the same port (e.g. a reader thread and a writer).
+    pub fn try_clone(&self) -> Result<Self, TransportError> {
+        let port = self
+            .port
+            .try_clone()
+            .map_err(|source| TransportError::Serial {
+                path: self.path.clone(),
+                source,
+            })?;
+        Ok(Self {
+            port,
+            path: self.path.clone(),
+        })
+    }
+
     /// The device path.
     pub fn path(&self) -> &Path {
         &self.path

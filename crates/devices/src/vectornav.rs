@@ -411,7 +411,7 @@ pub(crate) fn sentence_body(frame: &[u8]) -> Result<&[u8], Reject> {
     }
     let (hi, lo) = (hex_value(line[star + 1]), hex_value(line[star + 2]));
     let (Some(hi), Some(lo)) = (hi, lo) else {
-        return Err(Reject::Unsupported);
+        return Err(Reject::Checksum);
     };
     let body = &line[1..star];
     if xor8(body) != (hi << 4) | lo {
@@ -478,7 +478,8 @@ pub type VnAsciiDecoder = StreamDecoder<VnAscii>;
 
 impl VnYmr {
     /// Encodes the sentence with the device's field widths (`%+08.3f` angles,
-    /// `%+07.4f` field, `%+07.3f` acceleration, `%+09.6f` rates).
+    /// `%+08.4f` field, `%+07.3f` acceleration, `%+010.6f` rates): a decoded
+    /// device sentence re-encodes to the same bytes.
     pub fn encode(&self) -> Result<EncodedFrame, EncodeError> {
         use core::fmt::Write;
         let all = self

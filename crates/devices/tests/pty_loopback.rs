@@ -75,3 +75,37 @@ fn frames_cross_a_pty_both_ways() {
     assert!(t0.elapsed() < Duration::from_secs(2));
     assert_eq!(link.read_chunk(&mut buf).unwrap(), 0);
 }
+
+/// The on-board side may close and reopen its port (a restart): the master
+/// neither fails nor reads end-of-file meanwhile, and bytes written while
+/// the port was closed are read after it reopens.
+#[test]
+fn the_on_board_side_may_reopen_the_port() {
+    let mut pty = PtyPair::open().unwrap();
+    let link = SerialLink::open(pty.slave_path(), 115_200, Duration::from_millis(20)).unwrap();
+    drop(link);
+    let mut buf = [0u8; 64];
+    assert_eq!(
+        pty.read_timeout(&mut buf, Duration::from_millis(30))
+            .unwrap(),
+        0
+    );
+    let frame = ServoCommand {
+        seq: 3,
+        armed: false,
+        servo_counts: [0, 1, 2, 3],
+    }
+    .encode();
+    pty.write_all(frame.as_bytes()).unwrap();
+    let mut link = SerialLink::open(pty.slave_path(), 115_200, Duration::from_millis(20)).unwrap();
+    let mut decoder = AvionicsDecoder::new();
+    let got = read_until(&mut link, &mut decoder, 1);
+    assert_eq!(
+        got,
+        vec![AvionicsMessage::Servo(ServoCommand {
+            seq: 3,
+            armed: false,
+            servo_counts: [0, 1, 2, 3]
+        })]
+    );
+}

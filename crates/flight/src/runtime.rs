@@ -178,6 +178,8 @@ pub struct RunReport {
 /// A running on-board program.
 pub struct RuntimeHandle {
     stop: Arc<AtomicBool>,
+    /// Stops the control task only: the others drain what it sent, then stop.
+    stop_control: Arc<AtomicBool>,
     control: thread::JoinHandle<ControlResult>,
     others: Vec<thread::JoinHandle<ThreadResult>>,
     realtime: RealtimeStatus,
@@ -262,6 +264,7 @@ where
         }
     }
     let stop = Arc::new(AtomicBool::new(false));
+    let stop_control = Arc::new(AtomicBool::new(false));
     let sensors_closed = Arc::new(AtomicBool::new(false));
     let last_output_ns = Arc::new(AtomicU64::new(realtime::monotonic_ns()));
     let (frame_tx, frame_rx) = rtrb::RingBuffer::<Arrival>::new(FRAME_RING);
@@ -321,7 +324,7 @@ where
     // control task
     let (fifo_tx, fifo_rx) = std::sync::mpsc::channel::<Result<(), String>>();
     let control = {
-        let stop = stop.clone();
+        let stop = stop_control.clone();
         let closed = sensors_closed.clone();
         let last = last_output_ns.clone();
         let wake_out = avionics_thread.clone();
@@ -409,6 +412,7 @@ where
         Err(e) => {
             // no control task: stop everything at once
             stop.store(true, Ordering::SeqCst);
+            stop_control.store(true, Ordering::SeqCst);
             realtime.warnings.push(format!("control task: {e}"));
             thread::spawn(|| ControlResult {
                 direct: None,
@@ -425,6 +429,7 @@ where
     };
     RuntimeHandle {
         stop,
+        stop_control,
         control,
         others,
         realtime,
@@ -438,9 +443,10 @@ impl RuntimeHandle {
         self.realtime.warnings.clone()
     }
 
-    /// Ask every thread to stop.
+    /// Ask the control task to stop (after its current step); [`RuntimeHandle::join`]
+    /// then stops the other threads once they have handled all it sent.
     pub fn stop(&self) {
-        self.stop.store(true, Ordering::SeqCst);
+        self.stop_control.store(true, Ordering::SeqCst);
         for t in &self.wakers {
             t.unpark();
         }

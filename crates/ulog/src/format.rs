@@ -106,11 +106,11 @@ pub trait UlogValue: Copy + Default {
     const ARRAY_LEN: Option<usize>;
     /// Encoded size in bytes.
     const SIZE: usize;
-    /// Write the value into `out[..Self::SIZE]` (little-endian). The caller
-    /// guarantees the length.
+    /// Write the value into `out[..Self::SIZE]` (little-endian); nothing is
+    /// written when `out` is shorter.
     fn put(&self, out: &mut [u8]);
-    /// Read the value from `bytes[..Self::SIZE]`. The caller guarantees the
-    /// length.
+    /// Read the value from `bytes[..Self::SIZE]`; the default value when
+    /// `bytes` is shorter.
     fn get(bytes: &[u8]) -> Self;
 }
 
@@ -121,11 +121,15 @@ macro_rules! scalar_value {
             const ARRAY_LEN: Option<usize> = None;
             const SIZE: usize = std::mem::size_of::<$t>();
             fn put(&self, out: &mut [u8]) {
-                out[..Self::SIZE].copy_from_slice(&self.to_le_bytes());
+                if let Some(o) = out.get_mut(..Self::SIZE) {
+                    o.copy_from_slice(&self.to_le_bytes());
+                }
             }
             fn get(bytes: &[u8]) -> Self {
                 let mut b = [0u8; std::mem::size_of::<$t>()];
-                b.copy_from_slice(&bytes[..Self::SIZE]);
+                if let Some(s) = bytes.get(..Self::SIZE) {
+                    b.copy_from_slice(s);
+                }
                 <$t>::from_le_bytes(b)
             }
         }
@@ -142,10 +146,12 @@ impl UlogValue for bool {
     const ARRAY_LEN: Option<usize> = None;
     const SIZE: usize = 1;
     fn put(&self, out: &mut [u8]) {
-        out[0] = u8::from(*self);
+        if let Some(o) = out.first_mut() {
+            *o = u8::from(*self);
+        }
     }
     fn get(bytes: &[u8]) -> Self {
-        bytes[0] != 0
+        bytes.first().is_some_and(|b| *b != 0)
     }
 }
 
@@ -171,12 +177,18 @@ where
     const ARRAY_LEN: Option<usize> = Some(N);
     const SIZE: usize = T::SIZE * N;
     fn put(&self, out: &mut [u8]) {
+        if out.len() < Self::SIZE {
+            return;
+        }
         for (v, chunk) in self.iter().zip(out.chunks_exact_mut(T::SIZE)) {
             v.put(chunk);
         }
     }
     fn get(bytes: &[u8]) -> Self {
         let mut a = <[T; N]>::default();
+        if bytes.len() < Self::SIZE {
+            return a;
+        }
         for (v, chunk) in a.iter_mut().zip(bytes.chunks_exact(T::SIZE)) {
             *v = T::get(chunk);
         }
@@ -363,6 +375,24 @@ mod tests {
             assert_eq!(UlogType::from_name(t.name()), Some(t));
         }
         assert_eq!(UlogType::from_name("float32"), None);
+    }
+
+    #[test]
+    fn short_buffers_neither_panic_nor_write() {
+        let mut out = [7u8; 3];
+        1.5f64.put(&mut out);
+        [1u16, 2, 3].put(&mut out);
+        true.put(&mut []);
+        assert_eq!(out, [7, 7, 7]);
+        assert_eq!(f64::get(&[1, 2]), 0.0);
+        assert!(!bool::get(&[]));
+        assert_eq!(<[u32; 2]>::get(&[1, 0, 0, 0, 9]), [0, 0]);
+        assert_eq!(<[u32; 2]>::get(&[1, 0, 0, 0, 2, 0, 0, 0]), [1, 2]);
+        assert_eq!(2.5f32.to_le_bytes(), {
+            let mut b = [0; 4];
+            2.5f32.put(&mut b);
+            b
+        });
     }
 
     #[test]

@@ -1,9 +1,10 @@
 //! # helicon-ulog
 //!
 //! The flight data log in PX4's ULog format (PX4 "ULog File Format",
-//! version 1), readable by pyulog, PlotJuggler and PX4 Flight Review.
+//! version 1), the format pyulog, PlotJuggler and PX4 Flight Review read
+//! (the tests read it with pyulog and px4-ulog).
 //!
-//! - [`format`]: message formats declared from Rust types
+//! - [`format`](mod@format): message formats declared from Rust types
 //!   ([`ulog_message!`], [`Record`]): name, fields with ULog types and
 //!   arrays, `uint64_t timestamp` (µs) first, trailing padding to 8 bytes.
 //! - [`writer`]: [`UlogWriter`]: header, flag bits, formats, info,
@@ -17,6 +18,11 @@
 //!   `rc_input`, `timing`, `failsafe`, `mode`), the helpers that fill them
 //!   from [`helicon_core`]'s `Telemetry` and `SensorFrame`, and
 //!   [`FlightLog`], the writer with the whole set subscribed.
+//! - [`reader`]: a streaming reader (typed errors; a truncated file gives
+//!   every complete message, then [`ReadError::Truncated`]); [`flat`]:
+//!   formats flattened to columns (nested types, arrays, padding);
+//!   [`visit`]: one pass with the formats resolved; [`export`]: CSV and
+//!   text export (`helicon log export`) and the summary (`helicon log info`).
 //!
 //! ## Writing a flight log
 //!
@@ -32,13 +38,21 @@
 //! # Ok(()) }
 //! ```
 //!
+//! Call [`FlightLog::finish`] (or [`UlogWriter::finish`]) at the end: a
+//! writer dropped without it loses its buffer (at most 0.1 s), as a crash
+//! would.
+//!
 //! The writer is not thread-safe by itself: the runtime's logger thread
 //! owns it and drains a ring of [`LogRecord`]s (all `Copy`, no heap).
 
 pub mod error;
+pub mod export;
+pub mod flat;
 pub mod format;
 pub mod messages;
+pub mod reader;
 pub mod spec;
+pub mod visit;
 pub mod writer;
 
 pub use error::{ReadError, WriteError};

@@ -20,6 +20,9 @@ use std::io::Write;
 use std::marker::PhantomData;
 use std::path::Path;
 
+/// The largest [`FlushPolicy::max_bytes`] accepted.
+pub const MAX_FLUSH_BYTES: usize = 64 << 20;
+
 /// When the buffer is written to the output. The defaults bound the loss of
 /// a killed process to 0.1 s of log time (or 16 KiB, whichever comes first).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -136,7 +139,15 @@ impl<W: Write> UlogWriter<W> {
         start_us: u64,
         policy: FlushPolicy,
     ) -> Result<Self, WriteError> {
-        let cap = policy.max_bytes.saturating_add(2 * (spec::MAX_PAYLOAD + 3));
+        if policy.max_bytes > MAX_FLUSH_BYTES {
+            return Err(WriteError::Invalid {
+                file,
+                what: format!("flush policy max_bytes = {}", policy.max_bytes),
+                rule: "at most 64 MiB (the buffer is reserved once)",
+            });
+        }
+        // room for the threshold plus the largest message that crosses it
+        let cap = policy.max_bytes + 2 * (spec::MAX_PAYLOAD + spec::MSG_HEADER_LEN);
         let mut w = UlogWriter {
             out,
             file,
@@ -166,6 +177,12 @@ impl<W: Write> UlogWriter<W> {
     /// What was written so far.
     pub fn stats(&self) -> WriterStats {
         self.stats
+    }
+
+    /// Bytes encoded but not yet written to the output (what a killed
+    /// process would lose).
+    pub fn buffered_bytes(&self) -> usize {
+        self.buf.len()
     }
 
     /// The output (e.g. the `Vec<u8>` of a test); call [`Self::finish`]

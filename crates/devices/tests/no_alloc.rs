@@ -1,0 +1,112 @@
+//! Decoding and encoding allocate nothing in steady state: counted with the
+//! workspace's wrapping global allocator (this test binary only).
+#![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
+#![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; we only forward to System
+
+use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample};
+use helicon_devices::framing::Protocol;
+use helicon_devices::*;
+use nalgebra::{Vector3, Vector4};
+
+#[path = "../../core/tests/common/counting_alloc.rs"]
+mod counting_alloc;
+use counting_alloc::allocations;
+
+/// Decodes `stream` in 64-byte chunks; returns (messages, allocations).
+fn decode_counting<P: Protocol>(stream: &[u8]) -> (usize, usize) {
+    let mut d = StreamDecoder::<P>::new();
+    let before = allocations();
+    let mut n = 0;
+    for chunk in stream.chunks(64) {
+        n += d.push(chunk).count();
+    }
+    (n, allocations() - before)
+}
+
+#[test]
+fn decoders_and_encoders_do_not_allocate() {
+    let imu = ImuSample {
+        specific_force_body_m_s2: Vector3::new(0.1, -0.2, -9.82),
+        gyro_body_rad_s: Vector3::new(0.01, 0.02, -0.03),
+    };
+    let mag = Vector3::new(0.153, 0.008, -0.438);
+    let home = LocalNed::new(Geodetic::new(57.0, 9.9, 30.0).unwrap());
+    let fix = GpsFix {
+        epoch_s: 1.0,
+        fix: GpsFixType::Fix3d,
+        position_ned_m: Vector3::new(10.0, 20.0, -30.0),
+        velocity_ned_m_s: Some(Vector3::new(1.0, 2.0, 0.1)),
+    };
+    let u = Vector4::new(0.18, 0.0, 0.1, 0.3);
+
+    // the counter counts
+    let before = allocations();
+    std::hint::black_box(Vec::<u8>::with_capacity(16));
+    assert_eq!(allocations() - before, 1);
+
+    // encoders
+    let before = allocations();
+    let vn = VnCommon::from_samples(1.0, &imu, Some(&mag))
+        .unwrap()
+        .encode()
+        .unwrap();
+    let ymr = VnYmr {
+        yaw_pitch_roll_deg: [1.0, 2.0, 3.0],
+        mag_gauss: [0.1, 0.2, 0.3],
+        accel_m_s2: [0.0, 0.0, -9.8],
+        angular_rate_rad_s: [0.0; 3],
+    }
+    .encode()
+    .unwrap();
+    let pvt = NavPvt::from_gps_fix(&fix, &home, 0, 40.0).unwrap().encode();
+    let sentences = nmea0183::sentences_from_fix(&fix, &home, 3600.0, 40.0).unwrap();
+    let nmea = sentences.map(|m| m.encode().unwrap());
+    let servo = ServoCommand::from_inputs(1, true, &u).unwrap().encode();
+    let rc = RcInput::default().with_applied(&u).unwrap().encode();
+    assert_eq!(allocations() - before, 0, "encoders allocated");
+
+    let repeat = |f: &[u8]| -> Vec<u8> { f.iter().copied().cycle().take(f.len() * 200).collect() };
+    let mut nmea_stream = Vec::new();
+    for _ in 0..200 {
+        for s in &nmea {
+            nmea_stream.extend_from_slice(s.as_bytes());
+        }
+    }
+    let cases = [
+        (
+            "VN-100 binary",
+            decode_counting::<vectornav::VnBinary>(&repeat(vn.as_bytes())),
+        ),
+        (
+            "VNYMR",
+            decode_counting::<vectornav::VnAscii>(&repeat(ymr.as_bytes())),
+        ),
+        (
+            "NAV-PVT",
+            decode_counting::<ubx::Ubx>(&repeat(pvt.as_bytes())),
+        ),
+        ("NMEA", decode_counting::<nmea0183::Nmea>(&nmea_stream)),
+        (
+            "servo",
+            decode_counting::<avionics::Avionics>(&repeat(servo.as_bytes())),
+        ),
+        (
+            "RC",
+            decode_counting::<avionics::Avionics>(&repeat(rc.as_bytes())),
+        ),
+    ];
+    for (name, (messages, allocs)) in cases {
+        let want = if name == "NMEA" { 600 } else { 200 };
+        assert_eq!(messages, want, "{name}");
+        assert_eq!(allocs, 0, "{name} decoding allocated");
+    }
+    // the conversions
+    let before = allocations();
+    let p = NavPvt::from_gps_fix(&fix, &home, 0, 40.0).unwrap();
+    let _ = black_box_fix(p.to_gps_fix(&home, 1.0));
+    assert_eq!(allocations() - before, 0);
+}
+
+fn black_box_fix(f: GpsFix) -> GpsFix {
+    std::hint::black_box(f)
+}
