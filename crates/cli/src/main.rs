@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 mod console;
 mod control;
 mod demo;
+mod gcs_cmd;
 mod log_cmd;
 mod mc_cmd;
 mod model_cmd;
@@ -54,6 +55,8 @@ enum Command {
     Sitl(sitl_cmd::SitlArgs),
     /// The on-board program: device drivers, 400 Hz control task, avionics, ULog logger.
     Onboard(onboard_cmd::OnboardArgs),
+    /// A terminal ground station: a vehicle's MAVLink state once a second, its messages as they come.
+    Gcs(gcs_cmd::GcsArgs),
 }
 
 /// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
@@ -120,6 +123,7 @@ fn run() -> anyhow::Result<()> {
         Command::Sim(a) => sim_cmd::run(&a),
         Command::Sitl(a) => sitl_cmd::run(&a),
         Command::Onboard(a) => onboard_cmd::run(&a),
+        Command::Gcs(a) => gcs_cmd::run(&a),
     }
 }
 
