@@ -107,7 +107,8 @@ impl TtyPort {
         }
     }
 
-    /// Read what is available, waiting at most `timeout`: `Ok(0)` on timeout.
+    /// Read what is available, waiting at most `timeout`: `Ok(0)` on
+    /// timeout; an error once the device is gone (end of file, EIO).
     pub fn read_timeout(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, PortError> {
         let ms = PollTimeout::try_from(timeout).unwrap_or(PollTimeout::MAX);
         let mut fds = [PollFd::new(self.file.as_fd(), PollFlags::POLLIN)];
@@ -117,6 +118,8 @@ impl TtyPort {
             Err(e) => return Err(self.error(format!("poll: {e}"))),
         }
         match self.file.read(buf) {
+            // readable, yet nothing: the other side is gone
+            Ok(0) if !buf.is_empty() => Err(self.error("closed (end of file)".into())),
             Ok(n) => Ok(n),
             Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => Ok(0),
             Err(e) => Err(self.error(format!("read: {e}"))),

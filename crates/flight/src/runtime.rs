@@ -305,6 +305,11 @@ where
         thread::Builder::new()
             .name("avionics-out".into())
             .spawn(move || {
+                // the servo frame leaves as soon as the step is done: one
+                // below the control task, as the sensor server
+                if options.realtime.sched_fifo {
+                    let _ = realtime::set_fifo(options.realtime.priority.saturating_sub(1).max(1));
+                }
                 avionics_loop(
                     servos,
                     servo_rx,
@@ -628,6 +633,11 @@ fn control_loop(
         // wait for the step
         let (wake_ns, late_ns, arrival) = match ctx.options.pacing {
             Pacing::Clock => {
+                // the sensor port closed (a device gone, the end of a run)
+                // and every frame it delivered used: the program ends
+                if ctx.closed.load(Ordering::SeqCst) && ctx.frames.is_empty() {
+                    break;
+                }
                 realtime::sleep_until_ns(deadline_ns);
                 let now = realtime::monotonic_ns();
                 let late = now.saturating_sub(deadline_ns);
@@ -642,26 +652,18 @@ fn control_loop(
                 (now, late, newest)
             }
             Pacing::Sensor => {
+                // lock-step: the control task reads the sensors itself
+                let Some(d) = ctx.direct.as_mut() else { break };
                 let a = loop {
-                    if let Some(d) = ctx.direct.as_mut() {
-                        match d.sensors.next(POLL) {
-                            Ok(Next::Item(a)) => break Some(a),
-                            Ok(Next::Timeout) if !ctx.stop.load(Ordering::Relaxed) => continue,
-                            Ok(_) => break None,
-                            Err(e) => {
-                                d.error.get_or_insert(e.to_string());
-                                break None;
-                            }
+                    match d.sensors.next(POLL) {
+                        Ok(Next::Item(a)) => break Some(a),
+                        Ok(Next::Timeout) if !ctx.stop.load(Ordering::Relaxed) => {}
+                        Ok(_) => break None,
+                        Err(e) => {
+                            d.error.get_or_insert(e.to_string());
+                            break None;
                         }
                     }
-                    if let Ok(a) = ctx.frames.pop() {
-                        break Some(a);
-                    }
-                    if ctx.closed.load(Ordering::SeqCst) || ctx.stop.load(Ordering::Relaxed) {
-                        // drain what arrived before the close
-                        break ctx.frames.pop().ok();
-                    }
-                    thread::park_timeout(POLL);
                 };
                 let Some(a) = a else { break };
                 (realtime::monotonic_ns(), 0, Some(a))

@@ -434,4 +434,25 @@ mod tests {
         assert_eq!((ev.to, ev.reason), (Mode::Disarmed, Reason::Disarmed));
         assert_eq!(s.servo(&Input::repeat(9.0), &trim, None), trim);
     }
+
+    #[test]
+    fn magnetometer_loss_holds_and_disarming_clears_the_latch() {
+        let fs = FailsafeConfig::default();
+        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
+        s.update(&health(0.0, true), Some(&rc(false, true)), 0.2);
+        let mut h = health(0.5, true);
+        h.mag_fresh = false;
+        assert!(s.update(&h, None, 0.2).is_none()); // 0.5 s old: not yet
+        h.now_s = 0.5025;
+        let ev = s.update(&h, None, 0.2).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Hold, Reason::MagStale));
+        assert_eq!(s.latched(), Some(Reason::MagStale));
+        // disarm, then arm again with a healthy magnetometer: auto, latch cleared
+        s.update(&health(0.6, true), Some(&rc(false, false)), 0.2);
+        assert_eq!(s.latched(), None);
+        let ev = s
+            .update(&health(0.7, true), Some(&rc(false, true)), 0.2)
+            .unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Auto, Reason::Armed));
+    }
 }

@@ -61,7 +61,11 @@ fn the_onboard_program_aligns_arms_flies_and_logs() {
                 if k % 8 == 0 {
                     let mut channels_us = [1500u16; 8];
                     channels_us[4] = 2000;
-                    let rc = RcFrame { autonomous: true, channels_us, ..RcFrame::default() };
+                    let rc = RcFrame {
+                        autonomous: true,
+                        channels_us,
+                        ..RcFrame::default()
+                    };
                     av.write_all(rc.encode().as_bytes()).unwrap();
                 }
                 if k % 80 == 0 {
@@ -105,7 +109,11 @@ fn the_onboard_program_aligns_arms_flies_and_logs() {
     // aligned level at home, heading from the magnetometer: a still hover
     let psi = ulog.f64s("control", "estimate[2]");
     assert!(!psi.is_empty());
-    assert!(psi.iter().all(|p| p.abs() < 0.05), "heading {:?}", &psi[..3]);
+    assert!(
+        psi.iter().all(|p| p.abs() < 0.05),
+        "heading {:?}",
+        &psi[..3]
+    );
     let t = ulog.u64s("timing", "timestamp");
     assert!(t.windows(2).all(|w| w[1] > w[0]));
 }
