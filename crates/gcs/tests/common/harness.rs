@@ -80,6 +80,8 @@ pub struct Harness<'a> {
     pub max_step_s: f64,
     /// Sum of the control-task steps (s).
     pub sum_step_s: f64,
+    /// The last control-task step (s).
+    pub last_step_s: f64,
     /// The flight ended (the plant's envelope or the scenario's duration).
     pub ended: Option<String>,
 }
@@ -125,6 +127,7 @@ impl<'a> Harness<'a> {
             truth_ned_m: Vector3::new(x0[0], x0[1], x0[2]),
             max_step_s: 0.0,
             sum_step_s: 0.0,
+            last_step_s: 0.0,
             ended: None,
         }
     }
@@ -154,7 +157,7 @@ impl<'a> Harness<'a> {
             self.last_tel.as_ref(),
             flight_mode(self.mode),
             &self.servo,
-            self.max_step_s / 0.0025,
+            self.last_step_s / self.hw.sample_time_s(),
         );
         if let Some(a) = out.arm {
             self.task.set_armed(a);
@@ -169,6 +172,7 @@ impl<'a> Harness<'a> {
         let dt = start.elapsed().as_secs_f64();
         self.max_step_s = self.max_step_s.max(dt);
         self.sum_step_s += dt;
+        self.last_step_s = dt;
         self.servo = c.servo;
         self.mode = c.mode;
         if c.telemetry.is_some() {
