@@ -6,6 +6,7 @@ mod console;
 mod control;
 mod demo;
 mod design_cmd;
+mod gcs_cmd;
 mod ident_cmd;
 mod log_cmd;
 mod mc_cmd;
@@ -60,6 +61,8 @@ enum Command {
     Onboard(onboard_cmd::OnboardArgs),
     /// Frequency-domain system identification: frequency responses from logs, transfer-function fits.
     Ident(ident_cmd::IdentArgs),
+    /// A terminal ground station: a vehicle's MAVLink state once a second, its messages as they come.
+    Gcs(gcs_cmd::GcsArgs),
 }
 
 /// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
@@ -129,6 +132,7 @@ fn run() -> anyhow::Result<()> {
         Command::Sitl(a) => sitl_cmd::run(&a),
         Command::Onboard(a) => onboard_cmd::run(&a),
         Command::Ident(a) => ident_cmd::run(&a),
+        Command::Gcs(a) => gcs_cmd::run(&a),
     }
 }
 

@@ -64,6 +64,16 @@ impl ControlTask {
         }
     }
 
+    /// Arm or disarm from the ground station (takes effect at the next
+    /// step; a receiver frame's arm switch overrides it).
+    pub fn set_armed(&mut self, armed: bool) {
+        if armed {
+            self.supervisor.arm();
+        } else {
+            self.supervisor.disarm();
+        }
+    }
+
     /// The mode now.
     pub fn mode(&self) -> Mode {
         self.supervisor.mode()

@@ -197,6 +197,11 @@ impl Supervisor {
         self.armed = true;
     }
 
+    /// Disarm (as the arm switch would; the ground station's disarm).
+    pub fn disarm(&mut self) {
+        self.armed = false;
+    }
+
     /// The mode now.
     pub fn mode(&self) -> Mode {
         self.mode

@@ -1,0 +1,26 @@
+//! # helicon-gcs
+//!
+//! The thesis's Ground Station Server and Navigator (Figure 3.5) for today's
+//! ground stations:
+//!
+//! - [`navigator`]: missions and modes → the references the LQI tracks
+//!   (earth velocities and heading): takeoff, waypoint legs with speed and
+//!   acceleration limits, hold, return, landing, guided targets, the
+//!   link-loss failsafe. Allocation-free.
+//! - [`geo`]: mission items (MAVLink `MISSION_ITEM_INT`) ↔ the navigator's
+//!   local NED frame about home, through `helicon-devices`' WGS-84 geodesy.
+//! - [`link`]: what crosses between the control task and the server thread
+//!   (lock-free `rtrb` rings), and the vehicle-side half ([`link::Vehicle`]).
+//! - [`params`]: the parameter table (typed, validated).
+//! - [`server`]: the MAVLink 2 server (common dialect, UDP) on its own thread.
+//! - [`config`]: the `[gcs]` section of the on-board configuration.
+
+pub mod config;
+pub mod geo;
+pub mod link;
+pub mod navigator;
+pub mod params;
+pub mod server;
+
+pub use mavlink;
+pub use navigator::{NavMode, Navigator, NavigatorConfig};

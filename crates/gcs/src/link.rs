@@ -1,0 +1,338 @@
+//! What crosses between the control task and the ground-station server
+//! thread: two lock-free `rtrb` rings (the control task never blocks on the
+//! server: a full ring drops the status, never waits), and the vehicle-side
+//! half, [`Vehicle`], that the control task calls once per sample.
+
+use crate::navigator::{
+    Events, GuidedTarget, NavEvent, NavInput, NavMode, Navigator, NavigatorConfig, Plan,
+};
+use helicon_core::state::Input;
+use helicon_core::{Reference, Telemetry};
+use nalgebra::Vector3;
+
+/// From the ground station to the vehicle.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Uplink {
+    /// A ground-station heartbeat arrived.
+    GcsHeartbeat,
+    /// Arm (`true`) or disarm.
+    Arm(bool),
+    /// Take off to this height above home (m).
+    Takeoff(f64),
+    /// Land where it is.
+    Land,
+    /// Return home and land.
+    Return,
+    /// Hold position.
+    Hold,
+    /// Fly the mission from its start.
+    StartMission,
+    /// A new mission (boxed: the ring stays small; the control task drops
+    /// the box only when a mission is replaced, never in steady state).
+    Plan(Box<Plan>),
+    /// New navigator tuning (validated by the server).
+    Config(NavigatorConfig),
+    /// A guided target.
+    Guided(GuidedTarget),
+}
+
+/// The flight software's mode as the ground station is told it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FlightMode {
+    /// The supervisor's mode name (`auto`, `hold`, `manual`, …).
+    pub name: &'static str,
+    /// The law (not the trim or the pilot) flies the servos.
+    pub law_flies: bool,
+}
+
+/// One sample's state for the ground station.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VehicleStatus {
+    /// On-board time (s).
+    pub t_s: f64,
+    /// Armed by the ground station.
+    pub armed: bool,
+    /// The navigator's mode.
+    pub nav_mode: NavMode,
+    /// The flight software's mode.
+    pub flight_mode: FlightMode,
+    /// Estimated attitude [φ θ ψ] (rad).
+    pub attitude_rad: Vector3<f64>,
+    /// Estimated body rates [p q r] (rad/s).
+    pub rates_rad_s: Vector3<f64>,
+    /// Estimated position NED about home (m).
+    pub position_ned_m: Vector3<f64>,
+    /// Estimated velocity NED (m/s).
+    pub velocity_ned_m_s: Vector3<f64>,
+    /// 1σ of the position (m).
+    pub position_sigma_m: Vector3<f64>,
+    /// A navigation solution exists.
+    pub navigation_ok: bool,
+    /// A GPS fix was fused in the last second.
+    pub gps_ok: bool,
+    /// The servo commands sent.
+    pub servo: Input,
+    /// The reference flown.
+    pub reference: Reference,
+    /// The current mission item's sequence number and the mission's length.
+    pub mission_current: (u16, u16),
+    /// The ground-station link is lost (failsafe).
+    pub link_lost: bool,
+    /// The control task's load (compute time / period, 0..1).
+    pub load: f64,
+}
+
+/// Something to tell the operator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum VehicleEvent {
+    /// From the navigator.
+    Nav(NavEvent),
+    /// Armed (`true`) or disarmed.
+    Armed(bool),
+    /// The flight software's mode changed (name, reason).
+    FlightMode(&'static str, &'static str),
+}
+
+/// From the vehicle to the ground station.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Downlink {
+    /// The state of a sample.
+    Status(VehicleStatus),
+    /// An event.
+    Event(f64, VehicleEvent),
+}
+
+/// The vehicle's ends of the rings.
+pub struct VehicleEnd {
+    /// Commands in.
+    pub uplink: rtrb::Consumer<Uplink>,
+    /// Status and events out.
+    pub downlink: rtrb::Producer<Downlink>,
+}
+
+/// The server's ends of the rings.
+pub struct ServerEnd {
+    /// Commands out.
+    pub uplink: rtrb::Producer<Uplink>,
+    /// Status and events in.
+    pub downlink: rtrb::Consumer<Downlink>,
+}
+
+/// The two rings (`capacity` entries each).
+pub fn channel(capacity: usize) -> (VehicleEnd, ServerEnd) {
+    let (up_tx, up_rx) = rtrb::RingBuffer::new(capacity);
+    let (down_tx, down_rx) = rtrb::RingBuffer::new(capacity);
+    (
+        VehicleEnd {
+            uplink: up_rx,
+            downlink: down_tx,
+        },
+        ServerEnd {
+            uplink: up_tx,
+            downlink: down_rx,
+        },
+    )
+}
+
+/// What the vehicle side decided this sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VehicleOutput {
+    /// The reference for the LQI.
+    pub reference: Reference,
+    /// Arm (`Some(true)`) or disarm (`Some(false)`) the flight software now.
+    pub arm: Option<bool>,
+}
+
+/// The vehicle-side half: the navigator fed by the uplink, its status on
+/// the downlink. Allocation-free per sample (a mission replaced drops the
+/// old one's box: an operator's action, not the steady state).
+pub struct Vehicle {
+    nav: Navigator,
+    end: VehicleEnd,
+    armed: bool,
+    last_heartbeat_s: Option<f64>,
+    last_gps_s: Option<f64>,
+    at: NavInput,
+    status_every: u64,
+    samples: u64,
+    dropped: u64,
+    sent: u64,
+}
+
+impl Vehicle {
+    /// A disarmed vehicle with this navigator, sending its status every
+    /// `status_every` samples (at 400 Hz, 4 → 100 Hz, the fastest stream
+    /// the ground station can ask for).
+    pub fn new(nav: Navigator, end: VehicleEnd, status_every: u64) -> Self {
+        Vehicle {
+            nav,
+            end,
+            armed: false,
+            last_heartbeat_s: None,
+            last_gps_s: None,
+            at: NavInput {
+                t_s: 0.0,
+                position_ned_m: Vector3::zeros(),
+                yaw_rad: 0.0,
+            },
+            status_every: status_every.max(1),
+            samples: 0,
+            dropped: 0,
+            sent: 0,
+        }
+    }
+
+    /// The navigator.
+    pub fn navigator(&self) -> &Navigator {
+        &self.nav
+    }
+
+    /// Armed by the ground station.
+    pub fn armed(&self) -> bool {
+        self.armed
+    }
+
+    /// Statuses and events dropped because the server's ring was full.
+    pub fn dropped(&self) -> u64 {
+        self.dropped
+    }
+
+    /// Statuses and events handed to the server (for lock-step runs: the
+    /// server's [`crate::server::ServerHandle::processed`] catches up).
+    pub fn sent(&self) -> u64 {
+        self.sent
+    }
+
+    fn send(&mut self, d: Downlink) {
+        if self.end.downlink.push(d).is_err() {
+            self.dropped += 1;
+        } else {
+            self.sent += 1;
+        }
+    }
+
+    fn handle(&mut self, u: Uplink, events: &mut Events) -> Option<bool> {
+        let at = self.at;
+        let flying = self.armed;
+        match u {
+            Uplink::GcsHeartbeat => self.last_heartbeat_s = Some(at.t_s),
+            Uplink::Arm(a) if a != self.armed => {
+                self.armed = a;
+                if !a {
+                    self.nav.idle(&at, events);
+                }
+                return Some(a);
+            }
+            Uplink::Takeoff(h) if flying => {
+                self.nav.takeoff(&at, h, events);
+            }
+            Uplink::Land if flying => self.nav.land(&at, events),
+            Uplink::Return if flying => self.nav.return_home(&at, events),
+            Uplink::Hold if flying => self.nav.hold(&at, events),
+            Uplink::StartMission if flying => {
+                self.nav.start_mission(&at, events);
+            }
+            Uplink::Plan(p) => self.nav.set_plan(*p),
+            Uplink::Config(c) => {
+                // validated by the server; a refusal here keeps the old one
+                let _ = self.nav.set_config(c);
+            }
+            Uplink::Guided(g) if flying => {
+                self.nav.guided(&at, g, events);
+            }
+            _ => {}
+        }
+        None
+    }
+
+    /// One control sample: take the ground station's commands, run the
+    /// navigator on the last sample's telemetry (the estimate the law used),
+    /// send the status. `flight_mode` and `servo` are the flight software's
+    /// last; `load` the control task's compute time over its period.
+    pub fn step(
+        &mut self,
+        t_s: f64,
+        telemetry: Option<&Telemetry>,
+        flight_mode: FlightMode,
+        servo: &Input,
+        load: f64,
+    ) -> VehicleOutput {
+        // the navigator flies from the last finite estimate (the flight
+        // software refuses non-finite samples; this keeps it so here too)
+        if let Some(t) = telemetry {
+            if let Some(n) = &t.navigation
+                && n.position_ned_m.iter().all(|v| v.is_finite())
+            {
+                self.at.position_ned_m = n.position_ned_m;
+                if n.gps_fused {
+                    self.last_gps_s = Some(t_s);
+                }
+            }
+            if t.estimate[2].is_finite() {
+                self.at.yaw_rad = t.estimate[2];
+            }
+        }
+        self.at.t_s = t_s;
+        let mut events = Events::default();
+        let mut arm = None;
+        while let Ok(u) = self.end.uplink.pop() {
+            if let Some(a) = self.handle(u, &mut events) {
+                arm = Some(a);
+            }
+        }
+        if let Some(a) = arm {
+            self.send(Downlink::Event(t_s, VehicleEvent::Armed(a)));
+        }
+        let silence = self.last_heartbeat_s.map(|h| t_s - h);
+        let at = self.at;
+        self.nav.link(&at, silence, &mut events);
+        let reference = self.nav.step(&at, &mut events);
+        for e in events.iter() {
+            if e == NavEvent::Landed && self.armed {
+                self.armed = false;
+                arm = Some(false);
+                self.send(Downlink::Event(t_s, VehicleEvent::Armed(false)));
+            }
+            self.send(Downlink::Event(t_s, VehicleEvent::Nav(e)));
+        }
+        if self.samples % self.status_every == 0 {
+            let status = self.status(t_s, telemetry, flight_mode, servo, reference, load);
+            self.send(Downlink::Status(status));
+        }
+        self.samples += 1;
+        VehicleOutput { reference, arm }
+    }
+
+    fn status(
+        &self,
+        t_s: f64,
+        telemetry: Option<&Telemetry>,
+        flight_mode: FlightMode,
+        servo: &Input,
+        reference: Reference,
+        load: f64,
+    ) -> VehicleStatus {
+        let plan = self.nav.plan();
+        let current = plan.get(self.nav.current_index()).map_or(0, |i| i.seq);
+        let nav = telemetry.and_then(|t| t.navigation);
+        let est = telemetry.map(|t| t.estimate);
+        VehicleStatus {
+            t_s,
+            armed: self.armed,
+            nav_mode: self.nav.mode(),
+            flight_mode,
+            attitude_rad: est.map_or(Vector3::zeros(), |e| Vector3::new(e[0], e[1], e[2])),
+            rates_rad_s: est.map_or(Vector3::zeros(), |e| Vector3::new(e[6], e[7], e[8])),
+            position_ned_m: self.at.position_ned_m,
+            velocity_ned_m_s: nav.map_or(Vector3::zeros(), |n| n.velocity_ned_m_s),
+            position_sigma_m: nav.map_or(Vector3::repeat(f64::MAX), |n| n.position_sigma_m),
+            navigation_ok: nav.is_some(),
+            gps_ok: self.last_gps_s.is_some_and(|g| t_s - g <= 1.0),
+            servo: *servo,
+            reference,
+            mission_current: (current, u16::try_from(plan.len()).unwrap_or(u16::MAX)),
+            link_lost: self.nav.link_lost(),
+            load,
+        }
+    }
+}

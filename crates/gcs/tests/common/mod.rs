@@ -1,0 +1,5 @@
+//! Helpers of the SITL tests.
+#![allow(dead_code)]
+
+pub mod client;
+pub mod harness;
