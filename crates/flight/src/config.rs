@@ -214,9 +214,17 @@ pub struct OnboardConfig {
     /// Real-time options.
     #[serde(default)]
     pub realtime: RealtimeConfig,
+    /// The ground station (`[gcs]`, optional; see `helicon_gcs::config`):
+    /// when present the program starts the MAVLink server and flies the
+    /// navigator's references (not with `mission`).
+    #[serde(default, skip_serializing)]
+    pub gcs: Option<helicon_gcs::config::GcsSection>,
     /// The folder relative paths are resolved against (the file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
+    /// The file it was read from (named in errors found later).
+    #[serde(skip)]
+    pub file: String,
 }
 
 fn positive(file: &str, field: &str, v: f64, max: f64) -> Result<(), ConfigError> {
@@ -235,11 +243,12 @@ fn positive(file: &str, field: &str, v: f64, max: f64) -> Result<(), ConfigError
 impl OnboardConfig {
     /// Parse and check a configuration's text (`file` names it in errors).
     pub fn from_toml_str(text: &str, file: &str) -> Result<Self, ConfigError> {
-        let cfg: OnboardConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
+        let mut cfg: OnboardConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
             file: file.to_string(),
             message: e.to_string(),
         })?;
         cfg.validate(file)?;
+        cfg.file = file.to_string();
         Ok(cfg)
     }
 
@@ -342,7 +351,33 @@ impl OnboardConfig {
                 file: file.to_string(),
                 message: format!("[estimator.eskf]: {e}"),
             })?;
+        if let Some(g) = &self.gcs {
+            if self.mission.is_some() {
+                return Err(ConfigError::Invalid {
+                    file: file.to_string(),
+                    field: "gcs".into(),
+                    value: "[gcs]".into(),
+                    rule: "the ground station's navigator and `mission` both give the \
+                           references: keep one"
+                        .into(),
+                });
+            }
+            g.server_config(self.home_geodetic(file)?, file)?;
+        }
         Ok(())
+    }
+
+    /// The home as a WGS-84 position (checked).
+    pub fn home_geodetic(&self, file: &str) -> Result<helicon_devices::Geodetic, ConfigError> {
+        let h = &self.home;
+        helicon_devices::Geodetic::new(h.latitude_deg, h.longitude_deg, h.height_m).map_err(|e| {
+            ConfigError::Invalid {
+                file: file.to_string(),
+                field: "home".into(),
+                value: format!("{}, {}, {}", h.latitude_deg, h.longitude_deg, h.height_m),
+                rule: e.to_string(),
+            }
+        })
     }
 }
 
