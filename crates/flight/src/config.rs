@@ -402,6 +402,30 @@ mod tests {
         assert_eq!(c.stale, StaleLimits::default());
         assert_eq!(c.failsafe.overrun_limit, 8);
         assert!(c.realtime.sched_fifo);
+        assert!(c.gcs.is_none());
+    }
+
+    #[test]
+    fn the_gcs_section_is_read_and_checked() {
+        let c = OnboardConfig::from_toml_str(
+            &format!("{MIN}[gcs]\naddress = \"udpin:0.0.0.0:14550\"\n[gcs.navigator]\ncruise_speed_m_s = 3.0\n"),
+            "o.toml",
+        )
+        .unwrap();
+        let g = c.gcs.unwrap();
+        assert_eq!(g.address, "udpin:0.0.0.0:14550");
+        assert_eq!(g.navigator.cruise_speed_m_s, 3.0);
+        let e = err("[gcs]\nsystem_id = 255\n");
+        assert!(e.contains("o.toml") && e.contains("gcs.system_id"), "{e}");
+        let e = err("[gcs]\naddress = \"tcp:1.2.3.4:5\"\n");
+        assert!(e.contains("o.toml") && e.contains("gcs.address"), "{e}");
+        let e = err("[gcs.navigator]\ncruise_speed_m_s = -1.0\n");
+        assert!(e.contains("gcs.navigator.cruise_speed_m_s"), "{e}");
+        let both = format!("mission = \"m.toml\"\n{MIN}[gcs]\n");
+        let e = OnboardConfig::from_toml_str(&both, "o.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("o.toml") && e.contains("`gcs`"), "{e}");
     }
 
     #[test]
