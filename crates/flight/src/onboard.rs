@@ -192,21 +192,6 @@ pub fn run(
         Supervisor::new(cfg.stale, cfg.failsafe, 0.0),
         u_trim,
     );
-    // the ground station last: its server thread runs from here on
-    let (mission, server) = match (&mission_scenario, &cfg.gcs) {
-        (_, Some(g)) => {
-            let (m, server) = ground::start(g, home, &cfg.file, ts)?;
-            (m, Some(server))
-        }
-        (Some(s), None) => (Mission::Schedule(Box::new(s.reference_schedule())), None),
-        (None, None) => (
-            Mission::Hold(Reference {
-                velocity_ned_m_s: Vector3::zeros(),
-                yaw_rad: x0[ix::PSI],
-            }),
-            None,
-        ),
-    };
     let dir = cfg.resolve(&cfg.log.dir);
     std::fs::create_dir_all(&dir).map_err(|e| OnboardError::Log {
         path: dir.display().to_string(),
@@ -224,6 +209,21 @@ pub fn run(
                 message: e.to_string(),
             }
         })?;
+    // the ground station last: its server thread runs from here on
+    let (mission, server) = match (&mission_scenario, &cfg.gcs) {
+        (_, Some(g)) => {
+            let (m, server) = ground::start(g, home, &cfg.file, ts)?;
+            (m, Some(server))
+        }
+        (Some(s), None) => (Mission::Schedule(Box::new(s.reference_schedule())), None),
+        (None, None) => (
+            Mission::Hold(Reference {
+                velocity_ned_m_s: Vector3::zeros(),
+                yaw_rad: x0[ix::PSI],
+            }),
+            None,
+        ),
+    };
     let mut realtime = cfg.realtime;
     realtime.sched_fifo &= sched_fifo;
     let handle = runtime::spawn(

@@ -200,27 +200,6 @@ pub fn run(
     let u_trim = prepared.gains.set.u_trim;
     let mut supervisor = Supervisor::new(options.stale, options.failsafe, 0.0);
     let home_geo = Geodetic::new(HOME.0, HOME.1, HOME.2).map_err(dev("home"))?;
-    // the ground station arms; without one SITL starts armed, as a pilot
-    // arms on the ground
-    let (mission, server) = match &options.gcs {
-        Some(address) => {
-            let section = GcsSection {
-                address: address.clone(),
-                ..GcsSection::default()
-            };
-            let (m, server) =
-                ground::start(&section, home_geo, "--gcs", ts).map_err(dev("ground station"))?;
-            (m, Some(server))
-        }
-        None => {
-            supervisor.arm();
-            (
-                Mission::Schedule(Box::new(scenario.reference_schedule())),
-                None,
-            )
-        }
-    };
-    let task = ControlTask::new(computer, supervisor, u_trim);
 
     let mut wires = Wires {
         imu: PtyPair::open().map_err(dev("IMU pseudo-terminal"))?,
@@ -262,6 +241,27 @@ pub fn run(
     } else {
         options.realtime
     };
+    // the ground station arms; without one SITL starts armed, as a pilot
+    // arms on the ground
+    let (mission, server) = match &options.gcs {
+        Some(address) => {
+            let section = GcsSection {
+                address: address.clone(),
+                ..GcsSection::default()
+            };
+            let (m, server) =
+                ground::start(&section, home_geo, "--gcs", ts).map_err(dev("ground station"))?;
+            (m, Some(server))
+        }
+        None => {
+            supervisor.arm();
+            (
+                Mission::Schedule(Box::new(scenario.reference_schedule())),
+                None,
+            )
+        }
+    };
+    let task = ControlTask::new(computer, supervisor, u_trim);
     let handle = runtime::spawn(
         task,
         mission,
