@@ -1,9 +1,10 @@
-//! `helicon sitl SCENARIO.toml --out DIR [--speed max|realtime] [--duration S]`:
+//! `helicon sitl SCENARIO.toml --out DIR [--speed max|realtime] [--duration S] [--gcs ADDRESS]`:
 //! fly a scenario software-in-the-loop: the simulator plays the hardware on
 //! pseudo-terminals, the on-board runtime flies it through its device
 //! drivers. Writes the on-board `flight.ulg`, the truth `log.csv`,
 //! `timing.json`, and the run folder of `helicon sim` (summary, gains,
-//! scenario, plots, report).
+//! scenario, plots, report). With `--gcs` the ground station's navigator
+//! flies instead of the scenario's references.
 
 use crate::console::Console;
 use crate::sim_cmd::{folder_name, overrides_from, overrides_label, prepare_step};
@@ -48,6 +49,14 @@ pub struct SitlArgs {
     /// The pilot's switch goes to manual at this time (s).
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub manual_at: Option<f64>,
+    /// Fly with a ground station: start the MAVLink 2 server at
+    /// `udpout:HOST:PORT` (it sends to the ground station listening there) or
+    /// `udpin:HOST:PORT` (it listens). The helicopter then starts disarmed,
+    /// the simulated receiver is silent, and the navigator flies what the
+    /// operator commands (arm, takeoff, missions): the scenario's
+    /// `[[reference]]` are ignored; its duration still ends the run.
+    #[arg(long, value_name = "ADDRESS", conflicts_with = "manual_at")]
+    pub gcs: Option<String>,
 }
 
 fn check_time(flag: &str, v: Option<f64>) -> Result<()> {
@@ -101,6 +110,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
                 ..RealtimeConfig::default()
             },
             keep_frames: false,
+            gcs: a.gcs.clone(),
         };
         let r = sitl::run(&case, &prepared, &options)
             .with_context(|| format!("scenario `{}`: software in the loop", case.name))?;

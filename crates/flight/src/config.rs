@@ -214,9 +214,17 @@ pub struct OnboardConfig {
     /// Real-time options.
     #[serde(default)]
     pub realtime: RealtimeConfig,
+    /// The ground station (`[gcs]`, optional; see `helicon_gcs::config`):
+    /// when present the program starts the MAVLink server and flies the
+    /// navigator's references (not with `mission`).
+    #[serde(default, skip_serializing)]
+    pub gcs: Option<helicon_gcs::config::GcsSection>,
     /// The folder relative paths are resolved against (the file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
+    /// The file it was read from (named in errors found later).
+    #[serde(skip)]
+    pub file: String,
 }
 
 fn positive(file: &str, field: &str, v: f64, max: f64) -> Result<(), ConfigError> {
@@ -235,11 +243,12 @@ fn positive(file: &str, field: &str, v: f64, max: f64) -> Result<(), ConfigError
 impl OnboardConfig {
     /// Parse and check a configuration's text (`file` names it in errors).
     pub fn from_toml_str(text: &str, file: &str) -> Result<Self, ConfigError> {
-        let cfg: OnboardConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
+        let mut cfg: OnboardConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
             file: file.to_string(),
             message: e.to_string(),
         })?;
         cfg.validate(file)?;
+        cfg.file = file.to_string();
         Ok(cfg)
     }
 
@@ -342,7 +351,33 @@ impl OnboardConfig {
                 file: file.to_string(),
                 message: format!("[estimator.eskf]: {e}"),
             })?;
+        if let Some(g) = &self.gcs {
+            if self.mission.is_some() {
+                return Err(ConfigError::Invalid {
+                    file: file.to_string(),
+                    field: "gcs".into(),
+                    value: "[gcs]".into(),
+                    rule: "the ground station's navigator and `mission` both give the \
+                           references: keep one"
+                        .into(),
+                });
+            }
+            g.server_config(self.home_geodetic(file)?, file)?;
+        }
         Ok(())
+    }
+
+    /// The home as a WGS-84 position (checked).
+    pub fn home_geodetic(&self, file: &str) -> Result<helicon_devices::Geodetic, ConfigError> {
+        let h = &self.home;
+        helicon_devices::Geodetic::new(h.latitude_deg, h.longitude_deg, h.height_m).map_err(|e| {
+            ConfigError::Invalid {
+                file: file.to_string(),
+                field: "home".into(),
+                value: format!("{}, {}, {}", h.latitude_deg, h.longitude_deg, h.height_m),
+                rule: e.to_string(),
+            }
+        })
     }
 }
 
@@ -367,6 +402,30 @@ mod tests {
         assert_eq!(c.stale, StaleLimits::default());
         assert_eq!(c.failsafe.overrun_limit, 8);
         assert!(c.realtime.sched_fifo);
+        assert!(c.gcs.is_none());
+    }
+
+    #[test]
+    fn the_gcs_section_is_read_and_checked() {
+        let c = OnboardConfig::from_toml_str(
+            &format!("{MIN}[gcs]\naddress = \"udpin:0.0.0.0:14550\"\n[gcs.navigator]\ncruise_speed_m_s = 3.0\n"),
+            "o.toml",
+        )
+        .unwrap();
+        let g = c.gcs.unwrap();
+        assert_eq!(g.address, "udpin:0.0.0.0:14550");
+        assert_eq!(g.navigator.cruise_speed_m_s, 3.0);
+        let e = err("[gcs]\nsystem_id = 255\n");
+        assert!(e.contains("o.toml") && e.contains("gcs.system_id"), "{e}");
+        let e = err("[gcs]\naddress = \"tcp:1.2.3.4:5\"\n");
+        assert!(e.contains("o.toml") && e.contains("gcs.address"), "{e}");
+        let e = err("[gcs.navigator]\ncruise_speed_m_s = -1.0\n");
+        assert!(e.contains("gcs.navigator.cruise_speed_m_s"), "{e}");
+        let both = format!("mission = \"m.toml\"\n{MIN}[gcs]\n");
+        let e = OnboardConfig::from_toml_str(&both, "o.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("o.toml") && e.contains("`gcs`"), "{e}");
     }
 
     #[test]

@@ -65,7 +65,7 @@ impl ControlTask {
     }
 
     /// Arm or disarm from the ground station (takes effect at the next
-    /// step; a receiver frame's arm switch overrides it).
+    /// step; holds until the receiver's arm switch moves).
     pub fn set_armed(&mut self, armed: bool) {
         if armed {
             self.supervisor.arm();

@@ -11,6 +11,8 @@
 //! - [`safety`]: arming, the pilot's switch, sensor stale limits and overruns;
 //!   hold, then a descent;
 //! - [`control`]: the control task's work for one sample;
+//! - [`ground`]: the ground station (MAVLink server and navigator) started
+//!   from the on-board program;
 //! - [`runtime`]: the threads (sensor server, receiver, control task,
 //!   avionics-out with its watchdog, logger) and the lock-free rings between them;
 //! - [`realtime`]: absolute-deadline sleeps, SCHED_FIFO, `mlockall`, latency statistics;
@@ -18,6 +20,7 @@
 
 pub mod config;
 pub mod control;
+pub mod ground;
 pub mod onboard;
 pub mod ports;
 pub mod realtime;

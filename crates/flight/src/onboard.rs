@@ -5,6 +5,7 @@
 
 use crate::config::OnboardConfig;
 use crate::control::ControlTask;
+use crate::ground;
 use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort};
 use crate::runtime::{self, Mission, Next, Pacing, RunReport, RuntimeOptions, SensorPort};
 use crate::safety::Supervisor;
@@ -54,6 +55,9 @@ pub enum OnboardError {
     /// No alignment within the time allowed.
     #[error("alignment: {0}")]
     Alignment(String),
+    /// The ground station.
+    #[error(transparent)]
+    Ground(#[from] ground::GroundError),
     /// Building the flight software.
     #[error(transparent)]
     Build(#[from] helicon_sim::closed_loop::ClosedLoopError),
@@ -188,13 +192,6 @@ pub fn run(
         Supervisor::new(cfg.stale, cfg.failsafe, 0.0),
         u_trim,
     );
-    let mission = match &mission_scenario {
-        Some(s) => Mission::Schedule(Box::new(s.reference_schedule())),
-        None => Mission::Hold(Reference {
-            velocity_ned_m_s: Vector3::zeros(),
-            yaw_rad: x0[ix::PSI],
-        }),
-    };
     let dir = cfg.resolve(&cfg.log.dir);
     std::fs::create_dir_all(&dir).map_err(|e| OnboardError::Log {
         path: dir.display().to_string(),
@@ -212,6 +209,21 @@ pub fn run(
                 message: e.to_string(),
             }
         })?;
+    // the ground station last: its server thread runs from here on
+    let (mission, server) = match (&mission_scenario, &cfg.gcs) {
+        (_, Some(g)) => {
+            let (m, server) = ground::start(g, home, &cfg.file, ts)?;
+            (m, Some(server))
+        }
+        (Some(s), None) => (Mission::Schedule(Box::new(s.reference_schedule())), None),
+        (None, None) => (
+            Mission::Hold(Reference {
+                velocity_ned_m_s: Vector3::zeros(),
+                yaw_rad: x0[ix::PSI],
+            }),
+            None,
+        ),
+    };
     let mut realtime = cfg.realtime;
     realtime.sched_fifo &= sched_fifo;
     let handle = runtime::spawn(
@@ -234,5 +246,9 @@ pub fn run(
     for w in &handle.warnings() {
         eprintln!("warning: {w}");
     }
-    Ok((handle.join(), path))
+    let report = handle.join();
+    if let Some(server) = server {
+        server.stop();
+    }
+    Ok((report, path))
 }

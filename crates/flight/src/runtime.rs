@@ -26,6 +26,7 @@ use crate::records::{FlightRecord, step_records, write_record};
 use crate::safety::{Mode, RcInput};
 use helicon_core::state::Input;
 use helicon_core::{Reference, SensorFrame, Telemetry};
+use helicon_gcs::link::{FlightMode, Vehicle};
 use helicon_sim::scenario::ReferenceSchedule;
 use helicon_ulog::messages::Timing;
 use helicon_ulog::{FlightLog, timestamp_us};
@@ -118,27 +119,89 @@ pub struct RuntimeOptions {
     pub u_trim: Input,
 }
 
-/// The mission: the references against on-board time.
-#[derive(Debug, Clone)]
+/// The mission: where the references come from.
 pub enum Mission {
     /// A schedule of reference changes (a scenario's `[[reference]]`).
     Schedule(Box<ReferenceSchedule>),
     /// One constant reference.
     Hold(Reference),
+    /// The ground station's navigator (the vehicle half of `helicon-gcs`):
+    /// each step it takes the operator's commands from the server thread's
+    /// ring (never blocking), runs on the last step's telemetry and arms or
+    /// disarms the control task when the operator (or a landing) asks.
+    Ground(Box<Vehicle>),
+}
+
+impl std::fmt::Debug for Mission {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Mission::Schedule(_) => f.write_str("Mission::Schedule"),
+            Mission::Hold(r) => write!(f, "Mission::Hold({r:?})"),
+            Mission::Ground(_) => f.write_str("Mission::Ground"),
+        }
+    }
+}
+
+/// What the control task did last step, as the ground station's navigator
+/// sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LastStep {
+    /// The last telemetry the flight computer produced (`None` before the
+    /// first).
+    pub telemetry: Option<Telemetry>,
+    /// The mode then.
+    pub mode: Mode,
+    /// The servo commands then.
+    pub servo: Input,
+    /// Its compute time over the control period.
+    pub load: f64,
+}
+
+/// The flight software's mode as the ground station reports it.
+pub fn flight_mode(m: Mode) -> FlightMode {
+    FlightMode {
+        name: m.as_str(),
+        law_flies: matches!(m, Mode::Auto | Mode::Hold | Mode::Descent),
+    }
 }
 
 impl Mission {
-    /// The reference at on-board time `t_s` (no allocation).
-    pub fn at(&self, t_s: f64) -> Reference {
+    /// The reference at on-board time `t_s` of a time-scheduled mission;
+    /// `None` for [`Mission::Ground`] (its reference depends on the
+    /// telemetry: [`Mission::step`]). No allocation.
+    pub fn at(&self, t_s: f64) -> Option<Reference> {
         match self {
             Mission::Schedule(s) => {
                 let r = s.at(t_s);
-                Reference {
+                Some(Reference {
                     velocity_ned_m_s: Vector3::new(r[0], r[1], r[2]),
                     yaw_rad: r[3],
-                }
+                })
             }
-            Mission::Hold(r) => *r,
+            Mission::Hold(r) => Some(*r),
+            Mission::Ground(_) => None,
+        }
+    }
+
+    /// This step's reference at on-board time `t_s`; the ground station's
+    /// navigator reads `last` and arms or disarms `task` (taking effect in
+    /// this very step). No allocation in the steady state.
+    pub fn step(&mut self, t_s: f64, last: &LastStep, task: &mut ControlTask) -> Reference {
+        match self {
+            Mission::Ground(v) => {
+                let out = v.step(
+                    t_s,
+                    last.telemetry.as_ref(),
+                    flight_mode(last.mode),
+                    &last.servo,
+                    last.load,
+                );
+                if let Some(a) = out.arm {
+                    task.set_armed(a);
+                }
+                out.reference
+            }
+            Mission::Schedule(_) | Mission::Hold(_) => self.at(t_s).unwrap_or_default(),
         }
     }
 }
@@ -362,7 +425,7 @@ where
                     }),
                     options,
                 };
-                control_loop(task, &mission, ctx)
+                control_loop(task, mission, ctx)
             })
     };
     match fifo_rx.recv() {
@@ -608,7 +671,7 @@ struct Direct {
 #[allow(clippy::too_many_lines)] // one loop: wait, gather, step, hand over, log
 fn control_loop(
     mut task: ControlTask,
-    mission: &Mission,
+    mut mission: Mission,
     mut ctx: ControlCtx<'_>,
 ) -> ControlResult {
     let ts_s = ctx.options.sample_time_s;
@@ -623,6 +686,12 @@ fn control_loop(
     let t0_ns = realtime::monotonic_ns();
     let mut deadline_ns = t0_ns + period_ns;
     let mut missed_last = false;
+    let mut last = LastStep {
+        telemetry: None,
+        mode: task.mode(),
+        servo: ctx.options.u_trim,
+        load: 0.0,
+    };
     loop {
         if ctx.stop.load(Ordering::Relaxed) {
             break;
@@ -689,9 +758,14 @@ fn control_loop(
             frame,
             deadline_missed: missed_last,
             rc,
-            reference: mission.at(now_s),
+            reference: mission.step(now_s, &last, &mut task),
         };
         let out = task.step(&tick);
+        if out.telemetry.is_some() {
+            last.telemetry = out.telemetry;
+        }
+        last.mode = out.mode;
+        last.servo = out.servo;
         // the telemetry downlink before the servo frame: whoever waits for
         // the servo frame finds the sample's telemetry
         if let (Some(d), Some(t)) = (ctx.downlink.as_mut(), out.telemetry) {
@@ -723,6 +797,7 @@ fn control_loop(
         let done_ns = realtime::monotonic_ns();
         ctx.last_output_ns.store(done_ns, Ordering::Relaxed);
         compute.push(done_ns.saturating_sub(wake_ns));
+        last.load = done_ns.saturating_sub(wake_ns) as f64 / period_ns.max(1) as f64;
         // a step that ends after the next deadline missed it
         missed_last = ctx.options.pacing == Pacing::Clock && done_ns > deadline_ns + period_ns;
         if missed_last {

@@ -17,6 +17,10 @@
 //! `failsafe.hold_s` in `Hold` the helicopter descends at
 //! `failsafe.descent_m_s` until the pilot takes over or disarms. Every
 //! change of mode is one [`SafetyEvent`] with its reason, for the log.
+//!
+//! Arming: the receiver's arm switch arms or disarms when it moves (and at
+//! its first frame); the ground station's arm or disarm ([`Supervisor::arm`],
+//! [`Supervisor::disarm`]) holds until the switch moves again.
 
 use crate::config::{FailsafeConfig, StaleLimits};
 use helicon_core::Reference;
@@ -167,6 +171,8 @@ pub struct Supervisor {
     last_mag_s: f64,
     misses: u32,
     armed: bool,
+    /// The receiver's arm switch at its last frame.
+    rc_armed: Option<bool>,
     manual: bool,
     nav_failed: bool,
 }
@@ -186,6 +192,7 @@ impl Supervisor {
             last_mag_s: t0_s,
             misses: 0,
             armed: false,
+            rc_armed: None,
             manual: false,
             nav_failed: false,
         }
@@ -237,7 +244,12 @@ impl Supervisor {
         };
         self.nav_failed |= h.navigation_failed;
         if let Some(rc) = rc {
-            self.armed = rc.armed;
+            // the switch arms or disarms when it moves (and at the first
+            // frame): between, the ground station's arm or disarm holds
+            if self.rc_armed != Some(rc.armed) {
+                self.armed = rc.armed;
+                self.rc_armed = Some(rc.armed);
+            }
             let was_manual = self.manual;
             self.manual = rc.manual;
             if was_manual && !rc.manual {
@@ -454,5 +466,29 @@ mod tests {
             .update(&health(0.7, true), Some(&rc(false, true)), 0.2)
             .unwrap();
         assert_eq!((ev.to, ev.reason), (Mode::Auto, Reason::Armed));
+    }
+
+    #[test]
+    fn the_ground_station_arms_until_the_switch_moves() {
+        let mut s = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
+        let off = rc(false, false);
+        let on = rc(false, true);
+        // the switch off at its first frame: disarmed
+        assert!(s.update(&health(0.0, true), Some(&off), 0.0).is_none());
+        // the ground station arms: the switch, still off, does not undo it
+        s.arm();
+        let ev = s.update(&health(0.01, true), Some(&off), 0.0).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Auto, Reason::Armed));
+        assert!(s.update(&health(0.02, true), Some(&off), 0.0).is_none());
+        // the switch moves on, then off: disarmed
+        assert!(s.update(&health(0.03, true), Some(&on), 0.0).is_none());
+        let ev = s.update(&health(0.04, true), Some(&off), 0.0).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Disarmed, Reason::Disarmed));
+        // the switch on: armed; the ground station disarms and it holds
+        s.update(&health(0.05, true), Some(&on), 0.0).unwrap();
+        s.disarm();
+        let ev = s.update(&health(0.06, true), Some(&on), 0.0).unwrap();
+        assert_eq!(ev.to, Mode::Disarmed);
+        assert!(s.update(&health(0.07, true), Some(&on), 0.0).is_none());
     }
 }

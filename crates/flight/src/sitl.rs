@@ -22,6 +22,7 @@
 
 use crate::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
 use crate::control::ControlTask;
+use crate::ground;
 use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort, stick_us};
 use crate::runtime::{self, Mission, Pacing, RunReport, RuntimeOptions};
 use crate::safety::Supervisor;
@@ -29,6 +30,7 @@ use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, RcInput as RcFrame};
 use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCommon};
+use helicon_gcs::config::GcsSection;
 use helicon_sim::closed_loop::{
     ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, flight_computer,
 };
@@ -84,6 +86,12 @@ pub struct SitlOptions {
     pub realtime: RealtimeConfig,
     /// Keep every sensor frame the hardware sent ([`SitlResult::sent`]).
     pub keep_frames: bool,
+    /// Fly with the ground station: the MAVLink server at this address
+    /// (`udpout:HOST:PORT` or `udpin:HOST:PORT`). The on-board side then
+    /// starts disarmed, the simulated receiver stays silent (the ground
+    /// station is the only link) and the navigator gives the references:
+    /// the scenario's `[[reference]]` are not flown.
+    pub gcs: Option<String>,
 }
 
 /// The home of the local NED frame (the GPS receiver's WGS-84 position of
@@ -191,15 +199,13 @@ pub fn run(
     })?;
     let u_trim = prepared.gains.set.u_trim;
     let mut supervisor = Supervisor::new(options.stale, options.failsafe, 0.0);
-    supervisor.arm();
-    let task = ControlTask::new(computer, supervisor, u_trim);
+    let home_geo = Geodetic::new(HOME.0, HOME.1, HOME.2).map_err(dev("home"))?;
 
     let mut wires = Wires {
         imu: PtyPair::open().map_err(dev("IMU pseudo-terminal"))?,
         gps: PtyPair::open().map_err(dev("GPS pseudo-terminal"))?,
         avionics: PtyPair::open().map_err(dev("avionics pseudo-terminal"))?,
     };
-    let home_geo = Geodetic::new(HOME.0, HOME.1, HOME.2).map_err(dev("home"))?;
     let home = LocalNed::new(home_geo);
     // the on-board side opens the slave paths as its serial devices
     let imu_port = TtyPort::open(wires.imu.slave_path(), 921_600).map_err(dev("IMU"))?;
@@ -235,9 +241,30 @@ pub fn run(
     } else {
         options.realtime
     };
+    // the ground station arms; without one SITL starts armed, as a pilot
+    // arms on the ground
+    let (mission, server) = match &options.gcs {
+        Some(address) => {
+            let section = GcsSection {
+                address: address.clone(),
+                ..GcsSection::default()
+            };
+            let (m, server) =
+                ground::start(&section, home_geo, "--gcs", ts).map_err(dev("ground station"))?;
+            (m, Some(server))
+        }
+        None => {
+            supervisor.arm();
+            (
+                Mission::Schedule(Box::new(scenario.reference_schedule())),
+                None,
+            )
+        }
+    };
+    let task = ControlTask::new(computer, supervisor, u_trim);
     let handle = runtime::spawn(
         task,
-        Mission::Schedule(Box::new(scenario.reference_schedule())),
+        mission,
         sensors,
         receiver,
         DeviceServos::new(av_port),
@@ -284,8 +311,8 @@ pub fn run(
     let mut failure = None;
     while let Some(s) = hw.sense() {
         let t = s.t_s;
-        // the receiver at 50 Hz
-        if s.k % 8 == 0 {
+        // the receiver at 50 Hz (silent when the ground station flies)
+        if s.k % 8 == 0 && server.is_none() {
             let manual = options.pilot.manual_from_s.is_some_and(|m| t >= m);
             let mut channels_us = [1500u16; 8];
             for i in 0..4 {
@@ -409,6 +436,9 @@ pub fn run(
     let cpu_s = crate::realtime::process_cpu_s() - cpu0;
     handle.stop();
     let onboard = handle.join();
+    if let Some(server) = server {
+        server.stop();
+    }
     let log_rows = writer.finish()?;
     if let Some(e) = failure {
         return Err(e);

@@ -89,3 +89,92 @@ fn a_control_step_and_its_log_allocate_nothing() {
     assert!(records > 5 * 4800, "{records} records");
     assert_eq!(counted, 0, "allocations in 4400 steady-state control steps");
 }
+
+/// The ground station's part of a step (`Mission::Ground`: the uplink
+/// drained, the navigator on the last telemetry, the status pushed, the
+/// arm handed to the supervisor) allocates nothing either: a takeoff flown
+/// with a heartbeat every sample, over the samples after the first second.
+#[test]
+fn a_ground_station_step_allocates_nothing() {
+    use helicon_flight::runtime::{LastStep, Mission};
+    use helicon_gcs::link::{Downlink, Uplink, Vehicle, channel};
+    use helicon_gcs::navigator::{Navigator, NavigatorConfig};
+
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/demo.toml");
+    let mut s = Scenario::from_file(&path).unwrap();
+    s.duration_s = 4.0;
+    let prepared = prepare(&s).unwrap();
+    let mut hw = Hardware::new(&s, &prepared).unwrap();
+    let x0 = *hw.state();
+    let computer = flight_computer(&OnBoardSetup {
+        params: prepared.model.params(),
+        gains: &prepared.gains.set,
+        schedule: prepared.schedule.as_ref(),
+        trim_x: &prepared.trim.x,
+        sensors: &s.sensors,
+        navigation: &s.navigation,
+        estimator: &s.estimator,
+        feedback: true,
+        x0: &x0,
+    })
+    .unwrap();
+    let sup = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
+    let u_trim = prepared.gains.set.u_trim;
+    let mut task = ControlTask::new(computer, sup, u_trim);
+    let (vehicle_end, mut server_end) = channel(64);
+    let nav = Navigator::new(NavigatorConfig::default()).unwrap();
+    let mut mission = Mission::Ground(Box::new(Vehicle::new(nav, vehicle_end, 1)));
+    let mut last = LastStep {
+        telemetry: None,
+        mode: task.mode(),
+        servo: u_trim,
+        load: 0.0,
+    };
+    server_end.uplink.push(Uplink::Arm(true)).unwrap();
+    let mut counted = 0;
+    let mut statuses = 0;
+    while let Some(sample) = hw.sense() {
+        server_end.uplink.push(Uplink::GcsHeartbeat).unwrap();
+        if sample.k == 40 {
+            server_end.uplink.push(Uplink::Takeoff(5.0)).unwrap();
+        }
+        let before = allocations();
+        let reference = mission.step(sample.t_s, &last, &mut task);
+        let out = task.step(&Tick {
+            now_s: sample.t_s,
+            frame: Some(sample.frame),
+            deadline_missed: false,
+            rc: None,
+            reference,
+        });
+        if sample.t_s >= 1.0 {
+            counted += allocations() - before;
+        }
+        if out.telemetry.is_some() {
+            last.telemetry = out.telemetry;
+        }
+        last.mode = out.mode;
+        last.servo = out.servo;
+        while let Ok(d) = server_end.downlink.pop() {
+            if matches!(d, Downlink::Status(_)) {
+                statuses += 1;
+            }
+        }
+        let step = hw.actuate(&out.servo, out.telemetry.as_ref()).unwrap();
+        if step.end.is_some() {
+            break;
+        }
+    }
+    // armed by the ground station, climbing at the end
+    assert_eq!(task.mode().as_str(), "auto");
+    let Mission::Ground(v) = &mission else {
+        unreachable!()
+    };
+    assert_eq!(v.navigator().mode(), helicon_gcs::NavMode::Takeoff);
+    assert!(hw.state()[2] < -1.0, "z = {}", hw.state()[2]);
+    assert!(statuses > 1500, "{statuses} statuses");
+    assert_eq!(
+        counted, 0,
+        "allocations in steady-state ground-station steps"
+    );
+}

@@ -33,6 +33,7 @@ pub fn options(tag: &str) -> SitlOptions {
         failsafe: FailsafeConfig::default(),
         realtime: RealtimeConfig::default(),
         keep_frames: true,
+        gcs: None,
     }
 }
 

@@ -11,8 +11,9 @@ use helicon_core::Telemetry;
 use helicon_core::state::Input;
 use helicon_flight::config::{FailsafeConfig, StaleLimits};
 use helicon_flight::control::{ControlTask, Tick};
+use helicon_flight::runtime::flight_mode;
 use helicon_flight::safety::{Mode, Supervisor};
-use helicon_gcs::link::{FlightMode, Vehicle, channel};
+use helicon_gcs::link::{Vehicle, channel};
 use helicon_gcs::navigator::{Navigator, NavigatorConfig};
 use helicon_gcs::server::{self, ServerConfig, ServerHandle, ServerReport};
 use helicon_sim::closed_loop::{Hardware, OnBoardSetup, Prepared, flight_computer};
@@ -51,14 +52,6 @@ decimation = 4
 "#
     );
     Scenario::from_toml_str(&text, "gcs.toml").unwrap()
-}
-
-/// The flight software's mode for the ground station.
-pub fn flight_mode(m: Mode) -> FlightMode {
-    FlightMode {
-        name: m.as_str(),
-        law_flies: matches!(m, Mode::Auto | Mode::Hold | Mode::Descent),
-    }
 }
 
 /// One SITL flight in progress.
