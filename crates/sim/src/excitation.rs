@@ -64,11 +64,7 @@ impl Excitations {
                 IdentError::Invalid { field, value, rule } => {
                     // ident names fields `sweep.duration_s`: keep the field
                     let name = field.rsplit('.').next().unwrap_or(&field).to_string();
-                    bad(
-                        format!("excitation[{i}].input.{name}"),
-                        value,
-                        rule,
-                    )
+                    bad(format!("excitation[{i}].input.{name}"), value, rule)
                 }
                 other => bad(
                     format!("excitation[{i}].input"),
