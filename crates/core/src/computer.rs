@@ -63,13 +63,29 @@ impl<E: Estimator, F: StateFeedback> FlightComputer<E, F> {
     /// telemetry out. An error (a navigation failure, a non-finite
     /// measurement or estimate) leaves the commands of the previous sample to
     /// the caller's failsafe.
+    #[inline]
     pub fn step(
         &mut self,
         measurement: &E::Measurement,
         reference: &Reference,
     ) -> Result<Telemetry, CoreError> {
+        self.step_with_excitation(measurement, reference, &Input::zeros())
+    }
+
+    /// [`FlightComputer::step`] with a flight-test excitation: `offset`
+    /// (servo units, rad) is added to the law's command before saturation,
+    /// so the estimator predicts with, and the telemetry's `command` holds,
+    /// what was applied. Allocates nothing.
+    pub fn step_with_excitation(
+        &mut self,
+        measurement: &E::Measurement,
+        reference: &Reference,
+        offset: &Input,
+    ) -> Result<Telemetry, CoreError> {
         let estimate = self.estimator.update(measurement)?;
-        let cmd = self.feedback.command(&estimate.state, reference);
+        let cmd = self
+            .feedback
+            .command_with_offset(&estimate.state, reference, offset);
         self.estimator.predict(&cmd.u)?;
         let t = Telemetry {
             sample: self.sample,
@@ -112,9 +128,21 @@ impl SensorComputer {
         frame: &SensorFrame,
         reference: &Reference,
     ) -> Result<Telemetry, CoreError> {
+        self.step_with_excitation(frame, reference, &Input::zeros())
+    }
+
+    /// One control sample with a servo excitation added before saturation
+    /// (see [`FlightComputer::step_with_excitation`]).
+    #[inline]
+    pub fn step_with_excitation(
+        &mut self,
+        frame: &SensorFrame,
+        reference: &Reference,
+        offset: &Input,
+    ) -> Result<Telemetry, CoreError> {
         match self {
-            SensorComputer::Thesis(c) => c.step(frame, reference),
-            SensorComputer::Eskf(c) => c.step(frame, reference),
+            SensorComputer::Thesis(c) => c.step_with_excitation(frame, reference, offset),
+            SensorComputer::Eskf(c) => c.step_with_excitation(frame, reference, offset),
         }
     }
 

@@ -48,6 +48,21 @@ pub struct Command {
 pub trait StateFeedback {
     /// One sample of the control law.
     fn command(&mut self, estimate: &ReducedState, reference: &Reference) -> Command;
+    /// One sample of the control law with `offset` (servo units, rad) added
+    /// to the law's command *before* saturation: a flight-test excitation
+    /// injected on the servos. The default adds it to [`StateFeedback::command`]'s
+    /// output; laws that saturate must override it so the offset is
+    /// saturated (and seen by the anti-windup) like the rest of the command.
+    fn command_with_offset(
+        &mut self,
+        estimate: &ReducedState,
+        reference: &Reference,
+        offset: &Input,
+    ) -> Command {
+        let mut c = self.command(estimate, reference);
+        c.u += offset;
+        c
+    }
     /// Forget any internal state (integrators).
     fn reset(&mut self);
 }
@@ -97,9 +112,19 @@ impl Lqi {
 impl StateFeedback for Lqi {
     // `&self.ls * x`: by reference on purpose, the by-value `Mul` copies the
     // matrix each call.
-    #[allow(clippy::op_ref)]
     #[inline]
     fn command(&mut self, estimate: &ReducedState, reference: &Reference) -> Command {
+        self.command_with_offset(estimate, reference, &Input::zeros())
+    }
+
+    #[allow(clippy::op_ref)]
+    #[inline]
+    fn command_with_offset(
+        &mut self,
+        estimate: &ReducedState,
+        reference: &Reference,
+        offset: &Input,
+    ) -> Command {
         let trig = EulerTrig::new(estimate[0], estimate[1], estimate[2]);
         let ned_from_body = trig.ned_from_body();
         let v_body = Vector3::new(estimate[3], estimate[4], estimate[5]);
@@ -125,7 +150,7 @@ impl StateFeedback for Lqi {
             self.u_trim - &self.ls * x_fb - &self.li * xi_body
         } else {
             self.u_trim
-        };
+        } + offset;
         let mut u_sat = u;
         let mut saturated = [false; NU];
         for i in 0..NU {

@@ -333,6 +333,15 @@ impl ScheduledLqi {
 
 impl StateFeedback for ScheduledLqi {
     fn command(&mut self, estimate: &ReducedState, reference: &Reference) -> Command {
+        self.command_with_offset(estimate, reference, &Input::zeros())
+    }
+
+    fn command_with_offset(
+        &mut self,
+        estimate: &ReducedState,
+        reference: &Reference,
+        offset: &Input,
+    ) -> Command {
         let sigma = commanded_operating_point(reference);
         // non-finite: keep the last operating point (the law reports the error)
         if sigma.iter().all(|v| v.is_finite()) {
@@ -344,7 +353,7 @@ impl StateFeedback for ScheduledLqi {
         // the wrapped heading error), else the proportional path would pull
         // the heading back to the design's ψ = 0 through a turn.
         self.law.x_trim[2] = estimate[2] - wrap_pi(estimate[2] - reference.yaw_rad);
-        self.law.command(estimate, reference)
+        self.law.command_with_offset(estimate, reference, offset)
     }
 
     fn reset(&mut self) {
@@ -428,6 +437,19 @@ impl StateFeedback for Law {
         match self {
             Law::Fixed(l) => l.command(estimate, reference),
             Law::Scheduled(l) => l.command(estimate, reference),
+        }
+    }
+
+    #[inline]
+    fn command_with_offset(
+        &mut self,
+        estimate: &ReducedState,
+        reference: &Reference,
+        offset: &Input,
+    ) -> Command {
+        match self {
+            Law::Fixed(l) => l.command_with_offset(estimate, reference, offset),
+            Law::Scheduled(l) => l.command_with_offset(estimate, reference, offset),
         }
     }
 

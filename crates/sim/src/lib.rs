@@ -17,6 +17,7 @@
 
 pub mod closed_loop;
 pub mod envelope;
+pub mod excitation;
 pub mod log_csv;
 pub mod mc;
 pub mod metrics;

@@ -13,7 +13,7 @@
 //!   (plain notation for 1e-4 ≤ |v| < 1e9, exponent notation otherwise), so a
 //!   log is an exact record of the run.
 //!
-//! The columns of a helicon run are [`LOG_SCHEMA`] (79, SI units). The reader
+//! The columns of a helicon run are [`LOG_SCHEMA`] (83, SI units). The reader
 //! matches columns by name: a file with extra columns, or another order, reads
 //! as well, so tools can require only the columns they use
 //! ([`read_log_csv_with`]).
@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 
 /// Version of the `log.csv` layout: raised when a column of [`LOG_SCHEMA`]
 /// is renamed, removed, reordered or changes unit or meaning.
-pub const LOG_FORMAT_VERSION: u32 = 2;
+pub const LOG_FORMAT_VERSION: u32 = 3;
 
 /// The nine measured states of the thesis (15.2), in order.
 pub const MEASURED_NAMES: [&str; 9] = ["phi", "theta", "psi", "u", "v", "w", "p", "q", "r"];
@@ -63,6 +63,9 @@ pub enum LogSource {
     /// The flight software's IMU health `[vibration RMS, gravity residual,
     /// flags][i]` (zeros without sensor models).
     ImuHealth(usize),
+    /// The servo excitation `[S_col, S_lat, S_lon, S_tr][i]` added to the
+    /// law's command (`[[excitation]]`; zeros without).
+    Excitation(usize),
 }
 
 impl LogSource {
@@ -82,6 +85,7 @@ impl LogSource {
             LogSource::Inflow(i) => r.lambda[i],
             LogSource::RotorForce(i) => r.thrust[i],
             LogSource::ImuHealth(i) => r.imu_health[i],
+            LogSource::Excitation(i) => r.excitation[i],
         }
     }
 }
@@ -118,7 +122,7 @@ const fn col(name: &'static str, unit: &'static str, source: LogSource) -> LogCo
 use LogSource as S;
 
 /// Number of columns of `log.csv`.
-pub const LOG_COLUMNS: usize = 79;
+pub const LOG_COLUMNS: usize = 83;
 
 /// The columns of `log.csv`, in order: the one table the header, every row,
 /// the reader's units and the documentation come from.
@@ -211,6 +215,11 @@ pub static LOG_SCHEMA: [LogColumn; LOG_COLUMNS] = [
     col("imu_vib_rms_m_s2", "m/s^2", S::ImuHealth(0)),
     col("imu_gravity_residual_m_s2", "m/s^2", S::ImuHealth(1)),
     col("imu_health_flags", "1", S::ImuHealth(2)),
+    // the servo excitation added before saturation ([[excitation]])
+    col("exc_col", "1", S::Excitation(0)),
+    col("exc_lat", "1", S::Excitation(1)),
+    col("exc_lon", "1", S::Excitation(2)),
+    col("exc_tr", "1", S::Excitation(3)),
 ];
 
 /// The `log.csv` header, in column order.

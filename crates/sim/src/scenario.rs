@@ -256,6 +256,12 @@ pub struct Scenario {
     /// ([`crate::envelope::TrajectorySection`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub trajectory: Option<crate::envelope::TrajectorySection>,
+    /// Flight-test excitations added to the servo commands
+    /// ([`crate::excitation::ExcitationEntry`]). Not written when empty, so
+    /// the effective scenarios (and campaign hashes) without them are
+    /// unchanged.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub excitation: Vec<crate::excitation::ExcitationEntry>,
     /// Wind.
     #[serde(default)]
     pub wind: WindConfig,
@@ -672,6 +678,7 @@ impl Scenario {
             .validate(file)
             .map_err(|e| e.within(file, "sensors"))?;
         self.validate_envelope(file)?;
+        crate::excitation::Excitations::new(&self.excitation, file)?;
         crate::wind::Wind::from_config(&self.wind).map_err(|e| e.within(file, "wind"))?;
         Ok(())
     }

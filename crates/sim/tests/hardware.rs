@@ -53,6 +53,7 @@ fn hardware_steps_reproduce_fly_bit_for_bit() {
         assert_eq!(a.imu_health, [0.0; 3]);
         let b = LogRow {
             imu_health: [0.0; 3],
+            excitation: [0.0; 4],
             ..*b
         };
         assert_eq!(*a, b, "row at t = {}", a.t_s);

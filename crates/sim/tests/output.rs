@@ -96,11 +96,11 @@ fn run_folder_files_csv_and_json() {
     assert!(report.contains("(outputs.png)"));
     assert!(report.contains("| vn |"));
 
-    // log.csv: header, 79 columns, every 3rd sample from t = 0, exact values
+    // log.csv: header, 83 columns, every 3rd sample from t = 0, exact values
     let (header, rows) = csv_rows(&files.log);
     assert_eq!(header, log_header());
     assert_eq!(header.len(), LOG_COLUMNS);
-    assert_eq!(LOG_COLUMNS, 79);
+    assert_eq!(LOG_COLUMNS, 83);
     assert_eq!(header[0], "t_s");
     assert_eq!(&header[1..31], &STATE_NAMES.map(str::to_string)[..]);
     assert_eq!(&header[31..35], &INPUT_NAMES.map(str::to_string)[..]);
@@ -297,6 +297,7 @@ fn row(t: f64) -> LogRow {
         thrust: [0.0; 2],
         inflow_residual: [0.0; 2],
         imu_health: [0.0; 3],
+        excitation: [0.0; 4],
     }
 }
 
@@ -319,7 +320,7 @@ fn log_csv_round_trips_every_column_bit_for_bit() {
     let table = read_log_csv(&files.log).unwrap();
     assert_eq!(table.rows(), f.log.len());
     assert_eq!(table.names(), &log_header()[..]);
-    assert_eq!(LOG_FORMAT_VERSION, 2);
+    assert_eq!(LOG_FORMAT_VERSION, 3);
     for c in &LOG_SCHEMA {
         let col = table.column(c.name).unwrap();
         assert_eq!(table.unit(c.name), Some(c.unit));

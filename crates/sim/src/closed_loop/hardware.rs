@@ -148,6 +148,7 @@ impl<'a> Hardware<'a> {
             // The IMU health monitor is flight software: the on-board side
             // does not report it through the hardware (zeros, as without sensors).
             imu_health: [0.0; 3],
+            excitation: [0.0; 4],
         };
         if let Some(tel) = downlink {
             row = LogRow::new(t, &x_start, tel, r, &wind_ned, &step.aux);

@@ -236,6 +236,9 @@ pub struct LogRow {
     /// vibration RMS (m/s²), |mean f| − g (m/s²) and the flags
     /// (`helicon_core::ImuHealth`); zeros without sensor models.
     pub imu_health: [f64; 3],
+    /// The servo excitation added to the law's command this sample
+    /// [S_col, S_lat, S_lon, S_tr] (rad, before saturation; `[[excitation]]`).
+    pub excitation: [f64; 4],
 }
 
 /// A finished flight: the log and the summary.
@@ -398,6 +401,7 @@ fn fly_with(
     let mut wind = Wind::from_config(&scenario.wind)?;
     let mut health = imu_health_monitor(scenario, prepared)?;
     let schedule = scenario.reference_schedule();
+    let excitations = crate::excitation::Excitations::new(&scenario.excitation, &scenario.name)?;
     let mut acc = SummaryAccumulator::new(prepared);
     let mut sensors = Vec::new();
     if record_sensors {
@@ -414,7 +418,8 @@ fn fly_with(
             yaw_rad: r[3],
         };
         let record = record_sensors.then_some(&mut sensors);
-        let tel = match onboard.step(t, &plant, &reference, record, health.as_mut()) {
+        let exc = excitations.at(t);
+        let tel = match onboard.step(t, &plant, &reference, &exc, record, health.as_mut()) {
             Ok(tel) => tel,
             Err(e) => {
                 reason = Some((
@@ -429,6 +434,7 @@ fn fly_with(
         // the log keeps every `decimation`-th sample (and the last one)
         if k % decimation == 0 || k == n {
             let mut row = LogRow::new(t, &x_start, &tel, r, &wind_ned, &step.aux);
+            row.excitation = exc.into();
             if let Some(h) = health.as_ref().map(ImuHealthMonitor::health) {
                 row.imu_health = [
                     h.vibration_rms_m_s2,
@@ -495,6 +501,7 @@ impl LogRow {
             thrust: [-aux.force_mr_hub_n.z, aux.force_tr_y_n],
             inflow_residual: aux.inflow_residual,
             imu_health: [0.0; 3],
+            excitation: [0.0; 4],
         }
     }
 }

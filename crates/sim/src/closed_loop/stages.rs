@@ -288,6 +288,7 @@ impl OnBoard {
         t_s: f64,
         plant: &Plant<'_>,
         reference: &Reference,
+        excitation: &Input,
         record: Option<&mut Vec<SensorLogRow>>,
         health: Option<&mut ImuHealthMonitor>,
     ) -> Result<Telemetry, CoreError> {
@@ -309,14 +310,14 @@ impl OnBoard {
         match self {
             OnBoard::Sensed { suite, computer } => {
                 let frame = sense(suite);
-                computer.step(&frame, reference)
+                computer.step_with_excitation(&frame, reference, excitation)
             }
             OnBoard::IdealNavigation(computer) => {
                 let m = StateMeasurement {
                     t_s,
                     measured: SVector::from_fn(|i, _| xr[i]),
                 };
-                computer.step(&m, reference)
+                computer.step_with_excitation(&m, reference, excitation)
             }
             OnBoard::Truth {
                 computer,
@@ -329,7 +330,11 @@ impl OnBoard {
                     }
                     None => None,
                 };
-                let mut tel = computer.step(&TruthMeasurement { t_s, state: xr }, reference)?;
+                let mut tel = computer.step_with_excitation(
+                    &TruthMeasurement { t_s, state: xr },
+                    reference,
+                    excitation,
+                )?;
                 if let Some((y, solution)) = nav {
                     tel.measured = y;
                     tel.navigation = Some(solution);

@@ -353,6 +353,7 @@ mod tests {
             thrust: [0.0; 2],
             inflow_residual: [0.0; 2],
             imu_health: [0.0; 3],
+            excitation: [0.0; 4],
         }
     }
 
