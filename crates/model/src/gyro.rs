@@ -18,6 +18,26 @@
 //! mid-range (0 rad/s commanded): [`YawGyroBlock::at_trim`].
 
 use crate::params::{Params, YawGyro};
+use nalgebra::DMatrix;
+
+/// A discrete linear model of the wrong shape for [`YawGyroBlock::augment_discrete`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "yaw gyro augmentation: expected Φ n×n and Γ n×4 with the yaw rate at row {r_index} < n, \
+     found Φ {phi_rows}×{phi_cols} and Γ {gamma_rows}×{gamma_cols}"
+)]
+pub struct AugmentShapeError {
+    /// Rows of Φ.
+    pub phi_rows: usize,
+    /// Columns of Φ.
+    pub phi_cols: usize,
+    /// Rows of Γ.
+    pub gamma_rows: usize,
+    /// Columns of Γ.
+    pub gamma_cols: usize,
+    /// The yaw-rate index given.
+    pub r_index: usize,
+}
 
 /// The running yaw-rate gyro: gains, ranges and its integrator.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,6 +102,55 @@ impl YawGyroBlock {
         self.integral =
             (self.integral + self.gyro.ki * self.ts_s * e).clamp(self.s_min, self.s_max);
         out
+    }
+
+    /// The helicopter as flown with the gyro, linear and discrete: the ZOH
+    /// model (Φ, Γ) of the plant (n states, inputs `[S_col, S_lat, S_lon,
+    /// S_tr]`, the yaw rate at row `r_index`) closed by the block
+    /// (unsaturated), with the integrator appended as state n and the tail
+    /// input becoming the yaw-rate command input. Deviations from the trim:
+    /// `[x; I]_k+1 = Φa [x; I]_k + Γa [S_col, S_lat, S_lon, S_tr,in]_k` with
+    ///
+    /// ```text
+    /// Φa = [ Φ − Kp Γtr e_rᵀ    Γtr ]    Γa = [ Γcol Γlat Γlon   Kp c Γtr ]
+    ///      [ −Ki Ts e_rᵀ          1  ]         [  0    0    0     Ki Ts c  ]
+    /// ```
+    ///
+    /// (c = [`Self::rate_per_input_rad_s`], Γtr Γ's tail column).
+    pub fn augment_discrete(
+        &self,
+        phi: &DMatrix<f64>,
+        gamma: &DMatrix<f64>,
+        r_index: usize,
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), AugmentShapeError> {
+        let n = phi.nrows();
+        if phi.ncols() != n || gamma.nrows() != n || gamma.ncols() != 4 || r_index >= n {
+            return Err(AugmentShapeError {
+                phi_rows: n,
+                phi_cols: phi.ncols(),
+                gamma_rows: gamma.nrows(),
+                gamma_cols: gamma.ncols(),
+                r_index,
+            });
+        }
+        let (kp, ki, ts) = (self.gyro.kp_s, self.gyro.ki, self.ts_s);
+        let c = self.rate_per_input_rad_s();
+        let g_tr = gamma.column(3);
+        let mut phi_a = DMatrix::zeros(n + 1, n + 1);
+        phi_a.view_mut((0, 0), (n, n)).copy_from(phi);
+        for i in 0..n {
+            phi_a[(i, r_index)] -= kp * g_tr[i];
+            phi_a[(i, n)] = g_tr[i];
+        }
+        phi_a[(n, r_index)] = -ki * ts;
+        phi_a[(n, n)] = 1.0;
+        let mut gamma_a = DMatrix::zeros(n + 1, 4);
+        gamma_a.view_mut((0, 0), (n, 3)).copy_from(&gamma.columns(0, 3));
+        for i in 0..n {
+            gamma_a[(i, 3)] = kp * c * g_tr[i];
+        }
+        gamma_a[(n, 3)] = ki * ts * c;
+        Ok((phi_a, gamma_a))
     }
 
     /// The block's linear discrete closed loop around the scalar yaw

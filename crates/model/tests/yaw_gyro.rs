@@ -73,16 +73,28 @@ fn yaw_rate_step_settles_as_the_linear_closed_loop() {
             phi_s[1][0] * z[0] + phi_s[1][1] * z[1] + gam_s[1] * r_cmd,
         ];
     }
-    // (b) the block closed around the full 27-state ZOH linearisation
+    // (b) the 27-state ZOH linearisation closed by the block: the augmented
+    // 28-state model (the helicopter as flown with the gyro)
     let (phi, gam) = lin.discretize(TS).unwrap();
-    let mut x = DVector::<f64>::zeros(27);
-    let mut lin_block = gyro;
+    let (phi_a, gam_a) = gyro.augment_discrete(&phi, &gam, R).unwrap();
+    assert_eq!(phi_a.shape(), (28, 28));
+    let mut v = DVector::<f64>::zeros(4);
+    v[3] = input - gyro.mid_input();
+    let mut x = DVector::<f64>::zeros(28);
     let mut r_lin = Vec::with_capacity(n);
     for _ in 0..n {
         r_lin.push(x[R]);
-        let s = lin_block.step(input, x[R]) - t.u[3];
-        x = &phi * &x + gam.column(3) * s;
+        x = &phi_a * &x + &gam_a * &v;
     }
+    // the augmentation is the block run on the linear model, sample by sample
+    let mut xb = DVector::<f64>::zeros(27);
+    let mut lin_block = gyro;
+    for (k, r) in r_lin.iter().enumerate() {
+        assert!((xb[R] - r).abs() < 1e-12, "sample {k}");
+        let s = lin_block.step(input, xb[R]) - t.u[3];
+        xb = &phi * &xb + gam.column(3) * s;
+    }
+    assert!(gyro.augment_discrete(&phi, &gam, 27).is_err());
     // (c) the nonlinear model flown with the block at the control rate
     let mut block = gyro;
     let mut xs = expand(&t.x, [0.0; 3]);
