@@ -27,6 +27,7 @@ use helicon_core::{
     StateMeasurement, Telemetry, ThesisEstimator, TruthFeed, TruthMeasurement,
 };
 use helicon_gnc::design::{Gains, design};
+use helicon_model::gyro::YawGyroBlock;
 use helicon_model::integrate::rk4;
 use helicon_model::linearize::linearize;
 use helicon_model::state::{REDUCED_OFFSET, expand, ix, reduce};
@@ -69,6 +70,9 @@ pub enum ClosedLoopError {
     /// Wind or sensor configuration (the one configuration error shape).
     #[error(transparent)]
     Config(#[from] helicon_model::ConfigError),
+    /// The yaw-gyro augmentation of the design model.
+    #[error(transparent)]
+    Gyro(#[from] helicon_model::gyro::AugmentShapeError),
     /// Navigation (fusion) setup.
     #[error(transparent)]
     Fusion(#[from] helicon_core::fusion::FusionError),
@@ -124,6 +128,29 @@ pub struct Prepared {
     pub schedule: Option<std::sync::Arc<helicon_core::GainSchedule>>,
 }
 
+/// The design for the helicopter as flown with the yaw-rate gyro: the tail
+/// input is the yaw-rate command, its trim the mid-range (0 rad/s). The
+/// design model is the gyro-augmented model (plant closed by the block) with
+/// the block's integrator held at its trim value: the flight software's
+/// 27-state layout has no room for it, and the LQI's ψ integral absorbs its
+/// slow drift.
+fn gyro_design(
+    gyro: &YawGyroBlock,
+    phi: &nalgebra::DMatrix<f64>,
+    gamma: &nalgebra::DMatrix<f64>,
+    t: &Trim,
+    ts: f64,
+    scenario: &Scenario,
+) -> Result<Gains, ClosedLoopError> {
+    let (phi_a, gamma_a) = gyro.augment_discrete(phi, gamma, ix::R - REDUCED_OFFSET)?;
+    let n = phi.nrows();
+    let phi_d = phi_a.view((0, 0), (n, n)).into_owned();
+    let gamma_d = gamma_a.view((0, 0), (n, 4)).into_owned();
+    let mut u = t.u;
+    u[3] = gyro.mid_input();
+    Ok(design(&phi_d, &gamma_d, &t.x, &u, ts, &scenario.controller.design)?)
+}
+
 /// Trim, linearize, discretize and design (or load) the gains for a scenario.
 pub fn prepare(scenario: &Scenario) -> Result<Prepared, ClosedLoopError> {
     let params = match &scenario.params {
@@ -138,20 +165,6 @@ pub fn prepare_with_params(
     scenario: &Scenario,
     params: Params,
 ) -> Result<Prepared, ClosedLoopError> {
-    if params.yaw_gyro.is_enabled() {
-        // the plant stage and the design do not carry the gyro block yet:
-        // refuse rather than fly the helicopter without it silently
-        return Err(ClosedLoopError::Config(helicon_model::ConfigError::invalid(
-            &scenario
-                .params
-                .as_ref()
-                .map_or_else(|| "<parameters>".to_string(), |p| p.display().to_string()),
-            "yaw_gyro.enabled",
-            1.0,
-            "the closed loop does not fly the yaw-rate gyro yet (set it to false); \
-             the block is available to trim, linearisation and tests (helicon_model::gyro)",
-        )));
-    }
     let model = Model::new(params, scenario.preset.options());
     let target = TrimTarget {
         velocity_ned_m_s: Vector3::from(scenario.trim.velocity_ned_m_s),
@@ -209,7 +222,10 @@ pub fn prepare_with_params(
             };
             let lm = linearize(&model, &t.x, &t.u, &Vector3::zeros(), inflow)?;
             let (phi, gamma) = lm.discretize(ts)?;
-            design(&phi, &gamma, &t.x, &t.u, ts, &scenario.controller.design)?
+            match YawGyroBlock::at_trim(model.params(), ts, t.u[3]) {
+                None => design(&phi, &gamma, &t.x, &t.u, ts, &scenario.controller.design)?,
+                Some(gyro) => gyro_design(&gyro, &phi, &gamma, &t, ts, scenario)?,
+            }
         }
     };
     Ok(Prepared {
