@@ -175,7 +175,22 @@ pub fn prepare_with_params(
     // can hold (inputs within the servo range, blades unstalled, …)
     let t = trim(&model, &target, &TrimOptions::default())?.require_physical(&model)?;
     let ts = model.params().control.sample_time_s;
+    let gyro = YawGyroBlock::at_trim(model.params(), ts, t.u[3]);
+    let gyro_mismatch = |file: String, rule: &str| {
+        ClosedLoopError::Config(helicon_model::ConfigError::invalid(
+            &file,
+            "yaw_gyro.enabled",
+            1.0,
+            rule,
+        ))
+    };
     if let Some(s) = crate::envelope::scenario_schedule(scenario)? {
+        if gyro.is_some() {
+            return Err(gyro_mismatch(
+                "parameters".into(),
+                "gain schedules are designed without the yaw-rate gyro: fly the gyro with a single design",
+            ));
+        }
         let (schedule, core) = &*s;
         if schedule.sample_time_s() != ts {
             return Err(ClosedLoopError::SampleTimeMismatch {
@@ -202,6 +217,16 @@ pub fn prepare_with_params(
         Some(f) => {
             let path = scenario.resolve(f);
             let g = Gains::load(&path)?;
+            if let Some(gyro) = &gyro {
+                // a gyro design trims the tail input at mid-range (0 rad/s)
+                if g.set.u_trim[3] != gyro.mid_input() {
+                    return Err(gyro_mismatch(
+                        path.display().to_string(),
+                        "these gains were designed without the yaw-rate gyro (tail trim input is \
+                         not the mid-range 0 rad/s command): redesign with the gyro on",
+                    ));
+                }
+            }
             if g.set.sample_time_s != ts {
                 return Err(ClosedLoopError::SampleTimeMismatch {
                     file: path.display().to_string(),
@@ -222,7 +247,7 @@ pub fn prepare_with_params(
             };
             let lm = linearize(&model, &t.x, &t.u, &Vector3::zeros(), inflow)?;
             let (phi, gamma) = lm.discretize(ts)?;
-            match YawGyroBlock::at_trim(model.params(), ts, t.u[3]) {
+            match gyro {
                 None => design(&phi, &gamma, &t.x, &t.u, ts, &scenario.controller.design)?,
                 Some(gyro) => gyro_design(&gyro, &phi, &gamma, &t, ts, scenario)?,
             }
