@@ -145,7 +145,9 @@ impl YawGyroBlock {
         phi_a[(n, r_index)] = -ki * ts;
         phi_a[(n, n)] = 1.0;
         let mut gamma_a = DMatrix::zeros(n + 1, 4);
-        gamma_a.view_mut((0, 0), (n, 3)).copy_from(&gamma.columns(0, 3));
+        gamma_a
+            .view_mut((0, 0), (n, 3))
+            .copy_from(&gamma.columns(0, 3));
         for i in 0..n {
             gamma_a[(i, 3)] = kp * c * g_tr[i];
         }
@@ -168,10 +170,7 @@ impl YawGyroBlock {
         };
         let (kp, ki) = (self.gyro.kp_s, self.gyro.ki);
         // S = I + Kp (r_cmd − r); r+ = a r + b S; I+ = I + Ki Ts (r_cmd − r)
-        (
-            [[a - b * kp, b], [-ki * ts, 1.0]],
-            [b * kp, ki * ts],
-        )
+        ([[a - b * kp, b], [-ki * ts, 1.0]], [b * kp, ki * ts])
     }
 }
 
@@ -192,7 +191,9 @@ mod tests {
         assert_eq!(b.rate_command_rad_s(b.mid_input()), 0.0);
         // S_max commands +max_rate
         assert!((b.rate_command_rad_s(0.62) - 3.0).abs() < 1e-12);
-        assert!((b.input_for_rate(1.0) - b.mid_input() - 1.0 / b.rate_per_input_rad_s()).abs() < 1e-15);
+        assert!(
+            (b.input_for_rate(1.0) - b.mid_input() - 1.0 / b.rate_per_input_rad_s()).abs() < 1e-15
+        );
     }
 
     #[test]

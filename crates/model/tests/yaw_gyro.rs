@@ -1,6 +1,7 @@
 //! The yaw-rate gyro block (thesis §3.1.1) on the nonlinear model: its hover
 //! equilibrium, and a commanded yaw-rate step against the block's linear
 //! closed loops (scalar design loop and the full 27-state linearisation).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // tests: panics are failures
 
 use helicon_model::gyro::YawGyroBlock;
 use helicon_model::linearize::linearize;
@@ -120,9 +121,10 @@ fn yaw_rate_step_settles_as_the_linear_closed_loop() {
         settling_time_s(&r_lin, r_cmd),
         settling_time_s(&r_scalar, r_cmd),
     );
-    let poles = DMatrix::from_row_slice(2, 2, &[phi_s[0][0], phi_s[0][1], phi_s[1][0], phi_s[1][1]])
-        .complex_eigenvalues()
-        .map(|z| z.ln() / TS);
+    let poles =
+        DMatrix::from_row_slice(2, 2, &[phi_s[0][0], phi_s[0][1], phi_s[1][0], phi_s[1][1]])
+            .complex_eigenvalues()
+            .map(|z| z.ln() / TS);
     eprintln!(
         "N_r = {n_r:.4} 1/s, N_delta = {n_delta:.3}; design poles {poles:?}; \
          settling 2%: nonlinear {ts_nl:.4} s, 27-state linear {ts_lin:.4} s, scalar {ts_scalar:.4} s; \
@@ -134,13 +136,23 @@ fn yaw_rate_step_settles_as_the_linear_closed_loop() {
     // 2 % of the step (small-perturbation linearisation; measured 1.2 %) and
     // settles within 4 samples of it (measured 2 samples).
     assert!(worst_lin < 0.02 * r_cmd, "{worst_lin}");
-    assert!((ts_nl - ts_lin).abs() <= 4.0 * TS + 1e-12, "{ts_nl} vs {ts_lin}");
+    assert!(
+        (ts_nl - ts_lin).abs() <= 4.0 * TS + 1e-12,
+        "{ts_nl} vs {ts_lin}"
+    );
     // The scalar design loop omits the tail servo (ωn = 100 rad/s) and the
     // roll/sway coupling: settling within 15 % of its prediction (measured 10 %).
-    assert!((ts_nl - ts_scalar).abs() < 0.15 * ts_scalar, "{ts_nl} vs {ts_scalar}");
+    assert!(
+        (ts_nl - ts_scalar).abs() < 0.15 * ts_scalar,
+        "{ts_nl} vs {ts_scalar}"
+    );
     assert!(ts_nl > 0.2 && ts_nl < 0.8, "{ts_nl}");
     // heading hold: no steady yaw-rate error
-    assert!((r_nl[n - 1] - r_cmd).abs() < 0.02 * r_cmd, "{}", r_nl[n - 1]);
+    assert!(
+        (r_nl[n - 1] - r_cmd).abs() < 0.02 * r_cmd,
+        "{}",
+        r_nl[n - 1]
+    );
     // the design poles: well damped, about 10 rad/s
     for p in poles.iter() {
         assert!(p.re < -8.0 && p.im.abs() < p.re.abs(), "{p}");

@@ -148,7 +148,14 @@ fn gyro_design(
     let gamma_d = gamma_a.view((0, 0), (n, 4)).into_owned();
     let mut u = t.u;
     u[3] = gyro.mid_input();
-    Ok(design(&phi_d, &gamma_d, &t.x, &u, ts, &scenario.controller.design)?)
+    Ok(design(
+        &phi_d,
+        &gamma_d,
+        &t.x,
+        &u,
+        ts,
+        &scenario.controller.design,
+    )?)
 }
 
 /// Trim, linearize, discretize and design (or load) the gains for a scenario.
