@@ -71,3 +71,33 @@ fn gyro_off_leaves_the_flight_bit_identical() {
         assert_eq!(format!("{ra:?}"), format!("{rb:?}"));
     }
 }
+
+#[test]
+fn gains_designed_without_the_gyro_are_refused_with_it_on() {
+    let mut c = scenario("thesis-fig14-5.toml").cases().remove(1);
+    let plain = prepare(&c).unwrap();
+    let dir = std::env::temp_dir().join(format!("helicon-gyro-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("plain-gains.json");
+    plain.gains.save(&file).unwrap();
+    c.controller.gains_file = Some(file.clone());
+    let Err(e) = prepare_with_params(&c, rate_mode_gyro()) else {
+        panic!("gyro-less gains flown with the gyro on");
+    };
+    let msg = e.to_string();
+    assert!(
+        msg.contains("plain-gains.json") && msg.contains("yaw_gyro.enabled"),
+        "{msg}"
+    );
+    // the gyro's own design, saved and loaded, is accepted
+    let gyro = prepare_with_params(&c_without_file(&c), rate_mode_gyro()).unwrap();
+    gyro.gains.save(&file).unwrap();
+    assert!(prepare_with_params(&c, rate_mode_gyro()).is_ok());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+fn c_without_file(c: &Scenario) -> Scenario {
+    let mut c = c.clone();
+    c.controller.gains_file = None;
+    c
+}
