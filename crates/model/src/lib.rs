@@ -27,6 +27,7 @@ pub mod actuators;
 pub mod config_error;
 pub mod drag;
 pub mod flapping;
+pub mod gyro;
 pub mod inflow;
 pub mod integrate;
 pub mod linearize;

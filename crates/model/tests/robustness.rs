@@ -248,6 +248,7 @@ proptest! {
                 Rule::NonNegative => 0.0,
                 Rule::Count => 1.0,
                 Rule::Finite => -m.max_abs,
+                Rule::Flag => 0.0,
             };
             *(d.field)(&mut p) = match pick {
                 0 => low,

@@ -15,6 +15,8 @@ pub enum Rule {
     Finite,
     /// A whole number ≥ 1.
     Count,
+    /// A switch: 0 (off) or 1 (on); TOML `false`/`true` are accepted.
+    Flag,
 }
 
 /// The magnitude range of a family of parameters (the parameters with one
@@ -80,6 +82,9 @@ impl Rule {
             Rule::NonNegative if v < 0.0 => return Err("must be >= 0".into()),
             Rule::Count if v < 1.0 || v.fract() != 0.0 => {
                 return Err("must be a whole number >= 1".into());
+            }
+            Rule::Flag if v != 0.0 && v != 1.0 => {
+                return Err("must be true/false (or 1/0)".into());
             }
             _ => {}
         }
@@ -538,6 +543,41 @@ const BASE: [Descriptor; 53] = [
     ),
 ];
 
+const YAW_GYRO: [Descriptor; 4] = [
+    d!(
+        "yaw_gyro",
+        "enabled",
+        "1",
+        "yaw-rate gyro block on (thesis §3.1.1)",
+        Flag,
+        |p| p.yaw_gyro.enabled
+    ),
+    d!(
+        "yaw_gyro",
+        "kp_s",
+        "s",
+        "Kp gyro proportional gain (S_tr per rad/s)",
+        Finite,
+        |p| p.yaw_gyro.kp_s
+    ),
+    d!(
+        "yaw_gyro",
+        "ki",
+        "1",
+        "Ki gyro heading-hold gain (S_tr per rad)",
+        Finite,
+        |p| p.yaw_gyro.ki
+    ),
+    d!(
+        "yaw_gyro",
+        "max_rate_rad_s",
+        "rad/s",
+        "yaw-rate command at full tail input",
+        Positive,
+        |p| p.yaw_gyro.max_rate_rad_s
+    ),
+];
+
 /// All parameter descriptors, in file order.
 pub fn descriptors() -> impl Iterator<Item = &'static Descriptor> {
     BASE.iter()
@@ -545,6 +585,7 @@ pub fn descriptors() -> impl Iterator<Item = &'static Descriptor> {
         .chain(SERVO_LAT.iter())
         .chain(SERVO_LON.iter())
         .chain(SERVO_TR.iter())
+        .chain(YAW_GYRO.iter())
 }
 
 /// Number of parameter keys.

@@ -322,6 +322,33 @@ pub struct Control {
     pub sample_time_s: f64,
 }
 
+/// The optional yaw-rate gyro between the tail input and the tail servo
+/// (thesis §3.1.1: the stock helicopter's heading-hold gyro), see
+/// [`crate::gyro`]. Disabled by default: the tail input is then the tail
+/// servo command, as in the thesis's model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct YawGyro {
+    /// 1 when the block is on, 0 when off (TOML `true`/`false` or 1/0).
+    pub enabled: f64,
+    /// Proportional gain Kp (tail-servo command per rad/s of yaw-rate error,
+    /// i.e. s/rad). Its sign is the gyro's direction (the "reverse" switch of
+    /// a stock gyro): it must make a positive error drive the yaw rate up.
+    pub kp_s: f64,
+    /// Heading-hold integral gain Ki (tail-servo command per rad of
+    /// accumulated yaw-angle error), same sign as `kp_s`.
+    pub ki: f64,
+    /// Yaw-rate command at the ends of the tail input range (rad/s): the
+    /// input's mid-range is 0 rad/s, `s_max` is +`max_rate_rad_s`.
+    pub max_rate_rad_s: f64,
+}
+
+impl YawGyro {
+    /// Whether the block is on.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled != 0.0
+    }
+}
+
 /// Every model constant. Build with [`Params::bergen_twin`] or
 /// [`Params::from_toml_str`] / [`Params::from_file`]; all are validated.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -345,6 +372,8 @@ pub struct Params {
     pub servos: [Servo; 4],
     /// Controller constants.
     pub control: Control,
+    /// The optional yaw-rate gyro (off by default).
+    pub yaw_gyro: YawGyro,
 }
 
 const ZERO_SERVO: Servo = Servo {
@@ -427,6 +456,12 @@ impl Params {
             },
             servos: [ZERO_SERVO; 4],
             control: Control { sample_time_s: 0.0 },
+            yaw_gyro: YawGyro {
+                enabled: 0.0,
+                kp_s: 0.0,
+                ki: 0.0,
+                max_rate_rad_s: 0.0,
+            },
         }
     }
 
@@ -518,6 +553,7 @@ impl Params {
                         key: full.clone(),
                     })?;
                     let v = match value {
+                        toml::Value::Boolean(b) if d.rule == Rule::Flag => f64::from(u8::from(*b)),
                         toml::Value::Float(f) => *f,
                         toml::Value::Integer(i) => *i as f64,
                         other => {
@@ -615,6 +651,8 @@ impl Params {
             let v = *(d.field)(&mut copy);
             let value = if d.rule == Rule::Count {
                 format!("{v:.0}")
+            } else if d.rule == Rule::Flag {
+                (v != 0.0).to_string()
             } else {
                 format!("{v:?}")
             };
@@ -672,7 +710,7 @@ mod tests {
         assert_eq!(p.servos[3].s_min, -0.37);
         assert_eq!(p.stabilizer_bar.outer_radius_m, 0.65);
         assert_eq!(p.tail_rotor.radius_m, 0.18);
-        assert_eq!(descriptor_count(), 77);
+        assert_eq!(descriptor_count(), 81);
     }
 
     #[test]

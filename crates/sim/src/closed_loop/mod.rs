@@ -27,6 +27,7 @@ use helicon_core::{
     StateMeasurement, Telemetry, ThesisEstimator, TruthFeed, TruthMeasurement,
 };
 use helicon_gnc::design::{Gains, design};
+use helicon_model::gyro::YawGyroBlock;
 use helicon_model::integrate::rk4;
 use helicon_model::linearize::linearize;
 use helicon_model::state::{REDUCED_OFFSET, expand, ix, reduce};
@@ -69,6 +70,9 @@ pub enum ClosedLoopError {
     /// Wind or sensor configuration (the one configuration error shape).
     #[error(transparent)]
     Config(#[from] helicon_model::ConfigError),
+    /// The yaw-gyro augmentation of the design model.
+    #[error(transparent)]
+    Gyro(#[from] helicon_model::gyro::AugmentShapeError),
     /// Navigation (fusion) setup.
     #[error(transparent)]
     Fusion(#[from] helicon_core::fusion::FusionError),
@@ -124,6 +128,36 @@ pub struct Prepared {
     pub schedule: Option<std::sync::Arc<helicon_core::GainSchedule>>,
 }
 
+/// The design for the helicopter as flown with the yaw-rate gyro: the tail
+/// input is the yaw-rate command, its trim the mid-range (0 rad/s). The
+/// design model is the gyro-augmented model (plant closed by the block) with
+/// the block's integrator held at its trim value: the flight software's
+/// 27-state layout has no room for it, and the LQI's ψ integral absorbs its
+/// slow drift.
+fn gyro_design(
+    gyro: &YawGyroBlock,
+    phi: &nalgebra::DMatrix<f64>,
+    gamma: &nalgebra::DMatrix<f64>,
+    t: &Trim,
+    ts: f64,
+    scenario: &Scenario,
+) -> Result<Gains, ClosedLoopError> {
+    let (phi_a, gamma_a) = gyro.augment_discrete(phi, gamma, ix::R - REDUCED_OFFSET)?;
+    let n = phi.nrows();
+    let phi_d = phi_a.view((0, 0), (n, n)).into_owned();
+    let gamma_d = gamma_a.view((0, 0), (n, 4)).into_owned();
+    let mut u = t.u;
+    u[3] = gyro.mid_input();
+    Ok(design(
+        &phi_d,
+        &gamma_d,
+        &t.x,
+        &u,
+        ts,
+        &scenario.controller.design,
+    )?)
+}
+
 /// Trim, linearize, discretize and design (or load) the gains for a scenario.
 pub fn prepare(scenario: &Scenario) -> Result<Prepared, ClosedLoopError> {
     let params = match &scenario.params {
@@ -148,7 +182,22 @@ pub fn prepare_with_params(
     // can hold (inputs within the servo range, blades unstalled, …)
     let t = trim(&model, &target, &TrimOptions::default())?.require_physical(&model)?;
     let ts = model.params().control.sample_time_s;
+    let gyro = YawGyroBlock::at_trim(model.params(), ts, t.u[3]);
+    let gyro_mismatch = |file: String, rule: &str| {
+        ClosedLoopError::Config(helicon_model::ConfigError::invalid(
+            &file,
+            "yaw_gyro.enabled",
+            1.0,
+            rule,
+        ))
+    };
     if let Some(s) = crate::envelope::scenario_schedule(scenario)? {
+        if gyro.is_some() {
+            return Err(gyro_mismatch(
+                "parameters".into(),
+                "gain schedules are designed without the yaw-rate gyro: fly the gyro with a single design",
+            ));
+        }
         let (schedule, core) = &*s;
         if schedule.sample_time_s() != ts {
             return Err(ClosedLoopError::SampleTimeMismatch {
@@ -175,6 +224,16 @@ pub fn prepare_with_params(
         Some(f) => {
             let path = scenario.resolve(f);
             let g = Gains::load(&path)?;
+            if let Some(gyro) = &gyro {
+                // a gyro design trims the tail input at mid-range (0 rad/s)
+                if g.set.u_trim[3] != gyro.mid_input() {
+                    return Err(gyro_mismatch(
+                        path.display().to_string(),
+                        "these gains were designed without the yaw-rate gyro (tail trim input is \
+                         not the mid-range 0 rad/s command): redesign with the gyro on",
+                    ));
+                }
+            }
             if g.set.sample_time_s != ts {
                 return Err(ClosedLoopError::SampleTimeMismatch {
                     file: path.display().to_string(),
@@ -195,7 +254,10 @@ pub fn prepare_with_params(
             };
             let lm = linearize(&model, &t.x, &t.u, &Vector3::zeros(), inflow)?;
             let (phi, gamma) = lm.discretize(ts)?;
-            design(&phi, &gamma, &t.x, &t.u, ts, &scenario.controller.design)?
+            match gyro {
+                None => design(&phi, &gamma, &t.x, &t.u, ts, &scenario.controller.design)?,
+                Some(gyro) => gyro_design(&gyro, &phi, &gamma, &t, ts, scenario)?,
+            }
         }
     };
     Ok(Prepared {

@@ -22,6 +22,9 @@ pub(super) struct Plant<'a> {
     inflow_iterations: u32,
     substeps: u32,
     h_s: f64,
+    /// The yaw-rate gyro between the tail input and the tail servo, when
+    /// the parameters enable it (run once per controller sample).
+    gyro: Option<YawGyroBlock>,
 }
 
 /// What one plant step reports.
@@ -44,6 +47,7 @@ impl<'a> Plant<'a> {
             inflow_iterations: scenario.plant.inflow_iterations,
             substeps: scenario.plant.substeps,
             h_s: ts / f64::from(scenario.plant.substeps),
+            gyro: YawGyroBlock::at_trim(prepared.model.params(), ts, prepared.trim.u[3]),
         }
     }
 
@@ -67,6 +71,12 @@ impl<'a> Plant<'a> {
 
     /// Integrate one controller sample with `u` and the wind held.
     pub(super) fn advance(&mut self, u: &Input, wind_ned: &Vector3<f64>) -> PlantStep {
+        let mut u_servo = *u;
+        if let Some(gyro) = self.gyro.as_mut() {
+            // the tail input is a yaw-rate command; the gyro senses the true rate
+            u_servo[3] = gyro.step(u[3], self.x[ix::R]);
+        }
+        let u = &u_servo;
         let mut first: Option<(Aux, State)> = None;
         let mut error = None;
         let (inflow, iterations, model) = (self.inflow, self.inflow_iterations, self.model);
