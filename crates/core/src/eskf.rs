@@ -38,13 +38,13 @@
 //! allocates nothing (fixed-size nalgebra).
 
 use crate::error::CoreError;
-use crate::estimator::{Estimate, Estimator, KalmanPredictor, Predictor};
+use crate::estimator::{KalmanPredictor, NavigatedEstimator, Navigation};
 use crate::frames::wrap_pi;
 use crate::fusion::FusionError;
 use crate::gains::GainSet;
 use crate::navigation::{ImuBiasEstimate, NavigationSolution};
 use crate::sensor::{SensorFrame, SensorNoise};
-use crate::state::{Input, MeasuredStates, NM, ReducedState};
+use crate::state::{MeasuredStates, NM, ReducedState};
 use nalgebra::{Matrix3, SMatrix, SVector, UnitQuaternion, Vector3};
 
 /// Number of error states.
@@ -777,40 +777,26 @@ impl Eskf {
 /// The ESKF navigation ahead of the thesis's Kalman predictor: the ESKF
 /// gives the nine measured states (attitude, body velocity, bias-corrected
 /// rates), the predictor the flapping, servo and the other reduced states.
-#[derive(Debug, Clone)]
-pub struct EskfEstimator<P = KalmanPredictor> {
-    /// The navigation.
-    pub navigation: Eskf,
-    /// The Kalman predictor (one design, or a gain schedule's).
-    pub predictor: P,
-}
+pub type EskfEstimator<P = KalmanPredictor> = NavigatedEstimator<Eskf, P>;
 
 impl EskfEstimator {
     /// The estimator of a gain set: the navigation as built, the predictor
     /// starting at the absolute reduced state `x0`.
     pub fn new(navigation: Eskf, gains: &GainSet, x0: &ReducedState) -> Result<Self, CoreError> {
-        Ok(EskfEstimator {
+        Ok(NavigatedEstimator {
             navigation,
             predictor: KalmanPredictor::new(gains, x0)?,
         })
     }
 }
 
-impl<P: Predictor> Estimator for EskfEstimator<P> {
-    type Measurement = SensorFrame;
-
+impl Navigation for Eskf {
     #[inline]
-    fn update(&mut self, frame: &SensorFrame) -> Result<Estimate, CoreError> {
-        let y = self.navigation.step(frame)?;
-        Ok(Estimate {
-            state: self.predictor.absorb(&y)?,
-            measured: y,
-            navigation: Some(self.navigation.solution()),
-        })
+    fn step(&mut self, frame: &SensorFrame) -> Result<MeasuredStates, FusionError> {
+        Eskf::step(self, frame)
     }
-
-    fn predict(&mut self, applied: &Input) -> Result<(), CoreError> {
-        self.predictor.advance(applied)
+    fn solution(&self) -> NavigationSolution {
+        Eskf::solution(self)
     }
 }
 

@@ -19,6 +19,7 @@
 
 use crate::error::CoreError;
 use crate::frames::wrap_pi;
+use crate::fusion::FusionError;
 use crate::gains::GainSet;
 use crate::navigation::{NavigationFilter, NavigationSolution};
 use crate::sensor::SensorFrame;
@@ -190,17 +191,41 @@ impl Estimator for KalmanPredictor {
     }
 }
 
-/// The thesis's estimation chain: navigation, then the Kalman predictor (or
-/// any [`Predictor`], e.g. the gain-scheduled one).
+/// A navigation: sensor frames in, the nine measured states
+/// `[φ θ ψ u v w p q r]` out, and its solution for the logs. Implemented by
+/// the thesis's [`NavigationFilter`] and the ESKF ([`crate::eskf::Eskf`]).
+pub trait Navigation {
+    /// Absorb one sensor frame; returns the nine measured states.
+    fn step(&mut self, frame: &SensorFrame) -> Result<MeasuredStates, FusionError>;
+    /// The navigation solution after the last frame.
+    fn solution(&self) -> NavigationSolution;
+}
+
+impl Navigation for NavigationFilter {
+    #[inline]
+    fn step(&mut self, frame: &SensorFrame) -> Result<MeasuredStates, FusionError> {
+        NavigationFilter::step(self, frame)
+    }
+    fn solution(&self) -> NavigationSolution {
+        NavigationFilter::solution(self)
+    }
+}
+
+/// An estimation chain: a navigation, then the Kalman predictor (or any
+/// [`Predictor`], e.g. the gain-scheduled one) for the states it does not
+/// measure.
 #[derive(Debug, Clone)]
-pub struct ThesisEstimator<P = KalmanPredictor> {
-    /// Attitude determination + GPS/IMU fusion.
-    pub navigation: NavigationFilter,
-    /// The steady-state Kalman predictor.
+pub struct NavigatedEstimator<N, P = KalmanPredictor> {
+    /// The navigation (nine measured states from sensor frames).
+    pub navigation: N,
+    /// The predictor.
     pub predictor: P,
 }
 
-impl<P: Predictor> Estimator for ThesisEstimator<P> {
+/// The thesis's chain: q-method attitude + GPS/IMU fusion, then the predictor.
+pub type ThesisEstimator<P = KalmanPredictor> = NavigatedEstimator<NavigationFilter, P>;
+
+impl<N: Navigation, P: Predictor> Estimator for NavigatedEstimator<N, P> {
     type Measurement = SensorFrame;
 
     #[inline]

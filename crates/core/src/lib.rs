@@ -54,8 +54,8 @@ pub use computer::{FlightComputer, SensorComputer, Telemetry};
 pub use error::CoreError;
 pub use eskf::{Eskf, EskfConfig, EskfDiagnostics, EskfEstimator, ImuNoise};
 pub use estimator::{
-    Estimate, Estimator, KalmanPredictor, Predictor, StateMeasurement, ThesisEstimator,
-    Timestamped, TruthFeed, TruthMeasurement,
+    Estimate, Estimator, KalmanPredictor, NavigatedEstimator, Navigation, Predictor,
+    StateMeasurement, ThesisEstimator, Timestamped, TruthFeed, TruthMeasurement,
 };
 pub use gains::{GainSet, LqiOptions, ServoLimits};
 pub use imu_health::{ImuHealth, ImuHealthConfig, ImuHealthMonitor};
