@@ -13,6 +13,7 @@ mod mc_cmd;
 mod model_cmd;
 mod onboard_cmd;
 mod sensors;
+mod shaker_cmd;
 mod sim_cmd;
 mod sitl_cmd;
 mod trim_cmd;
@@ -122,7 +123,7 @@ fn run() -> anyhow::Result<()> {
         Command::Sensors(a) => match a.command {
             sensors::SensorsCommand::Simulate(s) => sensors::run_simulate(&s),
             sensors::SensorsCommand::Config => sensors::run_sensors_config(),
-            sensors::SensorsCommand::Shaker(s) => sensors::run_shaker(&s),
+            sensors::SensorsCommand::Shaker(s) => shaker_cmd::run_shaker(&s),
         },
         Command::Fuse(a) => sensors::run_fuse(&a),
         Command::Log(a) => log_cmd::run(&a),
