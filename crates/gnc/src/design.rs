@@ -62,6 +62,14 @@ pub struct ControllerConfig {
     /// Integral action (14.28)–(14.34); off gives the proportional LQR of
     /// §14.3.3 (Figure 14.3), u = −Ls,α x with Q1 = Hsᵀ Qy Hs (14.14).
     pub integral_action: bool,
+    /// With the yaw-rate gyro on (`[yaw_gyro]` in the parameters), the
+    /// Bryson maximum of the tail input as the yaw-rate command it stands
+    /// for (rad/s): the tail weight becomes 1/(this / c)², c the gyro's
+    /// rate per unit input, replacing `input_max[3]` (a tail-pitch
+    /// deflection, meaningless for a rate command). `None`: the gyro's full
+    /// range `max_rate_rad_s`. Unused without the gyro.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub yaw_rate_command_max_rad_s: Option<f64>,
 }
 
 impl Default for ControllerConfig {
@@ -79,6 +87,7 @@ impl Default for ControllerConfig {
             integral_action: true,
             reference_in_proportional: false,
             anti_windup: false,
+            yaw_rate_command_max_rad_s: None,
         }
     }
 }
@@ -152,6 +161,9 @@ impl ControllerConfig {
         pos("rho", self.rho)?;
         if let Some(t) = self.settling_time_s {
             pos("settling_time_s", t)?;
+        }
+        if let Some(r) = self.yaw_rate_command_max_rad_s {
+            pos("yaw_rate_command_max_rad_s", r)?;
         }
         if !(self.integral_weight.is_finite() && self.integral_weight >= 0.0) {
             return Err(DesignError::Config {

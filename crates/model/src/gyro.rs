@@ -69,6 +69,11 @@ impl YawGyroBlock {
         })
     }
 
+    /// The yaw-rate command at the ends of the tail input range (rad/s).
+    pub fn max_rate_rad_s(&self) -> f64 {
+        self.gyro.max_rate_rad_s
+    }
+
     /// Yaw-rate command (rad/s) per unit of tail input: `max_rate / S_half`.
     pub fn rate_per_input_rad_s(&self) -> f64 {
         self.gyro.max_rate_rad_s / (0.5 * (self.s_max - self.s_min))

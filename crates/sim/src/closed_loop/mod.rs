@@ -154,8 +154,29 @@ fn gyro_design(
         &t.x,
         &u,
         ts,
-        &scenario.controller.design,
+        &gyro_design_config(gyro, &scenario.controller.design)?,
     )?)
+}
+
+/// The design settings for the helicopter flown with the gyro: the tail
+/// input's Bryson maximum is a yaw-rate command
+/// (`yaw_rate_command_max_rad_s`, by default the gyro's full range), not the
+/// thesis's tail-pitch deflection `input_max[3]` (14.27). With 0.04 of input
+/// (0.24 rad/s) the rate command was so dear that the LQR met the pincer's
+/// heading decay with the cyclic instead (a ψ gain on S_lat six times the
+/// gyro-less design's): the ψ = π step of Figure 14.5 then saturated the
+/// lateral cyclic and rolled the helicopter over within 0.4 s.
+pub fn gyro_design_config(
+    gyro: &YawGyroBlock,
+    config: &helicon_gnc::design::ControllerConfig,
+) -> Result<helicon_gnc::design::ControllerConfig, ClosedLoopError> {
+    config.validate()?;
+    let rate = config
+        .yaw_rate_command_max_rad_s
+        .unwrap_or_else(|| gyro.max_rate_rad_s());
+    let mut c = config.clone();
+    c.input_max[3] = rate / gyro.rate_per_input_rad_s();
+    Ok(c)
 }
 
 /// Trim, linearize, discretize and design (or load) the gains for a scenario.
