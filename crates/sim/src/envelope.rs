@@ -294,3 +294,37 @@ pub fn segment_rms(log: &[crate::closed_loop::LogRow], t0_s: f64, t1_s: f64) -> 
         }
     })
 }
+
+/// The mean tracking error of a window in the reference's own axes: along
+/// the reference heading (positive: slower than the reference) and across
+/// it (reference − output on the reference's right axis, FRD; positive:
+/// the velocity points left of the reference, as it does when it lags a
+/// right turn). A controller that tracks a
+/// moving reference with a lag shows it here as a mean, which an RMS does
+/// not separate from turbulence.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SegmentLag {
+    /// Mean along-track velocity error (m/s).
+    pub along_m_s: f64,
+    /// Mean cross-track velocity error (m/s; positive: the velocity points
+    /// left of the reference).
+    pub cross_m_s: f64,
+}
+
+/// The mean along- and cross-track error of the log rows with
+/// `t0_s <= t < t1_s`, in the axes of each row's reference heading; `None`
+/// when no row falls inside.
+pub fn segment_lag(log: &[crate::closed_loop::LogRow], t0_s: f64, t1_s: f64) -> Option<SegmentLag> {
+    let (mut along, mut cross, mut n) = (0.0f64, 0.0f64, 0usize);
+    for r in log.iter().filter(|r| r.t_s >= t0_s && r.t_s < t1_s) {
+        let (s, c) = r.reference[3].sin_cos();
+        let (dn, de) = (r.reference[0] - r.output[0], r.reference[1] - r.output[1]);
+        along += c * dn + s * de;
+        cross += -s * dn + c * de;
+        n += 1;
+    }
+    (n > 0).then(|| SegmentLag {
+        along_m_s: along / n as f64,
+        cross_m_s: cross / n as f64,
+    })
+}

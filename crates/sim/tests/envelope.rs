@@ -5,7 +5,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests: a failed unwrap is a failed test
 
 use helicon_sim::closed_loop::{fly, prepare};
-use helicon_sim::envelope::segment_rms;
+use helicon_sim::envelope::{segment_lag, segment_rms};
 use helicon_sim::scenario::Scenario;
 use std::path::Path;
 
@@ -18,9 +18,10 @@ fn mission() -> Scenario {
 /// climb, cruise) with sensors, navigation and the predictor in Dryden
 /// turbulence, two seeds: completed; the log's references are the
 /// jerk-limited ones (15 m/s at 22 s, |Δ ref| per sample within the
-/// acceleration limit); tracking RMS within the 20-seed campaign's worst
-/// seed plus ~15 % (docs/envelope.md: horizontal 1.04 / 0.71 m/s, vertical
-/// 0.29 / 0.33 m/s in the acceleration / cruise segments).
+/// acceleration limit); tracking RMS within twice the 20-seed campaign's
+/// worst seed (docs/envelope.md, ESKF navigation: horizontal 0.069 /
+/// 0.061 m/s, vertical 0.176 / 0.255 m/s in the acceleration / cruise
+/// segments).
 #[test]
 fn shortened_mission_flies_with_the_schedule() {
     for seed in [1u64, 2] {
@@ -50,14 +51,86 @@ fn shortened_mission_flies_with_the_schedule() {
         }
         let acc = segment_rms(&f.log, 5.0, 22.0).unwrap();
         assert!(
-            acc.horizontal_m_s < 1.2 && acc.vertical_m_s < 0.5,
+            acc.horizontal_m_s < 0.14 && acc.vertical_m_s < 0.35,
             "{acc:?}"
         );
         let cruise = segment_rms(&f.log, 22.0, 32.0).unwrap();
         assert!(
-            cruise.horizontal_m_s < 0.8 && cruise.vertical_m_s < 0.5,
+            cruise.horizontal_m_s < 0.12 && cruise.vertical_m_s < 0.5,
             "{cruise:?}"
         );
+    }
+}
+
+/// The single hover design against the schedule on the whole mission, the
+/// same two seeds for both (paired): where it degrades and why. With the
+/// hover design the reference acts only through the integrators, and the
+/// trim of each new operating point (pitch −6.2° and S_lon +0.035 at
+/// 15 m/s, the bank of the turn) has to be wound up by them: a type-1 loop
+/// following a ramp, so a constant lag. The schedule puts the trims in.
+/// Measured over 20 seeds (docs/envelope.md): in the accelerations the
+/// hover design lags 0.66 m/s along track (schedule 0.01) and its
+/// horizontal RMS is 0.69 against 0.06 m/s; in the 0.2 rad/s turn its
+/// velocity points 1.70 m/s off the reference (schedule 0.02), RMS 1.88
+/// against 0.16 m/s and heading 7.2° against 1.8°. Where the operating
+/// point holds (the cruises) the two agree within 0.03 m/s: the hover
+/// design's frozen-point instability at 15 m/s (|z| = 1.000026) is too slow
+/// to show.
+#[test]
+fn hover_design_lags_the_schedule_where_the_operating_point_moves() {
+    let segment = |name: &str| match name {
+        "accelerate" => (5.0, 22.0),
+        "cruise" => (22.0, 30.0),
+        "turn" => (30.0, 50.7),
+        "cruise after turn" => (50.7, 75.0),
+        _ => (75.0, 92.0), // decelerate
+    };
+    for seed in [1u64, 2] {
+        let mut s = mission();
+        s.duration_s = 92.0;
+        s.wind.seed = seed;
+        s.sensors.seed = seed;
+        let mut h = s.clone();
+        h.controller.schedule = None;
+        let fs = fly(&s, &prepare(&s).unwrap(), None).unwrap();
+        let fh = fly(&h, &prepare(&h).unwrap(), None).unwrap();
+        assert!(fs.summary.reason.is_none(), "{:?}", fs.summary.reason);
+        assert!(fh.summary.reason.is_none(), "{:?}", fh.summary.reason);
+        let rms = |f: &helicon_sim::closed_loop::Flight, seg: &str| {
+            let (a, b) = segment(seg);
+            segment_rms(&f.log, a, b).unwrap()
+        };
+        let lag = |f: &helicon_sim::closed_loop::Flight, seg: &str| {
+            let (a, b) = segment(seg);
+            segment_lag(&f.log, a, b).unwrap()
+        };
+        for seg in ["accelerate", "turn", "decelerate"] {
+            let (rs, rh) = (rms(&fs, seg), rms(&fh, seg));
+            eprintln!(
+                "seed {seed} {seg}: horizontal RMS schedule {:.3}, hover {:.3} m/s; lag {:?} / {:?}",
+                rs.horizontal_m_s,
+                rh.horizontal_m_s,
+                lag(&fs, seg),
+                lag(&fh, seg)
+            );
+            assert!(rh.horizontal_m_s > 5.0 * rs.horizontal_m_s, "{seg}");
+        }
+        // the mechanism: a lag along track while the speed ramps …
+        let (ls, lh) = (lag(&fs, "accelerate"), lag(&fh, "accelerate"));
+        assert!(lh.along_m_s > 0.5 && ls.along_m_s.abs() < 0.1, "{ls:?} {lh:?}");
+        let (ls, lh) = (lag(&fs, "decelerate"), lag(&fh, "decelerate"));
+        assert!(lh.along_m_s < -0.5 && ls.along_m_s.abs() < 0.1, "{ls:?} {lh:?}");
+        // … and behind the turn while the velocity reference rotates
+        let (ls, lh) = (lag(&fs, "turn"), lag(&fh, "turn"));
+        assert!(lh.cross_m_s > 1.4 && ls.cross_m_s.abs() < 0.1, "{ls:?} {lh:?}");
+        let (ts, th) = (rms(&fs, "turn").heading_rad, rms(&fh, "turn").heading_rad);
+        assert!(th > 2.0 * ts, "heading RMS in the turn {ts} {th}");
+        // where the operating point holds, they agree
+        for seg in ["cruise", "cruise after turn"] {
+            let d = rms(&fh, seg).horizontal_m_s - rms(&fs, seg).horizontal_m_s;
+            eprintln!("seed {seed} {seg}: hover − schedule horizontal RMS {d:.4} m/s");
+            assert!(d.abs() < 0.03, "{seg}: {d}");
+        }
     }
 }
 
