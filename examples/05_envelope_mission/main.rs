@@ -21,6 +21,9 @@ use helicon_sim::envelope::{LegSection, segment_lag, segment_rms};
 use helicon_sim::scenario::{EstimatorKind, Scenario};
 use std::path::Path;
 
+/// A named window of the mission: (name, t0 s, t1 s).
+type Segment = (String, f64, f64);
+
 /// The command line.
 struct Options {
     seeds: u64,
@@ -41,8 +44,12 @@ fn options() -> Result<Options> {
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut value = |name: &str| -> Result<f64> {
-            let v = args.next().with_context(|| format!("{name} needs a value"))?;
-            let x: f64 = v.parse().with_context(|| format!("{name} {v}: not a number"))?;
+            let v = args
+                .next()
+                .with_context(|| format!("{name} needs a value"))?;
+            let x: f64 = v
+                .parse()
+                .with_context(|| format!("{name} {v}: not a number"))?;
             if !(x.is_finite() && x >= 0.0) {
                 bail!("{name} {v}: must be finite and >= 0");
             }
@@ -75,7 +82,7 @@ fn options() -> Result<Options> {
 /// The mission with the options applied, and its segments (name, t0, t1):
 /// from its legs (two speed legs: up and down; two yaw-rate legs: into and
 /// out of the turn).
-fn mission(base: &Scenario, o: &Options) -> Result<(Scenario, Vec<(String, f64, f64)>)> {
+fn mission(base: &Scenario, o: &Options) -> Result<(Scenario, Vec<Segment>)> {
     let mut s = base.clone();
     if let Some(n) = o.navigation {
         s.estimator.kind = n;
@@ -87,7 +94,10 @@ fn mission(base: &Scenario, o: &Options) -> Result<(Scenario, Vec<(String, f64, 
             .context("the mission has no [wind.dryden]")?
             .w20_m_s = w;
     }
-    let tr = s.trajectory.as_mut().context("the mission has no [trajectory]")?;
+    let tr = s
+        .trajectory
+        .as_mut()
+        .context("the mission has no [trajectory]")?;
     let (&[up, down], &[into, out]) = (tr.speed.as_slice(), tr.yaw_rate.as_slice()) else {
         bail!("the mission must have two speed legs and two yaw-rate legs");
     };
@@ -175,7 +185,7 @@ fn outcomes(name: &str, flights: &[Flight]) {
 /// One quantity per segment, both controllers and the paired difference.
 fn paired_table(
     what: &str,
-    segments: &[(String, f64, f64)],
+    segments: &[Segment],
     scheduled: &[Flight],
     hover: &[Flight],
     value: &dyn Fn(&Flight, f64, f64) -> Option<f64>,

@@ -117,12 +117,21 @@ fn hover_design_lags_the_schedule_where_the_operating_point_moves() {
         }
         // the mechanism: a lag along track while the speed ramps …
         let (ls, lh) = (lag(&fs, "accelerate"), lag(&fh, "accelerate"));
-        assert!(lh.along_m_s > 0.5 && ls.along_m_s.abs() < 0.1, "{ls:?} {lh:?}");
+        assert!(
+            lh.along_m_s > 0.5 && ls.along_m_s.abs() < 0.1,
+            "{ls:?} {lh:?}"
+        );
         let (ls, lh) = (lag(&fs, "decelerate"), lag(&fh, "decelerate"));
-        assert!(lh.along_m_s < -0.5 && ls.along_m_s.abs() < 0.1, "{ls:?} {lh:?}");
+        assert!(
+            lh.along_m_s < -0.5 && ls.along_m_s.abs() < 0.1,
+            "{ls:?} {lh:?}"
+        );
         // … and behind the turn while the velocity reference rotates
         let (ls, lh) = (lag(&fs, "turn"), lag(&fh, "turn"));
-        assert!(lh.cross_m_s > 1.4 && ls.cross_m_s.abs() < 0.1, "{ls:?} {lh:?}");
+        assert!(
+            lh.cross_m_s > 1.4 && ls.cross_m_s.abs() < 0.1,
+            "{ls:?} {lh:?}"
+        );
         let (ts, th) = (rms(&fs, "turn").heading_rad, rms(&fh, "turn").heading_rad);
         assert!(th > 2.0 * ts, "heading RMS in the turn {ts} {th}");
         // where the operating point holds, they agree

@@ -168,7 +168,9 @@ fn appendix_f_with_the_gyro() {
                 thesis_checks::check_appendix_f_thesis_inflow(&name, &f);
             } else {
                 let (t, os) = thesis_checks::check_appendix_f_converged(&name, &f, 3.5);
-                eprintln!("{name}: psi settles in {t:.3} s, overshoot {os:.1} % (gyro-less {os_plain:.1} %)");
+                eprintln!(
+                    "{name}: psi settles in {t:.3} s, overshoot {os:.1} % (gyro-less {os_plain:.1} %)"
+                );
                 assert!(os < os_plain, "{name}: {os} against {os_plain}");
             }
         }
