@@ -34,6 +34,15 @@ pub enum IdentError {
         /// What was wrong.
         rule: String,
     },
+    /// A file that cannot be read or is not valid TOML (the parser's
+    /// message names the key and the line), or holds an unknown key.
+    #[error("{file}: {message}")]
+    Parse {
+        /// The file.
+        file: String,
+        /// What was wrong.
+        message: String,
+    },
     /// A fit failed (no usable point, no convergence, singular information matrix).
     #[error("fit: {0}")]
     Fit(String),
