@@ -70,6 +70,19 @@ impl WindowSpec {
         }
     }
 
+    /// The effective number of independent averages n_d these windows give
+    /// on a record of `n_samples` (what [`CrossSpectra::n_d`] will hold), or
+    /// `None` when the window is invalid or longer than the record. A
+    /// conditioned response on q inputs needs n_d ≥ q ([`conditioned`]).
+    pub fn effective_averages(&self, n_samples: usize) -> Option<f64> {
+        if self.len < 4 || self.overlap >= self.len || n_samples < self.len {
+            return None;
+        }
+        let step = self.len - self.overlap;
+        let k = (n_samples - self.len) / step + 1;
+        Some(effective_averages(&self.weights(), step, k))
+    }
+
     fn weights(&self) -> Vec<f64> {
         match self.taper {
             Taper::Hann => hann(self.len),
