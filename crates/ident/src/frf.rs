@@ -665,4 +665,21 @@ mod tests {
         assert!((nd - expected).abs() < 1e-6 * expected, "{nd} {expected}");
         assert_eq!(effective_averages(&w, 1024, 7), 7.0);
     }
+
+    #[test]
+    fn window_spec_tells_the_averages_the_spectra_will_hold() {
+        let x: Vec<f64> = (0..4561).map(|i| (i as f64 * 0.37).sin()).collect();
+        for len in [4560 / 2, 4561 / 4, 100] {
+            let spec = WindowSpec::half_overlap(len);
+            let cs = cross_spectra_grid(&[&x], 0.01, spec, &[1.0, 2.0]).unwrap();
+            assert_eq!(spec.effective_averages(x.len()), Some(cs.n_d), "{len}");
+        }
+        // record/2 on a record of 4561 samples: 2 whole windows, 3 with
+        // overlap, below the 4 that four conditioned inputs need
+        let nd = WindowSpec::half_overlap(4561 / 2)
+            .effective_averages(4561)
+            .unwrap();
+        assert!(nd > 2.8 && nd < 3.0, "{nd}");
+        assert_eq!(WindowSpec::half_overlap(5000).effective_averages(4561), None);
+    }
 }
