@@ -447,7 +447,12 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
 
 /// Write magnitude, phase and coherence against log10 ω, with an optional
 /// fit (magnitude and phase curves) overlaid, to `path`.
-pub(crate) fn write_bode(path: &Path, title: &str, f: &Frf, fit: Option<&[Vec<(f64, f64)>; 2]>) -> Result<()> {
+pub(crate) fn write_bode(
+    path: &Path,
+    title: &str,
+    f: &Frf,
+    fit: Option<&[Vec<(f64, f64)>; 2]>,
+) -> Result<()> {
     let lw = |v: &[f64]| -> Vec<(f64, f64)> {
         f.omega_rad_s
             .iter()

@@ -167,7 +167,10 @@ pub fn run_ss(a: &SsArgs) -> Result<()> {
             file_stem(&c.input),
             file_stem(&c.output)
         ));
-        let title = format!("{} / {}: state-space fit, J = {:.3}", c.output, c.input, c.cost);
+        let title = format!(
+            "{} / {}: state-space fit, J = {:.3}",
+            c.output, c.input, c.cost
+        );
         write_bode(&png, &title, f, overlay.as_ref())?;
         println!(
             "  {} / {}: J = {:.3} over {} points; {}",

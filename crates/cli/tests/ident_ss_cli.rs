@@ -83,6 +83,10 @@ fn percentile(v: &[f64], p: f64) -> f64 {
 /// windows used, and matches the linearised hover model within its random
 /// error as `crates/sim/tests/excitation.rs` requires of the library.
 #[test]
+#[allow(
+    clippy::too_many_lines,
+    reason = "one flight, its checks in sequence (flying it once per check would triple the time)"
+)]
 fn ident_frf_conditioned_on_four_servos_on_the_flown_sweep_log() {
     let dir = tmpdir("flown");
     let run = dir.join("run");
@@ -117,7 +121,9 @@ fn ident_frf_conditioned_on_four_servos_on_the_flown_sweep_log() {
     assert!(ok, "{err}");
     println!("{out}{err}");
     assert!(
-        err.contains("57.000 s window holds 2.89 effective averages, fewer than the 4 inputs need: left out"),
+        err.contains(
+            "57.000 s window holds 2.89 effective averages, fewer than the 4 inputs need: left out"
+        ),
         "{err}"
     );
     assert!(out.contains("windows 28.500/14.250/7.125/3.562 s"), "{out}");
@@ -148,7 +154,12 @@ fn ident_frf_conditioned_on_four_servos_on_the_flown_sweep_log() {
     for (k, row) in q.iter().enumerate() {
         assert!((row.0 - lib.omega_rad_s[k]).abs() < 1e-12 * row.0);
         worst = worst.max((row.1 - lib.h[k]).norm() / lib.h[k].norm());
-        assert!((row.2 - lib.coherence[k]).abs() < 1e-12, "{} {}", row.2, lib.coherence[k]);
+        assert!(
+            (row.2 - lib.coherence[k]).abs() < 1e-12,
+            "{} {}",
+            row.2,
+            lib.coherence[k]
+        );
     }
     println!("CLI against the library: worst relative difference {worst:.2e}");
     // the CSV holds dB and degrees printed to round trip: only the
@@ -403,13 +414,21 @@ fn ident_ss_fits_exact_responses_and_writes_the_report() {
     let resp = |w: f64, input: usize, out: usize| {
         let s = Complex64::new(0.0, w);
         let a = DMatrix::from_row_slice(2, 2, &[lp, k, k, mq]).map(|v| Complex64::new(v, 0.0));
-        let b = DMatrix::from_row_slice(2, 2, &[llat, 0.5, 0.0, mlon]).map(|v| Complex64::new(v, 0.0));
+        let b =
+            DMatrix::from_row_slice(2, 2, &[llat, 0.5, 0.0, mlon]).map(|v| Complex64::new(v, 0.0));
         let m = DMatrix::<Complex64>::identity(2, 2) * s - a;
         let x = m.lu().solve(&b).unwrap();
-        let delay = if input == 1 { (-s * tau).exp() } else { Complex64::new(1.0, 0.0) };
+        let delay = if input == 1 {
+            (-s * tau).exp()
+        } else {
+            Complex64::new(1.0, 0.0)
+        };
         x[(out, input)] * delay
     };
-    for (sub, input, outs) in [("lat", 0, vec![("p", 0)]), ("lon", 1, vec![("q", 1), ("p_meas", 0)])] {
+    for (sub, input, outs) in [
+        ("lat", 0, vec![("p", 0)]),
+        ("lon", 1, vec![("q", 1), ("p_meas", 0)]),
+    ] {
         let mut text = String::from("output,omega_rad_s,mag_db,phase_deg,coherence,random_error\n");
         for (name, o) in outs {
             let h: Vec<Complex64> = grid.iter().map(|w| resp(*w, input, o)).collect();
@@ -417,8 +436,13 @@ fn ident_ss_fits_exact_responses_and_writes_the_report() {
                 &h.iter().map(|v| v.arg().to_degrees()).collect::<Vec<_>>(),
             );
             for (i, w) in grid.iter().enumerate() {
-                writeln!(text, "{name},{w},{},{},0.99,0.01", 20.0 * h[i].norm().log10(), ph[i])
-                    .unwrap();
+                writeln!(
+                    text,
+                    "{name},{w},{},{},0.99,0.01",
+                    20.0 * h[i].norm().log10(),
+                    ph[i]
+                )
+                .unwrap();
             }
         }
         std::fs::create_dir_all(dir.join(sub)).unwrap();
@@ -463,14 +487,27 @@ fn ident_ss_fits_exact_responses_and_writes_the_report() {
     for (from, to, field) in [
         ("q = [\"K\", \"M_q\"]", "q = [\"K\", \"M_qq\"]", "A.q[1]"),
         ("q = [\"K\", \"M_q\"]", "q = [\"K\"]", "A.q"),
-        ("frf = \"lat/frf.csv\"", "frf = \"nowhere/frf.csv\"", "response[0].frf"),
+        (
+            "frf = \"lat/frf.csv\"",
+            "frf = \"nowhere/frf.csv\"",
+            "response[0].frf",
+        ),
         ("start = -4.0", "start = inf", "parameter[0].start"),
     ] {
         let bad = dir.join("bad.toml");
         std::fs::write(&bad, EXACT_MODEL.replacen(from, to, 1)).unwrap();
-        let (ok, _, err) = helicon(&["ident", "ss", bad.to_str().unwrap(), "--out", out_dir.to_str().unwrap()]);
+        let (ok, _, err) = helicon(&[
+            "ident",
+            "ss",
+            bad.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
         assert!(!ok);
-        assert!(err.contains("bad.toml") && err.contains(field), "{field}: {err}");
+        assert!(
+            err.contains("bad.toml") && err.contains(field),
+            "{field}: {err}"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -680,6 +680,9 @@ mod tests {
             .effective_averages(4561)
             .unwrap();
         assert!(nd > 2.8 && nd < 3.0, "{nd}");
-        assert_eq!(WindowSpec::half_overlap(5000).effective_averages(4561), None);
+        assert_eq!(
+            WindowSpec::half_overlap(5000).effective_averages(4561),
+            None
+        );
     }
 }

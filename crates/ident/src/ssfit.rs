@@ -199,10 +199,7 @@ impl SsModel {
             ("D", &self.d, p, m),
         ] {
             if mat.len() != rows {
-                return Err((
-                    name.into(),
-                    format!("{} rows, {rows} expected", mat.len()),
-                ));
+                return Err((name.into(), format!("{} rows, {rows} expected", mat.len())));
             }
             for (i, row) in mat.iter().enumerate() {
                 if row.len() != cols {
@@ -326,9 +323,7 @@ impl SsModel {
             Cell::Free(k) => theta.get(*k).copied().unwrap_or(f64::NAN),
         };
         let mat = |m: &Vec<Vec<Cell>>, cols: usize| {
-            DMatrix::from_fn(m.len(), cols, |i, j| {
-                m[i].get(j).map_or(f64::NAN, |c| v(c))
-            })
+            DMatrix::from_fn(m.len(), cols, |i, j| m[i].get(j).map_or(f64::NAN, &v))
         };
         let (n, mi) = (self.states.len(), self.inputs.len());
         Matrices {
@@ -464,7 +459,9 @@ impl Bound {
     fn internal(self, theta: f64) -> f64 {
         match self {
             Bound::Free => theta,
-            Bound::Both(lo, hi) => (2.0 * (theta - lo) / (hi - lo) - 1.0).clamp(-1.0, 1.0).asin(),
+            Bound::Both(lo, hi) => (2.0 * (theta - lo) / (hi - lo) - 1.0)
+                .clamp(-1.0, 1.0)
+                .asin(),
             Bound::Lower(lo) => ((theta - lo + 1.0).powi(2) - 1.0).max(0.0).sqrt(),
             Bound::Upper(hi) => ((hi - theta + 1.0).powi(2) - 1.0).max(0.0).sqrt(),
         }
@@ -591,7 +588,13 @@ pub fn cost_at(
     model.matrices(theta)?;
     let data = prepare(model, responses, opts)?;
     let bounds = vec![Bound::Free; theta.len()];
-    let problem = problem(model, &[], &bounds, &data, DVector::from_column_slice(theta));
+    let problem = problem(
+        model,
+        &[],
+        &bounds,
+        &data,
+        DVector::from_column_slice(theta),
+    );
     let (r, _) = problem
         .evaluate(false)
         .ok_or_else(|| IdentError::Fit("non-finite model response".into()))?;
@@ -727,13 +730,13 @@ pub fn fit_ss(model: &SsModel, responses: &[Response], opts: &CostOptions) -> Re
             if !acc.cramer_rao[j].is_finite() {
                 flags.push("not identifiable: the responses do not depend on it".to_string());
             } else {
-                if !(cr_pct[j] <= CRAMER_RAO_GUIDELINE_PCT) {
+                if cr_pct[j].is_nan() || cr_pct[j] > CRAMER_RAO_GUIDELINE_PCT {
                     flags.push(format!(
                         "Cramér–Rao bound {:.3} % > {CRAMER_RAO_GUIDELINE_PCT} %",
                         cr_pct[j]
                     ));
                 }
-                if !(ins_pct[j] <= INSENSITIVITY_GUIDELINE_PCT) {
+                if ins_pct[j].is_nan() || ins_pct[j] > INSENSITIVITY_GUIDELINE_PCT {
                     flags.push(format!(
                         "insensitivity {:.3} % > {INSENSITIVITY_GUIDELINE_PCT} %",
                         ins_pct[j]
@@ -842,11 +845,10 @@ impl SsSpec {
     /// Read a model file (relative `frf` paths resolved from its folder).
     pub fn from_file(path: &Path) -> Result<SsSpec> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| IdentError::Parse {
-                file: file.clone(),
-                message: format!("cannot read: {e}"),
-            })?;
+        let text = std::fs::read_to_string(path).map_err(|e| IdentError::Parse {
+            file: file.clone(),
+            message: format!("cannot read: {e}"),
+        })?;
         let base = path.parent().unwrap_or(Path::new(""));
         SsSpec::from_toml_str(&text, &file, base)
     }
@@ -858,117 +860,8 @@ impl SsSpec {
             file: file.to_string(),
             message: e.to_string().trim_end().to_string(),
         })?;
+        let model = model_from_raw(&raw, file)?;
         let err = |field: String, rule: String| IdentError::file(file, field, rule);
-        let names: Vec<&str> = raw.parameter.iter().map(|p| p.name.as_str()).collect();
-        let cell = |field: String, v: &toml::Value| -> Result<Cell> {
-            match v {
-                toml::Value::Integer(i) => Ok(Cell::Fixed(*i as f64)),
-                toml::Value::Float(x) if x.is_finite() => Ok(Cell::Fixed(*x)),
-                toml::Value::Float(x) => Err(err(field, format!("{x}: must be finite"))),
-                toml::Value::String(s) => names
-                    .iter()
-                    .position(|n| n == s)
-                    .map(Cell::Free)
-                    .ok_or_else(|| {
-                        err(
-                            field,
-                            format!(
-                                "`{s}` is not a declared parameter (parameters: {})",
-                                names.join(", ")
-                            ),
-                        )
-                    }),
-                other => Err(err(
-                    field,
-                    format!("{other}: a cell is a number or a parameter name"),
-                )),
-            }
-        };
-        let matrix = |name: &str,
-                      table: &BTreeMap<String, Vec<toml::Value>>,
-                      rows: &[String],
-                      row_what: &str,
-                      cols: &[String],
-                      col_what: &str|
-         -> Result<Vec<Vec<Cell>>> {
-            if let Some(k) = table.keys().find(|k| !rows.contains(k)) {
-                return Err(err(
-                    format!("{name}.{k}"),
-                    format!("not one of the {row_what} ({})", rows.join(", ")),
-                ));
-            }
-            rows.iter()
-                .map(|r| {
-                    let row = table.get(r).ok_or_else(|| {
-                        err(
-                            format!("{name}.{r}"),
-                            format!(
-                                "missing: {name} needs a row for each of the {row_what} ({})",
-                                rows.join(", ")
-                            ),
-                        )
-                    })?;
-                    if row.len() != cols.len() {
-                        return Err(err(
-                            format!("{name}.{r}"),
-                            format!(
-                                "{} cells for {} {col_what} ({}): {name} must be {} × {}",
-                                row.len(),
-                                cols.len(),
-                                cols.join(", "),
-                                rows.len(),
-                                cols.len()
-                            ),
-                        ));
-                    }
-                    row.iter()
-                        .enumerate()
-                        .map(|(j, v)| cell(format!("{name}.{r}[{j}]"), v))
-                        .collect()
-                })
-                .collect()
-        };
-        let (st, inp, out) = (&raw.states, &raw.inputs, &raw.outputs);
-        let a = matrix("A", &raw.a, st, "states", st, "states")?;
-        let b = matrix("B", &raw.b, st, "states", inp, "inputs")?;
-        let c = matrix("C", &raw.c, out, "outputs", st, "states")?;
-        let d = match &raw.d {
-            Some(t) => matrix("D", t, out, "outputs", inp, "inputs")?,
-            None => vec![vec![Cell::Fixed(0.0); inp.len()]; out.len()],
-        };
-        if let Some(k) = raw.delay_s.keys().find(|k| !inp.contains(k)) {
-            return Err(err(
-                format!("delay_s.{k}"),
-                format!("not one of the inputs ({})", inp.join(", ")),
-            ));
-        }
-        let delay_s = inp
-            .iter()
-            .map(|i| match raw.delay_s.get(i) {
-                Some(v) => cell(format!("delay_s.{i}"), v),
-                None => Ok(Cell::Fixed(0.0)),
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let model = SsModel {
-            states: raw.states.clone(),
-            inputs: raw.inputs.clone(),
-            outputs: raw.outputs.clone(),
-            a,
-            b,
-            c,
-            d,
-            delay_s,
-            parameters: raw
-                .parameter
-                .iter()
-                .map(|p| FreeParameter {
-                    name: p.name.clone(),
-                    start: p.start,
-                    min: p.min,
-                    max: p.max,
-                })
-                .collect(),
-        };
         // The structural checks, their field names mapped to the file's.
         model.check_fields().map_err(|(field, rule)| {
             let field = rename_field(&model, &field);
@@ -999,6 +892,122 @@ impl SsSpec {
             min_coherence,
         })
     }
+}
+
+/// The model of a parsed file (cells resolved to numbers or parameters).
+fn model_from_raw(raw: &RawSpec, file: &str) -> Result<SsModel> {
+    let err = |field: String, rule: String| IdentError::file(file, field, rule);
+    let names: Vec<&str> = raw.parameter.iter().map(|p| p.name.as_str()).collect();
+    let cell = |field: String, v: &toml::Value| -> Result<Cell> {
+        match v {
+            toml::Value::Integer(i) => Ok(Cell::Fixed(*i as f64)),
+            toml::Value::Float(x) if x.is_finite() => Ok(Cell::Fixed(*x)),
+            toml::Value::Float(x) => Err(err(field, format!("{x}: must be finite"))),
+            toml::Value::String(s) => names
+                .iter()
+                .position(|n| n == s)
+                .map(Cell::Free)
+                .ok_or_else(|| {
+                    err(
+                        field,
+                        format!(
+                            "`{s}` is not a declared parameter (parameters: {})",
+                            names.join(", ")
+                        ),
+                    )
+                }),
+            other => Err(err(
+                field,
+                format!("{other}: a cell is a number or a parameter name"),
+            )),
+        }
+    };
+    let matrix = |name: &str,
+                  table: &BTreeMap<String, Vec<toml::Value>>,
+                  rows: &[String],
+                  row_what: &str,
+                  cols: &[String],
+                  col_what: &str|
+     -> Result<Vec<Vec<Cell>>> {
+        if let Some(k) = table.keys().find(|k| !rows.contains(k)) {
+            return Err(err(
+                format!("{name}.{k}"),
+                format!("not one of the {row_what} ({})", rows.join(", ")),
+            ));
+        }
+        rows.iter()
+            .map(|r| {
+                let row = table.get(r).ok_or_else(|| {
+                    err(
+                        format!("{name}.{r}"),
+                        format!(
+                            "missing: {name} needs a row for each of the {row_what} ({})",
+                            rows.join(", ")
+                        ),
+                    )
+                })?;
+                if row.len() != cols.len() {
+                    return Err(err(
+                        format!("{name}.{r}"),
+                        format!(
+                            "{} cells for {} {col_what} ({}): {name} must be {} × {}",
+                            row.len(),
+                            cols.len(),
+                            cols.join(", "),
+                            rows.len(),
+                            cols.len()
+                        ),
+                    ));
+                }
+                row.iter()
+                    .enumerate()
+                    .map(|(j, v)| cell(format!("{name}.{r}[{j}]"), v))
+                    .collect()
+            })
+            .collect()
+    };
+    let (st, inp, out) = (&raw.states, &raw.inputs, &raw.outputs);
+    let a = matrix("A", &raw.a, st, "states", st, "states")?;
+    let b = matrix("B", &raw.b, st, "states", inp, "inputs")?;
+    let c = matrix("C", &raw.c, out, "outputs", st, "states")?;
+    let d = match &raw.d {
+        Some(t) => matrix("D", t, out, "outputs", inp, "inputs")?,
+        None => vec![vec![Cell::Fixed(0.0); inp.len()]; out.len()],
+    };
+    if let Some(k) = raw.delay_s.keys().find(|k| !inp.contains(k)) {
+        return Err(err(
+            format!("delay_s.{k}"),
+            format!("not one of the inputs ({})", inp.join(", ")),
+        ));
+    }
+    let delay_s = inp
+        .iter()
+        .map(|i| match raw.delay_s.get(i) {
+            Some(v) => cell(format!("delay_s.{i}"), v),
+            None => Ok(Cell::Fixed(0.0)),
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let model = SsModel {
+        states: raw.states.clone(),
+        inputs: raw.inputs.clone(),
+        outputs: raw.outputs.clone(),
+        a,
+        b,
+        c,
+        d,
+        delay_s,
+        parameters: raw
+            .parameter
+            .iter()
+            .map(|p| FreeParameter {
+                name: p.name.clone(),
+                start: p.start,
+                min: p.min,
+                max: p.max,
+            })
+            .collect(),
+    };
+    Ok(model)
 }
 
 /// `A[1][2]` → `A.q[2]` (rows by name as in the file); other fields unchanged.
@@ -1111,7 +1120,10 @@ mod tests {
             states: vec!["x1".into(), "x2".into()],
             inputs: vec!["u1".into(), "u2".into()],
             outputs: vec!["y1".into(), "y2".into()],
-            a: vec![vec![Cell::Free(0), f(1.0)], vec![Cell::Free(1), Cell::Free(0)]],
+            a: vec![
+                vec![Cell::Free(0), f(1.0)],
+                vec![Cell::Free(1), Cell::Free(0)],
+            ],
             b: vec![vec![Cell::Free(2), f(0.3)], vec![f(0.0), f(2.0)]],
             c: vec![vec![f(1.0), Cell::Free(3)], vec![f(0.0), f(1.0)]],
             d: vec![vec![f(0.0), Cell::Free(4)], vec![f(0.0), f(0.0)]],
@@ -1131,7 +1143,9 @@ mod tests {
             omega_rad_s: grid.clone(),
             h: grid
                 .iter()
-                .map(|w| Complex64::from_polar(1.0 + 0.1 * w, -0.2 * w) * (1.0 + (i + 2 * o) as f64))
+                .map(|w| {
+                    Complex64::from_polar(1.0 + 0.1 * w, -0.2 * w) * (1.0 + (i + 2 * o) as f64)
+                })
                 .collect(),
             coherence: grid.iter().map(|w| 0.7 + 0.02 * w.min(10.0)).collect(),
             random_error: vec![0.1; grid.len()],
@@ -1151,7 +1165,10 @@ mod tests {
         let bounds: Vec<Bound> = model.parameters.iter().map(Bound::of).collect();
         let phi = DVector::from_iterator(
             6,
-            bounds.iter().zip(&model.parameters).map(|(b, p)| b.internal(p.start)),
+            bounds
+                .iter()
+                .zip(&model.parameters)
+                .map(|(b, p)| b.internal(p.start)),
         );
         let mut pr = problem(&model, &places, &bounds, &data, phi.clone());
         let jac = pr.jacobian().unwrap();

@@ -135,7 +135,11 @@ fn model_response_matches_scipy_freqresp() {
             );
             let re: Vec<f64> = serde_json::from_value(r["re"].clone()).unwrap();
             let im: Vec<f64> = serde_json::from_value(r["im"].clone()).unwrap();
-            let scale = re.iter().zip(&im).map(|(a, b)| a.hypot(*b)).fold(0.0, f64::max);
+            let scale = re
+                .iter()
+                .zip(&im)
+                .map(|(a, b)| a.hypot(*b))
+                .fold(0.0, f64::max);
             for (k, w) in omega.iter().enumerate() {
                 let h = mats.response(*w).unwrap()[(o, i)];
                 let e = (h - Complex64::new(re[k], im[k])).norm() / scale;
@@ -160,12 +164,7 @@ fn noise_free_two_responses_give_back_the_parameters() {
         exact(&s.model, &TRUTH, 0, 0, &grid),
         exact(&s.model, &TRUTH, 0, 1, &grid),
     ];
-    let fit = fit_ss(
-        &s.model,
-        &responses_of(&s, frfs),
-        &CostOptions::default(),
-    )
-    .unwrap();
+    let fit = fit_ss(&s.model, &responses_of(&s, frfs), &CostOptions::default()).unwrap();
     for (p, t) in fit.parameters.iter().zip(TRUTH) {
         let rel = (p.value - t).abs() / t.abs();
         println!("{} = {:.9} (truth {t}), rel {rel:.1e}", p.name, p.value);
@@ -252,7 +251,12 @@ frf = "b.csv"
         .collect();
     let fit = fit_ss(&s.model, &responses_of(&s, frfs), &CostOptions::default()).unwrap();
     for (p, t) in fit.parameters.iter().zip(truth) {
-        assert!((p.value - t).abs() < 1e-6 * t.abs(), "{}: {}", p.name, p.value);
+        assert!(
+            (p.value - t).abs() < 1e-6 * t.abs(),
+            "{}: {}",
+            p.name,
+            p.value
+        );
     }
     assert_eq!(fit.matrices.a[(0, 1)], fit.matrices.a[(1, 0)]);
     assert_eq!(fit.responses.len(), 4);
@@ -268,13 +272,18 @@ fn noisy_frfs(seed: u64, sigma_u: f64, sigma_q: f64) -> Vec<Frf> {
     let [xu, mu, mq, md, xd, tau] = TRUTH;
     let f = |t: f64, x: [f64; 3]| {
         let d = sweep.value(t - tau);
-        [xu * x[0] - 9.81 * x[2] + xd * d, mu * x[0] + mq * x[1] + md * d, x[1]]
+        [
+            xu * x[0] - 9.81 * x[2] + xd * d,
+            mu * x[0] + mq * x[1] + md * d,
+            x[1],
+        ]
     };
     let sub = 4;
     let h = dt / sub as f64;
     let mut x = [0.0; 3];
     let (mut yu, mut yq, mut ud) = (Vec::new(), Vec::new(), Vec::new());
-    let add = |a: [f64; 3], b: [f64; 3], s: f64| [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]];
+    let add =
+        |a: [f64; 3], b: [f64; 3], s: f64| [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]];
     for i in 0..n {
         let t0 = i as f64 * dt;
         ud.push(sweep.value(t0));
@@ -300,7 +309,9 @@ fn noisy_frfs(seed: u64, sigma_u: f64, sigma_q: f64) -> Vec<Frf> {
     let secs: Vec<f64> = lens.iter().map(|l| *l as f64 * dt).collect();
     let spectra: Vec<_> = lens
         .iter()
-        .map(|&l| cross_spectra_grid(&[&ud, &yu, &yq], dt, WindowSpec::half_overlap(l), &grid).unwrap())
+        .map(|&l| {
+            cross_spectra_grid(&[&ud, &yu, &yq], dt, WindowSpec::half_overlap(l), &grid).unwrap()
+        })
         .collect();
     [1, 2]
         .iter()
@@ -380,8 +391,14 @@ fn noisy_sweeps_fit_within_their_cramer_rao_bounds() {
 fn a_parameter_the_responses_cannot_see_is_flagged() {
     let start = [-0.5, 0.08, -2.0, 14.0, -3.0, 0.05];
     let text = hover_toml(start, BOTH)
-        .replace("outputs = [\"u\", \"q\"]", "outputs = [\"u\", \"q\", \"theta_m\"]")
-        .replace("q = [0, 1, 0]\n", "q = [0, 1, 0]\ntheta_m = [0, 0, \"K_theta\"]\n")
+        .replace(
+            "outputs = [\"u\", \"q\"]",
+            "outputs = [\"u\", \"q\", \"theta_m\"]",
+        )
+        .replace(
+            "q = [0, 1, 0]\n",
+            "q = [0, 1, 0]\ntheta_m = [0, 0, \"K_theta\"]\n",
+        )
         + "[[parameter]]\nname = \"K_theta\"\nstart = 1.3\n";
     let s = spec(&text);
     let mut truth = TRUTH.to_vec();
@@ -393,14 +410,26 @@ fn a_parameter_the_responses_cannot_see_is_flagged() {
     ];
     let fit = fit_ss(&s.model, &responses_of(&s, frfs), &CostOptions::default()).unwrap();
     let k = &fit.parameters[6];
-    println!("{}: {} CR {} flags {:?}", k.name, k.value, k.cramer_rao, k.flags);
+    println!(
+        "{}: {} CR {} flags {:?}",
+        k.name, k.value, k.cramer_rao, k.flags
+    );
     assert_eq!(k.name, "K_theta");
     assert!(k.cramer_rao.is_infinite() && k.insensitivity_pct.is_infinite());
-    assert!(k.flags.iter().any(|f| f.contains("not identifiable")), "{:?}", k.flags);
+    assert!(
+        k.flags.iter().any(|f| f.contains("not identifiable")),
+        "{:?}",
+        k.flags
+    );
     assert_eq!(k.value, 1.3, "left at its start");
     assert!(fit.correlation[(6, 0)].is_nan() && fit.correlation[(0, 0)] == 1.0);
     for (p, t) in fit.parameters.iter().zip(TRUTH) {
-        assert!((p.value - t).abs() < 1e-6 * t.abs(), "{}: {}", p.name, p.value);
+        assert!(
+            (p.value - t).abs() < 1e-6 * t.abs(),
+            "{}: {}",
+            p.name,
+            p.value
+        );
         assert!(p.flags.is_empty(), "{}: {:?}", p.name, p.flags);
     }
 
@@ -422,7 +451,10 @@ fn a_parameter_the_responses_cannot_see_is_flagged() {
     }
     for name in ["X_u", "M_u"] {
         let p = fit.parameters.iter().find(|p| p.name == name).unwrap();
-        assert!(p.cramer_rao_pct > 20.0 && !p.flags.is_empty(), "{name}: {p:?}");
+        assert!(
+            p.cramer_rao_pct > 20.0 && !p.flags.is_empty(),
+            "{name}: {p:?}"
+        );
     }
     for name in ["M_q", "M_d"] {
         let p = fit.parameters.iter().find(|p| p.name == name).unwrap();
@@ -435,18 +467,34 @@ fn hostile_model_files_name_the_file_and_field() {
     let good = hover_toml([-0.5, 0.08, -2.0, 14.0, -3.0, 0.05], BOTH);
     spec(&good);
     let cases: [(&str, &str, &str); 12] = [
-        ("q = [\"M_u\", \"M_q\", 0.0]", "q = [\"M_u\", \"M_qq\", 0.0]", "A.q[1]"),
-        ("q = [\"M_u\", \"M_q\", 0.0]", "q = [\"M_u\", \"M_q\"]", "A.q"),
+        (
+            "q = [\"M_u\", \"M_q\", 0.0]",
+            "q = [\"M_u\", \"M_qq\", 0.0]",
+            "A.q[1]",
+        ),
+        (
+            "q = [\"M_u\", \"M_q\", 0.0]",
+            "q = [\"M_u\", \"M_q\"]",
+            "A.q",
+        ),
         ("theta = [0, 1, 0]\n", "", "A.theta"),
         ("u = [\"X_d\"]", "u = [\"X_d\", 1.0]", "B.u"),
         ("u = [1, 0, 0]", "u = [1, 0, 0]\nw = [0, 0, 1]", "C.w"),
         ("start = -0.5", "start = nan", "parameter[0].start"),
         ("max = 0.0", "max = 0.0\nmin = 1.0", "parameter[2].min"),
-        ("min = 0.0\nmax = 0.2", "min = 0.3\nmax = 0.2", "parameter[5].min"),
+        (
+            "min = 0.0\nmax = 0.2",
+            "min = 0.3\nmax = 0.2",
+            "parameter[5].min",
+        ),
         ("delta = \"tau\"", "delta = -0.01", "delay_s.delta"),
         ("output = \"q\"", "output = \"r\"", "response[1].output"),
         ("name = \"tau\"", "name = \"tau2\"", "delay_s.delta"),
-        ("inputs = [\"delta\"]", "inputs = [\"delta\"]\ngain = 3", "gain"),
+        (
+            "inputs = [\"delta\"]",
+            "inputs = [\"delta\"]\ngain = 3",
+            "gain",
+        ),
     ];
     for (from, to, field) in cases {
         assert!(good.contains(from), "{from}");
@@ -455,7 +503,10 @@ fn hostile_model_files_name_the_file_and_field() {
             .unwrap_err()
             .to_string();
         println!("{e}");
-        assert!(e.contains("model.toml") && e.contains(field), "{field}: {e}");
+        assert!(
+            e.contains("model.toml") && e.contains(field),
+            "{field}: {e}"
+        );
     }
     // an unused parameter, a response band upside down
     let e = SsSpec::from_toml_str(
@@ -467,7 +518,11 @@ fn hostile_model_files_name_the_file_and_field() {
     .to_string();
     assert!(e.contains("parameter[6].name") && e.contains("Z_w"), "{e}");
     let e = SsSpec::from_toml_str(
-        &good.replacen("frf = \"frf.csv\"", "frf = \"frf.csv\"\nomega_min_rad_s = 5.0\nomega_max_rad_s = 1.0", 1),
+        &good.replacen(
+            "frf = \"frf.csv\"",
+            "frf = \"frf.csv\"\nomega_min_rad_s = 5.0\nomega_max_rad_s = 1.0",
+            1,
+        ),
         "model.toml",
         Path::new(""),
     )
@@ -501,6 +556,8 @@ fn hostile_model_files_name_the_file_and_field() {
         omega_min_rad_s: 0.0,
         omega_max_rad_s: f64::INFINITY,
     };
-    let e = fit_ss(&m, &[low], &CostOptions::default()).unwrap_err().to_string();
+    let e = fit_ss(&m, &[low], &CostOptions::default())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("no point with γ² > 0.6"), "{e}");
 }
