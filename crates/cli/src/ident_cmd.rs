@@ -28,6 +28,8 @@ pub enum IdentCommand {
     Frf(FrfArgs),
     /// Fit a transfer function (CIFER cost) to one response of a frf.csv: DIR/tf_<output>.json and an overlay plot.
     Tf(TfArgs),
+    /// Fit a linear state-space model with free entries (model TOML) to one or several responses: DIR/ss_fit.json and overlay plots.
+    Ss(crate::ident_ss::SsArgs),
     /// Sample a flight-test input (sweep, multisine, doublet, 3211) from a TOML file to CSV `t_s,value`.
     Input(InputArgs),
 }
@@ -107,6 +109,9 @@ pub struct FrfArgs {
     /// Other input columns to condition on (correlated inputs: other servos, closed loop).
     #[arg(long, value_delimiter = ',')]
     pub conditioned_on: Vec<String>,
+    /// Longest window used, s: longer ones among record/2, record/4, … are left out.
+    #[arg(long, allow_negative_numbers = true)]
+    pub max_window_s: Option<f64>,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
@@ -157,6 +162,7 @@ pub fn run(args: &IdentArgs) -> Result<()> {
         IdentCommand::Frf(a) => run_frf(a),
         IdentCommand::Tf(a) => run_tf(a),
         IdentCommand::Input(a) => run_input(a),
+        IdentCommand::Ss(a) => crate::ident_ss::run_ss(a),
     }
 }
 
@@ -268,7 +274,7 @@ fn uniform(file: &str, time: &str, t: &[f64], cols: &mut [Vec<f64>]) -> Result<f
     Ok(dt)
 }
 
-fn file_stem(name: &str) -> String {
+pub(crate) fn file_stem(name: &str) -> String {
     name.chars()
         .map(|c| {
             if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
@@ -278,6 +284,57 @@ fn file_stem(name: &str) -> String {
             }
         })
         .collect()
+}
+
+/// The window lengths of `ident frf`, samples: record/2, record/4, …
+/// (`--windows` of them, at least 32 samples each), leaving out those over
+/// `--max-window-s` and those whose effective number of averages n_d is
+/// below the number of inputs `nin` (conditioning on q inputs needs
+/// n_d ≥ q), each named on stderr. Refused when none is left.
+fn window_lengths(a: &FrfArgs, file: &str, n: usize, dt: f64, nin: usize) -> Result<Vec<usize>> {
+    if let Some(m) = a.max_window_s
+        && !(m.is_finite() && m > 0.0)
+    {
+        bail!("--max-window-s {m}: must be finite and > 0");
+    }
+    let mut lens = Vec::new();
+    let mut left_out = Vec::new();
+    for l in (1..=a.windows).map(|k| n >> k).filter(|l| *l >= 32) {
+        let secs = l as f64 * dt;
+        if let Some(m) = a.max_window_s
+            && secs > m
+        {
+            eprintln!("{file}: the {secs:.3} s window is longer than --max-window-s {m}: left out");
+            left_out.push(format!("{secs:.3} s (over --max-window-s)"));
+            continue;
+        }
+        let nd = WindowSpec::half_overlap(l)
+            .effective_averages(n)
+            .unwrap_or(0.0);
+        if nd < nin as f64 {
+            eprintln!(
+                "{file}: the {secs:.3} s window holds {nd:.2} effective averages, fewer than the {nin} inputs need: left out"
+            );
+            left_out.push(format!("{secs:.3} s ({nd:.2} averages)"));
+            continue;
+        }
+        lens.push(l);
+    }
+    if lens.is_empty() {
+        if left_out.is_empty() {
+            bail!("{file}: {n} samples: too short for a 32-sample window");
+        }
+        bail!(
+            "{file}: no window qualifies: {} ({nin} input(s) need at least {nin} effective averages per window); raise --windows for shorter windows{}, or condition on fewer inputs",
+            left_out.join(", "),
+            if a.max_window_s.is_some() {
+                ", raise --max-window-s"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(lens)
 }
 
 /// `helicon ident frf`.
@@ -305,13 +362,8 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
     let dt = uniform(&file, &a.time, &t, &mut cols)?;
     let n = cols[0].len();
     let record_s = n as f64 * dt;
-    let lens: Vec<usize> = (1..=a.windows)
-        .map(|k| n >> k)
-        .filter(|l| *l >= 32)
-        .collect();
-    if lens.is_empty() {
-        bail!("{file}: {n} samples: too short for a 32-sample window");
-    }
+    let nin = 1 + a.conditioned_on.len();
+    let lens = window_lengths(a, &file, n, dt, nin)?;
     let omega_min = a
         .omega_min
         .unwrap_or(4.0 * std::f64::consts::PI / (lens[0] as f64 * dt));
@@ -319,7 +371,6 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
     let grid = log_grid(omega_min, omega_max, a.points)
         .with_context(|| format!("--omega-min {omega_min} and --omega-max {omega_max}"))?;
     let chans: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    let nin = 1 + a.conditioned_on.len();
     let inputs: Vec<usize> = (0..nin).collect();
     let mut per_output: Vec<Vec<Frf>> = vec![Vec::new(); a.output.len()];
     for &l in &lens {
@@ -396,7 +447,12 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
 
 /// Write magnitude, phase and coherence against log10 ω, with an optional
 /// fit (magnitude and phase curves) overlaid, to `path`.
-fn write_bode(path: &Path, title: &str, f: &Frf, fit: Option<&[Vec<(f64, f64)>; 2]>) -> Result<()> {
+pub(crate) fn write_bode(
+    path: &Path,
+    title: &str,
+    f: &Frf,
+    fit: Option<&[Vec<(f64, f64)>; 2]>,
+) -> Result<()> {
     let lw = |v: &[f64]| -> Vec<(f64, f64)> {
         f.omega_rad_s
             .iter()
@@ -427,7 +483,7 @@ fn write_bode(path: &Path, title: &str, f: &Frf, fit: Option<&[Vec<(f64, f64)>; 
 }
 
 /// Read the rows of `output` from a frf.csv.
-fn read_frf(path: &Path, output: &str) -> Result<Frf> {
+pub(crate) fn read_frf(path: &Path, output: &str) -> Result<Frf> {
     let file = path.display().to_string();
     let mut rdr = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
@@ -561,7 +617,7 @@ pub fn run_tf(a: &TfArgs) -> Result<()> {
     });
     std::fs::write(&json_path, serde_json::to_string_pretty(&doc)? + "\n")
         .with_context(|| format!("{}: cannot write", json_path.display()))?;
-    let overlay = fit_curves(&f, &fit);
+    let overlay = fit_curves(&f, |w| fit.eval(w));
     let png = a.out.join(format!("tf_{stem}.png"));
     let title = format!(
         "{}: fit num {} den {}{}",
@@ -585,13 +641,24 @@ pub fn run_tf(a: &TfArgs) -> Result<()> {
     Ok(())
 }
 
-/// The fit's magnitude and phase on the response's grid, the phase shifted by
-/// whole turns to start within 180° of the estimate.
-fn fit_curves(f: &Frf, fit: &TfFit) -> [Vec<(f64, f64)>; 2] {
-    let h: Vec<Complex64> = f.omega_rad_s.iter().map(|w| fit.eval(*w)).collect();
+/// A fitted model's magnitude and phase (`eval` gives T(jω)) on the
+/// response's grid, the phase shifted by whole turns to lie nearest the
+/// estimate where it is coherent.
+pub(crate) fn fit_curves(f: &Frf, eval: impl Fn(f64) -> Complex64) -> [Vec<(f64, f64)>; 2] {
+    let h: Vec<Complex64> = f.omega_rad_s.iter().map(|w| eval(*w)).collect();
     let mut ph = unwrap_deg(&h.iter().map(|v| v.arg().to_degrees()).collect::<Vec<_>>());
-    if let (Some(p0), Some(d0)) = (ph.first().copied(), f.phase_deg().first().copied()) {
-        let turns = ((d0 - p0) / 360.0).round() * 360.0;
+    // Whole turns that bring the curve nearest the estimate on average over
+    // the coherent points (γ² > 0.6; all points when none is).
+    let est = f.phase_deg();
+    let good: Vec<usize> = (0..est.len()).filter(|&k| f.coherence[k] > 0.6).collect();
+    let idx: Vec<usize> = if good.is_empty() {
+        (0..est.len()).collect()
+    } else {
+        good
+    };
+    if !idx.is_empty() {
+        let mean = idx.iter().map(|&k| est[k] - ph[k]).sum::<f64>() / idx.len() as f64;
+        let turns = (mean / 360.0).round() * 360.0;
         ph.iter_mut().for_each(|p| *p += turns);
     }
     let x: Vec<f64> = f.omega_rad_s.iter().map(|w| w.log10()).collect();

@@ -23,6 +23,26 @@ pub enum IdentError {
         /// Why.
         reason: String,
     },
+    /// A model file that cannot be read, parsed or used: the file, the
+    /// field (dotted, e.g. `A.q[1]`, `parameter[2].max`) and the rule broken.
+    #[error("{file}: `{field}`: {rule}")]
+    File {
+        /// The file.
+        file: String,
+        /// The field.
+        field: String,
+        /// What was wrong.
+        rule: String,
+    },
+    /// A file that cannot be read or is not valid TOML (the parser's
+    /// message names the key and the line), or holds an unknown key.
+    #[error("{file}: {message}")]
+    Parse {
+        /// The file.
+        file: String,
+        /// What was wrong.
+        message: String,
+    },
     /// A fit failed (no usable point, no convergence, singular information matrix).
     #[error("fit: {0}")]
     Fit(String),
@@ -43,6 +63,17 @@ impl IdentError {
         IdentError::Data {
             what: what.into(),
             reason: reason.into(),
+        }
+    }
+}
+
+impl IdentError {
+    /// A field of a file that breaks a rule.
+    pub fn file(file: &str, field: impl Into<String>, rule: impl Into<String>) -> Self {
+        IdentError::File {
+            file: file.to_string(),
+            field: field.into(),
+            rule: rule.into(),
         }
     }
 }

@@ -14,39 +14,14 @@
 //! method with Sanathanan–Koerner reweighting, on a scaled frequency), then
 //! Levenberg–Marquardt minimises J with the analytic Jacobian.
 
+pub use crate::cost::{CostOptions, coherence_weight};
+use crate::cost::{Points, accuracy, percent, select};
 use crate::error::{IdentError, Result};
 use crate::frf::Frf;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rustfft::num_complex::Complex64;
 use serde::Serialize;
-
-/// Weights and point selection of the cost.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CostOptions {
-    /// Points with γ² at or below this are left out (0.6).
-    pub min_coherence: f64,
-    /// Magnitude weight W_g, per dB² (1).
-    pub w_gain: f64,
-    /// Phase weight W_p, per deg² (0.01745: 1 dB ≈ 7.57° of phase).
-    pub w_phase: f64,
-}
-
-impl Default for CostOptions {
-    fn default() -> Self {
-        Self {
-            min_coherence: 0.6,
-            w_gain: 1.0,
-            w_phase: 0.01745,
-        }
-    }
-}
-
-/// The coherence weight W_γ = [1.58 (1 − e^{−γ²})]² (γ² given).
-pub fn coherence_weight(gamma2: f64) -> f64 {
-    let w = 1.58 * (1.0 - (-gamma2).exp());
-    w * w
-}
 
 /// The structure of the transfer function to fit.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -100,17 +75,6 @@ fn poly(c: &[f64], s: Complex64) -> Complex64 {
         .fold(Complex64::new(0.0, 0.0), |acc, v| acc * s + v)
 }
 
-/// The selected points of the response: ω, the measured log-response
-/// (dB, deg) and the residual scale √(20/n_ω · W_γ · W).
-struct Points {
-    omega: Vec<f64>,
-    h: Vec<Complex64>,
-    scale_mag: Vec<f64>,
-    scale_ph: Vec<f64>,
-}
-
-const DB: f64 = 8.685_889_638_065_037; // 20 / ln 10
-
 /// The least-squares problem of the cost: residuals [mag, phase] per point.
 struct Problem<'a> {
     pts: &'a Points,
@@ -134,11 +98,6 @@ impl Problem<'_> {
     }
 }
 
-/// Phase difference in degrees brought into (−180, 180].
-fn wrap_deg(d: f64) -> f64 {
-    d - 360.0 * ((d - 180.0) / 360.0).ceil()
-}
-
 impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
     type ResidualStorage = Owned<f64, Dyn>;
     type JacobianStorage = Owned<f64, Dyn, Dyn>;
@@ -159,9 +118,7 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
         for (k, &w) in p.omega.iter().enumerate() {
             let s = Complex64::new(0.0, w);
             let t = poly(&num, s) / poly(&den, s) * (-s * tau).exp();
-            let ratio = t / p.h[k];
-            r[2 * k] = p.scale_mag[k] * DB * ratio.norm().ln();
-            r[2 * k + 1] = p.scale_ph[k] * wrap_deg(ratio.arg().to_degrees());
+            (r[2 * k], r[2 * k + 1]) = p.residuals(k, t);
         }
         r.iter().all(|v| v.is_finite()).then_some(r)
     }
@@ -184,37 +141,11 @@ impl LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
                 } else {
                     -s
                 };
-                jac[(2 * k, j)] = p.scale_mag[k] * DB * d.re;
-                jac[(2 * k + 1, j)] = p.scale_ph[k] * d.im.to_degrees();
+                (jac[(2 * k, j)], jac[(2 * k + 1, j)]) = p.jacobian(k, d);
             }
         }
         jac.iter().all(|v| v.is_finite()).then_some(jac)
     }
-}
-
-/// Select the points above the coherence threshold, with their residual scales.
-fn select(frf: &Frf, opts: &CostOptions) -> Result<Points> {
-    let idx: Vec<usize> = (0..frf.len())
-        .filter(|&k| {
-            frf.coherence[k] > opts.min_coherence
-                && frf.omega_rad_s[k] > 0.0
-                && frf.h[k].norm() > 0.0
-                && frf.h[k].norm().is_finite()
-        })
-        .collect();
-    let nw = idx.len() as f64;
-    Ok(Points {
-        omega: idx.iter().map(|&k| frf.omega_rad_s[k]).collect(),
-        h: idx.iter().map(|&k| frf.h[k]).collect(),
-        scale_mag: idx
-            .iter()
-            .map(|&k| (20.0 / nw * coherence_weight(frf.coherence[k]) * opts.w_gain).sqrt())
-            .collect(),
-        scale_ph: idx
-            .iter()
-            .map(|&k| (20.0 / nw * coherence_weight(frf.coherence[k]) * opts.w_phase).sqrt())
-            .collect(),
-    })
 }
 
 /// The start: Levy's linear fit N(jω) − T·(D(jω) − (jω)^n) = T·(jω)^n on
@@ -283,7 +214,7 @@ pub fn fit_tf(
             st.num_order, st.den_order
         )));
     }
-    let pts = select(frf, opts)?;
+    let pts = select(frf, opts, 0.0, f64::INFINITY);
     let np = st.num_order + 1 + st.den_order + usize::from(st.delay);
     if 2 * pts.omega.len() <= np {
         return Err(IdentError::Fit(format!(
@@ -328,7 +259,12 @@ pub fn fit_tf(
         .ok_or_else(|| IdentError::Fit("non-finite Jacobian at the optimum".into()))?;
     let cost = r.norm_squared();
     let params: Vec<f64> = problem.theta.iter().copied().collect();
-    let (cr, ins) = accuracy(&jac, cost, &params)?;
+    let acc = accuracy(&jac, cost)?;
+    if acc.cramer_rao.iter().chain(&params).any(|v| !v.is_finite()) {
+        return Err(IdentError::Fit(
+            "a parameter does not change the cost (insensitive): remove it".into(),
+        ));
+    }
     let (num, den, tau) = problem.split();
     Ok(TfFit {
         num,
@@ -336,17 +272,9 @@ pub fn fit_tf(
         delay_s: tau,
         cost,
         names: names(st),
-        cramer_rao_pct: cr
-            .iter()
-            .zip(&params)
-            .map(|(c, p)| 100.0 * c / p.abs())
-            .collect(),
-        insensitivity_pct: ins
-            .iter()
-            .zip(&params)
-            .map(|(c, p)| 100.0 * c / p.abs())
-            .collect(),
-        cramer_rao: cr,
+        cramer_rao_pct: percent(&acc.cramer_rao, &params),
+        insensitivity_pct: percent(&acc.insensitivity, &params),
+        cramer_rao: acc.cramer_rao,
         params,
         n_points: pts.omega.len(),
         evaluations: report.number_of_evaluations,
@@ -361,34 +289,6 @@ fn names(st: TfStructure) -> Vec<String> {
         v.push("tau_s".into());
     }
     v
-}
-
-/// Cramér–Rao bounds and insensitivities from the Jacobian of the weighted
-/// residuals: with the information matrix M = JᵀJ and the residual variance
-/// s² = J_min/(n_r − n_p) (the cost's residuals treated as independent with
-/// equal variance), CR_i = s √(M⁻¹)_ii and I_i = s / √M_ii (I_i ≤ CR_i; they
-/// differ when parameters are correlated).
-fn accuracy(jac: &DMatrix<f64>, cost: f64, params: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
-    let (nr, np) = jac.shape();
-    let s2 = cost / (nr - np) as f64;
-    let m = jac.transpose() * jac;
-    // Scale to unit diagonal before inverting (the coefficients span decades).
-    let d: Vec<f64> = (0..np).map(|i| m[(i, i)].sqrt()).collect();
-    if d.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
-        return Err(IdentError::Fit(
-            "a parameter does not change the cost (insensitive): remove it".into(),
-        ));
-    }
-    let ms = DMatrix::from_fn(np, np, |i, j| m[(i, j)] / (d[i] * d[j]));
-    let inv = ms.try_inverse().ok_or_else(|| {
-        IdentError::Fit("singular information matrix: parameters not separable".into())
-    })?;
-    let cr: Vec<f64> = (0..np).map(|i| (s2 * inv[(i, i)]).sqrt() / d[i]).collect();
-    let ins: Vec<f64> = (0..np).map(|i| s2.sqrt() / d[i]).collect();
-    if cr.iter().chain(&ins).chain(params).any(|v| !v.is_finite()) {
-        return Err(IdentError::Fit("non-finite Cramér–Rao bound".into()));
-    }
-    Ok((cr, ins))
 }
 
 /// The response of the fitted transfer function to `u` sampled every `dt_s`

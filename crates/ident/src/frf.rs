@@ -70,6 +70,19 @@ impl WindowSpec {
         }
     }
 
+    /// The effective number of independent averages n_d these windows give
+    /// on a record of `n_samples` (what [`CrossSpectra::n_d`] will hold), or
+    /// `None` when the window is invalid or longer than the record. A
+    /// conditioned response on q inputs needs n_d ≥ q ([`conditioned`]).
+    pub fn effective_averages(&self, n_samples: usize) -> Option<f64> {
+        if self.len < 4 || self.overlap >= self.len || n_samples < self.len {
+            return None;
+        }
+        let step = self.len - self.overlap;
+        let k = (n_samples - self.len) / step + 1;
+        Some(effective_averages(&self.weights(), step, k))
+    }
+
     fn weights(&self) -> Vec<f64> {
         match self.taper {
             Taper::Hann => hann(self.len),
@@ -651,5 +664,25 @@ mod tests {
         let expected = 1000.0 / (1.0 + 2.0 * (1.0 - 1.0 / 1000.0) / 36.0);
         assert!((nd - expected).abs() < 1e-6 * expected, "{nd} {expected}");
         assert_eq!(effective_averages(&w, 1024, 7), 7.0);
+    }
+
+    #[test]
+    fn window_spec_tells_the_averages_the_spectra_will_hold() {
+        let x: Vec<f64> = (0..4561).map(|i| (i as f64 * 0.37).sin()).collect();
+        for len in [4560 / 2, 4561 / 4, 100] {
+            let spec = WindowSpec::half_overlap(len);
+            let cs = cross_spectra_grid(&[&x], 0.01, spec, &[1.0, 2.0]).unwrap();
+            assert_eq!(spec.effective_averages(x.len()), Some(cs.n_d), "{len}");
+        }
+        // record/2 on a record of 4561 samples: 2 whole windows, 3 with
+        // overlap, below the 4 that four conditioned inputs need
+        let nd = WindowSpec::half_overlap(4561 / 2)
+            .effective_averages(4561)
+            .unwrap();
+        assert!(nd > 2.8 && nd < 3.0, "{nd}");
+        assert_eq!(
+            WindowSpec::half_overlap(5000).effective_averages(4561),
+            None
+        );
     }
 }

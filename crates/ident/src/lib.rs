@@ -5,14 +5,18 @@
 //! frequency responses with coherence and random error, conditioned for
 //! correlated inputs and composited over several windows ([`frf`]),
 //! transfer-function fits with the coherence-weighted cost, Cramér–Rao
-//! bounds and time-domain verification ([`fit`]), and Welch spectra
+//! bounds and time-domain verification ([`fit`]), linear state-space fits
+//! with chosen free entries to one or several responses ([`ssfit`]), the
+//! shared cost and accuracy ([`cost`]), and Welch spectra
 //! ([`spectral`]). Generic: any sampled channels, SI units, ω in rad/s.
 
+pub mod cost;
 pub mod error;
 pub mod fit;
 pub mod frf;
 pub mod inputs;
 pub mod spectral;
+pub mod ssfit;
 
 pub use error::{IdentError, Result};
 pub use rustfft::num_complex::Complex64;
