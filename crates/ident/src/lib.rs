@@ -12,6 +12,7 @@ pub mod error;
 pub mod fit;
 pub mod frf;
 pub mod inputs;
+pub mod servo;
 pub mod spectral;
 
 pub use error::{IdentError, Result};
