@@ -28,6 +28,7 @@ pub mod config_error;
 pub mod drag;
 pub mod flapping;
 pub mod gyro;
+pub mod ground;
 pub mod inflow;
 pub mod integrate;
 pub mod linearize;
