@@ -8,6 +8,8 @@ mod demo;
 mod design_cmd;
 mod gcs_cmd;
 mod ident_cmd;
+mod ident_ground;
+mod ident_servo;
 mod log_cmd;
 mod mc_cmd;
 mod model_cmd;
