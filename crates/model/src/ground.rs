@@ -119,37 +119,38 @@ impl Kind {
         }
     }
 
-    /// A template readings CSV: the header, a comment and example rows.
+    /// A template readings CSV: the header, a comment and example rows
+    /// (readings a Bergen Twin would give, rounded as a bench reads them).
     pub fn template(self) -> String {
         let [a, b] = self.columns();
         let (what, rows): (&str, &[(f64, f64)]) = match self {
             Kind::RotorDrag => (
                 "main-rotor torque at zero blade pitch (torque = Newton-meter force x its arm), at several rotor speeds",
-                &[(90.0, 1.9), (100.0, 2.3), (110.0, 2.8)],
+                &[(90.0, 1.68), (100.0, 2.06), (110.0, 2.49)],
             ),
             Kind::MainLiftSlope => (
                 "collective blade pitch and rotor thrust (positive up: weight on the scale at rest minus the reading, times g)",
-                &[(-0.05, -25.0), (-0.1, -70.0), (-0.15, -125.0)],
+                &[(-0.05, -37.5), (-0.1, -98.5), (-0.15, -169.5)],
             ),
             Kind::TailLiftSlope => (
                 "tail-rotor blade pitch and tail thrust (the rise of the Newton-meter force over the zero-pitch reading, fin removed)",
-                &[(0.05, 2.0), (0.1, 5.5), (0.15, 9.8)],
+                &[(0.05, 2.32), (0.1, 6.69), (0.15, 12.07)],
             ),
             Kind::BladeSpring => (
                 "force pulling the blade tip up (rotor stopped) and the flapping angle it gives",
-                &[(0.0, -0.01), (2.0, 0.0), (4.0, 0.01)],
+                &[(0.0, -0.0101), (2.0, -0.0007), (4.0, 0.0085)],
             ),
             Kind::BellGain => (
                 "swashplate cyclic tilt (stabilizer bar held level) and the blade's cyclic pitch",
-                &[(-0.1, -0.02), (0.0, 0.0), (0.1, 0.02)],
+                &[(-0.1, -0.0201), (0.0, 0.0001), (0.1, 0.0199)],
             ),
             Kind::HillerGain => (
                 "stabilizer-bar flapping angle (swashplate level) and the blade's cyclic pitch, same sense",
-                &[(-0.1, -0.08), (0.0, 0.0), (0.1, 0.08)],
+                &[(-0.1, -0.0799), (0.0, 0.0002), (0.1, 0.0801)],
             ),
             Kind::TailFinLoss => (
                 "tail thrust at the same pitch without and with the tail fin",
-                &[(4.0, 3.97), (8.0, 7.94), (12.0, 11.9)],
+                &[(4.0, 3.9944), (8.0, 7.9891), (12.0, 11.9834)],
             ),
         };
         let mut s = format!("# {}: {what}\n{a},{b}\n", self.name());
