@@ -20,12 +20,10 @@ use std::path::PathBuf;
 const CHANNELS: [&str; 4] = ["collective", "lateral", "longitudinal", "tail"];
 
 fn channel_index(name: &str) -> Result<usize> {
-    CHANNELS.iter().position(|c| *c == name).with_context(|| {
-        format!(
-            "--channel {name}: must be one of {}",
-            CHANNELS.join(", ")
-        )
-    })
+    CHANNELS
+        .iter()
+        .position(|c| *c == name)
+        .with_context(|| format!("--channel {name}: must be one of {}", CHANNELS.join(", ")))
 }
 
 /// `helicon ident servo`.
@@ -96,7 +94,10 @@ pub fn run_bench(a: &ServoBenchArgs) -> Result<()> {
     let ch = channel_index(&a.channel)?;
     let servo = params.servos[ch];
     if !(a.noise_rad.is_finite() && (0.0..=1.0).contains(&a.noise_rad)) {
-        bail!("--noise-rad {}: must be finite and in [0, 1] rad", a.noise_rad);
+        bail!(
+            "--noise-rad {}: must be finite and in [0, 1] rad",
+            a.noise_rad
+        );
     }
     if !(a.dt.is_finite() && a.dt > 0.0 && a.dt <= 0.1) {
         bail!("--dt {}: must be finite and in (0, 0.1] s", a.dt);

@@ -81,9 +81,7 @@ fn bench_test_identified_back_within_its_standard_errors() {
     }
     assert_eq!(j["rate_limit"]["status"], "identified");
     let rl = &j["rate_limit"]["rate_max_rad_s"];
-    assert!(
-        (rl["value"].as_f64().unwrap() - 5.0).abs() < 3.0 * rl["std_error"].as_f64().unwrap()
-    );
+    assert!((rl["value"].as_f64().unwrap() - 5.0).abs() < 3.0 * rl["std_error"].as_f64().unwrap());
     // the residual is the bench's 2 mrad noise
     let rms = j["residual_rms_rad"].as_f64().unwrap();
     assert!((rms - 0.002).abs() < 2e-4, "{rms}");
@@ -107,7 +105,11 @@ fn a_log_without_the_rate_limit_says_so() {
     assert!(ok, "{err}");
     let text = std::fs::read_to_string(&csv).unwrap();
     // 9 levels of 0.3 s at 400 Hz: the middle and the 0.1 and 0.25 steps
-    let cut: String = text.lines().take(2 + 9 * 120).collect::<Vec<_>>().join("\n");
+    let cut: String = text
+        .lines()
+        .take(2 + 9 * 120)
+        .collect::<Vec<_>>()
+        .join("\n");
     std::fs::write(&csv, cut).unwrap();
     let out = d.join("out");
     let (ok, stdout, err) = helicon(&[
@@ -163,7 +165,10 @@ fn hostile_servo_logs_are_refused() {
     }
     let nan = write("nan.csv", &rows.replace("0.3,1,0", "0.3,1,NaN"));
     let (ok, _, err) = servo(&nan, &[]);
-    assert!(!ok && err.contains("nan.csv") && err.contains("`p`"), "{err}");
+    assert!(
+        !ok && err.contains("nan.csv") && err.contains("`p`"),
+        "{err}"
+    );
     let empty = write("empty.csv", "");
     let (ok, _, err) = servo(&empty, &[]);
     assert!(!ok && err.contains("empty.csv"), "{err}");
@@ -186,7 +191,14 @@ fn hostile_servo_logs_are_refused() {
     assert!(!ok && err.contains("s_min"), "{err}");
     let (ok, _, err) = servo(&good, &["--substeps", "0"]);
     assert!(!ok && err.contains("substeps"), "{err}");
-    let (ok, _, err) = helicon(&["ident", "servo-bench", "--noise-rad", "nan", "--out", "x.csv"]);
+    let (ok, _, err) = helicon(&[
+        "ident",
+        "servo-bench",
+        "--noise-rad",
+        "nan",
+        "--out",
+        "x.csv",
+    ]);
     assert!(!ok && err.contains("--noise-rad"), "{err}");
     let _ = std::fs::remove_dir_all(&d);
 }
@@ -219,7 +231,10 @@ fn ground_templates_run_and_hostile_readings_name_line_and_column() {
         assert!(ok, "{kind}: {err}");
         let stem = format!("ground_{}", kind.replace('-', "_"));
         let j = json(&out.join(format!("{stem}.json")));
-        let (v, se) = (j["value"].as_f64().unwrap(), j["std_error"].as_f64().unwrap());
+        let (v, se) = (
+            j["value"].as_f64().unwrap(),
+            j["std_error"].as_f64().unwrap(),
+        );
         // the templates are Bergen Twin readings: its value within 5 %
         let truth = match kind {
             "rotor-drag" => 0.008,
@@ -234,11 +249,20 @@ fn ground_templates_run_and_hostile_readings_name_line_and_column() {
         let key = j["key"].as_str().unwrap();
         assert!(stdout.contains(key), "{stdout}");
         let (sec, name) = key.split_once('.').unwrap();
-        assert!(j["params_toml"].as_str().unwrap().starts_with(&format!("[{sec}]\n{name} = ")));
+        assert!(
+            j["params_toml"]
+                .as_str()
+                .unwrap()
+                .starts_with(&format!("[{sec}]\n{name} = "))
+        );
         assert!(out.join(format!("{stem}.png")).exists());
     }
     let bad = d.join("bad.csv");
-    std::fs::write(&bad, "# thrust test\npitch_rad,thrust_n\n-0.1,-98\n0.1,-90\n").unwrap();
+    std::fs::write(
+        &bad,
+        "# thrust test\npitch_rad,thrust_n\n-0.1,-98\n0.1,-90\n",
+    )
+    .unwrap();
     let (ok, _, err) = helicon(&[
         "ident",
         "ground",
@@ -247,7 +271,10 @@ fn ground_templates_run_and_hostile_readings_name_line_and_column() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(!ok && err.contains("bad.csv: line 4") && err.contains("`thrust_n` = -90"), "{err}");
+    assert!(
+        !ok && err.contains("bad.csv: line 4") && err.contains("`thrust_n` = -90"),
+        "{err}"
+    );
     std::fs::write(&bad, "pitch_rad,thrust_n\n-0.1,-98\n-0.2,oops\n").unwrap();
     let (ok, _, err) = helicon(&[
         "ident",

@@ -56,8 +56,9 @@ impl ServoModel {
     pub fn derivative(&self, s_cmd: f64, theta_rad: f64, theta_dot_rad_s: f64) -> (f64, f64) {
         let s = s_cmd.clamp(self.s_min, self.s_max);
         let wn = self.omega_n_rad_s;
-        let mut acc =
-            self.gain_rad * wn * wn * s - 2.0 * self.zeta * wn * theta_dot_rad_s - wn * wn * theta_rad;
+        let mut acc = self.gain_rad * wn * wn * s
+            - 2.0 * self.zeta * wn * theta_dot_rad_s
+            - wn * wn * theta_rad;
         let lim = self.rate_max_rad_s;
         if theta_dot_rad_s.abs() >= lim && acc * theta_dot_rad_s > 0.0 {
             acc = 0.0;
@@ -243,10 +244,7 @@ impl Problem<'_> {
         self.evaluations.set(self.evaluations.get() + 1);
         let (m, b) = model_and_offset(p, &self.opts);
         let yp = predict(&m, b, self.cmd, self.dt, self.opts.substeps);
-        let r = DVector::from_iterator(
-            self.y.len(),
-            yp.iter().zip(self.y).map(|(a, b)| a - b),
-        );
+        let r = DVector::from_iterator(self.y.len(), yp.iter().zip(self.y).map(|(a, b)| a - b));
         r.iter().all(|v| v.is_finite()).then_some(r)
     }
 }
@@ -357,16 +355,12 @@ fn grid_start(cmd: &[f64], y: &[f64], dt: f64, opts: ServoFitOptions) -> Option<
             let (sg, sy) = (g.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
             let sgg: f64 = g.iter().map(|v| (v - sg) * (v - sg)).sum();
             let sgy: f64 = g.iter().zip(y).map(|(a, b)| (a - sg) * (b - sy)).sum();
-            if !(sgg > 0.0) {
+            if sgg.is_nan() || sgg <= 0.0 {
                 continue;
             }
             let k = sgy / sgg;
             let b = sy - k * sg;
-            let rss: f64 = g
-                .iter()
-                .zip(y)
-                .map(|(a, c)| (k * a + b - c).powi(2))
-                .sum();
+            let rss: f64 = g.iter().zip(y).map(|(a, c)| (k * a + b - c).powi(2)).sum();
             if rss.is_finite() && best.is_none_or(|(r, _)| rss < r) {
                 best = Some((rss, [k, wn, zeta, b]));
             }
@@ -383,7 +377,9 @@ fn covariance(s: &Solved, n: usize) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
     let inv = info.clone().try_inverse().ok_or_else(|| {
         IdentError::Fit("singular information matrix: the log does not excite the servo".into())
     })?;
-    let se: Vec<f64> = (0..np).map(|i| (sigma2 * inv[(i, i)]).max(0.0).sqrt()).collect();
+    let se: Vec<f64> = (0..np)
+        .map(|i| (sigma2 * inv[(i, i)]).max(0.0).sqrt())
+        .collect();
     let corr = (0..np)
         .map(|i| {
             (0..np)

@@ -46,7 +46,10 @@ fn rel(a: f64, b: f64) -> f64 {
 #[test]
 fn identification_simulates_the_servo_as_the_model_does() {
     let s = bergen_collective();
-    let cmd = BenchInput::new(s.s_min, s.s_max).unwrap().sample(DT).unwrap();
+    let cmd = BenchInput::new(s.s_min, s.s_max)
+        .unwrap()
+        .sample(DT)
+        .unwrap();
     let m = ServoModel {
         gain_rad: s.gain_rad,
         omega_n_rad_s: s.omega_n_rad_s,
@@ -71,7 +74,10 @@ fn identification_simulates_the_servo_as_the_model_does() {
 #[test]
 fn noise_free_bergen_twin_servo_recovered_to_1e_6() {
     let s = bergen_collective();
-    let cmd = BenchInput::new(s.s_min, s.s_max).unwrap().sample(DT).unwrap();
+    let cmd = BenchInput::new(s.s_min, s.s_max)
+        .unwrap()
+        .sample(DT)
+        .unwrap();
     let y = bench(&cmd);
     let fit = fit_servo(&cmd, &y, DT, &opts()).unwrap();
     eprintln!("{fit:#?}");
@@ -94,7 +100,10 @@ fn noisy_estimates_lie_within_their_standard_errors() {
     // parameters each: the normalised errors |ê − e|/σ̂ should look like
     // |N(0, 1)|: median ≈ 0.67, 95 % below 2.
     let s = bergen_collective();
-    let cmd = BenchInput::new(s.s_min, s.s_max).unwrap().sample(DT).unwrap();
+    let cmd = BenchInput::new(s.s_min, s.s_max)
+        .unwrap()
+        .sample(DT)
+        .unwrap();
     let y0 = bench(&cmd);
     let mut z = Vec::new();
     for seed in 0..10u64 {
@@ -115,7 +124,11 @@ fn noisy_estimates_lie_within_their_standard_errors() {
             z.push((e.value - truth).abs() / e.std_error);
         }
         // the residual is the noise
-        assert!(rel(fit.residual_rms_rad, 0.002) < 0.05, "{}", fit.residual_rms_rad);
+        assert!(
+            rel(fit.residual_rms_rad, 0.002) < 0.05,
+            "{}",
+            fit.residual_rms_rad
+        );
     }
     z.sort_by(f64::total_cmp);
     let pct = |p: f64| z[((z.len() - 1) as f64 * p).round() as usize];
@@ -170,10 +183,17 @@ fn an_unreached_rate_limit_is_reported_not_guessed() {
 #[test]
 fn bad_data_are_refused_with_a_reason() {
     let s = bergen_collective();
-    let cmd = BenchInput::new(s.s_min, s.s_max).unwrap().sample(DT).unwrap();
+    let cmd = BenchInput::new(s.s_min, s.s_max)
+        .unwrap()
+        .sample(DT)
+        .unwrap();
     let y = bench(&cmd);
     let o = opts();
-    let e = |r: helicon_ident::Result<_>| r.map(|_: helicon_ident::servo::ServoFit| ()).unwrap_err().to_string();
+    let e = |r: helicon_ident::Result<_>| {
+        r.map(|_: helicon_ident::servo::ServoFit| ())
+            .unwrap_err()
+            .to_string()
+    };
     assert!(e(fit_servo(&cmd, &y[1..], DT, &o)).contains("positions"));
     assert!(e(fit_servo(&cmd[..10], &y[..10], DT, &o)).contains("at least 32"));
     let mut bad = y.clone();

@@ -215,7 +215,13 @@ impl Readings {
         // the reader's own line count skips comment and blank lines.
         let blanked: String = text
             .lines()
-            .map(|l| if l.trim_start().starts_with('#') { "" } else { l })
+            .map(|l| {
+                if l.trim_start().starts_with('#') {
+                    ""
+                } else {
+                    l
+                }
+            })
             .collect::<Vec<_>>()
             .join("\n");
         let mut rdr = csv::ReaderBuilder::new()
@@ -267,12 +273,18 @@ impl Readings {
             for (c, &i) in idx.iter().enumerate() {
                 let name = kind.columns()[c];
                 let text = rec.get(i).unwrap_or("");
-                v[c] = text.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                    parse_err(
-                        file,
-                        format!("line {line}, column `{name}`: `{text}` is not a finite number"),
-                    )
-                })?;
+                v[c] = text
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| {
+                        parse_err(
+                            file,
+                            format!(
+                                "line {line}, column `{name}`: `{text}` is not a finite number"
+                            ),
+                        )
+                    })?;
             }
             rows.push(Reading {
                 line,
@@ -347,7 +359,7 @@ fn fit_line(xs: &[f64], ys: &[f64], with_intercept: bool) -> Option<Line> {
     };
     let sxx: f64 = xs.iter().map(|x| (x - mx) * (x - mx)).sum();
     let sxy: f64 = xs.iter().zip(ys).map(|(x, y)| (x - mx) * (y - my)).sum();
-    if !(sxx > 0.0) {
+    if sxx.is_nan() || sxx <= 0.0 {
         return None;
     }
     let slope = sxy / sxx;
@@ -518,18 +530,18 @@ fn check_physics(rd: &Readings) -> Result<(), ConfigError> {
                     ));
                 }
             }
-            Kind::MainLiftSlope | Kind::TailLiftSlope => {
-                if r.y != 0.0 && r.x != 0.0 && r.y.signum() != r.x.signum() {
-                    return Err(rd.invalid(
-                        r,
-                        1,
-                        r.y,
-                        format!(
-                            "a blade pitch of {} rad cannot give a thrust of the other sign (thrust is positive in the direction a positive pitch pushes)",
-                            r.x
-                        ),
-                    ));
-                }
+            Kind::MainLiftSlope | Kind::TailLiftSlope
+                if r.y != 0.0 && r.x != 0.0 && r.y.signum() != r.x.signum() =>
+            {
+                return Err(rd.invalid(
+                    r,
+                    1,
+                    r.y,
+                    format!(
+                        "a blade pitch of {} rad cannot give a thrust of the other sign (thrust is positive in the direction a positive pitch pushes)",
+                        r.x
+                    ),
+                ));
             }
             Kind::TailFinLoss => {
                 if r.x <= 0.0 {
@@ -541,7 +553,12 @@ fn check_physics(rd: &Readings) -> Result<(), ConfigError> {
                     ));
                 }
                 if r.y < 0.0 {
-                    return Err(rd.invalid(r, 1, r.y, "the thrust with the fin must be >= 0".into()));
+                    return Err(rd.invalid(
+                        r,
+                        1,
+                        r.y,
+                        "the thrust with the fin must be >= 0".into(),
+                    ));
                 }
             }
             _ => {}
@@ -609,7 +626,10 @@ fn rotor_drag(rd: &Readings, p: &Params) -> Result<GroundResult, ConfigError> {
     if line.slope <= 0.0 {
         return Err(parse_err(
             &rd.file,
-            format!("column `torque_n_m`: the fit gives Cd = {} (must be > 0)", line.slope),
+            format!(
+                "column `torque_n_m`: the fit gives Cd = {} (must be > 0)",
+                line.slope
+            ),
         ));
     }
     let constants = vec![
@@ -736,7 +756,7 @@ fn fin_loss(rd: &Readings, p: &Params) -> Result<GroundResult, ConfigError> {
     let f = &p.fuselage;
     let r = p.tail_rotor.radius_m;
     let area = f.drag_tf * f.area_tf_m2;
-    if !(area > 0.0) {
+    if area.is_nan() || area <= 0.0 {
         return Err(ConfigError::invalid(
             &rd.file,
             "fuselage.drag_tf * fuselage.area_tf_m2",

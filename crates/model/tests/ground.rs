@@ -19,7 +19,7 @@ fn idx(name: &str) -> usize {
 /// The model at rest (no wind, all rates zero) with the given servo
 /// positions: its auxiliary outputs.
 fn at_rest(p: &Params, theta0: f64, theta_tr: f64) -> helicon_model::Aux {
-    let model = Model::new(p.clone(), Preset::Physical.options());
+    let model = Model::new(*p, Preset::Physical.options());
     let mut x = State::zeros();
     x[idx("theta0")] = theta0;
     x[idx("theta_tr")] = theta_tr;
@@ -51,14 +51,13 @@ fn readings(kind: Kind, sigma: f64, seed: u64) -> Vec<(f64, f64)> {
     let d = Normal::new(0.0, 1.0).unwrap();
     let mut e = || sigma * d.sample(&mut rng);
     let mut out = Vec::new();
-    for rep in 0..3 {
-        let _ = rep;
+    for _ in 0..3 {
         for i in 0..6 {
             let f = i as f64;
             out.push(match kind {
                 Kind::RotorDrag => {
                     let w = 80.0 + 8.0 * f;
-                    let mut q = p.clone();
+                    let mut q = p;
                     q.main_rotor.omega_rad_s = w;
                     (w, -at_rest(&q, 0.0, 0.0).torque_mr_hub_nm.z + e())
                 }
@@ -119,9 +118,26 @@ fn noise_free_readings_from_the_model_give_the_bergen_twin_back() {
     for kind in helicon_model::ground::KINDS {
         let r = run(kind, &readings(kind, 0.0, 0), &p);
         let rel = (r.value - truth(kind)).abs() / truth(kind);
-        eprintln!("{}: {} = {} (truth {}), rel {rel:.1e}", kind.name(), r.key, r.value, truth(kind));
-        assert!(rel < 1e-9, "{}: {} vs {}", kind.name(), r.value, truth(kind));
-        assert!(r.std_error < 1e-6 * r.value.abs(), "{}: se {}", kind.name(), r.std_error);
+        eprintln!(
+            "{}: {} = {} (truth {}), rel {rel:.1e}",
+            kind.name(),
+            r.key,
+            r.value,
+            truth(kind)
+        );
+        assert!(
+            rel < 1e-9,
+            "{}: {} vs {}",
+            kind.name(),
+            r.value,
+            truth(kind)
+        );
+        assert!(
+            r.std_error < 1e-6 * r.value.abs(),
+            "{}: se {}",
+            kind.name(),
+            r.std_error
+        );
         assert_eq!(r.key, kind.key());
         assert_eq!(r.n_readings, 18);
     }
@@ -155,7 +171,11 @@ fn noisy_readings_give_values_within_their_standard_errors() {
             "{}: |error|/se median {med:.2}, 90th percentile {p90:.2}, max {max:.2}",
             kind.name()
         );
-        assert!(z.iter().filter(|v| **v <= 2.0).count() >= 16, "{}: {z:?}", kind.name());
+        assert!(
+            z.iter().filter(|v| **v <= 2.0).count() >= 16,
+            "{}: {z:?}",
+            kind.name()
+        );
         assert!(max < 4.0, "{}: {z:?}", kind.name());
     }
 }
@@ -190,11 +210,19 @@ fn hand_worked_cases() {
     let s = 0.5 * (-beta + (beta * beta + 960.0).sqrt());
     let t1 = s * s;
     let s2 = 0.5 * (-beta + (beta * beta + 1920.0).sqrt());
-    let r = run(Kind::MainLiftSlope, &[(0.1, t1), (0.2, s2 * s2), (-0.1, -t1)], &p);
+    let r = run(
+        Kind::MainLiftSlope,
+        &[(0.1, t1), (0.2, s2 * s2), (-0.1, -t1)],
+        &p,
+    );
     assert!((r.value - 6.0).abs() < 1e-12, "{}", r.value);
 
     // blade-spring: R − e = 1, β = 0.01 + 0.005 F → Ks = 200
-    let r = run(Kind::BladeSpring, &[(0.0, 0.01), (1.0, 0.015), (2.0, 0.02)], &p);
+    let r = run(
+        Kind::BladeSpring,
+        &[(0.0, 0.01), (1.0, 0.015), (2.0, 0.02)],
+        &p,
+    );
     assert!((r.value - 200.0).abs() < 1e-10 && r.std_error < 1e-9);
     assert!((r.intercept.unwrap()[0] - 0.01).abs() < 1e-15);
     // bell-gain: y = (0, 0.02, 0.05) at x = (0, 0.1, 0.2): slope 0.25,
@@ -212,14 +240,18 @@ fn hand_worked_cases() {
     // tail-fin-loss: Rtr = 0.18, dtf·Atf = 0.014: loss/T = k, Ktf = √(4π 0.0324 k / 0.014)
     let q = Params::bergen_twin();
     let r = run(Kind::TailFinLoss, &[(4.0, 3.96), (8.0, 7.92)], &q);
-    let want = (4.0 * std::f64::consts::PI * 0.0324 * 0.01 / (q.fuselage.drag_tf * q.fuselage.area_tf_m2)).sqrt();
+    let want = (4.0 * std::f64::consts::PI * 0.0324 * 0.01
+        / (q.fuselage.drag_tf * q.fuselage.area_tf_m2))
+        .sqrt();
     assert!((r.value - want).abs() < 1e-12, "{} vs {want}", r.value);
 }
 
 fn err(kind: Kind, text: &str) -> String {
     match Readings::parse_csv(text, "bench.csv", kind) {
         Err(e) => e.to_string(),
-        Ok(r) => calculate(&r, &Params::bergen_twin()).unwrap_err().to_string(),
+        Ok(r) => calculate(&r, &Params::bergen_twin())
+            .unwrap_err()
+            .to_string(),
     }
 }
 
@@ -233,7 +265,10 @@ fn hostile_readings_name_file_line_and_column() {
     let e = err(k, "pitch_rad,thrust_n\n-0.1,-50\n");
     assert!(e.contains("1 reading") && e.contains("at least 2"), "{e}");
     let e = err(k, "pitch_rad,thrust_n\n-0.1,-50\n-0.2,NaN\n");
-    assert!(e.contains("bench.csv") && e.contains("line 3") && e.contains("`thrust_n`"), "{e}");
+    assert!(
+        e.contains("bench.csv") && e.contains("line 3") && e.contains("`thrust_n`"),
+        "{e}"
+    );
     let e = err(k, "pitch_rad,thrust_n\n-0.1,-50\n# a comment\n-0.2,inf\n");
     assert!(e.contains("line 4") && e.contains("`thrust_n`"), "{e}");
     // comments and blank lines before the header and between readings count as lines
@@ -242,7 +277,10 @@ fn hostile_readings_name_file_line_and_column() {
     let e = err(k, "pitch_rad,thrust_n\r\n-0.1,-50\r\n\r\n-0.2,x\r\n");
     assert!(e.contains("line 4,"), "{e}");
     let e = err(k, "pitch_rad,thrust_n\n-0.1,-50\n0.2,-90\n");
-    assert!(e.contains("bench.csv: line 3") && e.contains("`thrust_n` = -90"), "{e}");
+    assert!(
+        e.contains("bench.csv: line 3") && e.contains("`thrust_n` = -90"),
+        "{e}"
+    );
     let e = err(k, "pitch_rad,thrust\n-0.1,-50\n");
     assert!(e.contains("no column `thrust_n`"), "{e}");
     let e = err(k, "pitch_rad,thrust_n,thrust_n\n-0.1,-50,1\n");
@@ -254,20 +292,42 @@ fn hostile_readings_name_file_line_and_column() {
     let e = err(Kind::RotorDrag, "omega_rad_s,torque_n_m\n100,2\n-90,1.5\n");
     assert!(e.contains("line 3") && e.contains("`omega_rad_s`"), "{e}");
     let e = err(Kind::RotorDrag, "omega_rad_s,torque_n_m\n100,2\n90,-1.5\n");
-    assert!(e.contains("line 3") && e.contains("`torque_n_m` = -1.5"), "{e}");
-    let e = err(Kind::TailFinLoss, "thrust_no_fin_n,thrust_with_fin_n\n4,3.9\n-1,-1\n");
-    assert!(e.contains("line 3") && e.contains("`thrust_no_fin_n`"), "{e}");
-    let e = err(Kind::TailFinLoss, "thrust_no_fin_n,thrust_with_fin_n\n4,4.1\n8,8.2\n");
+    assert!(
+        e.contains("line 3") && e.contains("`torque_n_m` = -1.5"),
+        "{e}"
+    );
+    let e = err(
+        Kind::TailFinLoss,
+        "thrust_no_fin_n,thrust_with_fin_n\n4,3.9\n-1,-1\n",
+    );
+    assert!(
+        e.contains("line 3") && e.contains("`thrust_no_fin_n`"),
+        "{e}"
+    );
+    let e = err(
+        Kind::TailFinLoss,
+        "thrust_no_fin_n,thrust_with_fin_n\n4,4.1\n8,8.2\n",
+    );
     assert!(e.contains("no loss"), "{e}");
-    let e = err(Kind::BladeSpring, "force_n,flap_rad\n0,0.01\n1,0.005\n2,0.0\n");
+    let e = err(
+        Kind::BladeSpring,
+        "force_n,flap_rad\n0,0.01\n1,0.005\n2,0.0\n",
+    );
     assert!(e.contains("does not rise"), "{e}");
-    let e = err(Kind::HillerGain, "flybar_rad,blade_pitch_rad\n0,0\n0.1,-0.08\n0.2,-0.16\n");
+    let e = err(
+        Kind::HillerGain,
+        "flybar_rad,blade_pitch_rad\n0,0\n0.1,-0.08\n0.2,-0.16\n",
+    );
     assert!(e.contains("same sense"), "{e}");
     // every template parses and computes
     for kind in helicon_model::ground::KINDS {
         let r = Readings::parse_csv(&kind.template(), "t.csv", kind).unwrap();
         let out = calculate(&r, &Params::bergen_twin()).unwrap();
-        assert!(out.value.is_finite() && out.std_error.is_finite(), "{}", kind.name());
+        assert!(
+            out.value.is_finite() && out.std_error.is_finite(),
+            "{}",
+            kind.name()
+        );
         assert_eq!(Kind::from_name(kind.name()), Some(kind));
     }
 }
