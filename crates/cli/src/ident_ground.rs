@@ -95,7 +95,7 @@ fn plot(png: &std::path::Path, kind: Kind, r: &helicon_model::ground::GroundResu
     let mut pts = r.points.clone();
     pts.sort_by(|a, b| a[0].total_cmp(&b[0]));
     let read: Vec<(f64, f64)> = pts.iter().map(|p| (p[0], p[1])).collect();
-    let fit: Vec<(f64, f64)> = pts.iter().map(|p| (p[0], p[2])).collect();
+    let fit: Vec<(f64, f64)> = r.curve.iter().map(|p| (p[0], p[1])).collect();
     let [x, y] = kind.columns();
     Figure::new(
         &format!(
@@ -111,7 +111,7 @@ fn plot(png: &std::path::Path, kind: Kind, r: &helicon_model::ground::GroundResu
     .panel(
         Panel::new(y)
             .series(Series::new("readings", &read).dashed())
-            .series(Series::new("model with the fitted value", &fit)),
+            .series(Series::new("fit", &fit)),
     )
     .write(png)
     .with_context(|| png.display().to_string())

@@ -335,6 +335,8 @@ pub struct GroundResult {
     pub constants: Vec<(&'static str, f64)>,
     /// The readings (x, y) and the fitted relation at the same x, for plots.
     pub points: Vec<[f64; 3]>,
+    /// The fitted relation at 50 points across the readings' range of x.
+    pub curve: Vec<[f64; 2]>,
 }
 
 /// Straight-line least squares y = a·x (+ b): slope, its standard error,
@@ -610,6 +612,20 @@ fn result(
         intercept: line.intercept,
         constants,
         points: rd.rows.iter().map(|r| [r.x, r.y, model_y(r.x)]).collect(),
+        curve: {
+            let (lo, hi) = rd
+                .rows
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), r| {
+                    (a.min(r.x), b.max(r.x))
+                });
+            (0..50)
+                .map(|i| {
+                    let x = lo + (hi - lo) * f64::from(i) / 49.0;
+                    [x, model_y(x)]
+                })
+                .collect()
+        },
     })
 }
 
