@@ -210,7 +210,8 @@ pub fn run_servo(a: &ServoArgs) -> Result<()> {
 }
 
 /// servo.json: the estimates with their standard errors, the parameter keys
-/// they set, the fit's figures and the frequency-domain cross-check.
+/// they set (and a TOML snippet setting them), the fit's figures and the
+/// frequency-domain cross-check.
 fn servo_json(
     a: &ServoArgs,
     file: &str,
@@ -229,6 +230,13 @@ fn servo_json(
             serde_json::Value::Null
         }
     };
+    let mut toml = format!(
+        "[{section}]\ngain_rad = {}\nomega_n_rad_s = {}\nzeta = {}\n",
+        fit.gain_rad.value, fit.omega_n_rad_s.value, fit.zeta.value
+    );
+    if let RateLimit::Identified { rate_max_rad_s, .. } = &fit.rate_limit {
+        toml.push_str(&format!("rate_max_rad_s = {}\n", rate_max_rad_s.value));
+    }
     Ok(serde_json::json!({
         "log": file,
         "command": a.command,
@@ -261,6 +269,7 @@ fn servo_json(
             "rate_max_rad_s": key("rate_max_rad_s"),
         },
         "frequency_check": check,
+        "params_toml": toml,
     }))
 }
 

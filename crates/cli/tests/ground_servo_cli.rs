@@ -86,6 +86,13 @@ fn bench_test_identified_back_within_its_standard_errors() {
     let rms = j["residual_rms_rad"].as_f64().unwrap();
     assert!((rms - 0.002).abs() < 2e-4, "{rms}");
     assert!(j["frequency_check"]["points"].as_u64().unwrap() > 10);
+    // the snippet is a parameter file `helicon params` loads
+    let snippet = d.join("servo.toml");
+    std::fs::write(&snippet, j["params_toml"].as_str().unwrap()).unwrap();
+    let (ok, params, err) = helicon(&["params", "--params", snippet.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let want = format!("zeta = {}", j["zeta"]["value"].as_f64().unwrap());
+    assert!(params.contains(&want), "{params}");
     assert!(out.join("servo.png").exists());
     let _ = std::fs::remove_dir_all(&d);
 }
@@ -256,6 +263,15 @@ fn ground_templates_run_and_hostile_readings_name_line_and_column() {
                 .starts_with(&format!("[{sec}]\n{name} = "))
         );
         assert!(out.join(format!("{stem}.png")).exists());
+        let snippet = d.join(format!("{stem}.toml"));
+        std::fs::write(&snippet, j["params_toml"].as_str().unwrap()).unwrap();
+        let (ok, params, err) = helicon(&["params", "--params", snippet.to_str().unwrap()]);
+        assert!(ok, "{kind}: {err}");
+        assert!(
+            params.contains(&format!("{name} = {v}"))
+                || params.contains(&format!("{name} = {v:?}")),
+            "{kind}: {params}"
+        );
     }
     let bad = d.join("bad.csv");
     std::fs::write(
