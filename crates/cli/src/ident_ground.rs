@@ -38,9 +38,10 @@ pub fn run(a: &GroundArgs) -> Result<()> {
             KINDS.map(Kind::name).join(", ")
         )
     })?;
+    let mut con = crate::console::Console::stdout();
     if a.template {
-        print!("{}", kind.template());
-        return Ok(());
+        con.write_str(&kind.template());
+        return con.finish().context("writing to stdout");
     }
     let (Some(path), Some(out)) = (&a.readings, &a.out) else {
         bail!("READINGS and --out are needed (or --template)");
@@ -77,7 +78,8 @@ pub fn run(a: &GroundArgs) -> Result<()> {
         .with_context(|| format!("{}: cannot write", json_path.display()))?;
     let png = out.join(format!("{stem}.png"));
     plot(&png, kind, &r)?;
-    println!(
+    writeln!(
+        con,
         "{file}: {} = {} ± {:.3e} {} ({} readings, {:.2} %)",
         r.key,
         r.value,
@@ -86,8 +88,8 @@ pub fn run(a: &GroundArgs) -> Result<()> {
         r.n_readings,
         100.0 * r.std_error / r.value.abs()
     );
-    println!("  {}\n  {}", json_path.display(), png.display());
-    Ok(())
+    writeln!(con, "  {}\n  {}", json_path.display(), png.display());
+    con.finish().context("writing to stdout")
 }
 
 /// The readings and the fitted relation against the set variable.

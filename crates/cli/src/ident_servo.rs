@@ -135,7 +135,9 @@ pub fn run_bench(a: &ServoBenchArgs) -> Result<()> {
         writeln!(w, "{},{s},{y},{}", k as f64 * a.dt, x[0])?;
     }
     w.flush()?;
-    println!(
+    let mut con = crate::console::Console::stdout();
+    writeln!(
+        con,
         "servo.{}: {} samples over {:.2} s (steps of {:?} of the half range, full-range steps{}) -> {}",
         a.channel,
         cmd.len(),
@@ -148,7 +150,7 @@ pub fn run_bench(a: &ServoBenchArgs) -> Result<()> {
         },
         a.out.display()
     );
-    Ok(())
+    con.finish().context("writing to stdout")
 }
 
 /// `helicon ident servo`.
@@ -183,30 +185,34 @@ pub fn run_servo(a: &ServoArgs) -> Result<()> {
     let png = a.out.join("servo.png");
     overlay(&png, &file, cmd, pos, dt, &fit, a.substeps)?;
     let pm = |e: helicon_ident::servo::Estimate| format!("{:.6} ± {:.2e}", e.value, e.std_error);
-    println!(
+    let mut con = crate::console::Console::stdout();
+    writeln!(
+        con,
         "{file}: {} samples every {dt} s; residual RMS {:.3e} rad",
         fit.n_samples, fit.residual_rms_rad
     );
-    println!("  K  = {} rad", pm(fit.gain_rad));
-    println!("  ωn = {} rad/s", pm(fit.omega_n_rad_s));
-    println!("  ζ  = {}", pm(fit.zeta));
+    writeln!(con, "  K  = {} rad", pm(fit.gain_rad));
+    writeln!(con, "  ωn = {} rad/s", pm(fit.omega_n_rad_s));
+    writeln!(con, "  ζ  = {}", pm(fit.zeta));
     match &fit.rate_limit {
         RateLimit::Identified {
             rate_max_rad_s,
             samples_on_limit,
-        } => println!(
+        } => writeln!(
+            con,
             "  rate limit = {} rad/s ({samples_on_limit} samples on the limit, likelihood ratio {:.1})",
             pm(*rate_max_rad_s),
             fit.lr_statistic
         ),
         RateLimit::NotReached {
             lower_bound_rad_s, ..
-        } => println!(
+        } => writeln!(
+            con,
             "  rate limit: not reached in this log (at least {lower_bound_rad_s:.3} rad/s); not identified"
         ),
     }
-    println!("  {}\n  {}", json_path.display(), png.display());
-    Ok(())
+    writeln!(con, "  {}\n  {}", json_path.display(), png.display());
+    con.finish().context("writing to stdout")
 }
 
 /// servo.json: the estimates with their standard errors, the parameter keys

@@ -331,22 +331,33 @@ fn solve(
     })
 }
 
-/// Start values: a grid over ωn (log spaced from the record length to the
-/// Nyquist frequency) and ζ, with K and b from linear least squares on each
-/// unit-gain response (exact for a linear servo).
-fn grid_start(cmd: &[f64], y: &[f64], dt: f64, opts: ServoFitOptions) -> Option<[f64; 4]> {
+/// Start values: a grid over ωn (`nw` log-spaced values from the record
+/// length to the Nyquist frequency) and ζ, with K and b from linear least
+/// squares on each unit-gain response. With a rate limit the channel is
+/// homogeneous in K (θ = K φ, φ the unit-gain response limited to
+/// θ̇max/|K|), so K and b stay a linear least-squares problem for a given
+/// unit-gain limit `unit_limit` (∞: none): `(RSS, [K, ωn, ζ, b])` of the best
+/// grid point.
+fn grid_start(
+    cmd: &[f64],
+    y: &[f64],
+    dt: f64,
+    opts: ServoFitOptions,
+    unit_limit: f64,
+    nw: usize,
+    zetas: &[f64],
+) -> Option<(f64, [f64; 4])> {
     let n = cmd.len() as f64;
     let (w_lo, w_hi) = (2.0 * std::f64::consts::PI / (n * dt), 0.9 / dt);
-    let nw = 40;
     let mut best: Option<(f64, [f64; 4])> = None;
     for i in 0..nw {
         let wn = w_lo * (w_hi / w_lo).powf(i as f64 / (nw - 1) as f64);
-        for zeta in [0.3, 0.6, 0.9, 1.3, 2.0] {
+        for &zeta in zetas {
             let m = ServoModel {
                 gain_rad: 1.0,
                 omega_n_rad_s: wn,
                 zeta,
-                rate_max_rad_s: f64::INFINITY,
+                rate_max_rad_s: unit_limit,
                 s_min: opts.s_min,
                 s_max: opts.s_max,
             };
@@ -366,7 +377,42 @@ fn grid_start(cmd: &[f64], y: &[f64], dt: f64, opts: ServoFitOptions) -> Option<
             }
         }
     }
-    best.map(|(_, p)| p)
+    best
+}
+
+/// Starts of the limited fit: the linear fit's K, ωn, ζ, b with its limit
+/// at 0.6 and 0.9 of `peak` (the fastest rate of the linear fit), and the
+/// two best points of a grid over ωn, ζ and the unit-gain limit (0.15 …
+/// 0.9 of `peak`/|K|), which finds the servo when heavy rate limiting has
+/// biased the linear fit.
+fn limited_starts(
+    cmd: &[f64],
+    y: &[f64],
+    dt: f64,
+    opts: ServoFitOptions,
+    lin: &DVector<f64>,
+    peak: f64,
+) -> Vec<DVector<f64>> {
+    let mut starts: Vec<DVector<f64>> = [0.6, 0.9]
+        .iter()
+        .map(|f| {
+            let mut p: Vec<f64> = lin.iter().copied().collect();
+            p.push(f * peak);
+            DVector::from_vec(p)
+        })
+        .collect();
+    let k_lin = lin[0].abs().max(1e-12);
+    let mut grid: Vec<(f64, Vec<f64>)> = [0.15, 0.3, 0.5, 0.7, 0.9]
+        .iter()
+        .filter_map(|f| {
+            let unit = f * peak / k_lin;
+            grid_start(cmd, y, dt, opts, unit, 20, &[0.4, 0.8, 1.3, 2.0])
+                .map(|(rss, p)| (rss, vec![p[0], p[1], p[2], p[3], unit * p[0].abs()]))
+        })
+        .collect();
+    grid.sort_by(|a, b| a.0.total_cmp(&b.0));
+    starts.extend(grid.into_iter().take(2).map(|(_, p)| DVector::from_vec(p)));
+    starts
 }
 
 /// Standard errors and correlation from the Jacobian and residual.
@@ -461,8 +507,16 @@ pub fn fit_servo(
     check_inputs(commands, positions, dt_s, opts)?;
     let n = commands.len();
     let mut evals = 0;
-    let start = grid_start(commands, positions, dt_s, *opts)
-        .ok_or_else(|| IdentError::Fit("no start value gives a finite response".into()))?;
+    let (_, start) = grid_start(
+        commands,
+        positions,
+        dt_s,
+        *opts,
+        f64::INFINITY,
+        40,
+        &[0.3, 0.6, 0.9, 1.3, 2.0],
+    )
+    .ok_or_else(|| IdentError::Fit("no start value gives a finite response".into()))?;
     let lin = solve(
         commands,
         positions,
@@ -488,17 +542,8 @@ pub fn fit_servo(
         .fold(0.0, f64::max);
     // the limited fit from several starts below the unlimited response's peak rate
     let mut limited: Option<Solved> = None;
-    for frac in [0.4, 0.6, 0.8, 0.95] {
-        let mut p0: Vec<f64> = lin.p.iter().copied().collect();
-        p0.push(frac * peak);
-        let s = solve(
-            commands,
-            positions,
-            dt_s,
-            *opts,
-            DVector::from_vec(p0),
-            &mut evals,
-        );
+    for p0 in limited_starts(commands, positions, dt_s, *opts, &lin.p, peak) {
+        let s = solve(commands, positions, dt_s, *opts, p0, &mut evals);
         if let Some(s) = s.filter(|s| limited.as_ref().is_none_or(|b| s.rss < b.rss)) {
             limited = Some(s);
         }

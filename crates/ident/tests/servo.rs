@@ -219,3 +219,42 @@ fn bad_data_are_refused_with_a_reason() {
     assert!(BenchInput::new(1.0, 1.0).is_err());
     assert!(BenchInput::new(0.0, f64::NAN).is_err());
 }
+
+#[test]
+fn a_heavily_rate_limited_slow_servo_is_found() {
+    // A slow, strongly limited servo (K 1.2, ωn 30 rad/s, ζ 0.5, 2 rad/s) on
+    // the same bench input at 200 Hz: its full-range steps (1.19 rad) take
+    // 0.6 s at the limit, longer than a 0.3 s hold, which biases the
+    // unlimited fit far off (K 1.46, ζ 3.9). The grid over the unit-gain
+    // limit finds it; noise-free it comes back to 1e-6.
+    let s = helicon_model::params::Servo {
+        gain_rad: 1.2,
+        omega_n_rad_s: 30.0,
+        zeta: 0.5,
+        rate_max_rad_s: 2.0,
+        s_min: -0.37,
+        s_max: 0.62,
+    };
+    let dt = 0.005;
+    let cmd = BenchInput::new(s.s_min, s.s_max)
+        .unwrap()
+        .sample(dt)
+        .unwrap();
+    let y: Vec<f64> = servo_response(&s, &cmd, dt, [s.gain_rad * cmd[0], 0.0])
+        .iter()
+        .map(|x| x[0])
+        .collect();
+    let o = ServoFitOptions {
+        s_min: s.s_min,
+        s_max: s.s_max,
+        ..ServoFitOptions::default()
+    };
+    let fit = fit_servo(&cmd, &y, dt, &o).unwrap();
+    assert!(rel(fit.gain_rad.value, 1.2) < 1e-6, "{fit:?}");
+    assert!(rel(fit.omega_n_rad_s.value, 30.0) < 1e-6, "{fit:?}");
+    assert!(rel(fit.zeta.value, 0.5) < 1e-6, "{fit:?}");
+    let RateLimit::Identified { rate_max_rad_s, .. } = fit.rate_limit else {
+        panic!("{:?}", fit.rate_limit)
+    };
+    assert!(rel(rate_max_rad_s.value, 2.0) < 1e-6);
+}
