@@ -77,6 +77,9 @@ pub struct ServoBenchArgs {
     /// Noise seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Time each step level is held, s (longer for slow or strongly rate-limited servos).
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
+    pub hold_s: f64,
     /// Leave out the sweep (steps only).
     #[arg(long)]
     pub no_sweep: bool,
@@ -104,10 +107,11 @@ pub fn run_bench(a: &ServoBenchArgs) -> Result<()> {
     }
     let mut input = BenchInput::new(servo.s_min, servo.s_max)
         .with_context(|| format!("servo.{} command range", a.channel))?;
+    input.hold_s = a.hold_s;
     if a.no_sweep {
         input.sweep = None;
     }
-    let cmd = input.sample(a.dt)?;
+    let cmd = input.sample(a.dt).context("--hold-s")?;
     let x0 = [servo.gain_rad * cmd[0], 0.0];
     let truth = helicon_model::actuators::servo_response(&servo, &cmd, a.dt, x0);
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(a.seed);

@@ -207,6 +207,8 @@ fn hostile_servo_logs_are_refused() {
         "x.csv",
     ]);
     assert!(!ok && err.contains("--noise-rad"), "{err}");
+    let (ok, _, err) = helicon(&["ident", "servo-bench", "--hold-s", "-1", "--out", "x.csv"]);
+    assert!(!ok && err.contains("hold_s"), "{err}");
     let _ = std::fs::remove_dir_all(&d);
 }
 
