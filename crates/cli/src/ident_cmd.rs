@@ -32,6 +32,12 @@ pub enum IdentCommand {
     Ss(crate::ident_ss::SsArgs),
     /// Sample a flight-test input (sweep, multisine, doublet, 3211) from a TOML file to CSV `t_s,value`.
     Input(InputArgs),
+    /// Identify a servo (K, ωn, ζ, rate limit, thesis (5.1)–(5.4)) from a log of its command and measured position: DIR/servo.json and an overlay plot.
+    Servo(crate::ident_servo::ServoArgs),
+    /// Write a simulated bench test of one of the model's servos (steps, a sweep, position noise) to CSV.
+    ServoBench(crate::ident_servo::ServoBenchArgs),
+    /// A ground experiment of thesis §11.1 (rotor drag, lift slopes, blade spring, Bell/Hiller gains, tail-fin loss): readings CSV in, parameter and standard error out.
+    Ground(crate::ident_ground::GroundArgs),
 }
 
 /// `helicon ident input`.
@@ -163,17 +169,20 @@ pub fn run(args: &IdentArgs) -> Result<()> {
         IdentCommand::Tf(a) => run_tf(a),
         IdentCommand::Input(a) => run_input(a),
         IdentCommand::Ss(a) => crate::ident_ss::run_ss(a),
+        IdentCommand::Servo(a) => crate::ident_servo::run_servo(a),
+        IdentCommand::ServoBench(a) => crate::ident_servo::run_bench(a),
+        IdentCommand::Ground(a) => crate::ident_ground::run(a),
     }
 }
 
 /// Columns read from a CSV by name: their values, row by row.
-struct Table {
-    columns: Vec<Vec<f64>>,
+pub(crate) struct Table {
+    pub(crate) columns: Vec<Vec<f64>>,
 }
 
 /// Read the named columns of `path`; every value must be a finite number
 /// (errors name the file, the column and the line).
-fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
+pub(crate) fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
     let file = path.display().to_string();
     let mut rdr = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
@@ -234,7 +243,7 @@ fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
 /// The sample time of the time column; an irregular column is resampled by
 /// linear interpolation onto a uniform grid at its median step (said on
 /// stderr), and refused when it goes backwards or has a gap over 5 steps.
-fn uniform(file: &str, time: &str, t: &[f64], cols: &mut [Vec<f64>]) -> Result<f64> {
+pub(crate) fn uniform(file: &str, time: &str, t: &[f64], cols: &mut [Vec<f64>]) -> Result<f64> {
     let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
     if let Some(i) = steps.iter().position(|d| d.is_nan() || *d <= 0.0) {
         bail!(

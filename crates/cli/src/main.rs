@@ -8,6 +8,8 @@ mod demo;
 mod design_cmd;
 mod gcs_cmd;
 mod ident_cmd;
+mod ident_ground;
+mod ident_servo;
 mod ident_ss;
 mod log_cmd;
 mod mc_cmd;

@@ -15,6 +15,7 @@ pub mod error;
 pub mod fit;
 pub mod frf;
 pub mod inputs;
+pub mod servo;
 pub mod spectral;
 pub mod ssfit;
 

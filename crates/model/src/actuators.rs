@@ -37,6 +37,35 @@ pub fn servo_derivative(
     (theta_dot_rad_s.clamp(-lim, lim), acc)
 }
 
+/// Drive one servo channel through `commands` (sample k's command held over
+/// [t_k, t_k + `dt_s`), as the flight computer holds it) with the model's
+/// own integrator ([`crate::integrate::rk4`], one step per sample) from the
+/// state `x0 = [θ, θ̇]`; returns the state at every sample (the first is
+/// `x0`). This is what a bench test of the servo measures, without noise:
+/// `helicon ident servo-bench` writes it, and the servo identification is
+/// tested against it.
+pub fn servo_response(servo: &Servo, commands: &[f64], dt_s: f64, x0: [f64; 2]) -> Vec<[f64; 2]> {
+    let mut x = crate::state::State::zeros();
+    x[0] = x0[0];
+    x[1] = x0[1];
+    let mut out = Vec::with_capacity(commands.len());
+    for &s in commands {
+        out.push([x[0], x[1]]);
+        let next = crate::integrate::rk4(&x, dt_s, |st| {
+            let (a, b) = servo_derivative(servo, s, st[0], st[1]);
+            let mut d = crate::state::State::zeros();
+            d[0] = a;
+            d[1] = b;
+            Ok::<_, std::convert::Infallible>(d)
+        });
+        x = match next {
+            Ok(v) => v,
+            Err(never) => match never {},
+        };
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

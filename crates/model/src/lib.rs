@@ -27,6 +27,7 @@ pub mod actuators;
 pub mod config_error;
 pub mod drag;
 pub mod flapping;
+pub mod ground;
 pub mod gyro;
 pub mod inflow;
 pub mod integrate;
