@@ -7,6 +7,7 @@
 use crate::safety::{Health, Mode, RcInput, SafetyEvent, Supervisor};
 use helicon_core::state::Input;
 use helicon_core::{Reference, SensorComputer, SensorFrame, Telemetry};
+use helicon_sim::excitation::Excitations;
 
 /// What the control task is given for one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,6 +36,54 @@ pub struct ControlOutput {
     pub telemetry: Option<Telemetry>,
     /// A change of mode this sample.
     pub event: Option<SafetyEvent>,
+    /// The flight-test excitation of the sample, when the mission has one
+    /// and the flight computer ran: the offset added to the law's command
+    /// (zeros when not applied) and whether it runs.
+    pub excitation: Option<(Input, bool)>,
+}
+
+/// What the control task reports of a step it computed (the ground link's
+/// item; SITL fills `log.csv`'s estimate, excitation and IMU-health
+/// columns from it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepReport {
+    /// The flight computer's record.
+    pub telemetry: Telemetry,
+    /// The excitation added to the law's command (zeros without).
+    pub excitation: Input,
+}
+
+impl ControlOutput {
+    /// The step's report, when the flight computer ran.
+    pub fn report(&self) -> Option<StepReport> {
+        self.telemetry.map(|telemetry| StepReport {
+            telemetry,
+            excitation: self.excitation.map_or_else(Input::zeros, |e| e.0),
+        })
+    }
+}
+
+/// The excitation's clock: started at the first entry into auto, ended
+/// for good when auto is left.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct ExcitationClock {
+    start_s: Option<f64>,
+    ended: bool,
+}
+
+impl ExcitationClock {
+    /// The time into the excitation at `now_s` in `mode` (`None`: not
+    /// applied).
+    fn at(&mut self, now_s: f64, mode: Mode) -> Option<f64> {
+        if self.ended {
+            return None;
+        }
+        if mode != Mode::Auto {
+            self.ended = self.start_s.is_some();
+            return None;
+        }
+        Some(now_s - *self.start_s.get_or_insert(now_s))
+    }
 }
 
 /// The control task: the flight computer under the safety supervisor.
@@ -47,6 +96,7 @@ pub struct ControlTask {
     rc: Option<RcInput>,
     heading_rad: f64,
     nav_failed: bool,
+    excitation: ExcitationClock,
 }
 
 impl ControlTask {
@@ -61,6 +111,7 @@ impl ControlTask {
             rc: None,
             heading_rad: 0.0,
             nav_failed: false,
+            excitation: ExcitationClock::default(),
         }
     }
 
@@ -85,8 +136,17 @@ impl ControlTask {
     /// on the fresh frame against the mode's reference; the mode picks the
     /// servo commands. Entering auto from any other mode resets the law's
     /// integrators (no wound-up integral from the ground or from manual
-    /// flight).
+    /// flight). No excitation: [`ControlTask::step_with`].
     pub fn step(&mut self, tick: &Tick) -> ControlOutput {
+        self.step_with(tick, &Excitations::default())
+    }
+
+    /// [`ControlTask::step`] with the mission's flight-test excitation:
+    /// its clock starts at the first entry into auto, it is added to the
+    /// law's command only in auto, and leaving auto (the pilot's switch, a
+    /// failsafe, disarming) ends it for the rest of the flight. No
+    /// allocation.
+    pub fn step_with(&mut self, tick: &Tick, excitation: &Excitations) -> ControlOutput {
         if let Some(rc) = tick.rc {
             self.rc = Some(rc);
         }
@@ -107,10 +167,24 @@ impl ControlTask {
             self.computer.reset_feedback();
         }
         self.nav_failed = false;
+        let offset = if excitation.is_empty() {
+            None
+        } else {
+            Some(
+                match self.excitation.at(tick.now_s, self.supervisor.mode()) {
+                    Some(t) => (excitation.at(t), true),
+                    None => (Input::zeros(), false),
+                },
+            )
+        };
         let mut telemetry = None;
         if let Some(frame) = &tick.frame {
             let reference = self.supervisor.reference(&tick.reference);
-            match self.computer.step(frame, &reference) {
+            let u_exc = offset.map_or_else(Input::zeros, |o| o.0);
+            match self
+                .computer
+                .step_with_excitation(frame, &reference, &u_exc)
+            {
                 Ok(t) => {
                     self.law = t.command;
                     self.heading_rad = t.estimate[2];
@@ -126,6 +200,29 @@ impl ControlTask {
             mode: self.supervisor.mode(),
             telemetry,
             event,
+            excitation: offset.filter(|_| telemetry.is_some()),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The excitation's clock starts at the first entry into auto, runs in
+    /// auto only, and leaving auto ends it for good.
+    #[test]
+    fn the_excitation_runs_from_the_first_auto_until_auto_is_left() {
+        let mut c = ExcitationClock::default();
+        assert_eq!(c.at(0.0, Mode::Disarmed), None);
+        assert_eq!(c.at(0.5, Mode::Manual), None);
+        assert_eq!(c.at(1.0, Mode::Auto), Some(0.0));
+        assert_eq!(c.at(1.25, Mode::Auto), Some(0.25));
+        assert_eq!(c.at(1.5, Mode::Manual), None);
+        assert_eq!(c.at(2.0, Mode::Auto), None);
+        let mut c = ExcitationClock::default();
+        assert_eq!(c.at(0.0, Mode::Auto), Some(0.0));
+        assert_eq!(c.at(0.1, Mode::Hold), None);
+        assert_eq!(c.at(0.2, Mode::Auto), None);
     }
 }

@@ -6,8 +6,9 @@
 use crate::config::OnboardConfig;
 use crate::control::ControlTask;
 use crate::ground;
+use crate::mission::{Mission, References};
 use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort};
-use crate::runtime::{self, Mission, Next, Pacing, RunReport, RuntimeOptions, SensorPort};
+use crate::runtime::{self, Next, Pacing, RunReport, RuntimeOptions, SensorPort};
 use crate::safety::Supervisor;
 use helicon_core::attitude::{VectorObservation, gravity_observation, q_method};
 use helicon_core::frames::body_from_ned;
@@ -18,6 +19,7 @@ use helicon_gnc::design::Gains;
 use helicon_model::Params;
 use helicon_model::config_error::ConfigError;
 use helicon_sim::closed_loop::{OnBoardSetup, flight_computer};
+use helicon_sim::excitation::Excitations;
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
 use nalgebra::Vector3;
@@ -104,6 +106,34 @@ pub fn align(
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
+/// The flight-test excitation flown: `onboard.toml`'s `[[excitation]]`,
+/// or the mission file's; both at once is refused (which one was meant?).
+fn mission_excitation(
+    cfg: &OnboardConfig,
+    mission: Option<&Scenario>,
+) -> Result<Excitations, ConfigError> {
+    match mission {
+        Some(m) if !m.excitation.is_empty() => {
+            let file = cfg
+                .mission
+                .as_ref()
+                .map_or_else(|| m.name.clone(), |p| cfg.resolve(p).display().to_string());
+            if !cfg.excitation.is_empty() {
+                return Err(ConfigError::Invalid {
+                    file: cfg.file.clone(),
+                    field: "excitation".into(),
+                    value: format!("{} entries", cfg.excitation.len()),
+                    rule: format!(
+                        "the mission file {file} has its own [[excitation]]: give them in one place"
+                    ),
+                });
+            }
+            Excitations::new(&m.excitation, &file)
+        }
+        _ => Excitations::new(&cfg.excitation, &cfg.file),
+    }
+}
+
 /// Run the on-board program of `cfg` for `duration` (until the IMU port
 /// closes when `None`); the log and `timing.json` go to the configured
 /// folder. Returns the runtime's report and the log's path.
@@ -131,6 +161,7 @@ pub fn run(
         Some(m) => Some(Scenario::from_file(&cfg.resolve(m))?),
         None => None,
     };
+    let excitation = mission_excitation(cfg, mission_scenario.as_ref())?;
     let d = &cfg.devices;
     let imu = TtyPort::open(&d.imu.path, d.imu.baud)?;
     let gps = TtyPort::open(&d.gps.path, d.gps.baud)?;
@@ -215,15 +246,19 @@ pub fn run(
             let (m, server) = ground::start(g, home, &cfg.file, ts)?;
             (m, Some(server))
         }
-        (Some(s), None) => (Mission::Schedule(Box::new(s.reference_schedule())), None),
+        (Some(s), None) => (
+            Mission::new(References::Schedule(Box::new(s.reference_schedule()))),
+            None,
+        ),
         (None, None) => (
-            Mission::Hold(Reference {
+            Mission::new(References::Hold(Reference {
                 velocity_ned_m_s: Vector3::zeros(),
                 yaw_rad: x0[ix::PSI],
-            }),
+            })),
             None,
         ),
     };
+    let mission = mission.with_excitation(excitation);
     let mut realtime = cfg.realtime;
     realtime.sched_fifo &= sched_fifo;
     let handle = runtime::spawn(

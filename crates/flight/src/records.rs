@@ -5,7 +5,7 @@
 use crate::control::{ControlOutput, Tick};
 use crate::safety::{Mode, RcInput, Reason, SafetyEvent};
 use helicon_ulog::messages::{
-    Control, Failsafe, FailsafeReason, FlightMode, Mode as ModeRecord, Navigation,
+    Control, Excitation, Failsafe, FailsafeReason, FlightMode, Mode as ModeRecord, Navigation,
     RcInput as RcRecord, ServoOutput, Timing,
 };
 use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, timestamp_us};
@@ -135,8 +135,9 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
 
 /// Everything one control step logs, handed to `push` in order: the frame
 /// (`sensor_imu`, `sensor_mag`, `sensor_gps`), the receiver's frame, the
-/// change of mode, the control step (`control`, `navigation`), the servo
-/// command and the timing. No allocation.
+/// change of mode, the control step (`control`, `navigation`,
+/// `excitation` when the mission has one), the servo command and the
+/// timing. No allocation.
 pub fn step_records(
     tick: &Tick,
     out: &ControlOutput,
@@ -168,6 +169,13 @@ pub fn step_records(
             push(FlightRecord::Log(LogRecord::Navigation(
                 Navigation::from_solution(t.t_s, n)?,
             )));
+        }
+        if let Some((offset, active)) = out.excitation {
+            push(FlightRecord::Log(LogRecord::Excitation(Excitation {
+                timestamp: ts,
+                offset: offset.into(),
+                active,
+            })));
         }
     }
     push(FlightRecord::Log(LogRecord::Servo(ServoOutput {

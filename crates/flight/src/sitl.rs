@@ -21,10 +21,11 @@
 //! scenario's references (the ground station's mission uplink).
 
 use crate::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
-use crate::control::ControlTask;
+use crate::control::{ControlTask, StepReport};
 use crate::ground;
+use crate::mission::{Mission, References};
 use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort, stick_us};
-use crate::runtime::{self, Mission, Pacing, RunReport, RuntimeOptions};
+use crate::runtime::{self, Pacing, RunReport, RuntimeOptions};
 use crate::safety::Supervisor;
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;
@@ -34,6 +35,7 @@ use helicon_gcs::config::GcsSection;
 use helicon_sim::closed_loop::{
     ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, flight_computer,
 };
+use helicon_sim::excitation::Excitations;
 use helicon_sim::log_csv::{LogCsvError, LogWriter};
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
@@ -256,11 +258,17 @@ pub fn run(
         None => {
             supervisor.arm();
             (
-                Mission::Schedule(Box::new(scenario.reference_schedule())),
+                Mission::new(References::Schedule(Box::new(
+                    scenario.reference_schedule(),
+                ))),
                 None,
             )
         }
     };
+    // the scenario's flight-test inputs, flown on board
+    let mission = mission.with_excitation(
+        Excitations::new(&scenario.excitation, &scenario.name).map_err(ClosedLoopError::from)?,
+    );
     let task = ControlTask::new(computer, supervisor, u_trim);
     let handle = runtime::spawn(
         task,
@@ -410,11 +418,10 @@ pub fn run(
             }
         }
         // the telemetry of this sample (lock-step: pushed before its servo frame)
-        let mut tel = None;
+        let mut report: Option<StepReport> = None;
         while let Ok(x) = downlink.pop() {
-            let newer = tel.is_none_or(|t: helicon_core::Telemetry| x.sample >= t.sample);
-            if newer {
-                tel = Some(x);
+            if report.is_none_or(|r| x.telemetry.sample >= r.telemetry.sample) {
+                report = Some(x);
             }
             if lockstep {
                 break;
@@ -422,9 +429,13 @@ pub fn run(
         }
         received.push(u);
         samples += 1;
-        let Some(step) = hw.actuate(&u, tel.as_ref()) else {
+        let Some(mut step) = hw.actuate(&u, report.as_ref().map(|r| &r.telemetry)) else {
             break;
         };
+        // the flight software's own columns, as `helicon sim` fills them
+        if let Some(r) = &report {
+            step.row.excitation = r.excitation.into();
+        }
         if step.kept {
             writer.write(&step.row)?;
         }
