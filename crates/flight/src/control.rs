@@ -5,6 +5,7 @@
 //! picks what goes to the servos. Allocation-free.
 
 use crate::safety::{Health, Mode, RcInput, SafetyEvent, Supervisor};
+use helicon_core::imu_health::{ImuHealth, ImuHealthMonitor};
 use helicon_core::state::Input;
 use helicon_core::{Reference, SensorComputer, SensorFrame, Telemetry};
 use helicon_sim::excitation::Excitations;
@@ -40,6 +41,38 @@ pub struct ControlOutput {
     /// and the flight computer ran: the offset added to the law's command
     /// (zeros when not applied) and whether it runs.
     pub excitation: Option<(Input, bool)>,
+    /// The IMU health monitor after this sample's IMU sample (when it runs
+    /// and a sample came).
+    pub imu_health: Option<ImuHealth>,
+    /// The IMU health's flags changed this sample (settling aside).
+    pub imu_health_change: Option<ImuHealthChange>,
+}
+
+/// A change of the IMU health monitor's flags (the settling flag aside):
+/// the supervisor logs it (a warning when a flag is raised) and tells the
+/// ground station; the mode does not change.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImuHealthChange {
+    /// The flags before.
+    pub previous: u8,
+    /// The flags now ([`ImuHealth::VIBRATION`], …).
+    pub flags: u8,
+}
+
+impl ImuHealthChange {
+    /// The operator's text for the change: the most severe flag raised,
+    /// or that the IMU is healthy again.
+    pub fn text(&self) -> &'static str {
+        if self.flags & ImuHealth::GRAVITY_DEFICIT != 0 {
+            "IMU health: mean specific force short of gravity (hidden accelerometer saturation?)"
+        } else if self.flags & ImuHealth::NEAR_RANGE != 0 {
+            "IMU health: accelerometer near its range"
+        } else if self.flags & ImuHealth::VIBRATION != 0 {
+            "IMU health: vibration above threshold"
+        } else {
+            "IMU health: healthy again"
+        }
+    }
 }
 
 /// What the control task reports of a step it computed (the ground link's
@@ -51,6 +84,8 @@ pub struct StepReport {
     pub telemetry: Telemetry,
     /// The excitation added to the law's command (zeros without).
     pub excitation: Input,
+    /// The IMU health after the step's sample (when the monitor runs).
+    pub imu_health: Option<ImuHealth>,
 }
 
 impl ControlOutput {
@@ -59,6 +94,7 @@ impl ControlOutput {
         self.telemetry.map(|telemetry| StepReport {
             telemetry,
             excitation: self.excitation.map_or_else(Input::zeros, |e| e.0),
+            imu_health: self.imu_health,
         })
     }
 }
@@ -97,6 +133,8 @@ pub struct ControlTask {
     heading_rad: f64,
     nav_failed: bool,
     excitation: ExcitationClock,
+    health: Option<ImuHealthMonitor>,
+    health_flags: u8,
 }
 
 impl ControlTask {
@@ -112,7 +150,18 @@ impl ControlTask {
             heading_rad: 0.0,
             nav_failed: false,
             excitation: ExcitationClock::default(),
+            health: None,
+            health_flags: 0,
         }
+    }
+
+    /// The same task running the IMU health monitor on each IMU sample
+    /// (as `helicon sim` does; `helicon_sim::closed_loop::imu_health_at`
+    /// builds it).
+    #[must_use]
+    pub fn with_imu_health(mut self, monitor: ImuHealthMonitor) -> Self {
+        self.health = Some(monitor);
+        self
     }
 
     /// Arm or disarm from the ground station (takes effect at the next
@@ -177,6 +226,20 @@ impl ControlTask {
                 },
             )
         };
+        let mut imu_health = None;
+        let mut imu_health_change = None;
+        if let (Some(frame), Some(m)) = (&tick.frame, self.health.as_mut()) {
+            let h = m.update(&frame.imu);
+            let flags = h.flags & !ImuHealth::SETTLING;
+            if flags != self.health_flags {
+                imu_health_change = Some(ImuHealthChange {
+                    previous: self.health_flags,
+                    flags,
+                });
+                self.health_flags = flags;
+            }
+            imu_health = Some(h);
+        }
         let mut telemetry = None;
         if let Some(frame) = &tick.frame {
             let reference = self.supervisor.reference(&tick.reference);
@@ -201,6 +264,8 @@ impl ControlTask {
             telemetry,
             event,
             excitation: offset.filter(|_| telemetry.is_some()),
+            imu_health,
+            imu_health_change,
         }
     }
 }

@@ -147,3 +147,37 @@ impl Mission {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use helicon_gcs::link::{Downlink, channel};
+    use helicon_gcs::navigator::{Navigator, NavigatorConfig};
+
+    /// A warning reaches the ground station's server ring (its status
+    /// text); a mission without a ground station ignores it.
+    #[test]
+    fn warnings_go_to_the_ground_station() {
+        let (vehicle_end, mut server_end) = channel(8);
+        let nav = Navigator::new(NavigatorConfig::default()).unwrap();
+        let mut m = Mission::new(References::Ground(Box::new(Vehicle::new(
+            nav,
+            vehicle_end,
+            1,
+        ))));
+        m.notify(
+            2.5,
+            VehicleEvent::Warning("IMU health: vibration above threshold"),
+        );
+        assert_eq!(
+            server_end.downlink.pop().ok(),
+            Some(Downlink::Event(
+                2.5,
+                VehicleEvent::Warning("IMU health: vibration above threshold")
+            ))
+        );
+        let mut hold = Mission::new(References::Hold(Reference::default()));
+        hold.notify(2.5, VehicleEvent::Warning("x"));
+        assert!(hold.excitation().is_empty());
+    }
+}

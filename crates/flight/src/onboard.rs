@@ -18,7 +18,7 @@ use helicon_devices::{Geodetic, LocalNed};
 use helicon_gnc::design::Gains;
 use helicon_model::Params;
 use helicon_model::config_error::ConfigError;
-use helicon_sim::closed_loop::{OnBoardSetup, flight_computer};
+use helicon_sim::closed_loop::{OnBoardSetup, flight_computer, imu_health_at};
 use helicon_sim::excitation::Excitations;
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
@@ -222,7 +222,8 @@ pub fn run(
         computer,
         Supervisor::new(cfg.stale, cfg.failsafe, 0.0),
         u_trim,
-    );
+    )
+    .with_imu_health(imu_health_at(&params, ts, &cfg.sensors, &cfg.file)?);
     let dir = cfg.resolve(&cfg.log.dir);
     std::fs::create_dir_all(&dir).map_err(|e| OnboardError::Log {
         path: dir.display().to_string(),

@@ -2,11 +2,12 @@
 //! message set, plus the supervisor's events with their precise reason,
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
-use crate::control::{ControlOutput, Tick};
+use crate::control::{ControlOutput, ImuHealthChange, Tick};
 use crate::safety::{Mode, RcInput, Reason, SafetyEvent};
+use helicon_core::imu_health::ImuHealth;
 use helicon_ulog::messages::{
-    Control, Excitation, Failsafe, FailsafeReason, FlightMode, Mode as ModeRecord, Navigation,
-    RcInput as RcRecord, ServoOutput, Timing,
+    Control, Excitation, Failsafe, FailsafeReason, FlightMode, ImuHealth as ImuHealthRecord,
+    Mode as ModeRecord, Navigation, RcInput as RcRecord, ServoOutput, Timing,
 };
 use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, timestamp_us};
 use std::io::Write;
@@ -20,6 +21,14 @@ pub enum FlightRecord {
     /// A change of mode (written as `mode`, `failsafe` when it raises or
     /// clears one, and a text message naming the precise reason).
     Event(SafetyEvent),
+    /// The IMU health's flags changed (written as a text message: a
+    /// warning when a flag is raised).
+    ImuHealth {
+        /// On-board time (s).
+        t_s: f64,
+        /// The change.
+        change: ImuHealthChange,
+    },
     /// The watchdog commanded the trim: the control task was silent for
     /// this long (s).
     Watchdog {
@@ -117,6 +126,31 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
             let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("mode change");
             log.writer_mut().log(level, ts, s)
         }
+        FlightRecord::ImuHealth { t_s, change } => {
+            let ts = timestamp_us(*t_s, "imu health")?;
+            let mut text = Text {
+                buf: [0; 160],
+                len: 0,
+            };
+            let _ = std::fmt::Write::write_fmt(
+                &mut text,
+                format_args!(
+                    "imu_health: flags {} -> {} at t = {t_s:.4} s: {}",
+                    change.previous,
+                    change.flags,
+                    change.text()
+                ),
+            );
+            let level = if change.flags & ImuHealth::GRAVITY_DEFICIT != 0 {
+                LogLevel::Critical
+            } else if change.flags & !change.previous != 0 {
+                LogLevel::Warning
+            } else {
+                LogLevel::Notice
+            };
+            let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("imu health");
+            log.writer_mut().log(level, ts, s)
+        }
         FlightRecord::Watchdog { t_s, silent_s } => {
             let ts = timestamp_us(*t_s, "watchdog")?;
             let mut text = Text {
@@ -135,7 +169,8 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
 
 /// Everything one control step logs, handed to `push` in order: the frame
 /// (`sensor_imu`, `sensor_mag`, `sensor_gps`), the receiver's frame, the
-/// change of mode, the control step (`control`, `navigation`,
+/// change of mode, the IMU health (`imu_health`, and its change of flags),
+/// the control step (`control`, `navigation`,
 /// `excitation` when the mission has one), the servo command and the
 /// timing. No allocation.
 pub fn step_records(
@@ -160,6 +195,21 @@ pub fn step_records(
     }
     if let Some(ev) = out.event {
         push(FlightRecord::Event(ev));
+    }
+    if let (Some(f), Some(h)) = (&tick.frame, &out.imu_health) {
+        push(FlightRecord::Log(LogRecord::ImuHealth(ImuHealthRecord {
+            timestamp: timestamp_us(f.t_s, "imu_health")?,
+            vibration_rms_m_s2: h.vibration_rms_m_s2,
+            gravity_residual_m_s2: h.gravity_residual_m_s2,
+            peak_fraction: h.peak_fraction,
+            flags: h.flags,
+        })));
+    }
+    if let Some(change) = out.imu_health_change {
+        push(FlightRecord::ImuHealth {
+            t_s: tick.now_s,
+            change,
+        });
     }
     if let Some(t) = &out.telemetry {
         push(FlightRecord::Log(LogRecord::Control(

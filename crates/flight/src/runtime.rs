@@ -27,6 +27,7 @@ use crate::records::{FlightRecord, step_records, write_record};
 use crate::safety::{Mode, RcInput};
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;
+use helicon_gcs::link::VehicleEvent;
 use helicon_ulog::messages::Timing;
 use helicon_ulog::{FlightLog, timestamp_us};
 use std::io::Write;
@@ -672,6 +673,9 @@ fn control_loop(
             reference: mission.step(now_s, &last, &mut task),
         };
         let out = task.step_with(&tick, mission.excitation());
+        if let Some(c) = out.imu_health_change {
+            mission.notify(now_s, VehicleEvent::Warning(c.text()));
+        }
         if out.telemetry.is_some() {
             last.telemetry = out.telemetry;
         }

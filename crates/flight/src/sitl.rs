@@ -34,6 +34,7 @@ use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCo
 use helicon_gcs::config::GcsSection;
 use helicon_sim::closed_loop::{
     ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, flight_computer,
+    imu_health_at,
 };
 use helicon_sim::excitation::Excitations;
 use helicon_sim::log_csv::{LogCsvError, LogWriter};
@@ -269,7 +270,12 @@ pub fn run(
     let mission = mission.with_excitation(
         Excitations::new(&scenario.excitation, &scenario.name).map_err(ClosedLoopError::from)?,
     );
-    let task = ControlTask::new(computer, supervisor, u_trim);
+    let task = ControlTask::new(computer, supervisor, u_trim).with_imu_health(imu_health_at(
+        p,
+        ts,
+        &scenario.sensors,
+        &scenario.name,
+    )?);
     let handle = runtime::spawn(
         task,
         mission,
@@ -435,6 +441,13 @@ pub fn run(
         // the flight software's own columns, as `helicon sim` fills them
         if let Some(r) = &report {
             step.row.excitation = r.excitation.into();
+            if let Some(h) = &r.imu_health {
+                step.row.imu_health = [
+                    h.vibration_rms_m_s2,
+                    h.gravity_residual_m_s2,
+                    f64::from(h.flags),
+                ];
+            }
         }
         if step.kept {
             writer.write(&step.row)?;

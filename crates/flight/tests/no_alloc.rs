@@ -13,7 +13,7 @@ use helicon_flight::config::{FailsafeConfig, StaleLimits};
 use helicon_flight::control::{ControlTask, Tick};
 use helicon_flight::records::{FlightRecord, step_records, write_record};
 use helicon_flight::safety::{RcInput, Supervisor};
-use helicon_sim::closed_loop::{Hardware, OnBoardSetup, flight_computer, prepare};
+use helicon_sim::closed_loop::{Hardware, OnBoardSetup, flight_computer, imu_health_at, prepare};
 use helicon_sim::excitation::Excitations;
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::messages::Timing;
@@ -42,7 +42,15 @@ fn a_control_step_and_its_log_allocate_nothing() {
     .unwrap();
     let mut sup = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
     sup.arm();
-    let mut task = ControlTask::new(computer, sup, prepared.gains.set.u_trim);
+    let health = imu_health_at(
+        prepared.model.params(),
+        prepared.gains.set.sample_time_s,
+        &s.sensors,
+        "demo",
+    )
+    .unwrap();
+    let mut task =
+        ControlTask::new(computer, sup, prepared.gains.set.u_trim).with_imu_health(health);
     let (mut tx, mut rx) = rtrb::RingBuffer::<FlightRecord>::new(4096);
     let mut log =
         FlightLog::new(std::io::sink(), &LogInfo::default(), FlushPolicy::default()).unwrap();
@@ -88,9 +96,9 @@ fn a_control_step_and_its_log_allocate_nothing() {
         }
     }
     assert_eq!(steps, 4801);
-    // per step: IMU, control, navigation, excitation, servo, timing; magnetometer at
+    // per step: IMU, IMU health, control, navigation, excitation, servo, timing; magnetometer at
     // 100 Hz, GPS at 5 Hz, receiver at 50 Hz
-    assert!(records > 6 * 4800, "{records} records");
+    assert!(records > 7 * 4800, "{records} records");
     assert_eq!(counted, 0, "allocations in 4400 steady-state control steps");
 }
 
