@@ -6,8 +6,9 @@ use crate::control::{ControlOutput, ImuHealthChange, Tick};
 use crate::safety::{Mode, RcInput, Reason, SafetyEvent};
 use helicon_core::imu_health::ImuHealth;
 use helicon_ulog::messages::{
-    Control, Excitation, Failsafe, FailsafeReason, FlightMode, ImuHealth as ImuHealthRecord,
-    Mode as ModeRecord, Navigation, RcInput as RcRecord, ServoOutput, Timing,
+    Control, EstimatorBias, Excitation, Failsafe, FailsafeReason, FlightMode,
+    ImuHealth as ImuHealthRecord, Mode as ModeRecord, Navigation, RcInput as RcRecord, ServoOutput,
+    Timing,
 };
 use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, timestamp_us};
 use std::io::Write;
@@ -170,8 +171,9 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
 /// Everything one control step logs, handed to `push` in order: the frame
 /// (`sensor_imu`, `sensor_mag`, `sensor_gps`), the receiver's frame, the
 /// change of mode, the IMU health (`imu_health`, and its change of flags),
-/// the control step (`control`, `navigation`,
-/// `excitation` when the mission has one), the servo command and the
+/// the control step (`control`, `navigation`, `estimator_bias` when the
+/// navigation estimates the IMU biases, `excitation` when the mission has
+/// one), the servo command and the
 /// timing. No allocation.
 pub fn step_records(
     tick: &Tick,
@@ -219,6 +221,11 @@ pub fn step_records(
             push(FlightRecord::Log(LogRecord::Navigation(
                 Navigation::from_solution(t.t_s, n)?,
             )));
+            if let Some(b) = &n.imu_bias {
+                push(FlightRecord::Log(LogRecord::EstimatorBias(
+                    EstimatorBias::from_estimate(t.t_s, b)?,
+                )));
+            }
         }
         if let Some((offset, active)) = out.excitation {
             push(FlightRecord::Log(LogRecord::Excitation(Excitation {
