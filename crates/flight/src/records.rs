@@ -20,7 +20,7 @@ pub enum FlightRecord {
     /// A record of the message set.
     Log(LogRecord),
     /// A change of mode (written as `mode`, `failsafe` when it raises or
-    /// clears one, and a text message naming the precise reason).
+    /// clears one, and one text message naming the precise reason).
     Event(SafetyEvent),
     /// The IMU health's flags changed (written as a text message: a
     /// warning when a flag is raised).
@@ -89,7 +89,9 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
         FlightRecord::Log(x) => log.write(x),
         FlightRecord::Event(ev) => {
             let ts = timestamp_us(ev.t_s, "mode change")?;
-            log.write(&LogRecord::Mode(ModeRecord {
+            // the records' data only: the text below is the event's one
+            // text (FlightLog::write would add a generic one of its own)
+            log.write_data(&LogRecord::Mode(ModeRecord {
                 timestamp: ts,
                 mode: flight_mode(ev.to) as u8,
                 previous: flight_mode(ev.from) as u8,
@@ -99,7 +101,7 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
             if let Some(code) = failsafe_reason(ev.reason)
                 && (raised || cleared)
             {
-                log.write(&LogRecord::Failsafe(Failsafe {
+                log.write_data(&LogRecord::Failsafe(Failsafe {
                     timestamp: ts,
                     reason: code as u8,
                     active: raised,

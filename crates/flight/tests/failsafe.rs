@@ -36,6 +36,12 @@ fn gps_loss_holds_then_descends() {
     let descent = log.texts_with("hold_elapsed: hold -> descent");
     assert_eq!(descent.len(), 1);
     assert!((descent[0].0 - hold[0].0 - 4.0).abs() < 0.003);
+    // each event is one text, the supervisor's (no generic "mode: …" or
+    // "failsafe raised: …" beside it)
+    assert_eq!(log.texts.len(), 3, "{:?}", log.texts);
+    let mode_t = log.u64s("mode", "timestamp");
+    let text_t: Vec<u64> = log.texts.iter().map(|(t, _)| *t).collect();
+    assert_eq!(text_t, mode_t);
     assert_eq!(log.u8s("failsafe", "reason"), vec![SENSOR_TIMEOUT]);
     assert_eq!(log.bools("failsafe", "active"), vec![true]);
     // hold and descent are both the log's failsafe mode; the text names them
