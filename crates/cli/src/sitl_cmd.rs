@@ -102,6 +102,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
             },
             pilot: Pilot {
                 manual_from_s: a.manual_at,
+                ..Pilot::default()
             },
             stale: StaleLimits::default(),
             failsafe: FailsafeConfig::default(),

@@ -46,6 +46,9 @@ pub struct ControlOutput {
     pub imu_health: Option<ImuHealth>,
     /// The IMU health's flags changed this sample (settling aside).
     pub imu_health_change: Option<ImuHealthChange>,
+    /// The receiver's failsafe changed this sample: `Some(true)` the
+    /// pilot's link lost, `Some(false)` back.
+    pub rc_link_lost: Option<bool>,
 }
 
 /// A change of the IMU health monitor's flags (the settling flag aside):
@@ -135,6 +138,7 @@ pub struct ControlTask {
     excitation: ExcitationClock,
     health: Option<ImuHealthMonitor>,
     health_flags: u8,
+    rc_lost: bool,
 }
 
 impl ControlTask {
@@ -152,6 +156,7 @@ impl ControlTask {
             excitation: ExcitationClock::default(),
             health: None,
             health_flags: 0,
+            rc_lost: false,
         }
     }
 
@@ -196,8 +201,16 @@ impl ControlTask {
     /// failsafe, disarming) ends it for the rest of the flight. No
     /// allocation.
     pub fn step_with(&mut self, tick: &Tick, excitation: &Excitations) -> ControlOutput {
+        let mut rc_link_lost = None;
         if let Some(rc) = tick.rc {
-            self.rc = Some(rc);
+            // a receiver in failsafe does not give the pilot's sticks
+            if !rc.failsafe {
+                self.rc = Some(rc);
+            }
+            if rc.failsafe != self.rc_lost {
+                self.rc_lost = rc.failsafe;
+                rc_link_lost = Some(rc.failsafe);
+            }
         }
         let health = Health {
             now_s: tick.now_s,
@@ -266,6 +279,7 @@ impl ControlTask {
             excitation: offset.filter(|_| telemetry.is_some()),
             imu_health,
             imu_health_change,
+            rc_link_lost,
         }
     }
 }

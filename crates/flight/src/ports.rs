@@ -13,7 +13,8 @@
 //! - Avionics: the project's framed servo/RC protocol. The receiver's
 //!   sticks are the first four channels, 1500 µs ± 1000 µs per unit of
 //!   servo command; the pilot's switch is the frame's `autonomous` flag;
-//!   the arm switch is channel 5 above 1500 µs.
+//!   the arm switch is channel 5 above 1500 µs; the frame's failsafe flag
+//!   (the receiver lost the transmitter) is passed on to the supervisor.
 //!
 //! [`TtyPort`] opens a device as the program opens `/dev/ttyS*` (raw 8N1
 //! at the baud rate, through `nix`'s termios): a minimal adapter beside
@@ -316,6 +317,7 @@ impl RcPort for DeviceRc {
                 servo: Input::from_fn(|i, _| stick_command(rc.channels_us[i])),
                 manual: !rc.autonomous,
                 armed: rc.channels_us[4] > 1500,
+                failsafe: rc.failsafe,
             }),
             None => Next::Timeout,
         })

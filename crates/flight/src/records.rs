@@ -30,6 +30,14 @@ pub enum FlightRecord {
         /// The change.
         change: ImuHealthChange,
     },
+    /// The receiver's failsafe raised (the pilot's link lost) or cleared
+    /// (written as a text message).
+    RcLink {
+        /// On-board time (s).
+        t_s: f64,
+        /// Lost (true) or back.
+        lost: bool,
+    },
     /// The watchdog commanded the trim: the control task was silent for
     /// this long (s).
     Watchdog {
@@ -60,6 +68,7 @@ pub fn failsafe_reason(r: Reason) -> Option<FailsafeReason> {
         Reason::Overrun => Some(FailsafeReason::DeadlineMiss),
         Reason::NavigationFailure => Some(FailsafeReason::NavigationFailure),
         Reason::PilotManual | Reason::PilotAuto => Some(FailsafeReason::Pilot),
+        Reason::RcLost => Some(FailsafeReason::RcLoss),
         Reason::Armed | Reason::Disarmed | Reason::HoldElapsed => None,
     }
 }
@@ -154,6 +163,18 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
             let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("imu health");
             log.writer_mut().log(level, ts, s)
         }
+        FlightRecord::RcLink { t_s, lost } => {
+            let ts = timestamp_us(*t_s, "rc link")?;
+            let (level, text) = if *lost {
+                (
+                    LogLevel::Critical,
+                    "rc_link: receiver failsafe, the pilot's link lost",
+                )
+            } else {
+                (LogLevel::Notice, "rc_link: the pilot's link back")
+            };
+            log.writer_mut().log(level, ts, text)
+        }
         FlightRecord::Watchdog { t_s, silent_s } => {
             let ts = timestamp_us(*t_s, "watchdog")?;
             let mut text = Text {
@@ -196,6 +217,12 @@ pub fn step_records(
     }
     if let Some(rc) = &tick.rc {
         push(FlightRecord::Log(LogRecord::Rc(rc_record(ts, rc))));
+    }
+    if let Some(lost) = out.rc_link_lost {
+        push(FlightRecord::RcLink {
+            t_s: tick.now_s,
+            lost,
+        });
     }
     if let Some(ev) = out.event {
         push(FlightRecord::Event(ev));
@@ -263,6 +290,6 @@ fn rc_record(ts: u64, rc: &RcInput) -> RcRecord {
         channels_us,
         channel_count: 4,
         manual_switch: rc.manual,
-        signal_lost: false,
+        signal_lost: rc.failsafe,
     }
 }

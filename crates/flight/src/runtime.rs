@@ -676,6 +676,16 @@ fn control_loop(
         if let Some(c) = out.imu_health_change {
             mission.notify(now_s, VehicleEvent::Warning(c.text()));
         }
+        if let Some(lost) = out.rc_link_lost {
+            mission.notify(
+                now_s,
+                VehicleEvent::Warning(if lost {
+                    "RC: receiver failsafe, the pilot's link lost"
+                } else {
+                    "RC: the pilot's link back"
+                }),
+            );
+        }
         if out.telemetry.is_some() {
             last.telemetry = out.telemetry;
         }

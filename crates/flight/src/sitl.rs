@@ -66,8 +66,16 @@ pub struct Faults {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Pilot {
     /// The pilot's switch goes to manual at this time (s), the sticks at
-    /// the trim.
+    /// the trim plus [`Pilot::stick_offset`].
     pub manual_from_s: Option<f64>,
+    /// The pilot's switch goes back to auto at this time (s).
+    pub manual_until_s: Option<f64>,
+    /// The sticks' offset from the trim (servo units).
+    pub stick_offset: Input,
+    /// The receiver is in failsafe over this interval (s): it lost the
+    /// transmitter and sends its failsafe values (sticks centred, the
+    /// pilot's switch at manual, the arm switch off), flagged.
+    pub rc_failsafe_s: Option<(f64, f64)>,
 }
 
 /// A SITL run's settings.
@@ -327,15 +335,23 @@ pub fn run(
         let t = s.t_s;
         // the receiver at 50 Hz (silent when the ground station flies)
         if s.k % 8 == 0 && server.is_none() {
-            let manual = options.pilot.manual_from_s.is_some_and(|m| t >= m);
+            let pilot = &options.pilot;
+            let manual = pilot.manual_from_s.is_some_and(|m| t >= m)
+                && pilot.manual_until_s.is_none_or(|m| t < m);
+            let failsafe = pilot.rc_failsafe_s.is_some_and(|(a, b)| t >= a && t < b);
             let mut channels_us = [1500u16; 8];
             for i in 0..4 {
-                channels_us[i] = stick_us(u_trim[i]);
+                channels_us[i] = stick_us(u_trim[i] + pilot.stick_offset[i]);
             }
             channels_us[4] = 2000; // armed
+            if failsafe {
+                channels_us = [1500u16; 8];
+                channels_us[4] = 1000;
+            }
             let frame = RcFrame {
                 seq: rc_seq,
-                autonomous: !manual,
+                autonomous: !manual && !failsafe,
+                failsafe,
                 channels_us,
                 ..RcFrame::default()
             };

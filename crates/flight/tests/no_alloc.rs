@@ -58,6 +58,7 @@ fn a_control_step_and_its_log_allocate_nothing() {
         servo: prepared.gains.set.u_trim,
         manual: false,
         armed: true,
+        failsafe: false,
     };
     // the flight-test excitation of ident-hover-sweep (S_lon sweep from 1 s)
     let sweep = Scenario::from_file(&path.with_file_name("ident-hover-sweep.toml")).unwrap();
