@@ -257,9 +257,19 @@ impl ControlTask {
         if let Some(frame) = &tick.frame {
             let reference = self.supervisor.reference(&tick.reference);
             let u_exc = offset.map_or_else(Input::zeros, |o| o.0);
+            // outside the law's modes the predictor is told what the
+            // servos get (the pilot's sticks, the trim), not the idle law's
+            let applied = match self.supervisor.mode() {
+                Mode::Auto | Mode::Hold | Mode::Descent => None,
+                Mode::Manual | Mode::Disarmed | Mode::ImuLost => Some(self.supervisor.servo(
+                    &self.u_trim,
+                    &self.u_trim,
+                    self.rc.as_ref(),
+                )),
+            };
             match self
                 .computer
-                .step_with_excitation(frame, &reference, &u_exc)
+                .step_applied(frame, &reference, &u_exc, applied.as_ref())
             {
                 Ok(t) => {
                     self.law = t.command;
