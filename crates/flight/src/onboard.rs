@@ -7,7 +7,7 @@ use crate::config::OnboardConfig;
 use crate::control::ControlTask;
 use crate::ground;
 use crate::mission::{Mission, References};
-use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort};
+use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port};
 use crate::runtime::{self, Next, Pacing, RunReport, RuntimeOptions, SensorPort};
 use crate::safety::Supervisor;
 use helicon_core::attitude::{VectorObservation, gravity_observation, q_method};
@@ -163,10 +163,10 @@ pub fn run(
     };
     let excitation = mission_excitation(cfg, mission_scenario.as_ref())?;
     let d = &cfg.devices;
-    let imu = TtyPort::open(&d.imu.path, d.imu.baud)?;
-    let gps = TtyPort::open(&d.gps.path, d.gps.baud)?;
-    let avionics = TtyPort::open(&d.avionics.path, d.avionics.baud)?;
-    let rc = avionics.try_clone()?;
+    let imu = open_port(&d.imu.path, d.imu.baud)?;
+    let gps = open_port(&d.gps.path, d.gps.baud)?;
+    let avionics = open_port(&d.avionics.path, d.avionics.baud)?;
+    let rc = clone_port(&avionics)?;
     let h = &cfg.home;
     let home = Geodetic::new(h.latitude_deg, h.longitude_deg, h.height_m)
         .map_err(|e| OnboardError::Alignment(format!("home: {e}")))?;

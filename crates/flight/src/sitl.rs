@@ -24,7 +24,7 @@ use crate::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
 use crate::control::{ControlTask, StepReport};
 use crate::ground;
 use crate::mission::{Mission, References};
-use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort, stick_us};
+use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port, stick_us};
 use crate::runtime::{self, Pacing, RunReport, RuntimeOptions};
 use crate::safety::Supervisor;
 use helicon_core::SensorFrame;
@@ -219,10 +219,10 @@ pub fn run(
     };
     let home = LocalNed::new(home_geo);
     // the on-board side opens the slave paths as its serial devices
-    let imu_port = TtyPort::open(wires.imu.slave_path(), 921_600).map_err(dev("IMU"))?;
-    let gps_port = TtyPort::open(wires.gps.slave_path(), 115_200).map_err(dev("GPS"))?;
-    let av_port = TtyPort::open(wires.avionics.slave_path(), 115_200).map_err(dev("avionics"))?;
-    let rc_port = av_port.try_clone().map_err(dev("avionics"))?;
+    let imu_port = open_port(wires.imu.slave_path(), 921_600).map_err(dev("IMU"))?;
+    let gps_port = open_port(wires.gps.slave_path(), 115_200).map_err(dev("GPS"))?;
+    let av_port = open_port(wires.avionics.slave_path(), 115_200).map_err(dev("avionics"))?;
+    let rc_port = clone_port(&av_port).map_err(dev("avionics"))?;
     let sensors = DeviceSensors::new(imu_port, gps_port, home, scenario.sensors.gps.latency_s);
     let lockstep = options.speed == Speed::Max;
     // lock-step: the sensor server reads the receiver too (deterministic);
