@@ -288,3 +288,39 @@ pub fn run(
     }
     Ok((report, path))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MIN: &str = "gains = \"g.json\"\n[devices.imu]\npath = \"/dev/ttyS1\"\nbaud = 921600\n\
+        [devices.gps]\npath = \"/dev/ttyS2\"\nbaud = 115200\n\
+        [devices.avionics]\npath = \"/dev/ttyS3\"\nbaud = 115200\n";
+    const SWEEP: &str = "[[excitation]]\nservo = \"S_lon\"\nt_s = 1.0\ninput = { kind = \"sweep\", \
+        amplitude = 0.02, omega_min_rad_s = 1.2, omega_max_rad_s = 30.0, duration_s = 27.0 }\n";
+
+    /// The excitation flown: onboard.toml's or the mission's, not both.
+    #[test]
+    fn the_excitation_comes_from_one_place() {
+        let plain = OnboardConfig::from_toml_str(MIN, "o.toml").unwrap();
+        let mut with = OnboardConfig::from_toml_str(&format!("{MIN}{SWEEP}"), "o.toml").unwrap();
+        with.mission = Some(PathBuf::from("m.toml"));
+        let mission =
+            Scenario::from_toml_str(&format!("duration_s = 5.0\n{SWEEP}"), "m.toml").unwrap();
+        let bare = Scenario::from_toml_str("duration_s = 5.0\n", "m.toml").unwrap();
+        assert!(mission_excitation(&plain, None).unwrap().is_empty());
+        assert!(!mission_excitation(&with, Some(&bare)).unwrap().is_empty());
+        assert!(
+            !mission_excitation(&plain, Some(&mission))
+                .unwrap()
+                .is_empty()
+        );
+        let e = mission_excitation(&with, Some(&mission))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("o.toml") && e.contains("excitation") && e.contains("m.toml"),
+            "{e}"
+        );
+    }
+}
