@@ -64,16 +64,17 @@ pub struct ImuHealthChange {
 
 impl ImuHealthChange {
     /// The operator's text for the change: the most severe flag raised,
-    /// or that the IMU is healthy again.
+    /// or that the IMU is healthy again (at most 50 bytes: one MAVLink
+    /// STATUSTEXT).
     pub fn text(&self) -> &'static str {
         if self.flags & ImuHealth::GRAVITY_DEFICIT != 0 {
-            "IMU health: mean specific force short of gravity (hidden accelerometer saturation?)"
+            "IMU: gravity deficit, accelerometer saturating?"
         } else if self.flags & ImuHealth::NEAR_RANGE != 0 {
-            "IMU health: accelerometer near its range"
+            "IMU: accelerometer near its range"
         } else if self.flags & ImuHealth::VIBRATION != 0 {
-            "IMU health: vibration above threshold"
+            "IMU: vibration above threshold"
         } else {
-            "IMU health: healthy again"
+            "IMU: healthy again"
         }
     }
 }
@@ -300,6 +301,20 @@ mod tests {
 
     /// The excitation's clock starts at the first entry into auto, runs in
     /// auto only, and leaving auto ends it for good.
+    /// The operator's texts fit one MAVLink STATUSTEXT (50 bytes).
+    #[test]
+    fn imu_health_texts_fit_a_status_text() {
+        for flags in 0..8 {
+            let c = ImuHealthChange { previous: 8, flags };
+            assert!(c.text().len() <= 50, "{}", c.text());
+        }
+        let c = ImuHealthChange {
+            previous: 0,
+            flags: ImuHealth::GRAVITY_DEFICIT | ImuHealth::VIBRATION,
+        };
+        assert!(c.text().contains("gravity deficit"));
+    }
+
     #[test]
     fn the_excitation_runs_from_the_first_auto_until_auto_is_left() {
         let mut c = ExcitationClock::default();

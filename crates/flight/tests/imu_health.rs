@@ -86,7 +86,7 @@ fn sitl_runs_the_imu_health_monitor_as_helicon_sim() {
         "{texts:?} vs {}",
         a.time_s()[raised]
     );
-    assert!(texts[0].1.contains("short of gravity"), "{texts:?}");
+    assert!(texts[0].1.contains("gravity deficit"), "{texts:?}");
 
     // replayed on the IMU samples the on-board program logged, a monitor
     // of its own gives the on-board records bit for bit
