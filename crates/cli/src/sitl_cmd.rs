@@ -49,13 +49,25 @@ pub struct SitlArgs {
     /// The pilot's switch goes to manual at this time (s).
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub manual_at: Option<f64>,
+    /// The pilot's switch goes back to auto at this time (s; with `--manual-at`).
+    #[arg(
+        long,
+        value_name = "S",
+        allow_negative_numbers = true,
+        requires = "manual_at"
+    )]
+    pub manual_until: Option<f64>,
+    /// The receiver loses the pilot's transmitter from this time on (s): its
+    /// frames carry the failsafe flag.
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub rc_failsafe_at: Option<f64>,
     /// Fly with a ground station: start the MAVLink 2 server at
     /// `udpout:HOST:PORT` (it sends to the ground station listening there) or
     /// `udpin:HOST:PORT` (it listens). The helicopter then starts disarmed,
     /// the simulated receiver is silent, and the navigator flies what the
     /// operator commands (arm, takeoff, missions): the scenario's
     /// `[[reference]]` are ignored; its duration still ends the run.
-    #[arg(long, value_name = "ADDRESS", conflicts_with = "manual_at")]
+    #[arg(long, value_name = "ADDRESS", conflicts_with_all = ["manual_at", "rc_failsafe_at"])]
     pub gcs: Option<String>,
 }
 
@@ -72,6 +84,8 @@ fn check_time(flag: &str, v: Option<f64>) -> Result<()> {
 pub fn run(a: &SitlArgs) -> Result<()> {
     check_time("--gps-loss-at", a.gps_loss_at)?;
     check_time("--manual-at", a.manual_at)?;
+    check_time("--manual-until", a.manual_until)?;
+    check_time("--rc-failsafe-at", a.rc_failsafe_at)?;
     let o = overrides_from(None, None, a.duration)?;
     let source = format!("{}{}", a.scenario.display(), overrides_label(&o));
     let base = Scenario::from_file(&a.scenario)?.with_overrides(&o, &source)?;
@@ -102,6 +116,9 @@ pub fn run(a: &SitlArgs) -> Result<()> {
             },
             pilot: Pilot {
                 manual_from_s: a.manual_at,
+                manual_until_s: a.manual_until,
+                rc_failsafe_s: a.rc_failsafe_at.map(|t| (t, f64::INFINITY)),
+                ..Pilot::default()
             },
             stale: StaleLimits::default(),
             failsafe: FailsafeConfig::default(),

@@ -106,6 +106,11 @@ fn sitl_bad_flags_and_a_short_run() {
         &["--gps-loss-at"],
     );
     fails_with(&d, &["sitl", "ok.toml", "--duration", "0"], &["duration_s"]);
+    fails_with(
+        &d,
+        &["sitl", "ok.toml", "--rc-failsafe-at", "-1"],
+        &["--rc-failsafe-at"],
+    );
     fails_with(&d, &["sitl", "missing.toml"], &["missing.toml"]);
     let (code, out, err) = helicon(&d, &["sitl", "ok.toml", "--out", "o"]);
     assert_eq!(code, Some(0), "{err}");

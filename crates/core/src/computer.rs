@@ -82,17 +82,38 @@ impl<E: Estimator, F: StateFeedback> FlightComputer<E, F> {
         reference: &Reference,
         offset: &Input,
     ) -> Result<Telemetry, CoreError> {
+        self.step_applied(measurement, reference, offset, None)
+    }
+
+    /// [`FlightComputer::step_with_excitation`] for a sample whose servos
+    /// get `applied` instead of the law's command (the pilot's sticks in
+    /// manual flight, the trim on the ground), when given: the estimator
+    /// predicts with what the servos got and the telemetry's `command`
+    /// holds it (its `saturated` all false); the law still runs on the
+    /// estimate (its tracking error and integral are reported). Allocates
+    /// nothing.
+    pub fn step_applied(
+        &mut self,
+        measurement: &E::Measurement,
+        reference: &Reference,
+        offset: &Input,
+        applied: Option<&Input>,
+    ) -> Result<Telemetry, CoreError> {
         let estimate = self.estimator.update(measurement)?;
         let cmd = self
             .feedback
             .command_with_offset(&estimate.state, reference, offset);
-        self.estimator.predict(&cmd.u)?;
+        let (u, saturated) = match applied {
+            Some(a) => (*a, [false; NU]),
+            None => (cmd.u, cmd.saturated),
+        };
+        self.estimator.predict(&u)?;
         let t = Telemetry {
             sample: self.sample,
             t_s: measurement.t_s(),
             reference: *reference,
-            command: cmd.u,
-            saturated: cmd.saturated,
+            command: u,
+            saturated,
             tracking_error: cmd.tracking_error,
             integral: cmd.integral,
             estimate: estimate.state,
@@ -143,6 +164,22 @@ impl SensorComputer {
         match self {
             SensorComputer::Thesis(c) => c.step_with_excitation(frame, reference, offset),
             SensorComputer::Eskf(c) => c.step_with_excitation(frame, reference, offset),
+        }
+    }
+
+    /// One control sample whose servos get `applied` instead of the law's
+    /// command, when given (see [`FlightComputer::step_applied`]).
+    #[inline]
+    pub fn step_applied(
+        &mut self,
+        frame: &SensorFrame,
+        reference: &Reference,
+        offset: &Input,
+        applied: Option<&Input>,
+    ) -> Result<Telemetry, CoreError> {
+        match self {
+            SensorComputer::Thesis(c) => c.step_applied(frame, reference, offset, applied),
+            SensorComputer::Eskf(c) => c.step_applied(frame, reference, offset, applied),
         }
     }
 

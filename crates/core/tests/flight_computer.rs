@@ -206,3 +206,41 @@ fn excitation_is_added_before_saturation_and_predicted_with() {
     }
     assert!(want.iter().skip(9).any(|v| v.abs() > 1e-6));
 }
+
+/// `step_applied`: with the servos given something else than the law's
+/// command (the pilot's sticks), the estimator predicts with that and the
+/// telemetry holds it; the law's errors are still reported; `None` is
+/// `step_with_excitation` bit for bit.
+#[test]
+fn the_predictor_is_told_what_was_applied() {
+    let r = Reference::default();
+    let zero = SVector::zeros();
+    let (mut a, mut b) = (computer(), computer());
+    for k in 0..50 {
+        assert_eq!(
+            a.step_applied(&frame(k), &r, &zero, None).unwrap(),
+            b.step_with_excitation(&frame(k), &r, &zero).unwrap()
+        );
+    }
+    // the pilot's sticks against the law's command, from identical computers
+    let (mut law_c, mut pilot_c) = (computer(), computer());
+    let sticks = SVector::from([0.2, -0.1, 0.15, 0.05]);
+    let law = law_c.step(&frame(0), &r).unwrap();
+    let piloted = pilot_c
+        .step_applied(&frame(0), &r, &zero, Some(&sticks))
+        .unwrap();
+    assert_eq!(piloted.command, sticks);
+    assert_eq!(piloted.saturated, [false; 4]);
+    assert_eq!(piloted.tracking_error, law.tracking_error);
+    // the next estimate differs by Γ (u_pilot − u_law) off the measured block
+    let (n1, n2) = (
+        law_c.step(&frame(1), &r).unwrap(),
+        pilot_c.step(&frame(1), &r).unwrap(),
+    );
+    let want = gains().gamma * (sticks - law.command);
+    for i in 9..27 {
+        let d = n2.estimate[i] - n1.estimate[i];
+        assert!((d - want[i]).abs() < 1e-15, "state {i}: {d} vs {}", want[i]);
+    }
+    assert!(want.iter().skip(9).any(|v| v.abs() > 1e-6));
+}

@@ -79,6 +79,23 @@ impl SerialLink {
         }
     }
 
+    /// Reads what is available into `buf`, waiting at most `timeout`
+    /// (which becomes the link's read timeout); `Ok(0)` when nothing
+    /// arrived in time. Setting the timeout is no system call.
+    pub fn read_timeout(
+        &mut self,
+        buf: &mut [u8],
+        timeout: Duration,
+    ) -> Result<usize, TransportError> {
+        self.port
+            .set_timeout(timeout)
+            .map_err(|source| TransportError::Serial {
+                path: self.path.clone(),
+                source,
+            })?;
+        self.read_chunk(buf)
+    }
+
     /// Writes all of `bytes`.
     pub fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         self.port

@@ -109,3 +109,36 @@ fn the_on_board_side_may_reopen_the_port() {
         })]
     );
 }
+
+/// `read_timeout`: a read with its own timeout (zero: what is there now)
+/// on a link and on its clone, each keeping its own.
+#[test]
+fn a_read_waits_at_most_its_own_timeout() {
+    let mut pty = PtyPair::open().unwrap();
+    let mut link = SerialLink::open(pty.slave_path(), 115_200, Duration::from_secs(5)).unwrap();
+    let mut writer = link.try_clone().unwrap();
+    let mut buf = [0u8; 64];
+    // nothing there: zero and a short timeout return at once with nothing
+    let t0 = std::time::Instant::now();
+    assert_eq!(link.read_timeout(&mut buf, Duration::ZERO).unwrap(), 0);
+    assert_eq!(
+        link.read_timeout(&mut buf, Duration::from_millis(10))
+            .unwrap(),
+        0
+    );
+    assert!(
+        t0.elapsed() < Duration::from_secs(4),
+        "waited the link's 5 s"
+    );
+    pty.write_all(b"abc").unwrap();
+    let n = link
+        .read_timeout(&mut buf, Duration::from_millis(500))
+        .unwrap();
+    assert_eq!(&buf[..n], b"abc");
+    // the clone writes to the master side
+    writer.write_all(b"xy").unwrap();
+    let n = pty
+        .read_timeout(&mut buf, Duration::from_millis(500))
+        .unwrap();
+    assert_eq!(&buf[..n], b"xy");
+}

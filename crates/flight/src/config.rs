@@ -219,6 +219,11 @@ pub struct OnboardConfig {
     /// navigator's references (not with `mission`).
     #[serde(default, skip_serializing)]
     pub gcs: Option<helicon_gcs::config::GcsSection>,
+    /// Flight-test inputs (`[[excitation]]`, the scenarios' form): added to
+    /// the law's command in auto from the first entry into auto, ended for
+    /// good when auto is left (the pilot's switch stops them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub excitation: Vec<helicon_sim::excitation::ExcitationEntry>,
     /// The folder relative paths are resolved against (the file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -298,6 +303,7 @@ impl OnboardConfig {
                 ));
             }
         }
+        helicon_sim::excitation::Excitations::new(&self.excitation, file)?;
         let s = &self.stale;
         positive(file, "stale.imu_s", s.imu_s, 1.0)?;
         positive(file, "stale.gps_s", s.gps_s, 60.0)?;
@@ -403,6 +409,24 @@ mod tests {
         assert_eq!(c.failsafe.overrun_limit, 8);
         assert!(c.realtime.sched_fifo);
         assert!(c.gcs.is_none());
+    }
+
+    #[test]
+    fn excitation_entries_are_read_and_checked() {
+        let sweep = "[[excitation]]\nservo = \"S_lon\"\nt_s = 1.0\ninput = { kind = \"sweep\", \
+            amplitude = 0.02, omega_min_rad_s = 1.2, omega_max_rad_s = 30.0, duration_s = 27.0 }\n";
+        let c = OnboardConfig::from_toml_str(&format!("{MIN}{sweep}"), "o.toml").unwrap();
+        assert_eq!(c.excitation.len(), 1);
+        assert_eq!(c.excitation[0].servo, "S_lon");
+        let e = err(&sweep.replace("S_lon", "S_pitch"));
+        assert!(
+            e.contains("o.toml") && e.contains("excitation[0].servo"),
+            "{e}"
+        );
+        let e = err(&sweep.replace("t_s = 1.0", "t_s = -1.0"));
+        assert!(e.contains("excitation[0].t_s"), "{e}");
+        let e = err(&sweep.replace("duration_s = 27.0", "duration_s = -27.0"));
+        assert!(e.contains("excitation[0].input.duration_s"), "{e}");
     }
 
     #[test]

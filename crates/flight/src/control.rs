@@ -5,8 +5,10 @@
 //! picks what goes to the servos. Allocation-free.
 
 use crate::safety::{Health, Mode, RcInput, SafetyEvent, Supervisor};
+use helicon_core::imu_health::{ImuHealth, ImuHealthMonitor};
 use helicon_core::state::Input;
 use helicon_core::{Reference, SensorComputer, SensorFrame, Telemetry};
+use helicon_sim::excitation::Excitations;
 
 /// What the control task is given for one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,6 +37,93 @@ pub struct ControlOutput {
     pub telemetry: Option<Telemetry>,
     /// A change of mode this sample.
     pub event: Option<SafetyEvent>,
+    /// The flight-test excitation of the sample, when the mission has one
+    /// and the flight computer ran: the offset added to the law's command
+    /// (zeros when not applied) and whether it runs.
+    pub excitation: Option<(Input, bool)>,
+    /// The IMU health monitor after this sample's IMU sample (when it runs
+    /// and a sample came).
+    pub imu_health: Option<ImuHealth>,
+    /// The IMU health's flags changed this sample (settling aside).
+    pub imu_health_change: Option<ImuHealthChange>,
+    /// The receiver's failsafe changed this sample: `Some(true)` the
+    /// pilot's link lost, `Some(false)` back.
+    pub rc_link_lost: Option<bool>,
+}
+
+/// A change of the IMU health monitor's flags (the settling flag aside):
+/// the supervisor logs it (a warning when a flag is raised) and tells the
+/// ground station; the mode does not change.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ImuHealthChange {
+    /// The flags before.
+    pub previous: u8,
+    /// The flags now ([`ImuHealth::VIBRATION`], …).
+    pub flags: u8,
+}
+
+impl ImuHealthChange {
+    /// The operator's text for the change: the most severe flag raised,
+    /// or that the IMU is healthy again (at most 50 bytes: one MAVLink
+    /// STATUSTEXT).
+    pub fn text(&self) -> &'static str {
+        if self.flags & ImuHealth::GRAVITY_DEFICIT != 0 {
+            "IMU: gravity deficit, accelerometer saturating?"
+        } else if self.flags & ImuHealth::NEAR_RANGE != 0 {
+            "IMU: accelerometer near its range"
+        } else if self.flags & ImuHealth::VIBRATION != 0 {
+            "IMU: vibration above threshold"
+        } else {
+            "IMU: healthy again"
+        }
+    }
+}
+
+/// What the control task reports of a step it computed (the ground link's
+/// item; SITL fills `log.csv`'s estimate, excitation and IMU-health
+/// columns from it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepReport {
+    /// The flight computer's record.
+    pub telemetry: Telemetry,
+    /// The excitation added to the law's command (zeros without).
+    pub excitation: Input,
+    /// The IMU health after the step's sample (when the monitor runs).
+    pub imu_health: Option<ImuHealth>,
+}
+
+impl ControlOutput {
+    /// The step's report, when the flight computer ran.
+    pub fn report(&self) -> Option<StepReport> {
+        self.telemetry.map(|telemetry| StepReport {
+            telemetry,
+            excitation: self.excitation.map_or_else(Input::zeros, |e| e.0),
+            imu_health: self.imu_health,
+        })
+    }
+}
+
+/// The excitation's clock: started at the first entry into auto, ended
+/// for good when auto is left.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct ExcitationClock {
+    start_s: Option<f64>,
+    ended: bool,
+}
+
+impl ExcitationClock {
+    /// The time into the excitation at `now_s` in `mode` (`None`: not
+    /// applied).
+    fn at(&mut self, now_s: f64, mode: Mode) -> Option<f64> {
+        if self.ended {
+            return None;
+        }
+        if mode != Mode::Auto {
+            self.ended = self.start_s.is_some();
+            return None;
+        }
+        Some(now_s - *self.start_s.get_or_insert(now_s))
+    }
 }
 
 /// The control task: the flight computer under the safety supervisor.
@@ -47,6 +136,10 @@ pub struct ControlTask {
     rc: Option<RcInput>,
     heading_rad: f64,
     nav_failed: bool,
+    excitation: ExcitationClock,
+    health: Option<ImuHealthMonitor>,
+    health_flags: u8,
+    rc_lost: bool,
 }
 
 impl ControlTask {
@@ -61,7 +154,20 @@ impl ControlTask {
             rc: None,
             heading_rad: 0.0,
             nav_failed: false,
+            excitation: ExcitationClock::default(),
+            health: None,
+            health_flags: 0,
+            rc_lost: false,
         }
+    }
+
+    /// The same task running the IMU health monitor on each IMU sample
+    /// (as `helicon sim` does; `helicon_sim::closed_loop::imu_health_at`
+    /// builds it).
+    #[must_use]
+    pub fn with_imu_health(mut self, monitor: ImuHealthMonitor) -> Self {
+        self.health = Some(monitor);
+        self
     }
 
     /// Arm or disarm from the ground station (takes effect at the next
@@ -85,10 +191,27 @@ impl ControlTask {
     /// on the fresh frame against the mode's reference; the mode picks the
     /// servo commands. Entering auto from any other mode resets the law's
     /// integrators (no wound-up integral from the ground or from manual
-    /// flight).
+    /// flight). No excitation: [`ControlTask::step_with`].
     pub fn step(&mut self, tick: &Tick) -> ControlOutput {
+        self.step_with(tick, &Excitations::default())
+    }
+
+    /// [`ControlTask::step`] with the mission's flight-test excitation:
+    /// its clock starts at the first entry into auto, it is added to the
+    /// law's command only in auto, and leaving auto (the pilot's switch, a
+    /// failsafe, disarming) ends it for the rest of the flight. No
+    /// allocation.
+    pub fn step_with(&mut self, tick: &Tick, excitation: &Excitations) -> ControlOutput {
+        let mut rc_link_lost = None;
         if let Some(rc) = tick.rc {
-            self.rc = Some(rc);
+            // a receiver in failsafe does not give the pilot's sticks
+            if !rc.failsafe {
+                self.rc = Some(rc);
+            }
+            if rc.failsafe != self.rc_lost {
+                self.rc_lost = rc.failsafe;
+                rc_link_lost = Some(rc.failsafe);
+            }
         }
         let health = Health {
             now_s: tick.now_s,
@@ -107,10 +230,48 @@ impl ControlTask {
             self.computer.reset_feedback();
         }
         self.nav_failed = false;
+        let offset = if excitation.is_empty() {
+            None
+        } else {
+            Some(
+                match self.excitation.at(tick.now_s, self.supervisor.mode()) {
+                    Some(t) => (excitation.at(t), true),
+                    None => (Input::zeros(), false),
+                },
+            )
+        };
+        let mut imu_health = None;
+        let mut imu_health_change = None;
+        if let (Some(frame), Some(m)) = (&tick.frame, self.health.as_mut()) {
+            let h = m.update(&frame.imu);
+            let flags = h.flags & !ImuHealth::SETTLING;
+            if flags != self.health_flags {
+                imu_health_change = Some(ImuHealthChange {
+                    previous: self.health_flags,
+                    flags,
+                });
+                self.health_flags = flags;
+            }
+            imu_health = Some(h);
+        }
         let mut telemetry = None;
         if let Some(frame) = &tick.frame {
             let reference = self.supervisor.reference(&tick.reference);
-            match self.computer.step(frame, &reference) {
+            let u_exc = offset.map_or_else(Input::zeros, |o| o.0);
+            // outside the law's modes the predictor is told what the
+            // servos get (the pilot's sticks, the trim), not the idle law's
+            let applied = match self.supervisor.mode() {
+                Mode::Auto | Mode::Hold | Mode::Descent => None,
+                Mode::Manual | Mode::Disarmed | Mode::ImuLost => Some(self.supervisor.servo(
+                    &self.u_trim,
+                    &self.u_trim,
+                    self.rc.as_ref(),
+                )),
+            };
+            match self
+                .computer
+                .step_applied(frame, &reference, &u_exc, applied.as_ref())
+            {
                 Ok(t) => {
                     self.law = t.command;
                     self.heading_rad = t.estimate[2];
@@ -126,6 +287,46 @@ impl ControlTask {
             mode: self.supervisor.mode(),
             telemetry,
             event,
+            excitation: offset.filter(|_| telemetry.is_some()),
+            imu_health,
+            imu_health_change,
+            rc_link_lost,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The excitation's clock starts at the first entry into auto, runs in
+    /// auto only, and leaving auto ends it for good.
+    /// The operator's texts fit one MAVLink STATUSTEXT (50 bytes).
+    #[test]
+    fn imu_health_texts_fit_a_status_text() {
+        for flags in 0..8 {
+            let c = ImuHealthChange { previous: 8, flags };
+            assert!(c.text().len() <= 50, "{}", c.text());
+        }
+        let c = ImuHealthChange {
+            previous: 0,
+            flags: ImuHealth::GRAVITY_DEFICIT | ImuHealth::VIBRATION,
+        };
+        assert!(c.text().contains("gravity deficit"));
+    }
+
+    #[test]
+    fn the_excitation_runs_from_the_first_auto_until_auto_is_left() {
+        let mut c = ExcitationClock::default();
+        assert_eq!(c.at(0.0, Mode::Disarmed), None);
+        assert_eq!(c.at(0.5, Mode::Manual), None);
+        assert_eq!(c.at(1.0, Mode::Auto), Some(0.0));
+        assert_eq!(c.at(1.25, Mode::Auto), Some(0.25));
+        assert_eq!(c.at(1.5, Mode::Manual), None);
+        assert_eq!(c.at(2.0, Mode::Auto), None);
+        let mut c = ExcitationClock::default();
+        assert_eq!(c.at(0.0, Mode::Auto), Some(0.0));
+        assert_eq!(c.at(0.1, Mode::Hold), None);
+        assert_eq!(c.at(0.2, Mode::Auto), None);
     }
 }

@@ -4,7 +4,7 @@
 //! meet through `helicon-gcs`' lock-free rings only: the control task never
 //! waits for the server (a full ring drops a status and counts it).
 
-use crate::runtime::Mission;
+use crate::mission::{Mission, References};
 use helicon_devices::Geodetic;
 use helicon_gcs::config::GcsSection;
 use helicon_gcs::link::{Vehicle, channel};
@@ -53,5 +53,5 @@ pub fn start(
     let (vehicle_end, server_end) = channel(RING);
     let vehicle = Vehicle::new(nav, vehicle_end, status_every);
     let handle = server::spawn(config, server_end)?;
-    Ok((Mission::Ground(Box::new(vehicle)), handle))
+    Ok((Mission::new(References::Ground(Box::new(vehicle))), handle))
 }

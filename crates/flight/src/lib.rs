@@ -11,6 +11,8 @@
 //! - [`safety`]: arming, the pilot's switch, sensor stale limits and overruns;
 //!   hold, then a descent;
 //! - [`control`]: the control task's work for one sample;
+//! - [`mission`]: the references (schedule, hold, the ground station's
+//!   navigator) and the flight-test excitation;
 //! - [`ground`]: the ground station (MAVLink server and navigator) started
 //!   from the on-board program;
 //! - [`runtime`]: the threads (sensor server, receiver, control task,
@@ -21,6 +23,7 @@
 pub mod config;
 pub mod control;
 pub mod ground;
+pub mod mission;
 pub mod onboard;
 pub mod ports;
 pub mod realtime;

@@ -6,8 +6,9 @@
 use crate::config::OnboardConfig;
 use crate::control::ControlTask;
 use crate::ground;
-use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort};
-use crate::runtime::{self, Mission, Next, Pacing, RunReport, RuntimeOptions, SensorPort};
+use crate::mission::{Mission, References};
+use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port};
+use crate::runtime::{self, Next, Pacing, RunReport, RuntimeOptions, SensorPort};
 use crate::safety::Supervisor;
 use helicon_core::attitude::{VectorObservation, gravity_observation, q_method};
 use helicon_core::frames::body_from_ned;
@@ -17,7 +18,8 @@ use helicon_devices::{Geodetic, LocalNed};
 use helicon_gnc::design::Gains;
 use helicon_model::Params;
 use helicon_model::config_error::ConfigError;
-use helicon_sim::closed_loop::{OnBoardSetup, flight_computer};
+use helicon_sim::closed_loop::{OnBoardSetup, flight_computer, imu_health_at};
+use helicon_sim::excitation::Excitations;
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
 use nalgebra::Vector3;
@@ -104,6 +106,34 @@ pub fn align(
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
+/// The flight-test excitation flown: `onboard.toml`'s `[[excitation]]`,
+/// or the mission file's; both at once is refused (which one was meant?).
+fn mission_excitation(
+    cfg: &OnboardConfig,
+    mission: Option<&Scenario>,
+) -> Result<Excitations, ConfigError> {
+    match mission {
+        Some(m) if !m.excitation.is_empty() => {
+            let file = cfg
+                .mission
+                .as_ref()
+                .map_or_else(|| m.name.clone(), |p| cfg.resolve(p).display().to_string());
+            if !cfg.excitation.is_empty() {
+                return Err(ConfigError::Invalid {
+                    file: cfg.file.clone(),
+                    field: "excitation".into(),
+                    value: format!("{} entries", cfg.excitation.len()),
+                    rule: format!(
+                        "the mission file {file} has its own [[excitation]]: give them in one place"
+                    ),
+                });
+            }
+            Excitations::new(&m.excitation, &file)
+        }
+        _ => Excitations::new(&cfg.excitation, &cfg.file),
+    }
+}
+
 /// Run the on-board program of `cfg` for `duration` (until the IMU port
 /// closes when `None`); the log and `timing.json` go to the configured
 /// folder. Returns the runtime's report and the log's path.
@@ -131,11 +161,12 @@ pub fn run(
         Some(m) => Some(Scenario::from_file(&cfg.resolve(m))?),
         None => None,
     };
+    let excitation = mission_excitation(cfg, mission_scenario.as_ref())?;
     let d = &cfg.devices;
-    let imu = TtyPort::open(&d.imu.path, d.imu.baud)?;
-    let gps = TtyPort::open(&d.gps.path, d.gps.baud)?;
-    let avionics = TtyPort::open(&d.avionics.path, d.avionics.baud)?;
-    let rc = avionics.try_clone()?;
+    let imu = open_port(&d.imu.path, d.imu.baud)?;
+    let gps = open_port(&d.gps.path, d.gps.baud)?;
+    let avionics = open_port(&d.avionics.path, d.avionics.baud)?;
+    let rc = clone_port(&avionics)?;
     let h = &cfg.home;
     let home = Geodetic::new(h.latitude_deg, h.longitude_deg, h.height_m)
         .map_err(|e| OnboardError::Alignment(format!("home: {e}")))?;
@@ -191,7 +222,8 @@ pub fn run(
         computer,
         Supervisor::new(cfg.stale, cfg.failsafe, 0.0),
         u_trim,
-    );
+    )
+    .with_imu_health(imu_health_at(&params, ts, &cfg.sensors, &cfg.file)?);
     let dir = cfg.resolve(&cfg.log.dir);
     std::fs::create_dir_all(&dir).map_err(|e| OnboardError::Log {
         path: dir.display().to_string(),
@@ -215,15 +247,19 @@ pub fn run(
             let (m, server) = ground::start(g, home, &cfg.file, ts)?;
             (m, Some(server))
         }
-        (Some(s), None) => (Mission::Schedule(Box::new(s.reference_schedule())), None),
+        (Some(s), None) => (
+            Mission::new(References::Schedule(Box::new(s.reference_schedule()))),
+            None,
+        ),
         (None, None) => (
-            Mission::Hold(Reference {
+            Mission::new(References::Hold(Reference {
                 velocity_ned_m_s: Vector3::zeros(),
                 yaw_rad: x0[ix::PSI],
-            }),
+            })),
             None,
         ),
     };
+    let mission = mission.with_excitation(excitation);
     let mut realtime = cfg.realtime;
     realtime.sched_fifo &= sched_fifo;
     let handle = runtime::spawn(
@@ -251,4 +287,40 @@ pub fn run(
         server.stop();
     }
     Ok((report, path))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MIN: &str = "gains = \"g.json\"\n[devices.imu]\npath = \"/dev/ttyS1\"\nbaud = 921600\n\
+        [devices.gps]\npath = \"/dev/ttyS2\"\nbaud = 115200\n\
+        [devices.avionics]\npath = \"/dev/ttyS3\"\nbaud = 115200\n";
+    const SWEEP: &str = "[[excitation]]\nservo = \"S_lon\"\nt_s = 1.0\ninput = { kind = \"sweep\", \
+        amplitude = 0.02, omega_min_rad_s = 1.2, omega_max_rad_s = 30.0, duration_s = 27.0 }\n";
+
+    /// The excitation flown: onboard.toml's or the mission's, not both.
+    #[test]
+    fn the_excitation_comes_from_one_place() {
+        let plain = OnboardConfig::from_toml_str(MIN, "o.toml").unwrap();
+        let mut with = OnboardConfig::from_toml_str(&format!("{MIN}{SWEEP}"), "o.toml").unwrap();
+        with.mission = Some(PathBuf::from("m.toml"));
+        let mission =
+            Scenario::from_toml_str(&format!("duration_s = 5.0\n{SWEEP}"), "m.toml").unwrap();
+        let bare = Scenario::from_toml_str("duration_s = 5.0\n", "m.toml").unwrap();
+        assert!(mission_excitation(&plain, None).unwrap().is_empty());
+        assert!(!mission_excitation(&with, Some(&bare)).unwrap().is_empty());
+        assert!(
+            !mission_excitation(&plain, Some(&mission))
+                .unwrap()
+                .is_empty()
+        );
+        let e = mission_excitation(&with, Some(&mission))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("o.toml") && e.contains("excitation") && e.contains("m.toml"),
+            "{e}"
+        );
+    }
 }

@@ -13,13 +13,12 @@
 //! - Avionics: the project's framed servo/RC protocol. The receiver's
 //!   sticks are the first four channels, 1500 µs ± 1000 µs per unit of
 //!   servo command; the pilot's switch is the frame's `autonomous` flag;
-//!   the arm switch is channel 5 above 1500 µs.
+//!   the arm switch is channel 5 above 1500 µs; the frame's failsafe flag
+//!   (the receiver lost the transmitter) is passed on to the supervisor.
 //!
-//! [`TtyPort`] opens a device as the program opens `/dev/ttyS*` (raw 8N1
-//! at the baud rate, through `nix`'s termios): a minimal adapter beside
-//! `helicon-devices`' `SerialLink`, because the runtime needs a handle it
-//! can clone (a reader and a writer thread on the avionics port) and poll
-//! together with another port.
+//! The devices are `helicon-devices`' [`SerialLink`]s (raw 8N1 at the baud
+//! rate); the avionics port's link is cloned for the receiver and the
+//! servos (a reader and a writer thread).
 
 use crate::runtime::{Arrival, Next, PortError, RcPort, SensorPort, ServoPort};
 use crate::safety::RcInput;
@@ -27,117 +26,54 @@ use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, ServoCommand};
 use helicon_devices::{AvionicsDecoder, LocalNed, UbxDecoder, VnBinaryDecoder};
-use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
-use nix::sys::termios::{BaudRate, SetArg, cfmakeraw, cfsetspeed, tcgetattr, tcsetattr};
-use std::fs::File;
-use std::io::{ErrorKind, Read, Write};
-use std::os::fd::AsFd;
-use std::os::unix::fs::OpenOptionsExt;
-use std::path::{Path, PathBuf};
+use helicon_devices::{SerialLink, TransportError};
+use std::path::Path;
 use std::time::Duration;
 
-/// The baud rates a [`TtyPort`] can be opened at.
+/// The baud rates a device can be opened at.
 pub const BAUDS: [u32; 9] = [
     9600, 19200, 38400, 57600, 115_200, 230_400, 460_800, 921_600, 1_000_000,
 ];
 
-fn baud_rate(baud: u32) -> Option<BaudRate> {
-    Some(match baud {
-        9600 => BaudRate::B9600,
-        19200 => BaudRate::B19200,
-        38400 => BaudRate::B38400,
-        57600 => BaudRate::B57600,
-        115_200 => BaudRate::B115200,
-        230_400 => BaudRate::B230400,
-        460_800 => BaudRate::B460800,
-        921_600 => BaudRate::B921600,
-        1_000_000 => BaudRate::B1000000,
-        _ => return None,
+/// Open the serial device `path` at `baud` (one of [`BAUDS`]) as the
+/// program opens `/dev/ttyS*` (a pty slave in SITL).
+pub fn open_port(path: &Path, baud: u32) -> Result<SerialLink, PortError> {
+    if !BAUDS.contains(&baud) {
+        return Err(PortError {
+            port: path.display().to_string(),
+            message: format!("baud rate {baud} not one of {BAUDS:?}"),
+        });
+    }
+    SerialLink::open(path, baud, Duration::ZERO).map_err(|e| PortError {
+        port: path.display().to_string(),
+        message: format!("cannot open: {e}"),
     })
 }
 
-/// A serial device: raw 8N1 at a baud rate.
-#[derive(Debug)]
-pub struct TtyPort {
-    file: File,
-    path: PathBuf,
+/// A second handle on the device of `link` (a reader and a writer thread).
+pub fn clone_port(link: &SerialLink) -> Result<SerialLink, PortError> {
+    link.try_clone()
+        .map_err(|e| port_error(link, "cannot clone", &e))
 }
 
-impl TtyPort {
-    /// Open `path` at `baud` (one of [`BAUDS`]).
-    pub fn open(path: &Path, baud: u32) -> Result<Self, PortError> {
-        let err = |message: String| PortError {
-            port: path.display().to_string(),
-            message,
-        };
-        let rate =
-            baud_rate(baud).ok_or_else(|| err(format!("baud rate {baud} not one of {BAUDS:?}")))?;
-        let file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .custom_flags(nix::fcntl::OFlag::O_NOCTTY.bits())
-            .open(path)
-            .map_err(|e| err(format!("cannot open: {e}")))?;
-        let mut t =
-            tcgetattr(file.as_fd()).map_err(|e| err(format!("not a serial device: {e}")))?;
-        cfmakeraw(&mut t);
-        cfsetspeed(&mut t, rate).map_err(|e| err(format!("baud rate: {e}")))?;
-        tcsetattr(file.as_fd(), SetArg::TCSANOW, &t).map_err(|e| err(format!("tcsetattr: {e}")))?;
-        Ok(TtyPort {
-            file,
-            path: path.to_path_buf(),
-        })
+fn port_error(link: &SerialLink, what: &str, e: &TransportError) -> PortError {
+    PortError {
+        port: link.path().display().to_string(),
+        message: format!("{what}: {e}"),
     }
+}
 
-    /// A second handle on the same device (a reader and a writer thread).
-    pub fn try_clone(&self) -> Result<Self, PortError> {
-        Ok(TtyPort {
-            file: self
-                .file
-                .try_clone()
-                .map_err(|e| self.error(format!("cannot clone: {e}")))?,
-            path: self.path.clone(),
-        })
-    }
-
-    fn error(&self, message: String) -> PortError {
-        PortError {
-            port: self.path.display().to_string(),
-            message,
-        }
-    }
-
-    /// Read what is available, waiting at most `timeout`: `Ok(0)` on
-    /// timeout; an error once the device is gone (end of file, EIO).
-    pub fn read_timeout(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, PortError> {
-        let ms = PollTimeout::try_from(timeout).unwrap_or(PollTimeout::MAX);
-        let mut fds = [PollFd::new(self.file.as_fd(), PollFlags::POLLIN)];
-        match poll(&mut fds, ms) {
-            Ok(0) | Err(nix::errno::Errno::EINTR) => return Ok(0),
-            Ok(_) => {}
-            Err(e) => return Err(self.error(format!("poll: {e}"))),
-        }
-        match self.file.read(buf) {
-            // readable, yet nothing: the other side is gone
-            Ok(0) if !buf.is_empty() => Err(self.error("closed (end of file)".into())),
-            Ok(n) => Ok(n),
-            Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::Interrupted) => Ok(0),
-            Err(e) => Err(self.error(format!("read: {e}"))),
-        }
-    }
-
-    /// Write all of `bytes`.
-    pub fn write_all(&mut self, bytes: &[u8]) -> Result<(), PortError> {
-        self.file
-            .write_all(bytes)
-            .map_err(|e| self.error(format!("write: {e}")))
-    }
+/// Read what `link` has, waiting at most `timeout`: `Ok(0)` on timeout; an
+/// error once the device is gone (hung up, EIO).
+fn read_port(link: &mut SerialLink, buf: &mut [u8], timeout: Duration) -> Result<usize, PortError> {
+    link.read_timeout(buf, timeout)
+        .map_err(|e| port_error(link, "read", &e))
 }
 
 /// The IMU (with magnetometer) and GPS read by one sensor-server thread.
 pub struct DeviceSensors {
-    imu: TtyPort,
-    gps: TtyPort,
+    imu: SerialLink,
+    gps: SerialLink,
     vn: VnBinaryDecoder,
     ubx: UbxDecoder,
     home: LocalNed,
@@ -153,7 +89,7 @@ pub struct DeviceSensors {
 
 impl DeviceSensors {
     /// The sensors on their ports; GPS positions in the NED frame of `home`.
-    pub fn new(imu: TtyPort, gps: TtyPort, home: LocalNed, gps_latency_s: f64) -> Self {
+    pub fn new(imu: SerialLink, gps: SerialLink, home: LocalNed, gps_latency_s: f64) -> Self {
         DeviceSensors {
             imu,
             gps,
@@ -204,7 +140,7 @@ impl DeviceSensors {
     /// is assembled.
     fn drain_gps(&mut self) -> Result<(), PortError> {
         loop {
-            let n = self.gps.read_timeout(&mut self.buf, Duration::ZERO)?;
+            let n = read_port(&mut self.gps, &mut self.buf, Duration::ZERO)?;
             if n == 0 {
                 return Ok(());
             }
@@ -254,7 +190,7 @@ impl DeviceSensors {
 
 impl SensorPort for DeviceSensors {
     fn next(&mut self, timeout: Duration) -> Result<Next<Arrival>, PortError> {
-        let n = self.imu.read_timeout(&mut self.buf, timeout)?;
+        let n = read_port(&mut self.imu, &mut self.buf, timeout)?;
         if n == 0 {
             // the GPS keeps being read while the IMU is silent
             self.drain_gps()?;
@@ -286,14 +222,14 @@ pub fn stick_command(us: u16) -> f64 {
 
 /// The receiver side of the avionics port.
 pub struct DeviceRc {
-    port: TtyPort,
+    port: SerialLink,
     decoder: AvionicsDecoder,
     buf: [u8; 256],
 }
 
 impl DeviceRc {
     /// The receiver on (a handle of) the avionics port.
-    pub fn new(port: TtyPort) -> Self {
+    pub fn new(port: SerialLink) -> Self {
         DeviceRc {
             port,
             decoder: AvionicsDecoder::new(),
@@ -304,7 +240,7 @@ impl DeviceRc {
 
 impl RcPort for DeviceRc {
     fn next(&mut self, timeout: Duration) -> Result<Next<RcInput>, PortError> {
-        let n = self.port.read_timeout(&mut self.buf, timeout)?;
+        let n = read_port(&mut self.port, &mut self.buf, timeout)?;
         let mut last = None;
         self.decoder.push_with(&self.buf[..n], |m| {
             if let AvionicsMessage::Rc(rc) = m {
@@ -316,6 +252,7 @@ impl RcPort for DeviceRc {
                 servo: Input::from_fn(|i, _| stick_command(rc.channels_us[i])),
                 manual: !rc.autonomous,
                 armed: rc.channels_us[4] > 1500,
+                failsafe: rc.failsafe,
             }),
             None => Next::Timeout,
         })
@@ -324,13 +261,13 @@ impl RcPort for DeviceRc {
 
 /// The servo side of the avionics port.
 pub struct DeviceServos {
-    port: TtyPort,
+    port: SerialLink,
     seq: u8,
 }
 
 impl DeviceServos {
     /// The servos on (a handle of) the avionics port.
-    pub fn new(port: TtyPort) -> Self {
+    pub fn new(port: SerialLink) -> Self {
         DeviceServos { port, seq: 0 }
     }
 }
@@ -342,6 +279,8 @@ impl ServoPort for DeviceServos {
             message: e.to_string(),
         })?;
         self.seq = self.seq.wrapping_add(1);
-        self.port.write_all(cmd.encode().as_bytes())
+        self.port
+            .write_all(cmd.encode().as_bytes())
+            .map_err(|e| port_error(&self.port, "write", &e))
     }
 }

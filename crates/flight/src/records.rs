@@ -2,11 +2,13 @@
 //! message set, plus the supervisor's events with their precise reason,
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
-use crate::control::{ControlOutput, Tick};
+use crate::control::{ControlOutput, ImuHealthChange, Tick};
 use crate::safety::{Mode, RcInput, Reason, SafetyEvent};
+use helicon_core::imu_health::ImuHealth;
 use helicon_ulog::messages::{
-    Control, Failsafe, FailsafeReason, FlightMode, Mode as ModeRecord, Navigation,
-    RcInput as RcRecord, ServoOutput, Timing,
+    Control, EstimatorBias, Excitation, Failsafe, FailsafeReason, FlightMode,
+    ImuHealth as ImuHealthRecord, Mode as ModeRecord, Navigation, RcInput as RcRecord, ServoOutput,
+    Timing,
 };
 use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, timestamp_us};
 use std::io::Write;
@@ -18,8 +20,24 @@ pub enum FlightRecord {
     /// A record of the message set.
     Log(LogRecord),
     /// A change of mode (written as `mode`, `failsafe` when it raises or
-    /// clears one, and a text message naming the precise reason).
+    /// clears one, and one text message naming the precise reason).
     Event(SafetyEvent),
+    /// The IMU health's flags changed (written as a text message: a
+    /// warning when a flag is raised).
+    ImuHealth {
+        /// On-board time (s).
+        t_s: f64,
+        /// The change.
+        change: ImuHealthChange,
+    },
+    /// The receiver's failsafe raised (the pilot's link lost) or cleared
+    /// (written as a text message).
+    RcLink {
+        /// On-board time (s).
+        t_s: f64,
+        /// Lost (true) or back.
+        lost: bool,
+    },
     /// The watchdog commanded the trim: the control task was silent for
     /// this long (s).
     Watchdog {
@@ -50,6 +68,7 @@ pub fn failsafe_reason(r: Reason) -> Option<FailsafeReason> {
         Reason::Overrun => Some(FailsafeReason::DeadlineMiss),
         Reason::NavigationFailure => Some(FailsafeReason::NavigationFailure),
         Reason::PilotManual | Reason::PilotAuto => Some(FailsafeReason::Pilot),
+        Reason::RcLost => Some(FailsafeReason::RcLoss),
         Reason::Armed | Reason::Disarmed | Reason::HoldElapsed => None,
     }
 }
@@ -79,7 +98,9 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
         FlightRecord::Log(x) => log.write(x),
         FlightRecord::Event(ev) => {
             let ts = timestamp_us(ev.t_s, "mode change")?;
-            log.write(&LogRecord::Mode(ModeRecord {
+            // the records' data only: the text below is the event's one
+            // text (FlightLog::write would add a generic one of its own)
+            log.write_data(&LogRecord::Mode(ModeRecord {
                 timestamp: ts,
                 mode: flight_mode(ev.to) as u8,
                 previous: flight_mode(ev.from) as u8,
@@ -89,7 +110,7 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
             if let Some(code) = failsafe_reason(ev.reason)
                 && (raised || cleared)
             {
-                log.write(&LogRecord::Failsafe(Failsafe {
+                log.write_data(&LogRecord::Failsafe(Failsafe {
                     timestamp: ts,
                     reason: code as u8,
                     active: raised,
@@ -117,6 +138,43 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
             let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("mode change");
             log.writer_mut().log(level, ts, s)
         }
+        FlightRecord::ImuHealth { t_s, change } => {
+            let ts = timestamp_us(*t_s, "imu health")?;
+            let mut text = Text {
+                buf: [0; 160],
+                len: 0,
+            };
+            let _ = std::fmt::Write::write_fmt(
+                &mut text,
+                format_args!(
+                    "imu_health: flags {} -> {} at t = {t_s:.4} s: {}",
+                    change.previous,
+                    change.flags,
+                    change.text()
+                ),
+            );
+            let level = if change.flags & ImuHealth::GRAVITY_DEFICIT != 0 {
+                LogLevel::Critical
+            } else if change.flags & !change.previous != 0 {
+                LogLevel::Warning
+            } else {
+                LogLevel::Notice
+            };
+            let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("imu health");
+            log.writer_mut().log(level, ts, s)
+        }
+        FlightRecord::RcLink { t_s, lost } => {
+            let ts = timestamp_us(*t_s, "rc link")?;
+            let (level, text) = if *lost {
+                (
+                    LogLevel::Critical,
+                    "rc_link: receiver failsafe, the pilot's link lost",
+                )
+            } else {
+                (LogLevel::Notice, "rc_link: the pilot's link back")
+            };
+            log.writer_mut().log(level, ts, text)
+        }
         FlightRecord::Watchdog { t_s, silent_s } => {
             let ts = timestamp_us(*t_s, "watchdog")?;
             let mut text = Text {
@@ -135,8 +193,11 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
 
 /// Everything one control step logs, handed to `push` in order: the frame
 /// (`sensor_imu`, `sensor_mag`, `sensor_gps`), the receiver's frame, the
-/// change of mode, the control step (`control`, `navigation`), the servo
-/// command and the timing. No allocation.
+/// change of mode, the IMU health (`imu_health`, and its change of flags),
+/// the control step (`control`, `navigation`, `estimator_bias` when the
+/// navigation estimates the IMU biases, `excitation` when the mission has
+/// one), the servo command and the
+/// timing. No allocation.
 pub fn step_records(
     tick: &Tick,
     out: &ControlOutput,
@@ -157,8 +218,29 @@ pub fn step_records(
     if let Some(rc) = &tick.rc {
         push(FlightRecord::Log(LogRecord::Rc(rc_record(ts, rc))));
     }
+    if let Some(lost) = out.rc_link_lost {
+        push(FlightRecord::RcLink {
+            t_s: tick.now_s,
+            lost,
+        });
+    }
     if let Some(ev) = out.event {
         push(FlightRecord::Event(ev));
+    }
+    if let (Some(f), Some(h)) = (&tick.frame, &out.imu_health) {
+        push(FlightRecord::Log(LogRecord::ImuHealth(ImuHealthRecord {
+            timestamp: timestamp_us(f.t_s, "imu_health")?,
+            vibration_rms_m_s2: h.vibration_rms_m_s2,
+            gravity_residual_m_s2: h.gravity_residual_m_s2,
+            peak_fraction: h.peak_fraction,
+            flags: h.flags,
+        })));
+    }
+    if let Some(change) = out.imu_health_change {
+        push(FlightRecord::ImuHealth {
+            t_s: tick.now_s,
+            change,
+        });
     }
     if let Some(t) = &out.telemetry {
         push(FlightRecord::Log(LogRecord::Control(
@@ -168,6 +250,18 @@ pub fn step_records(
             push(FlightRecord::Log(LogRecord::Navigation(
                 Navigation::from_solution(t.t_s, n)?,
             )));
+            if let Some(b) = &n.imu_bias {
+                push(FlightRecord::Log(LogRecord::EstimatorBias(
+                    EstimatorBias::from_estimate(t.t_s, b)?,
+                )));
+            }
+        }
+        if let Some((offset, active)) = out.excitation {
+            push(FlightRecord::Log(LogRecord::Excitation(Excitation {
+                timestamp: ts,
+                offset: offset.into(),
+                active,
+            })));
         }
     }
     push(FlightRecord::Log(LogRecord::Servo(ServoOutput {
@@ -196,6 +290,6 @@ fn rc_record(ts: u64, rc: &RcInput) -> RcRecord {
         channels_us,
         channel_count: 4,
         manual_switch: rc.manual,
-        signal_lost: false,
+        signal_lost: rc.failsafe,
     }
 }

@@ -20,17 +20,16 @@
 //! on-board time is k·Ts from the first message). Either way each step is
 //! the [`ControlTask`]'s and sends exactly one servo frame.
 
-use crate::control::{ControlTask, Tick};
+use crate::control::{ControlTask, StepReport, Tick};
+pub use crate::mission::{LastStep, Mission, flight_mode};
 use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
 use crate::records::{FlightRecord, step_records, write_record};
 use crate::safety::{Mode, RcInput};
+use helicon_core::SensorFrame;
 use helicon_core::state::Input;
-use helicon_core::{Reference, SensorFrame, Telemetry};
-use helicon_gcs::link::{FlightMode, Vehicle};
-use helicon_sim::scenario::ReferenceSchedule;
+use helicon_gcs::link::VehicleEvent;
 use helicon_ulog::messages::Timing;
 use helicon_ulog::{FlightLog, timestamp_us};
-use nalgebra::Vector3;
 use std::io::Write;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -117,93 +116,6 @@ pub struct RuntimeOptions {
     pub watchdog_s: f64,
     /// The trim (watchdog and disarmed commands).
     pub u_trim: Input,
-}
-
-/// The mission: where the references come from.
-pub enum Mission {
-    /// A schedule of reference changes (a scenario's `[[reference]]`).
-    Schedule(Box<ReferenceSchedule>),
-    /// One constant reference.
-    Hold(Reference),
-    /// The ground station's navigator (the vehicle half of `helicon-gcs`):
-    /// each step it takes the operator's commands from the server thread's
-    /// ring (never blocking), runs on the last step's telemetry and arms or
-    /// disarms the control task when the operator (or a landing) asks.
-    Ground(Box<Vehicle>),
-}
-
-impl std::fmt::Debug for Mission {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Mission::Schedule(_) => f.write_str("Mission::Schedule"),
-            Mission::Hold(r) => write!(f, "Mission::Hold({r:?})"),
-            Mission::Ground(_) => f.write_str("Mission::Ground"),
-        }
-    }
-}
-
-/// What the control task did last step, as the ground station's navigator
-/// sees it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LastStep {
-    /// The last telemetry the flight computer produced (`None` before the
-    /// first).
-    pub telemetry: Option<Telemetry>,
-    /// The mode then.
-    pub mode: Mode,
-    /// The servo commands then.
-    pub servo: Input,
-    /// Its compute time over the control period.
-    pub load: f64,
-}
-
-/// The flight software's mode as the ground station reports it.
-pub fn flight_mode(m: Mode) -> FlightMode {
-    FlightMode {
-        name: m.as_str(),
-        law_flies: matches!(m, Mode::Auto | Mode::Hold | Mode::Descent),
-    }
-}
-
-impl Mission {
-    /// The reference at on-board time `t_s` of a time-scheduled mission;
-    /// `None` for [`Mission::Ground`] (its reference depends on the
-    /// telemetry: [`Mission::step`]). No allocation.
-    pub fn at(&self, t_s: f64) -> Option<Reference> {
-        match self {
-            Mission::Schedule(s) => {
-                let r = s.at(t_s);
-                Some(Reference {
-                    velocity_ned_m_s: Vector3::new(r[0], r[1], r[2]),
-                    yaw_rad: r[3],
-                })
-            }
-            Mission::Hold(r) => Some(*r),
-            Mission::Ground(_) => None,
-        }
-    }
-
-    /// This step's reference at on-board time `t_s`; the ground station's
-    /// navigator reads `last` and arms or disarms `task` (taking effect in
-    /// this very step). No allocation in the steady state.
-    pub fn step(&mut self, t_s: f64, last: &LastStep, task: &mut ControlTask) -> Reference {
-        match self {
-            Mission::Ground(v) => {
-                let out = v.step(
-                    t_s,
-                    last.telemetry.as_ref(),
-                    flight_mode(last.mode),
-                    &last.servo,
-                    last.load,
-                );
-                if let Some(a) = out.arm {
-                    task.set_armed(a);
-                }
-                out.reference
-            }
-            Mission::Schedule(_) | Mission::Hold(_) => self.at(t_s).unwrap_or_default(),
-        }
-    }
 }
 
 /// What a run measured (`timing.json`).
@@ -304,7 +216,7 @@ pub fn spawn<S, R, V, W>(
     rc: Option<R>,
     servos: V,
     log: FlightLog<W>,
-    downlink: Option<rtrb::Producer<Telemetry>>,
+    downlink: Option<rtrb::Producer<StepReport>>,
     options: RuntimeOptions,
 ) -> RuntimeHandle
 where
@@ -654,7 +566,7 @@ struct ControlCtx<'a> {
     last_output_ns: &'a AtomicU64,
     wake_out: Option<Thread>,
     wake_log: Option<Thread>,
-    downlink: Option<rtrb::Producer<Telemetry>>,
+    downlink: Option<rtrb::Producer<StepReport>>,
     direct: Option<Direct>,
     options: RuntimeOptions,
 }
@@ -760,7 +672,20 @@ fn control_loop(
             rc,
             reference: mission.step(now_s, &last, &mut task),
         };
-        let out = task.step(&tick);
+        let out = task.step_with(&tick, mission.excitation());
+        if let Some(c) = out.imu_health_change {
+            mission.notify(now_s, VehicleEvent::Warning(c.text()));
+        }
+        if let Some(lost) = out.rc_link_lost {
+            mission.notify(
+                now_s,
+                VehicleEvent::Warning(if lost {
+                    "RC: receiver failsafe, the pilot's link lost"
+                } else {
+                    "RC: the pilot's link back"
+                }),
+            );
+        }
         if out.telemetry.is_some() {
             last.telemetry = out.telemetry;
         }
@@ -768,8 +693,8 @@ fn control_loop(
         last.servo = out.servo;
         // the telemetry downlink before the servo frame: whoever waits for
         // the servo frame finds the sample's telemetry
-        if let (Some(d), Some(t)) = (ctx.downlink.as_mut(), out.telemetry) {
-            let _ = d.push(t);
+        if let (Some(d), Some(r)) = (ctx.downlink.as_mut(), out.report()) {
+            let _ = d.push(r);
         }
         if let Some(d) = ctx.direct.as_mut() {
             match d.servos.send(&out.servo) {

@@ -18,6 +18,13 @@
 //! `failsafe.descent_m_s` until the pilot takes over or disarms. Every
 //! change of mode is one [`SafetyEvent`] with its reason, for the log.
 //!
+//! The receiver's failsafe (it lost the pilot's transmitter) is the pilot's
+//! link lost: its frames' switches and sticks are ignored (a failsafe
+//! frame never disarms nor hands the servos to the receiver); a pilot
+//! flying in manual hands over to the law's hold, latched (reason
+//! `rc_lost`), then the descent, until the link is back and the pilot
+//! takes over and hands back; in auto the mission flies on.
+//!
 //! Arming: the receiver's arm switch arms or disarms when it moves (and at
 //! its first frame); the ground station's arm or disarm ([`Supervisor::arm`],
 //! [`Supervisor::disarm`]) holds until the switch moves again.
@@ -88,6 +95,9 @@ pub enum Reason {
     HoldElapsed,
     /// The IMU delivers again (or the navigation recovered): auto.
     ImuRecovered,
+    /// The receiver reports its failsafe (the pilot's link lost) while the
+    /// pilot flew: the law takes over.
+    RcLost,
 }
 
 impl Reason {
@@ -105,10 +115,11 @@ impl Reason {
             Reason::Overrun => "overrun",
             Reason::HoldElapsed => "hold_elapsed",
             Reason::ImuRecovered => "imu_recovered",
+            Reason::RcLost => "rc_lost",
         }
     }
 
-    /// A small code for binary logs (0..=10, in declaration order).
+    /// A small code for binary logs (0..=11, in declaration order).
     pub fn code(self) -> u8 {
         self as u8
     }
@@ -136,6 +147,10 @@ pub struct RcInput {
     pub manual: bool,
     /// The arm switch.
     pub armed: bool,
+    /// The receiver's failsafe: it lost the pilot's transmitter and
+    /// outputs its failsafe values (its sticks and switches are not the
+    /// pilot's and are ignored).
+    pub failsafe: bool,
 }
 
 /// What the supervisor is told each sample.
@@ -243,7 +258,18 @@ impl Supervisor {
             0
         };
         self.nav_failed |= h.navigation_failed;
-        if let Some(rc) = rc {
+        if rc.is_some_and(|r| r.failsafe) {
+            // the pilot's link is lost: the receiver's switches are not the
+            // pilot's (no disarming, no manual); a pilot flying hands over
+            // to the law's hold (latched, as the other failsafes); the
+            // mission flies on in auto
+            if self.manual {
+                self.manual = false;
+                if self.armed {
+                    self.latched = Some(Reason::RcLost);
+                }
+            }
+        } else if let Some(rc) = rc {
             // the switch arms or disarms when it moves (and at the first
             // frame): between, the ground station's arm or disarm holds
             if self.rc_armed != Some(rc.armed) {
@@ -365,7 +391,55 @@ mod tests {
             servo: Input::repeat(0.1),
             manual,
             armed,
+            failsafe: false,
         }
+    }
+
+    #[test]
+    fn a_receiver_failsafe_hands_the_pilots_flight_to_the_hold() {
+        let fs = FailsafeConfig::default();
+        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
+        s.update(&health(0.0, true), Some(&rc(false, true)), 0.0);
+        // in auto: the mission flies on, the failsafe frame's switches
+        // (disarmed, manual) ignored
+        let lost = RcInput {
+            failsafe: true,
+            ..rc(true, false)
+        };
+        assert!(s.update(&health(0.1, true), Some(&lost), 0.0).is_none());
+        assert_eq!(s.mode(), Mode::Auto);
+        // the link back, the pilot takes over; then it is lost again
+        let ev = s
+            .update(&health(0.2, true), Some(&rc(true, true)), 0.4)
+            .unwrap();
+        assert_eq!(ev.to, Mode::Manual);
+        let ev = s.update(&health(0.3, true), Some(&lost), 0.4).unwrap();
+        assert_eq!(
+            (ev.from, ev.to, ev.reason),
+            (Mode::Manual, Mode::Hold, Reason::RcLost)
+        );
+        assert_eq!(s.reference(&Reference::default()).yaw_rad, 0.4);
+        assert_eq!(s.latched(), Some(Reason::RcLost));
+        // latched: a failsafe frame at auto does not resume the mission
+        let lost_auto = RcInput {
+            failsafe: true,
+            ..rc(false, true)
+        };
+        assert!(
+            s.update(&health(0.4, true), Some(&lost_auto), 0.4)
+                .is_none()
+        );
+        // the link back at manual: the pilot's; handed back: auto
+        assert_eq!(
+            s.update(&health(0.5, true), Some(&rc(true, true)), 0.4)
+                .unwrap()
+                .to,
+            Mode::Manual
+        );
+        let ev = s
+            .update(&health(0.6, true), Some(&rc(false, true)), 0.4)
+            .unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Auto, Reason::PilotAuto));
     }
 
     #[test]

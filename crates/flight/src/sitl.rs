@@ -21,10 +21,11 @@
 //! scenario's references (the ground station's mission uplink).
 
 use crate::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
-use crate::control::ControlTask;
+use crate::control::{ControlTask, StepReport};
 use crate::ground;
-use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, TtyPort, stick_us};
-use crate::runtime::{self, Mission, Pacing, RunReport, RuntimeOptions};
+use crate::mission::{Mission, References};
+use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port, stick_us};
+use crate::runtime::{self, Pacing, RunReport, RuntimeOptions};
 use crate::safety::Supervisor;
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;
@@ -33,7 +34,9 @@ use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCo
 use helicon_gcs::config::GcsSection;
 use helicon_sim::closed_loop::{
     ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, flight_computer,
+    imu_health_at,
 };
+use helicon_sim::excitation::Excitations;
 use helicon_sim::log_csv::{LogCsvError, LogWriter};
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
@@ -63,8 +66,16 @@ pub struct Faults {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Pilot {
     /// The pilot's switch goes to manual at this time (s), the sticks at
-    /// the trim.
+    /// the trim plus [`Pilot::stick_offset`].
     pub manual_from_s: Option<f64>,
+    /// The pilot's switch goes back to auto at this time (s).
+    pub manual_until_s: Option<f64>,
+    /// The sticks' offset from the trim (servo units).
+    pub stick_offset: Input,
+    /// The receiver is in failsafe over this interval (s): it lost the
+    /// transmitter and sends its failsafe values (sticks centred, the
+    /// pilot's switch at manual, the arm switch off), flagged.
+    pub rc_failsafe_s: Option<(f64, f64)>,
 }
 
 /// A SITL run's settings.
@@ -208,10 +219,10 @@ pub fn run(
     };
     let home = LocalNed::new(home_geo);
     // the on-board side opens the slave paths as its serial devices
-    let imu_port = TtyPort::open(wires.imu.slave_path(), 921_600).map_err(dev("IMU"))?;
-    let gps_port = TtyPort::open(wires.gps.slave_path(), 115_200).map_err(dev("GPS"))?;
-    let av_port = TtyPort::open(wires.avionics.slave_path(), 115_200).map_err(dev("avionics"))?;
-    let rc_port = av_port.try_clone().map_err(dev("avionics"))?;
+    let imu_port = open_port(wires.imu.slave_path(), 921_600).map_err(dev("IMU"))?;
+    let gps_port = open_port(wires.gps.slave_path(), 115_200).map_err(dev("GPS"))?;
+    let av_port = open_port(wires.avionics.slave_path(), 115_200).map_err(dev("avionics"))?;
+    let rc_port = clone_port(&av_port).map_err(dev("avionics"))?;
     let sensors = DeviceSensors::new(imu_port, gps_port, home, scenario.sensors.gps.latency_s);
     let lockstep = options.speed == Speed::Max;
     // lock-step: the sensor server reads the receiver too (deterministic);
@@ -256,12 +267,23 @@ pub fn run(
         None => {
             supervisor.arm();
             (
-                Mission::Schedule(Box::new(scenario.reference_schedule())),
+                Mission::new(References::Schedule(Box::new(
+                    scenario.reference_schedule(),
+                ))),
                 None,
             )
         }
     };
-    let task = ControlTask::new(computer, supervisor, u_trim);
+    // the scenario's flight-test inputs, flown on board
+    let mission = mission.with_excitation(
+        Excitations::new(&scenario.excitation, &scenario.name).map_err(ClosedLoopError::from)?,
+    );
+    let task = ControlTask::new(computer, supervisor, u_trim).with_imu_health(imu_health_at(
+        p,
+        ts,
+        &scenario.sensors,
+        &scenario.name,
+    )?);
     let handle = runtime::spawn(
         task,
         mission,
@@ -313,15 +335,23 @@ pub fn run(
         let t = s.t_s;
         // the receiver at 50 Hz (silent when the ground station flies)
         if s.k % 8 == 0 && server.is_none() {
-            let manual = options.pilot.manual_from_s.is_some_and(|m| t >= m);
+            let pilot = &options.pilot;
+            let manual = pilot.manual_from_s.is_some_and(|m| t >= m)
+                && pilot.manual_until_s.is_none_or(|m| t < m);
+            let failsafe = pilot.rc_failsafe_s.is_some_and(|(a, b)| t >= a && t < b);
             let mut channels_us = [1500u16; 8];
             for i in 0..4 {
-                channels_us[i] = stick_us(u_trim[i]);
+                channels_us[i] = stick_us(u_trim[i] + pilot.stick_offset[i]);
             }
             channels_us[4] = 2000; // armed
+            if failsafe {
+                channels_us = [1500u16; 8];
+                channels_us[4] = 1000;
+            }
             let frame = RcFrame {
                 seq: rc_seq,
-                autonomous: !manual,
+                autonomous: !manual && !failsafe,
+                failsafe,
                 channels_us,
                 ..RcFrame::default()
             };
@@ -410,11 +440,10 @@ pub fn run(
             }
         }
         // the telemetry of this sample (lock-step: pushed before its servo frame)
-        let mut tel = None;
+        let mut report: Option<StepReport> = None;
         while let Ok(x) = downlink.pop() {
-            let newer = tel.is_none_or(|t: helicon_core::Telemetry| x.sample >= t.sample);
-            if newer {
-                tel = Some(x);
+            if report.is_none_or(|r| x.telemetry.sample >= r.telemetry.sample) {
+                report = Some(x);
             }
             if lockstep {
                 break;
@@ -422,9 +451,20 @@ pub fn run(
         }
         received.push(u);
         samples += 1;
-        let Some(step) = hw.actuate(&u, tel.as_ref()) else {
+        let Some(mut step) = hw.actuate(&u, report.as_ref().map(|r| &r.telemetry)) else {
             break;
         };
+        // the flight software's own columns, as `helicon sim` fills them
+        if let Some(r) = &report {
+            step.row.excitation = r.excitation.into();
+            if let Some(h) = &r.imu_health {
+                step.row.imu_health = [
+                    h.vibration_rms_m_s2,
+                    h.gravity_residual_m_s2,
+                    f64::from(h.flags),
+                ];
+            }
+        }
         if step.kept {
             writer.write(&step.row)?;
         }

@@ -36,6 +36,12 @@ fn gps_loss_holds_then_descends() {
     let descent = log.texts_with("hold_elapsed: hold -> descent");
     assert_eq!(descent.len(), 1);
     assert!((descent[0].0 - hold[0].0 - 4.0).abs() < 0.003);
+    // each event is one text, the supervisor's (no generic "mode: …" or
+    // "failsafe raised: …" beside it)
+    assert_eq!(log.texts.len(), 3, "{:?}", log.texts);
+    let mode_t = log.u64s("mode", "timestamp");
+    let text_t: Vec<u64> = log.texts.iter().map(|(t, _)| *t).collect();
+    assert_eq!(text_t, mode_t);
     assert_eq!(log.u8s("failsafe", "reason"), vec![SENSOR_TIMEOUT]);
     assert_eq!(log.bools("failsafe", "active"), vec![true]);
     // hold and descent are both the log's failsafe mode; the text names them
@@ -158,4 +164,84 @@ fn the_pilots_switch_takes_the_servos_at_once() {
     let src = log.u8s("servo_output", "source");
     assert!(src[800..].iter().all(|s| *s == 1));
     assert!(src[..800].iter().all(|s| *s == 0));
+}
+
+const RC_LOSS: u8 = 5;
+const PILOT: u8 = 6;
+
+/// The receiver's failsafe while the pilot flies: the law's hold takes
+/// over at the very sample (latched, reason `rc_lost`), the failsafe
+/// frame's switches (manual, arm off) are ignored, and when the link is
+/// back the pilot's switch (still at manual) takes the servos again.
+#[test]
+fn a_receiver_failsafe_in_manual_hands_over_to_the_hold() {
+    let s = scenario("demo.toml", 4.0);
+    let prepared = prepare(&s).unwrap();
+    let mut o = options("rc_failsafe_manual");
+    o.pilot.manual_from_s = Some(1.0);
+    o.pilot.rc_failsafe_s = Some((2.0, 3.0));
+    let r = sitl::run(&s, &prepared, &o).unwrap();
+    assert_eq!(r.summary.termination, Termination::Completed);
+    let log = Ulog::read(&r.ulog);
+    let hold = log.texts_with("rc_lost: manual -> hold");
+    assert_eq!(hold.len(), 1, "{:?}", log.texts);
+    assert!((hold[0].0 - 2.0).abs() < 1e-6, "{}", hold[0].0);
+    assert_eq!(log.texts_with("rc_link: receiver failsafe").len(), 1);
+    assert_eq!(log.texts_with("rc_link: the pilot's link back").len(), 1);
+    let back = log.texts_with("pilot_manual: hold -> manual");
+    assert_eq!(back.len(), 1, "{:?}", log.texts);
+    assert!((back[0].0 - 3.0).abs() < 1e-6);
+    assert_eq!(
+        log.u8s("mode", "mode"),
+        vec![AUTOMATIC, MANUAL, FAILSAFE, MANUAL]
+    );
+    // raised by the loss, cleared by the pilot taking over
+    assert_eq!(log.u8s("failsafe", "reason"), vec![RC_LOSS, PILOT]);
+    assert_eq!(log.bools("failsafe", "active"), vec![true, false]);
+    // the servos: the pilot's until 2 s, the law's (not the receiver's
+    // failsafe sticks) over the loss, the pilot's again from 3 s
+    let trim = prepared.gains.set.u_trim;
+    let pilot = |k: usize| {
+        (0..4).all(|i| (r.received[k][i] - stick_command(stick_us(trim[i]))).abs() < 1e-9)
+    };
+    assert!((400..800).all(pilot));
+    assert!((801..1200).all(|k| !pilot(k)));
+    assert!((1200..1601).all(pilot));
+    let control = log.f64s("control", "command[0]");
+    for k in 800..1200 {
+        assert!(
+            (r.received[k][0] - control[k]).abs() <= 0.5e-4 + 1e-12,
+            "k {k}"
+        );
+    }
+    // the receiver's frames logged with the loss
+    let rc_t = log.u64s("rc_input", "timestamp");
+    let lost = log.bools("rc_input", "signal_lost");
+    for (t, l) in rc_t.iter().zip(&lost) {
+        let t = *t as f64 * 1e-6;
+        assert_eq!(*l, (2.0..3.0).contains(&t), "rc at {t} s");
+    }
+}
+
+/// The receiver's failsafe in auto: the mission flies on (no change of
+/// mode, never disarmed by the failsafe frame's arm switch), the loss
+/// and the return logged.
+#[test]
+fn a_receiver_failsafe_in_auto_flies_the_mission_on() {
+    let s = scenario("demo.toml", 3.0);
+    let prepared = prepare(&s).unwrap();
+    let mut o = options("rc_failsafe_auto");
+    o.pilot.rc_failsafe_s = Some((1.0, 2.0));
+    let r = sitl::run(&s, &prepared, &o).unwrap();
+    assert_eq!(r.summary.termination, Termination::Completed);
+    let log = Ulog::read(&r.ulog);
+    assert_eq!(log.u8s("mode", "mode"), vec![AUTOMATIC]);
+    assert_eq!(r.onboard.final_mode, "auto");
+    let lost = log.texts_with("rc_link: receiver failsafe");
+    assert_eq!(lost.len(), 1, "{:?}", log.texts);
+    assert!((lost[0].0 - 1.0).abs() < 1e-6);
+    assert_eq!(log.texts_with("rc_link: the pilot's link back").len(), 1);
+    // the law flew every sample
+    let source = log.u8s("servo_output", "source");
+    assert!(source.iter().all(|s| *s == 0));
 }

@@ -132,10 +132,18 @@ fn sitl_with_the_ground_station_arms_takes_off_and_climbs() {
         !hb.base_mode
             .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED)
     );
-    assert_eq!(
-        command(&conn, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0),
-        Some(MavResult::MAV_RESULT_ACCEPTED)
-    );
+    // the server refuses to arm before a status with a navigation solution
+    // (its first status precedes the first control step's telemetry; on a
+    // loaded machine the client can be that early): ask again until then
+    let start = Instant::now();
+    let armed = loop {
+        let r = command(&conn, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0);
+        if r != Some(MavResult::MAV_RESULT_DENIED) || start.elapsed() > Duration::from_secs(10) {
+            break r;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    assert_eq!(armed, Some(MavResult::MAV_RESULT_ACCEPTED));
     // the server takes a takeoff once the vehicle reports itself armed
     let start = Instant::now();
     loop {

@@ -13,7 +13,8 @@ use helicon_flight::config::{FailsafeConfig, StaleLimits};
 use helicon_flight::control::{ControlTask, Tick};
 use helicon_flight::records::{FlightRecord, step_records, write_record};
 use helicon_flight::safety::{RcInput, Supervisor};
-use helicon_sim::closed_loop::{Hardware, OnBoardSetup, flight_computer, prepare};
+use helicon_sim::closed_loop::{Hardware, OnBoardSetup, flight_computer, imu_health_at, prepare};
+use helicon_sim::excitation::Excitations;
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::messages::Timing;
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
@@ -41,7 +42,15 @@ fn a_control_step_and_its_log_allocate_nothing() {
     .unwrap();
     let mut sup = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
     sup.arm();
-    let mut task = ControlTask::new(computer, sup, prepared.gains.set.u_trim);
+    let health = imu_health_at(
+        prepared.model.params(),
+        prepared.gains.set.sample_time_s,
+        &s.sensors,
+        "demo",
+    )
+    .unwrap();
+    let mut task =
+        ControlTask::new(computer, sup, prepared.gains.set.u_trim).with_imu_health(health);
     let (mut tx, mut rx) = rtrb::RingBuffer::<FlightRecord>::new(4096);
     let mut log =
         FlightLog::new(std::io::sink(), &LogInfo::default(), FlushPolicy::default()).unwrap();
@@ -49,7 +58,11 @@ fn a_control_step_and_its_log_allocate_nothing() {
         servo: prepared.gains.set.u_trim,
         manual: false,
         armed: true,
+        failsafe: false,
     };
+    // the flight-test excitation of ident-hover-sweep (S_lon sweep from 1 s)
+    let sweep = Scenario::from_file(&path.with_file_name("ident-hover-sweep.toml")).unwrap();
+    let excitation = Excitations::new(&sweep.excitation, "ident-hover-sweep").unwrap();
     let mut counted = 0;
     let mut steps = 0;
     let mut records = 0;
@@ -62,7 +75,7 @@ fn a_control_step_and_its_log_allocate_nothing() {
             reference: sample.reference,
         };
         let before = allocations();
-        let out = task.step(&tick);
+        let out = task.step_with(&tick, &excitation);
         let timing = Timing {
             timestamp: (sample.t_s * 1e6).round() as u64,
             sample: steps,
@@ -84,9 +97,9 @@ fn a_control_step_and_its_log_allocate_nothing() {
         }
     }
     assert_eq!(steps, 4801);
-    // per step: IMU, control, navigation, servo, timing; magnetometer at
+    // per step: IMU, IMU health, control, navigation, excitation, servo, timing; magnetometer at
     // 100 Hz, GPS at 5 Hz, receiver at 50 Hz
-    assert!(records > 5 * 4800, "{records} records");
+    assert!(records > 7 * 4800, "{records} records");
     assert_eq!(counted, 0, "allocations in 4400 steady-state control steps");
 }
 
@@ -96,7 +109,7 @@ fn a_control_step_and_its_log_allocate_nothing() {
 /// with a heartbeat every sample, over the samples after the first second.
 #[test]
 fn a_ground_station_step_allocates_nothing() {
-    use helicon_flight::runtime::{LastStep, Mission};
+    use helicon_flight::mission::{LastStep, Mission, References};
     use helicon_gcs::link::{Downlink, Uplink, Vehicle, channel};
     use helicon_gcs::navigator::{Navigator, NavigatorConfig};
 
@@ -123,7 +136,11 @@ fn a_ground_station_step_allocates_nothing() {
     let mut task = ControlTask::new(computer, sup, u_trim);
     let (vehicle_end, mut server_end) = channel(64);
     let nav = Navigator::new(NavigatorConfig::default()).unwrap();
-    let mut mission = Mission::Ground(Box::new(Vehicle::new(nav, vehicle_end, 1)));
+    let mut mission = Mission::new(References::Ground(Box::new(Vehicle::new(
+        nav,
+        vehicle_end,
+        1,
+    ))));
     let mut last = LastStep {
         telemetry: None,
         mode: task.mode(),
@@ -167,7 +184,7 @@ fn a_ground_station_step_allocates_nothing() {
     }
     // armed by the ground station, climbing at the end
     assert_eq!(task.mode().as_str(), "auto");
-    let Mission::Ground(v) = &mission else {
+    let References::Ground(v) = mission.references() else {
         unreachable!()
     };
     assert_eq!(v.navigator().mode(), helicon_gcs::NavMode::Takeoff);

@@ -91,6 +91,9 @@ pub enum VehicleEvent {
     Armed(bool),
     /// The flight software's mode changed (name, reason).
     FlightMode(&'static str, &'static str),
+    /// A warning of the flight software for the operator (a status text
+    /// at warning severity), e.g. the IMU health monitor's.
+    Warning(&'static str),
 }
 
 /// From the vehicle to the ground station.
@@ -201,6 +204,12 @@ impl Vehicle {
     /// server's [`crate::server::ServerHandle::processed`] catches up).
     pub fn sent(&self) -> u64 {
         self.sent
+    }
+
+    /// Tell the operator `event` (time `t_s`); never blocks (a full ring
+    /// drops it and counts it).
+    pub fn notify(&mut self, t_s: f64, event: VehicleEvent) {
+        self.send(Downlink::Event(t_s, event));
     }
 
     fn send(&mut self, d: Downlink) {

@@ -314,6 +314,9 @@ impl Server {
                     if a { "armed" } else { "disarmed" },
                 );
             }
+            VehicleEvent::Warning(text) => {
+                self.text(MavSeverity::MAV_SEVERITY_WARNING, text);
+            }
             VehicleEvent::FlightMode(name, reason) => {
                 self.text(
                     MavSeverity::MAV_SEVERITY_WARNING,

@@ -7,8 +7,8 @@
 //! `cargo run -p helicon-ulog --example ulog_sample -- OUT.ulg`
 
 use helicon_ulog::messages::{
-    Control, FailsafeReason, FlightMode, Mode, Navigation, RcInput, SensorGps, SensorImu,
-    SensorMag, ServoOutput, Timing,
+    Control, EstimatorBias, Excitation, FailsafeReason, FlightMode, ImuHealth, Mode, Navigation,
+    RcInput, SensorGps, SensorImu, SensorMag, ServoOutput, Timing,
 };
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogLevel, LogRecord, UlogWriter, WriteError};
 
@@ -67,6 +67,27 @@ pub fn step_records(k: u64) -> Vec<LogRecord> {
             log_dropped: 0,
         }),
     ];
+    if k % 10 == 3 {
+        v.push(LogRecord::Excitation(Excitation {
+            timestamp: ts,
+            offset: [f(k, 0) * 1e-2, 0.0, -f(k, 2) * 1e-2, 0.0],
+            active: k < 40,
+        }));
+        v.push(LogRecord::ImuHealth(ImuHealth {
+            timestamp: ts,
+            vibration_rms_m_s2: f(k, 5),
+            gravity_residual_m_s2: -f(k, 6) * 1e-2,
+            peak_fraction: 0.125,
+            flags: (k % 16) as u8,
+        }));
+        v.push(LogRecord::EstimatorBias(EstimatorBias {
+            timestamp: ts,
+            gyro_rad_s: [f(k, 1) * 1e-3, -2e-3, 1e-4],
+            accel_m_s2: [0.05, f(k, 2) * 1e-2, -0.1],
+            gyro_sigma_rad_s: [1e-3; 3],
+            accel_sigma_m_s2: [0.02, 0.02, f(k, 3).abs()],
+        }));
+    }
     if k % 4 == 0 {
         v.push(LogRecord::Mag(SensorMag {
             timestamp: ts,

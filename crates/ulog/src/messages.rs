@@ -14,12 +14,17 @@
 //! | `timing` | control step | the runtime (wake-up jitter, compute time, misses) |
 //! | `failsafe` | event | the runtime; also a LOGGING message |
 //! | `mode` | event | the runtime; also a LOGGING message |
+//! | `excitation` | control step of a mission with `[[excitation]]` | the servo offset added to the law's command |
+//! | `imu_health` | control step with an IMU sample | `helicon_core::imu_health::ImuHealth` |
+//! | `estimator_bias` | control step of a navigation that estimates IMU biases (the ESKF) | [`NavigationSolution::imu_bias`] |
 //!
 //! Units are SI, frames NED (navigation) and FRD (body); times on the
 //! on-board clock, `timestamp` in µs. Physical quantities are `double` so a
 //! log replays bit for bit (the navigation can be re-run from
 //! `sensor_*`). At 400 Hz (magnetometer 100 Hz, RC 50 Hz, GPS 5 Hz) the
-//! whole set comes to about 231 kB/s.
+//! whole set comes to about 231 kB/s; the IMU health adds 15.2 kB/s, the
+//! ESKF's biases 43.6 kB/s and an identification flight's excitation
+//! 18.4 kB/s.
 
 use crate::error::WriteError;
 use crate::format::Record;
@@ -27,7 +32,7 @@ use crate::spec::LogLevel;
 use crate::ulog_message;
 use crate::writer::{FlushPolicy, Topic, UlogWriter, timestamp_us};
 use helicon_core::computer::Telemetry;
-use helicon_core::navigation::NavigationSolution;
+use helicon_core::navigation::{ImuBiasEstimate, NavigationSolution};
 use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame};
 use helicon_core::state::NM;
 use std::fs::File;
@@ -190,6 +195,66 @@ ulog_message! {
         mode: u8,
         /// Previous mode.
         previous: u8,
+    }
+}
+
+ulog_message! {
+    /// The flight-test excitation of a control step (`[[excitation]]`):
+    /// the servo offset added to the law's command before saturation.
+    pub struct Excitation: "excitation" {
+        /// Time of the control step (µs).
+        timestamp: u64,
+        /// Offset [S_col S_lat S_lon S_tr] in the model's input units
+        /// (zeros when not applied).
+        offset: [f64; 4],
+        /// The excitation runs (auto, its clock started and not ended).
+        active: bool,
+    }
+}
+
+ulog_message! {
+    /// The IMU health monitor after a sample (vibration, hidden
+    /// accelerometer saturation; `helicon_core::imu_health`).
+    pub struct ImuHealth: "imu_health" {
+        /// Time of the IMU sample (µs).
+        timestamp: u64,
+        /// RMS of the in-band residue (m/s²).
+        vibration_rms_m_s2: f64,
+        /// |running mean of the specific force| − g (m/s²).
+        gravity_residual_m_s2: f64,
+        /// Decaying peak of the largest axis over the output range (0..1).
+        peak_fraction: f64,
+        /// Flags: 1 vibration, 2 near range, 4 gravity deficit, 8 settling.
+        flags: u8,
+    }
+}
+
+ulog_message! {
+    /// The IMU biases a navigation estimates (the ESKF), body axes.
+    pub struct EstimatorBias: "estimator_bias" {
+        /// Time of the control step (µs).
+        timestamp: u64,
+        /// Gyro bias (rad/s).
+        gyro_rad_s: [f64; 3],
+        /// Accelerometer bias (m/s²).
+        accel_m_s2: [f64; 3],
+        /// 1σ of the gyro bias (rad/s).
+        gyro_sigma_rad_s: [f64; 3],
+        /// 1σ of the accelerometer bias (m/s²).
+        accel_sigma_m_s2: [f64; 3],
+    }
+}
+
+impl EstimatorBias {
+    /// The record of a navigation's bias estimate at time `t_s`.
+    pub fn from_estimate(t_s: f64, b: &ImuBiasEstimate) -> Result<Self, WriteError> {
+        Ok(EstimatorBias {
+            timestamp: timestamp_us(t_s, "estimator_bias")?,
+            gyro_rad_s: vec3(&b.gyro_rad_s),
+            accel_m_s2: vec3(&b.accel_m_s2),
+            gyro_sigma_rad_s: vec3(&b.gyro_sigma_rad_s),
+            accel_sigma_m_s2: vec3(&b.accel_sigma_m_s2),
+        })
     }
 }
 
@@ -414,6 +479,12 @@ pub enum LogRecord {
     Failsafe(Failsafe),
     /// `mode` (also logged as text)
     Mode(Mode),
+    /// `excitation`
+    Excitation(Excitation),
+    /// `imu_health`
+    ImuHealth(ImuHealth),
+    /// `estimator_bias`
+    EstimatorBias(EstimatorBias),
 }
 
 /// Identification written into the log's INFO messages.
@@ -452,6 +523,9 @@ struct Topics {
     timing: Topic<Timing>,
     failsafe: Topic<Failsafe>,
     mode: Topic<Mode>,
+    excitation: Topic<Excitation>,
+    imu_health: Topic<ImuHealth>,
+    estimator_bias: Topic<EstimatorBias>,
 }
 
 /// The flight log: a [`UlogWriter`] with the whole message set declared
@@ -499,6 +573,9 @@ impl<W: Write> FlightLog<W> {
         w.add_format::<Timing>()?;
         w.add_format::<Failsafe>()?;
         w.add_format::<Mode>()?;
+        w.add_format::<Excitation>()?;
+        w.add_format::<ImuHealth>()?;
+        w.add_format::<EstimatorBias>()?;
         let topics = Topics {
             control: w.add_logged(0)?,
             navigation: w.add_logged(0)?,
@@ -510,6 +587,9 @@ impl<W: Write> FlightLog<W> {
             timing: w.add_logged(0)?,
             failsafe: w.add_logged(0)?,
             mode: w.add_logged(0)?,
+            excitation: w.add_logged(0)?,
+            imu_health: w.add_logged(0)?,
+            estimator_bias: w.add_logged(0)?,
         };
         Ok(FlightLog { writer: w, topics })
     }
@@ -537,6 +617,9 @@ impl<W: Write> FlightLog<W> {
             LogRecord::Timing(x) => w.write(t.timing, x),
             LogRecord::Failsafe(x) => w.write(t.failsafe, x),
             LogRecord::Mode(x) => w.write(t.mode, x),
+            LogRecord::Excitation(x) => w.write(t.excitation, x),
+            LogRecord::ImuHealth(x) => w.write(t.imu_health, x),
+            LogRecord::EstimatorBias(x) => w.write(t.estimator_bias, x),
         }
     }
 
@@ -641,7 +724,7 @@ impl std::fmt::Write for StackText {
 
 /// The sizes of the message set's records (bytes logged per message,
 /// without the 5-byte header and id).
-pub fn record_sizes() -> [(&'static str, usize); 10] {
+pub fn record_sizes() -> [(&'static str, usize); 13] {
     [
         (Control::NAME, Control::SIZE),
         (Navigation::NAME, Navigation::SIZE),
@@ -653,6 +736,9 @@ pub fn record_sizes() -> [(&'static str, usize); 10] {
         (Timing::NAME, Timing::SIZE),
         (Failsafe::NAME, Failsafe::SIZE),
         (Mode::NAME, Mode::SIZE),
+        (Excitation::NAME, Excitation::SIZE),
+        (ImuHealth::NAME, ImuHealth::SIZE),
+        (EstimatorBias::NAME, EstimatorBias::SIZE),
     ]
 }
 
@@ -682,5 +768,10 @@ mod tests {
             + 5 * size("sensor_gps")
             + 10 * 11; // a SYNC per flush
         assert_eq!(per_s.div_ceil(1000), 231); // kB/s
+        // the on-board runtime's additions, each per control step
+        assert_eq!(size("imu_health"), 5 + 8 + 3 * 8 + 1);
+        assert_eq!(400 * size("imu_health"), 15_200);
+        assert_eq!(400 * size("estimator_bias"), 400 * (5 + 8 + 12 * 8));
+        assert_eq!(400 * size("excitation"), 400 * (5 + 8 + 4 * 8 + 1));
     }
 }

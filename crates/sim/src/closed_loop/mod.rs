@@ -440,15 +440,33 @@ fn imu_health_monitor(
     if !scenario.controller.fusion {
         return Ok(None);
     }
-    let cfg = ImuHealthConfig::new(
-        prepared.model.params().environment.g_m_s2,
+    imu_health_at(
+        prepared.model.params(),
         prepared.gains.set.sample_time_s,
-        scenario.sensors.imu.accel.range,
+        &scenario.sensors,
+        "<scenario>",
+    )
+    .map(Some)
+}
+
+/// The IMU health monitor the flight software runs (`helicon sim`, SITL
+/// and the on-board program alike): local gravity of `params`, one sample
+/// per control period, the accelerometer range of `sensors` (`file` names
+/// the configuration in the error).
+pub fn imu_health_at(
+    params: &Params,
+    sample_time_s: f64,
+    sensors: &SensorConfig,
+    file: &str,
+) -> Result<ImuHealthMonitor, ClosedLoopError> {
+    let cfg = ImuHealthConfig::new(
+        params.environment.g_m_s2,
+        sample_time_s,
+        sensors.imu.accel.range,
     );
-    match ImuHealthMonitor::new(cfg) {
-        Some(m) => Ok(Some(m)),
-        None => Err(helicon_model::ConfigError::invalid(
-            "<scenario>",
+    ImuHealthMonitor::new(cfg).ok_or_else(|| {
+        helicon_model::ConfigError::invalid(
+            file,
             "sensors.imu.accel.range",
             cfg.accel_range_m_s2,
             format!(
@@ -456,8 +474,8 @@ fn imu_health_monitor(
                 cfg.first_invalid().unwrap_or("setting")
             ),
         )
-        .into()),
-    }
+        .into()
+    })
 }
 
 fn fly_with(
