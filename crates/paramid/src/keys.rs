@@ -1,0 +1,38 @@
+//! Model parameters by their `helicon params` key (`section.key`, e.g.
+//! `main_rotor.lift_slope_per_rad`), read and set through the model's
+//! parameter table.
+
+use helicon_model::params::{Descriptor, Rule, descriptors};
+use helicon_model::Params;
+
+/// The descriptor of `key` (`section.key`), if it is a parameter.
+pub fn find(key: &str) -> Option<&'static Descriptor> {
+    descriptors().find(|d| {
+        key.len() == d.section.len() + 1 + d.key.len()
+            && key.starts_with(d.section)
+            && key[d.section.len()..].starts_with('.')
+            && key.ends_with(d.key)
+    })
+}
+
+/// The full key `section.key` of a descriptor.
+pub fn full_key(d: &Descriptor) -> String {
+    format!("{}.{}", d.section, d.key)
+}
+
+/// Whether the parameter is continuous (not a count or a switch), so that
+/// it can be identified.
+pub fn is_continuous(d: &Descriptor) -> bool {
+    !matches!(d.rule, Rule::Count | Rule::Flag)
+}
+
+/// The value of a parameter.
+pub fn get(p: &Params, d: &Descriptor) -> f64 {
+    let mut copy = *p;
+    *(d.field)(&mut copy)
+}
+
+/// Set a parameter (no validation: see [`Params::validate`]).
+pub fn set(p: &mut Params, d: &Descriptor, v: f64) {
+    *(d.field)(p) = v;
+}

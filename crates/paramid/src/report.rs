@@ -1,0 +1,1 @@
+//! Outputs (placeholder, filled below).

@@ -1,0 +1,1 @@
+//! Time-domain verification (placeholder, filled below).

@@ -1,0 +1,197 @@
+//! Noise-free identification: the "measurements" are the truth's own
+//! linearised responses (C(zI − Φ)⁻¹Γ at its trims) at two operating points,
+//! 16 responses each; starting from the nominal Bergen Twin, bounded
+//! Levenberg–Marquardt must return the truth's parameters.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use helicon_model::Params;
+use helicon_paramid::config::{IdentConfig, Optimiser};
+use helicon_paramid::cost::Cost;
+use helicon_paramid::data::from_model;
+use helicon_paramid::fit::{FitOptions, identify};
+use helicon_paramid::keys;
+use std::path::Path;
+
+/// Two operating points (hover, 5 m/s forward), 4 servos × p, q, r, w,
+/// 10 parameters.
+pub const IDENT_2X16X10: &str = r#"
+points = 20
+[[operating_point]]
+name = "hover"
+log = "unused.csv"
+[[operating_point]]
+name = "fwd5"
+velocity_ned_m_s = [5.0, 0.0, 0.0]
+log = "unused.csv"
+
+[[response]]
+input = "S_col"
+output = "w"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_col"
+output = "r"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_col"
+output = "p"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_col"
+output = "q"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_lat"
+output = "p"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_lat"
+output = "q"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_lat"
+output = "r"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_lat"
+output = "w"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_lon"
+output = "q"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_lon"
+output = "p"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_lon"
+output = "r"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_lon"
+output = "w"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_tr"
+output = "r"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_tr"
+output = "p"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_tr"
+output = "q"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_tr"
+output = "w"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+
+[[parameter]]
+key = "main_rotor.lift_slope_per_rad"
+min = 3.0
+max = 12.0
+[[parameter]]
+key = "main_rotor.drag_coefficient"
+min = 0.004
+max = 0.016
+[[parameter]]
+key = "main_rotor.blade_inertia_kg_m2"
+min = 0.15
+max = 0.6
+[[parameter]]
+key = "main_rotor.spring_n_m_per_rad"
+min = 100.0
+max = 400.0
+[[parameter]]
+key = "stabilizer_bar.paddle_inertia_kg_m2"
+min = 0.0025
+max = 0.01
+[[parameter]]
+key = "body.ixx_kg_m2"
+min = 0.1
+max = 0.4
+[[parameter]]
+key = "body.iyy_kg_m2"
+min = 0.31
+max = 1.24
+[[parameter]]
+key = "body.izz_kg_m2"
+min = 0.3
+max = 1.2
+[[parameter]]
+key = "servo.longitudinal.omega_n_rad_s"
+min = 50.0
+max = 200.0
+[[parameter]]
+key = "tail_rotor.lift_slope_per_rad"
+min = 3.0
+max = 12.0
+"#;
+
+fn truth_a() -> Params {
+    Params::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../params/truths/truth-a.toml"))
+        .unwrap()
+}
+
+fn check(optimiser: Optimiser, tol: f64) {
+    let cfg = IdentConfig::from_toml_str(IDENT_2X16X10, "noise-free.toml", Path::new(".")).unwrap();
+    assert_eq!(cfg.response_count(), 32);
+    let truth = truth_a();
+    let data = from_model(&cfg, &truth).unwrap();
+    let cost = Cost::new(&cfg, &data).unwrap();
+    let t0 = std::time::Instant::now();
+    let fit = identify(
+        &cost,
+        &FitOptions {
+            optimiser,
+            max_iterations: 100,
+            auto_fix: false,
+        },
+    )
+    .unwrap();
+    let elapsed = t0.elapsed().as_secs_f64();
+    let evals: usize = fit.passes.iter().map(|p| p.evaluations).sum();
+    println!(
+        "{optimiser:?}: cost {:.3e} -> {:.3e}, {evals} cost evaluations, {elapsed:.2} s ({})",
+        fit.cost_start, fit.cost_final, fit.passes[0].termination
+    );
+    let mut worst: f64 = 0.0;
+    for p in &fit.parameters {
+        let want = keys::get(&truth, keys::find(&p.key).unwrap());
+        let rel = (p.identified - want).abs() / want.abs();
+        println!(
+            "  {:40} start {:10.5} identified {:12.7} truth {:10.5} rel {:.2e} CR {:?} %",
+            p.key, p.start, p.identified, want, rel, p.cramer_rao_pct
+        );
+        worst = worst.max(rel);
+    }
+    assert!(worst < tol, "worst relative error {worst:e}");
+    assert!(fit.cost_final < 1e-10 * fit.cost_start, "{} -> {}", fit.cost_start, fit.cost_final);
+}
+
+/// Tolerance 1e-6 relative (the issue's requirement). The floor is the
+/// trim's residual tolerance (1e-10) and the linearisation's round-off
+/// (~1e-11 relative), amplified by the conditioning of the fit.
+#[test]
+fn noise_free_lm_recovers_the_truth_to_1e_6() {
+    check(Optimiser::Lm, 1e-6);
+}
