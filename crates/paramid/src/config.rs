@@ -10,6 +10,7 @@
 //! start = "params.toml"      # start parameters (default: the Bergen Twin)
 //! windows_s = [24.0, 12.0, 6.0]
 //! points = 40                # log-spaced frequencies per response
+//! min_points = 5             # responses with fewer coherent points are left out
 //!
 //! [[operating_point]]
 //! name = "hover"
@@ -179,6 +180,9 @@ fn default_windows() -> Vec<f64> {
 fn default_points() -> usize {
     40
 }
+fn default_min_points() -> usize {
+    5
+}
 fn default_iterations() -> usize {
     100
 }
@@ -218,6 +222,8 @@ struct Raw {
     windows_s: Vec<f64>,
     #[serde(default = "default_points")]
     points: usize,
+    #[serde(default = "default_min_points")]
+    min_points: usize,
     #[serde(default)]
     operating_point: Vec<OperatingPoint>,
     #[serde(default)]
@@ -287,6 +293,10 @@ pub struct IdentConfig {
     pub windows_s: Vec<f64>,
     /// Frequencies per response.
     pub points: usize,
+    /// A response with fewer points above the coherence threshold is left
+    /// out (a few isolated coherent points of an off-axis response are
+    /// chance, not signal).
+    pub min_points: usize,
     /// Operating points (paths resolved), each with its responses.
     pub operating_points: Vec<OperatingPoint>,
     /// Parameters.
@@ -391,6 +401,7 @@ impl IdentConfig {
             max_iterations: raw.max_iterations,
             windows_s: raw.windows_s,
             points: raw.points,
+            min_points: raw.min_points,
             operating_points,
             parameters,
             verification,
@@ -439,6 +450,9 @@ fn check_numbers(raw: &Raw, file: &str) -> Result<(), ConfigError> {
     }
     if !(2..=2000).contains(&raw.points) {
         return Err(invalid(file, "points", raw.points as f64, "must be in 2..=2000"));
+    }
+    if !(1..=raw.points).contains(&raw.min_points) {
+        return Err(invalid(file, "min_points", raw.min_points as f64, "must be in 1..=points"));
     }
     if raw.windows_s.is_empty() {
         return Err(text_invalid(file, "windows_s", "[]", "needs at least one window length"));

@@ -83,6 +83,8 @@ pub struct Cost {
     pub base: Params,
     /// The parameters identified.
     pub parameters: Vec<Parameter>,
+    /// Responses left out (no point above the coherence threshold), with why.
+    pub skipped: Vec<String>,
 }
 
 /// The residual scales of one point: (magnitude, phase).
@@ -98,10 +100,12 @@ fn scales(form: CostForm, wk: f64, wc: f64, gamma2: f64, n: usize) -> (f64, f64)
 
 impl Cost {
     /// The cost of `cfg` on the measured `data` (one per operating point,
-    /// in order). Errors if a response keeps no point above the coherence
-    /// threshold or the residuals are fewer than the parameters.
+    /// in order). Responses that keep fewer than `min_points` points above the
+    /// coherence threshold are left out (listed in [`Cost::skipped`]); errors if the
+    /// residuals are fewer than the parameters.
     pub fn new(cfg: &IdentConfig, data: &[PointData]) -> Result<Self> {
         let mut points = Vec::with_capacity(data.len());
+        let mut skipped = Vec::new();
         for (op, d) in cfg.operating_points.iter().zip(data) {
             let mut responses = Vec::with_capacity(d.responses.len());
             for m in &d.responses {
@@ -113,13 +117,16 @@ impl Cost {
                             && f.h[k].norm().is_finite()
                     })
                     .collect();
-                if idx.is_empty() {
-                    return Err(ParamIdError::Fit(format!(
-                        "operating point `{}`, response {}: no frequency with γ² > {} (excite this input, or drop the response)",
+                if idx.len() < cfg.min_points {
+                    skipped.push(format!(
+                        "operating point `{}`, response {}: {} frequencies with γ² > {} (min_points = {}), left out of the cost",
                         op.name,
                         m.response.label(),
-                        cfg.min_coherence
-                    )));
+                        idx.len(),
+                        cfg.min_coherence,
+                        cfg.min_points
+                    ));
+                    continue;
                 }
                 let sc: Vec<(f64, f64)> = idx
                     .iter()
@@ -148,6 +155,7 @@ impl Cost {
             preset: cfg.preset,
             base: cfg.start,
             parameters: cfg.parameters.clone(),
+            skipped,
         };
         if cost.residual_count() <= cfg.parameters.len() {
             return Err(ParamIdError::Fit(format!(

@@ -17,6 +17,7 @@
 //!   data cannot determine;
 //! - [`report`]: `identified.toml`, `report.json`, `report.md`;
 //! - [`verify`]: time-domain verification on doublet logs (Theil coefficient);
+//! - [`demo`]: the programme end to end on a simulated helicopter;
 //! - [`keys`]: parameters by their `helicon params` key.
 
 pub mod config;
@@ -26,6 +27,7 @@ pub mod error;
 pub mod fit;
 pub mod keys;
 pub mod linear;
+pub mod demo;
 pub mod report;
 pub mod verify;
 
