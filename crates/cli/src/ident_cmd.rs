@@ -30,6 +30,10 @@ pub enum IdentCommand {
     Tf(TfArgs),
     /// Sample a flight-test input (sweep, multisine, doublet, 3211) from a TOML file to CSV `t_s,value`.
     Input(InputArgs),
+    /// Identify the model's physical parameters from flight responses at several operating points (IDENT.toml; thesis ch. 11).
+    Fit(crate::ident_fit::FitArgs),
+    /// The identification programme end to end on a simulated helicopter with known parameters.
+    Demo(crate::ident_fit::DemoArgs),
 }
 
 /// `helicon ident input`.
@@ -157,6 +161,8 @@ pub fn run(args: &IdentArgs) -> Result<()> {
         IdentCommand::Frf(a) => run_frf(a),
         IdentCommand::Tf(a) => run_tf(a),
         IdentCommand::Input(a) => run_input(a),
+        IdentCommand::Fit(a) => crate::ident_fit::run_fit(a),
+        IdentCommand::Demo(a) => crate::ident_fit::run_demo_cmd(a),
     }
 }
 

@@ -8,6 +8,7 @@ mod demo;
 mod design_cmd;
 mod gcs_cmd;
 mod ident_cmd;
+mod ident_fit;
 mod log_cmd;
 mod mc_cmd;
 mod model_cmd;

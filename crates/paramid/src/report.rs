@@ -204,8 +204,13 @@ pub fn markdown(r: &Report) -> String {
     let _ = writeln!(s, "# Parameter identification\n");
     let _ = writeln!(
         s,
-        "From `{}`: cost {:?}, optimiser {:?}, γ² > {}, {} residuals; fit {:.2} s.\n",
-        r.ident_file, r.cost_form, r.optimiser, r.min_coherence, r.residuals, r.fit_time_s
+        "From `{}`: cost `{}`, optimiser `{}`, γ² > {}, {} residuals; fit {:.2} s.\n",
+        r.ident_file,
+        format!("{:?}", r.cost_form).to_lowercase(),
+        format!("{:?}", r.optimiser).to_lowercase(),
+        r.min_coherence,
+        r.residuals,
+        r.fit_time_s
     );
     let _ = writeln!(
         s,
