@@ -14,138 +14,7 @@ use std::path::Path;
 
 /// Two operating points (hover, 5 m/s forward), 4 servos × p, q, r, w,
 /// 10 parameters.
-pub const IDENT_2X16X10: &str = r#"
-points = 20
-[[operating_point]]
-name = "hover"
-log = "unused.csv"
-[[operating_point]]
-name = "fwd5"
-velocity_ned_m_s = [5.0, 0.0, 0.0]
-log = "unused.csv"
-
-[[response]]
-input = "S_col"
-output = "w"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_col"
-output = "r"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_col"
-output = "p"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_col"
-output = "q"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_lat"
-output = "p"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_lat"
-output = "q"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_lat"
-output = "r"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_lat"
-output = "w"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_lon"
-output = "q"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_lon"
-output = "p"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_lon"
-output = "r"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_lon"
-output = "w"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_tr"
-output = "r"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_tr"
-output = "p"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_tr"
-output = "q"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-[[response]]
-input = "S_tr"
-output = "w"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 25.0
-
-[[parameter]]
-key = "main_rotor.lift_slope_per_rad"
-min = 3.0
-max = 12.0
-[[parameter]]
-key = "main_rotor.drag_coefficient"
-min = 0.004
-max = 0.016
-[[parameter]]
-key = "main_rotor.blade_inertia_kg_m2"
-min = 0.15
-max = 0.6
-[[parameter]]
-key = "main_rotor.spring_n_m_per_rad"
-min = 100.0
-max = 400.0
-[[parameter]]
-key = "stabilizer_bar.paddle_inertia_kg_m2"
-min = 0.0025
-max = 0.01
-[[parameter]]
-key = "body.ixx_kg_m2"
-min = 0.1
-max = 0.4
-[[parameter]]
-key = "body.iyy_kg_m2"
-min = 0.31
-max = 1.24
-[[parameter]]
-key = "body.izz_kg_m2"
-min = 0.3
-max = 1.2
-[[parameter]]
-key = "servo.longitudinal.omega_n_rad_s"
-min = 50.0
-max = 200.0
-[[parameter]]
-key = "tail_rotor.lift_slope_per_rad"
-min = 3.0
-max = 12.0
-"#;
+pub const IDENT_2X16X10: &str = include_str!("../fixtures/noise_free.toml");
 
 fn truth_a() -> Params {
     Params::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../params/truths/truth-a.toml"))
@@ -194,4 +63,12 @@ fn check(optimiser: Optimiser, tol: f64) {
 #[test]
 fn noise_free_lm_recovers_the_truth_to_1e_6() {
     check(Optimiser::Lm, 1e-6);
+}
+
+/// The simplex (MOSCA's optimiser) on the same problem: 20 times as many
+/// cost evaluations as LM (2891 against 144, 10 s against 0.9 s on the shared
+/// 2-core machine), the same answer (worst 1.4e-7 relative).
+#[test]
+fn noise_free_simplex_recovers_the_truth_to_1e_6() {
+    check(Optimiser::Simplex, 1e-6);
 }
