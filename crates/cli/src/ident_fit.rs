@@ -87,7 +87,11 @@ pub fn run_demo_cmd(a: &DemoArgs) -> Result<()> {
             want,
             p.identified,
             100.0 * (p.identified - want) / want,
-            if p.identifiable { "" } else { "  (not identifiable)" }
+            if p.identifiable {
+                ""
+            } else {
+                "  (not identifiable)"
+            }
         );
     }
     Ok(())
@@ -124,7 +128,9 @@ fn finish(id: &Identification, out: &Path, elapsed_s: f64) -> Result<()> {
             f(p.cramer_rao_pct),
             f(p.insensitivity_pct),
             if p.identifiable { "yes" } else { "NO" },
-            p.reason.as_deref().map_or(String::new(), |s| format!(" ({s})"))
+            p.reason
+                .as_deref()
+                .map_or(String::new(), |s| format!(" ({s})"))
         );
     }
     for v in &r.verification {
@@ -145,7 +151,13 @@ fn finish(id: &Identification, out: &Path, elapsed_s: f64) -> Result<()> {
 
 fn file_stem(s: &str) -> String {
     s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect()
 }
 
@@ -189,9 +201,15 @@ fn bode_overlays(id: &Identification, out: &Path) -> Result<usize> {
         for (k, r) in pt.responses.iter().enumerate() {
             let f = &measured[p][k].frf;
             let lw = |v: &[f64]| -> Vec<(f64, f64)> {
-                f.omega_rad_s.iter().zip(v).map(|(w, y)| (w.log10(), *y)).collect()
+                f.omega_rad_s
+                    .iter()
+                    .zip(v)
+                    .map(|(w, y)| (w.log10(), *y))
+                    .collect()
             };
-            let db = |h: &[Complex64]| -> Vec<f64> { h.iter().map(|z| 20.0 * z.norm().log10()).collect() };
+            let db = |h: &[Complex64]| -> Vec<f64> {
+                h.iter().map(|z| 20.0 * z.norm().log10()).collect()
+            };
             let ph_data = f.phase_deg();
             let near = ph_data.first().copied().unwrap_or(0.0);
             let (mag_d, ph_d, coh) = (lw(&f.mag_db()), lw(&ph_data), lw(&f.coherence));
@@ -204,7 +222,11 @@ fn bode_overlays(id: &Identification, out: &Path) -> Result<usize> {
                 color: [127, 127, 127],
             });
             pc.y_include = vec![0.0, 1.0];
-            let path = out.join(format!("bode_{}_{}.png", file_stem(&pt.name), file_stem(&r.label)));
+            let path = out.join(format!(
+                "bode_{}_{}.png",
+                file_stem(&pt.name),
+                file_stem(&r.label)
+            ));
             Figure::new(&format!("{}: {}", pt.name, r.label), "log10 ω [rad/s]")
                 .panel(
                     Panel::new("magnitude [dB]")
@@ -238,7 +260,11 @@ fn verification_plots(id: &Identification, out: &Path) -> Result<usize> {
             })
             .collect();
         let mut fig = Figure::new(
-            &format!("verification {} ({}), perturbations from the first sample", i + 1, v.operating_point),
+            &format!(
+                "verification {} ({}), perturbations from the first sample",
+                i + 1,
+                v.operating_point
+            ),
             "t − t0 [s]",
         );
         for (o, s) in v.outputs.iter().zip(&series) {
@@ -250,7 +276,8 @@ fn verification_plots(id: &Identification, out: &Path) -> Result<usize> {
             );
         }
         let path = out.join(format!("verify_{}.png", i + 1));
-        fig.write(&path).with_context(|| path.display().to_string())?;
+        fig.write(&path)
+            .with_context(|| path.display().to_string())?;
     }
     Ok(id.verification.len())
 }

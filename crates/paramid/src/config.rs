@@ -368,7 +368,12 @@ impl IdentConfig {
             }
             v.log = base.join(&v.log);
             if v.outputs.is_empty() {
-                return Err(text_invalid(file, f("outputs"), "[]", "needs at least one output"));
+                return Err(text_invalid(
+                    file,
+                    f("outputs"),
+                    "[]",
+                    "needs at least one output",
+                ));
             }
             for (k, o) in v.outputs.iter().enumerate() {
                 let r = Response {
@@ -430,7 +435,12 @@ fn check_span(file: &str, field: &str, a: Option<f64>, b: Option<f64>) -> Result
 
 fn check_numbers(raw: &Raw, file: &str) -> Result<(), ConfigError> {
     if !(raw.min_coherence.is_finite() && (0.0..1.0).contains(&raw.min_coherence)) {
-        return Err(invalid(file, "min_coherence", raw.min_coherence, "must be in [0, 1)"));
+        return Err(invalid(
+            file,
+            "min_coherence",
+            raw.min_coherence,
+            "must be in [0, 1)",
+        ));
     }
     for (name, v) in [("w_kappa", raw.w_kappa), ("w_chi", raw.w_chi)] {
         if !(v.is_finite() && v >= 0.0) {
@@ -438,7 +448,12 @@ fn check_numbers(raw: &Raw, file: &str) -> Result<(), ConfigError> {
         }
     }
     if raw.w_kappa + raw.w_chi <= 0.0 {
-        return Err(invalid(file, "w_kappa", raw.w_kappa, "w_kappa and w_chi cannot both be 0"));
+        return Err(invalid(
+            file,
+            "w_kappa",
+            raw.w_kappa,
+            "w_kappa and w_chi cannot both be 0",
+        ));
     }
     if !(1..=100_000).contains(&raw.max_iterations) {
         return Err(invalid(
@@ -449,23 +464,48 @@ fn check_numbers(raw: &Raw, file: &str) -> Result<(), ConfigError> {
         ));
     }
     if !(2..=2000).contains(&raw.points) {
-        return Err(invalid(file, "points", raw.points as f64, "must be in 2..=2000"));
+        return Err(invalid(
+            file,
+            "points",
+            raw.points as f64,
+            "must be in 2..=2000",
+        ));
     }
     if !(1..=raw.points).contains(&raw.min_points) {
-        return Err(invalid(file, "min_points", raw.min_points as f64, "must be in 1..=points"));
+        return Err(invalid(
+            file,
+            "min_points",
+            raw.min_points as f64,
+            "must be in 1..=points",
+        ));
     }
     if raw.windows_s.is_empty() {
-        return Err(text_invalid(file, "windows_s", "[]", "needs at least one window length"));
+        return Err(text_invalid(
+            file,
+            "windows_s",
+            "[]",
+            "needs at least one window length",
+        ));
     }
     for (i, w) in raw.windows_s.iter().enumerate() {
         if !(w.is_finite() && *w > 0.0) {
-            return Err(invalid(file, format!("windows_s[{i}]"), *w, "must be finite and > 0"));
+            return Err(invalid(
+                file,
+                format!("windows_s[{i}]"),
+                *w,
+                "must be finite and > 0",
+            ));
         }
     }
     Ok(())
 }
 
-fn check_response(file: &str, field: &str, r: &Response, cond: &[String]) -> Result<(), ConfigError> {
+fn check_response(
+    file: &str,
+    field: &str,
+    r: &Response,
+    cond: &[String],
+) -> Result<(), ConfigError> {
     if r.input_index().is_none() {
         return Err(text_invalid(
             file,
@@ -492,7 +532,12 @@ fn check_response(file: &str, field: &str, r: &Response, cond: &[String]) -> Res
     }
     let (lo, hi) = (r.omega_min_rad_s, r.omega_max_rad_s);
     if !(lo.is_finite() && lo > 0.0) {
-        return Err(invalid(file, format!("{field}.omega_min_rad_s"), lo, "must be finite and > 0"));
+        return Err(invalid(
+            file,
+            format!("{field}.omega_min_rad_s"),
+            lo,
+            "must be finite and > 0",
+        ));
     }
     if !(hi.is_finite() && hi > lo) {
         return Err(invalid(
@@ -507,7 +552,12 @@ fn check_response(file: &str, field: &str, r: &Response, cond: &[String]) -> Res
 
 fn check_points(raw: &Raw, file: &str, base: &Path) -> Result<Vec<OperatingPoint>, ConfigError> {
     if raw.operating_point.is_empty() {
-        return Err(text_invalid(file, "operating_point", "[]", "needs at least one [[operating_point]]"));
+        return Err(text_invalid(
+            file,
+            "operating_point",
+            "[]",
+            "needs at least one [[operating_point]]",
+        ));
     }
     for (i, r) in raw.response.iter().enumerate() {
         check_response(file, &format!("response[{i}]"), r, &default_servos())?;
@@ -520,11 +570,21 @@ fn check_points(raw: &Raw, file: &str, base: &Path) -> Result<Vec<OperatingPoint
             return Err(text_invalid(file, f("name"), &op.name, "must not be empty"));
         }
         if out.iter().any(|o: &OperatingPoint| o.name == op.name) {
-            return Err(text_invalid(file, f("name"), &op.name, "names must be unique"));
+            return Err(text_invalid(
+                file,
+                f("name"),
+                &op.name,
+                "names must be unique",
+            ));
         }
         for (k, v) in op.velocity_ned_m_s.iter().enumerate() {
             if !(v.is_finite() && v.abs() <= 100.0) {
-                return Err(invalid(file, f(&format!("velocity_ned_m_s[{k}]")), *v, "must be finite, |v| <= 100 m/s"));
+                return Err(invalid(
+                    file,
+                    f(&format!("velocity_ned_m_s[{k}]")),
+                    *v,
+                    "must be finite, |v| <= 100 m/s",
+                ));
             }
         }
         if !op.yaw_rad.is_finite() {
@@ -532,11 +592,21 @@ fn check_points(raw: &Raw, file: &str, base: &Path) -> Result<Vec<OperatingPoint
         }
         check_span(file, &f("t_start_s"), op.t_start_s, op.t_end_s)?;
         if op.conditioned_on.is_empty() {
-            return Err(text_invalid(file, f("conditioned_on"), "[]", "needs at least one input"));
+            return Err(text_invalid(
+                file,
+                f("conditioned_on"),
+                "[]",
+                "needs at least one input",
+            ));
         }
         for (k, c) in op.conditioned_on.iter().enumerate() {
             if op.conditioned_on[..k].contains(c) {
-                return Err(text_invalid(file, f(&format!("conditioned_on[{k}]")), c, "given twice"));
+                return Err(text_invalid(
+                    file,
+                    f(&format!("conditioned_on[{k}]")),
+                    c,
+                    "given twice",
+                ));
             }
         }
         if op.response.is_empty() {
@@ -556,7 +626,12 @@ fn check_points(raw: &Raw, file: &str, base: &Path) -> Result<Vec<OperatingPoint
                 .iter()
                 .any(|q| q.input == r.input && q.output == r.output)
             {
-                return Err(text_invalid(file, f(&format!("response[{k}].output")), &r.output, "response given twice"));
+                return Err(text_invalid(
+                    file,
+                    f(&format!("response[{k}].output")),
+                    &r.output,
+                    "response given twice",
+                ));
             }
         }
         op.log = base.join(&op.log);
@@ -567,23 +642,39 @@ fn check_points(raw: &Raw, file: &str, base: &Path) -> Result<Vec<OperatingPoint
 
 fn check_parameters(raw: &Raw, file: &str, start: &Params) -> Result<Vec<Parameter>, ConfigError> {
     if raw.parameter.is_empty() {
-        return Err(text_invalid(file, "parameter", "[]", "needs at least one [[parameter]] to identify"));
+        return Err(text_invalid(
+            file,
+            "parameter",
+            "[]",
+            "needs at least one [[parameter]] to identify",
+        ));
     }
     let mut out: Vec<Parameter> = Vec::with_capacity(raw.parameter.len());
     for (i, p) in raw.parameter.iter().enumerate() {
         let f = |s: &str| format!("parameter[{i}].{s}");
         let d = keys::find(&p.key).ok_or_else(|| {
-            text_invalid(file, f("key"), &p.key, "not a parameter key (run `helicon params` for the list)")
+            text_invalid(
+                file,
+                f("key"),
+                &p.key,
+                "not a parameter key (run `helicon params` for the list)",
+            )
         })?;
         if !keys::is_continuous(d) {
-            return Err(text_invalid(file, f("key"), &p.key, "a count or a switch cannot be identified"));
+            return Err(text_invalid(
+                file,
+                f("key"),
+                &p.key,
+                "a count or a switch cannot be identified",
+            ));
         }
         if out.iter().any(|q| std::ptr::eq(q.descriptor, d)) {
             return Err(text_invalid(file, f("key"), &p.key, "given twice"));
         }
         let s = keys::get(start, d);
         for (name, v) in [("min", p.min), ("max", p.max)] {
-            d.check(v).map_err(|rule| invalid(file, f(name), v, &rule))?;
+            d.check(v)
+                .map_err(|rule| invalid(file, f(name), v, &rule))?;
         }
         if p.min >= p.max {
             return Err(invalid(file, f("min"), p.min, "must be < max"));
@@ -597,7 +688,12 @@ fn check_parameters(raw: &Raw, file: &str, start: &Params) -> Result<Vec<Paramet
             ));
         }
         if s == 0.0 {
-            return Err(invalid(file, f("key"), s, "the start value is 0: parameters are scaled by their start, give a non-zero start"));
+            return Err(invalid(
+                file,
+                f("key"),
+                s,
+                "the start value is 0: parameters are scaled by their start, give a non-zero start",
+            ));
         }
         out.push(Parameter {
             descriptor: d,

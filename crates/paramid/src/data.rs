@@ -139,8 +139,16 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
             .into());
         }
     }
-    let lo = op.response.iter().map(|r| r.omega_min_rad_s).fold(f64::INFINITY, f64::min);
-    let hi = op.response.iter().map(|r| r.omega_max_rad_s).fold(0.0, f64::max);
+    let lo = op
+        .response
+        .iter()
+        .map(|r| r.omega_min_rad_s)
+        .fold(f64::INFINITY, f64::min);
+    let hi = op
+        .response
+        .iter()
+        .map(|r| r.omega_max_rad_s)
+        .fold(0.0, f64::max);
     let nyq = std::f64::consts::PI / rec.dt_s;
     if hi >= nyq {
         return Err(ConfigError::invalid(
@@ -170,10 +178,17 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
     let mut responses = Vec::with_capacity(op.response.len());
     for r in &op.response {
         let (Some(input), Some(state)) = (r.input_index(), r.state_index()) else {
-            return Err(ParamIdError::Fit(format!("response {} unchecked", r.label())));
+            return Err(ParamIdError::Fit(format!(
+                "response {} unchecked",
+                r.label()
+            )));
         };
         let out = names.iter().position(|n| *n == r.output).unwrap_or(0);
-        let pos = op.conditioned_on.iter().position(|c| *c == r.input).unwrap_or(0);
+        let pos = op
+            .conditioned_on
+            .iter()
+            .position(|c| *c == r.input)
+            .unwrap_or(0);
         let parts = spectra
             .iter()
             .map(|cs| {
@@ -235,7 +250,13 @@ pub fn from_model(cfg: &IdentConfig, truth: &helicon_model::Params) -> Result<Ve
                 .response
                 .iter()
                 .zip(&grids)
-                .map(|(r, g)| (r.input_index().unwrap_or(0), r.state_index().unwrap_or(0), g.as_slice()))
+                .map(|(r, g)| {
+                    (
+                        r.input_index().unwrap_or(0),
+                        r.state_index().unwrap_or(0),
+                        g.as_slice(),
+                    )
+                })
                 .collect();
             let target = crate::linear::target(op.velocity_ned_m_s, op.yaw_rad);
             let (h, _) =

@@ -21,9 +21,21 @@ use std::path::Path;
 
 /// The identification flights: (name, forward speed m/s, scenario text).
 pub const FLIGHTS: [(&str, f64, &str); 3] = [
-    ("hover", 0.0, include_str!("../../../scenarios/ident/hover.toml")),
-    ("fwd5", 5.0, include_str!("../../../scenarios/ident/fwd5.toml")),
-    ("fwd10", 10.0, include_str!("../../../scenarios/ident/fwd10.toml")),
+    (
+        "hover",
+        0.0,
+        include_str!("../../../scenarios/ident/hover.toml"),
+    ),
+    (
+        "fwd5",
+        5.0,
+        include_str!("../../../scenarios/ident/fwd5.toml"),
+    ),
+    (
+        "fwd10",
+        10.0,
+        include_str!("../../../scenarios/ident/fwd10.toml"),
+    ),
 ];
 
 /// The verification flight (doublets in hover).
@@ -31,9 +43,18 @@ pub const VERIFY_FLIGHT: &str = include_str!("../../../scenarios/ident/hover-dou
 
 /// The shipped true helicopters (name, parameter file text).
 pub const TRUTHS: [(&str, &str); 3] = [
-    ("truth-a", include_str!("../../../params/truths/truth-a.toml")),
-    ("truth-b", include_str!("../../../params/truths/truth-b.toml")),
-    ("truth-c", include_str!("../../../params/truths/truth-c.toml")),
+    (
+        "truth-a",
+        include_str!("../../../params/truths/truth-a.toml"),
+    ),
+    (
+        "truth-b",
+        include_str!("../../../params/truths/truth-b.toml"),
+    ),
+    (
+        "truth-c",
+        include_str!("../../../params/truths/truth-c.toml"),
+    ),
 ];
 
 /// The parameters measured on the ground before the flights (thesis §11.1:
@@ -102,7 +123,13 @@ impl Default for DemoOptions {
 
 /// Fly one scenario text with the true parameters (controller designed
 /// on the nominal model) and write its `log.csv` to `log`.
-pub fn fly_scenario(name: &str, text: &str, truth: &Params, seed: Option<u64>, log: &Path) -> Result<()> {
+pub fn fly_scenario(
+    name: &str,
+    text: &str,
+    truth: &Params,
+    seed: Option<u64>,
+    log: &Path,
+) -> Result<()> {
     let file = format!("scenarios/ident/{name}.toml");
     let mut s = Scenario::from_toml_str(text, &file)?;
     if let Some(seed) = seed {
@@ -148,7 +175,10 @@ pub fn ident_toml(opts: &DemoOptions) -> String {
          cost = \"thesis\"\noptimiser = \"lm\"\nauto_fix = true\nmin_coherence = 0.6\n",
     );
     let _ = writeln!(s, "points = {}", opts.points);
-    for (name, v, _) in FLIGHTS.iter().filter(|f| opts.flights.iter().any(|n| n == f.0)) {
+    for (name, v, _) in FLIGHTS
+        .iter()
+        .filter(|f| opts.flights.iter().any(|n| n == f.0))
+    {
         let _ = write!(
             s,
             "\n[[operating_point]]\nname = \"{name}\"\nvelocity_ned_m_s = [{v:?}, 0.0, 0.0]\nlog = \"flights/{name}/log.csv\"\n"
@@ -206,7 +236,13 @@ pub fn run_demo(truth: &Params, out: &Path, opts: &DemoOptions) -> Result<Identi
     }
     jobs.par_iter()
         .map(|(name, text)| {
-            fly_scenario(name, text, truth, opts.seed, &out.join("flights").join(name).join("log.csv"))
+            fly_scenario(
+                name,
+                text,
+                truth,
+                opts.seed,
+                &out.join("flights").join(name).join("log.csv"),
+            )
         })
         .collect::<Result<Vec<()>>>()?;
     let mut start = Params::bergen_twin();

@@ -256,7 +256,10 @@ fn minimise(
             if report.termination.was_usage_issue() {
                 return Err(ParamIdError::Fit(format!("{:?}", report.termination)));
             }
-            (p.xi.iter().copied().collect::<Vec<_>>(), format!("{:?}", report.termination))
+            (
+                p.xi.iter().copied().collect::<Vec<_>>(),
+                format!("{:?}", report.termination),
+            )
         }
         Optimiser::Simplex => {
             let mut simplex = vec![xi0.clone()];
@@ -475,7 +478,11 @@ pub fn identify(cost: &Cost, opts: &FitOptions) -> Result<FitResult> {
         correlation_keys: free.iter().map(|&i| cost.parameters[i].key()).collect(),
         correlation: corr
             .iter()
-            .map(|row| row.iter().map(|v| if v.is_finite() { *v } else { 0.0 }).collect())
+            .map(|row| {
+                row.iter()
+                    .map(|v| if v.is_finite() { *v } else { 0.0 })
+                    .collect()
+            })
             .collect(),
         values,
         passes,

@@ -2,8 +2,8 @@
 //! `main_rotor.lift_slope_per_rad`), read and set through the model's
 //! parameter table.
 
-use helicon_model::params::{Descriptor, Rule, descriptors};
 use helicon_model::Params;
+use helicon_model::params::{Descriptor, Rule, descriptors};
 
 /// The descriptor of `key` (`section.key`), if it is a parameter.
 pub fn find(key: &str) -> Option<&'static Descriptor> {

@@ -23,11 +23,11 @@
 pub mod config;
 pub mod cost;
 pub mod data;
+pub mod demo;
 pub mod error;
 pub mod fit;
 pub mod keys;
 pub mod linear;
-pub mod demo;
 pub mod report;
 pub mod verify;
 

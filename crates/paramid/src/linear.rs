@@ -67,7 +67,9 @@ pub fn sampled_responses(
                 d - Complex64::new(phi[(i, j)], 0.0)
             });
             let x = m.lu().solve(&g)?;
-            x.iter().all(|v| v.re.is_finite() && v.im.is_finite()).then_some(x)
+            x.iter()
+                .all(|v| v.re.is_finite() && v.im.is_finite())
+                .then_some(x)
         })
         .collect()
 }

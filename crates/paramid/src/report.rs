@@ -163,7 +163,11 @@ impl Identification {
         let mut s = format!(
             "# Identified by `helicon ident fit` from {} ({} of {} parameters identifiable;\n# see report.md). The other keys are the start values.\n",
             self.config.file,
-            self.fit.parameters.iter().filter(|p| p.identifiable).count(),
+            self.fit
+                .parameters
+                .iter()
+                .filter(|p| p.identifiable)
+                .count(),
             self.fit.parameters.len()
         );
         s.push_str(&self.identified.to_toml());
@@ -244,7 +248,10 @@ pub fn markdown(r: &Report) -> String {
             p.reason.as_deref().unwrap_or("")
         );
     }
-    let _ = writeln!(s, "\nGuidelines (CIFER): Cramér–Rao bound ≤ 20 %, insensitivity ≤ 10 %.\n");
+    let _ = writeln!(
+        s,
+        "\nGuidelines (CIFER): Cramér–Rao bound ≤ 20 %, insensitivity ≤ 10 %.\n"
+    );
     let _ = writeln!(s, "## Cost per response\n");
     let _ = writeln!(
         s,
@@ -290,8 +297,14 @@ pub fn markdown(r: &Report) -> String {
         );
     }
     if !r.verification.is_empty() {
-        let _ = writeln!(s, "\n## Time-domain verification (Theil inequality coefficient)\n");
-        let _ = writeln!(s, "| log | point | output | start | identified |\n|---|---|---|---|---|");
+        let _ = writeln!(
+            s,
+            "\n## Time-domain verification (Theil inequality coefficient)\n"
+        );
+        let _ = writeln!(
+            s,
+            "| log | point | output | start | identified |\n|---|---|---|---|---|"
+        );
         for v in &r.verification {
             for o in &v.outputs {
                 let _ = writeln!(

@@ -65,7 +65,12 @@ fn replay(
         .iter()
         .find(|o| o.name == v.operating_point)
         .ok_or_else(|| ParamIdError::Fit(format!("no operating point `{}`", v.operating_point)))?;
-    let (t, _) = linear_model(params, cfg.preset, &target(op.velocity_ned_m_s, op.yaw_rad), &op.name)?;
+    let (t, _) = linear_model(
+        params,
+        cfg.preset,
+        &target(op.velocity_ned_m_s, op.yaw_rad),
+        &op.name,
+    )?;
     let model = Model::new(*params, cfg.preset.options());
     let mut x = expand(&t.x, [0.0; 3]);
     let mut out = vec![Vec::with_capacity(du.len()); rows.len()];

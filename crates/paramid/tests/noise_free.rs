@@ -17,8 +17,10 @@ use std::path::Path;
 pub const IDENT_2X16X10: &str = include_str!("../fixtures/noise_free.toml");
 
 fn truth_a() -> Params {
-    Params::from_file(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../params/truths/truth-a.toml"))
-        .unwrap()
+    Params::from_file(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../params/truths/truth-a.toml"),
+    )
+    .unwrap()
 }
 
 fn check(optimiser: Optimiser, tol: f64) {
@@ -54,7 +56,12 @@ fn check(optimiser: Optimiser, tol: f64) {
         worst = worst.max(rel);
     }
     assert!(worst < tol, "worst relative error {worst:e}");
-    assert!(fit.cost_final < 1e-10 * fit.cost_start, "{} -> {}", fit.cost_start, fit.cost_final);
+    assert!(
+        fit.cost_final < 1e-10 * fit.cost_start,
+        "{} -> {}",
+        fit.cost_start,
+        fit.cost_final
+    );
 }
 
 /// Tolerance 1e-6 relative (the requirement). The floor is the

@@ -18,13 +18,22 @@ fn pole_mismatch(truth: &Params, other: &Params) -> (f64, f64) {
     let hover = target([0.0; 3], 0.0);
     let poles = |p: &Params| {
         let (_, lm) = linear_model(p, helicon_model::Preset::Physical, &hover, "hover").unwrap();
-        lm.poles().unwrap().into_iter().map(|p| p.value).collect::<Vec<_>>()
+        lm.poles()
+            .unwrap()
+            .into_iter()
+            .map(|p| p.value)
+            .collect::<Vec<_>>()
     };
     let (pt, po) = (poles(truth), poles(other));
     let mut d: Vec<f64> = pt
         .iter()
         .filter(|z| z.norm() < 40.0 && z.norm() > 0.5)
-        .map(|z| po.iter().map(|w| (z - w).norm()).fold(f64::INFINITY, f64::min) / z.norm())
+        .map(|z| {
+            po.iter()
+                .map(|w| (z - w).norm())
+                .fold(f64::INFINITY, f64::min)
+                / z.norm()
+        })
         .collect();
     d.sort_by(f64::total_cmp);
     (d[d.len() / 2], d[d.len() - 1])
@@ -39,7 +48,10 @@ fn truth(name: &str) -> Params {
 /// CR bounds, cost ratio final/start, final cost / cost at the truth).
 fn recover(name: &str) -> (f64, f64, f64, f64) {
     let t = truth(name);
-    let dir = std::env::temp_dir().join(format!("helicon-paramid-recovery-{name}-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "helicon-paramid-recovery-{name}-{}",
+        std::process::id()
+    ));
     let id = run_demo(&t, &dir, &DemoOptions::default()).unwrap();
     let r = id.report();
     println!(
@@ -76,14 +88,18 @@ fn recover(name: &str) -> (f64, f64, f64, f64) {
             want,
             err,
             p.cramer_rao_pct.map_or("-".into(), |v| format!("{v:.3}")),
-            p.insensitivity_pct.map_or("-".into(), |v| format!("{v:.3}")),
+            p.insensitivity_pct
+                .map_or("-".into(), |v| format!("{v:.3}")),
             p.identifiable,
             p.reason.as_deref().unwrap_or("")
         );
     }
     for v in &r.verification {
         for o in &v.outputs {
-            println!("  verify {} {:.3} -> {:.3}", o.output, o.theil_start, o.theil_identified);
+            println!(
+                "  verify {} {:.3} -> {:.3}",
+                o.output, o.theil_start, o.theil_identified
+            );
         }
     }
     let start = id.config.start;
@@ -92,7 +108,10 @@ fn recover(name: &str) -> (f64, f64, f64, f64) {
     println!(
         "  hover poles 0.5-40 rad/s vs the truth's: start median {s_med:.4} max {s_max:.4}, identified median {i_med:.4} max {i_max:.4} (relative distance)"
     );
-    assert!(i_med < s_med && i_max < s_max, "identified poles no closer to the truth's");
+    assert!(
+        i_med < s_med && i_max < s_max,
+        "identified poles no closer to the truth's"
+    );
     let _ = std::fs::remove_dir_all(&dir);
     (
         worst_pct,
@@ -116,8 +135,13 @@ fn recover(name: &str) -> (f64, f64, f64, f64) {
 #[test]
 fn truth_a_is_recovered_from_flown_noisy_data() {
     let (worst_pct, worst_cr, ratio, vs_truth) = recover("truth-a");
-    println!("worst {worst_pct:.2} %, {worst_cr:.2} CR bounds, cost ratio {ratio:.2e}, final/truth {vs_truth:.3}");
+    println!(
+        "worst {worst_pct:.2} %, {worst_cr:.2} CR bounds, cost ratio {ratio:.2e}, final/truth {vs_truth:.3}"
+    );
     assert!(worst_pct < 12.0, "worst identifiable error {worst_pct} %");
     assert!(ratio < 0.1, "cost ratio {ratio}");
-    assert!(vs_truth <= 1.0, "the fit must do at least as well as the truth: {vs_truth}");
+    assert!(
+        vs_truth <= 1.0,
+        "the fit must do at least as well as the truth: {vs_truth}"
+    );
 }
