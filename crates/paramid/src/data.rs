@@ -68,7 +68,7 @@ pub fn read_record(
             file,
             field,
             keep.len() as f64,
-            &format!("{log}: needs at least 64 samples in the time span used"),
+            format!("{log}: needs at least 64 samples in the time span used"),
         )
         .into());
     }
@@ -81,7 +81,7 @@ pub fn read_record(
             file,
             field,
             dt,
-            &format!("{log}: the time step varies ({} to {} s): identification needs a uniform log (no decimation gaps)", steps[0], steps[steps.len() - 1]),
+            format!("{log}: the time step varies ({} to {} s): identification needs a uniform log (no decimation gaps)", steps[0], steps[steps.len() - 1]),
         )
         .into());
     }
@@ -90,7 +90,7 @@ pub fn read_record(
             file,
             field,
             dt,
-            &format!("{log}: the log's step must be the control period control.sample_time_s = {expected_dt_s} s (log every sample)"),
+            format!("{log}: the log's step must be the control period control.sample_time_s = {expected_dt_s} s (log every sample)"),
         )
         .into());
     }
@@ -134,7 +134,7 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
                 &cfg.file,
                 format!("windows_s[{i}]"),
                 *w,
-                &format!("{log}: a window must be at most half the record used ({record_s:.1} s), for averaging"),
+                format!("{log}: a window must be at most half the record used ({record_s:.1} s), for averaging"),
             )
             .into());
         }
@@ -155,7 +155,7 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
             &cfg.file,
             format!("operating_point[{index}].response"),
             hi,
-            &format!("omega_max_rad_s must be below the log's Nyquist frequency {nyq:.1} rad/s"),
+            format!("omega_max_rad_s must be below the log's Nyquist frequency {nyq:.1} rad/s"),
         )
         .into());
     }

@@ -295,13 +295,16 @@ fn minimise(
     Ok((out, pass))
 }
 
+/// Cramér–Rao bounds (%), insensitivities (%) and correlation matrix.
+pub type AccuracyParts = (Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
+
 /// Accuracy of the free parameters at `values`: (CR %, insensitivity %,
 /// correlation); CR is ∞ where the information matrix is singular.
 pub fn accuracy(
     cost: &Cost,
     free: &[usize],
     values: &[f64],
-) -> Result<(Vec<f64>, Vec<f64>, Vec<Vec<f64>>)> {
+) -> Result<AccuracyParts> {
     let r0 = cost.residuals(values)?;
     let np = free.len();
     let cols: Vec<Result<DVector<f64>>> = free
@@ -394,7 +397,7 @@ pub fn identify(cost: &Cost, opts: &FitOptions) -> Result<FitResult> {
         }
         let n_pass = passes.len();
         let insensitive: Vec<usize> = (0..free.len())
-            .filter(|&k| !(ins[k] <= INSENSITIVITY_MAX_PCT))
+            .filter(|&k| !ins[k].is_finite() || ins[k] > INSENSITIVITY_MAX_PCT)
             .collect();
         if !insensitive.is_empty() {
             for &k in &insensitive {
@@ -409,7 +412,7 @@ pub fn identify(cost: &Cost, opts: &FitOptions) -> Result<FitResult> {
         }
         let worst = (0..free.len()).max_by(|&a, &b| cr[a].total_cmp(&cr[b]));
         match worst {
-            Some(k) if !(cr[k] <= CR_MAX_PCT) => {
+            Some(k) if !cr[k].is_finite() || cr[k] > CR_MAX_PCT => {
                 let partner = (0..free.len())
                     .filter(|&j| j != k)
                     .max_by(|&a, &b| corr[k][a].abs().total_cmp(&corr[k][b].abs()));

@@ -46,6 +46,29 @@ fn truth(name: &str) -> Params {
 
 /// Returns (worst error % of the identifiable parameters, worst error in
 /// CR bounds, cost ratio final/start, final cost / cost at the truth).
+/// Fly the shipped `scenarios/demo.toml` (steps on vn, ψ, vd, turbulence,
+/// sensors in the loop) on the true helicopter with the LQI designed on
+/// `design`, for wind and sensor seeds 1..=n; the mean over the seeds of each
+/// output's RMS tracking error (vn, ve, vd in m/s, psi in rad).
+fn monte_carlo(truth: &Params, design: &Params, n: u64) -> Vec<(String, f64)> {
+    use helicon_sim::closed_loop::{Outcome, fly, prepare_with_params};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/demo.toml");
+    let mut sums: std::collections::BTreeMap<String, f64> = Default::default();
+    for seed in 1..=n {
+        let mut s = helicon_sim::scenario::Scenario::from_file(&path).unwrap();
+        s.wind.seed = seed;
+        s.sensors.seed = seed;
+        let mut p = prepare_with_params(&s, *truth).unwrap();
+        p.gains = prepare_with_params(&s, *design).unwrap().gains;
+        let f = fly(&s, &p, None).unwrap();
+        assert_eq!(f.summary.outcome, Outcome::Completed, "{:?}", f.summary.reason);
+        for (k, m) in &f.summary.metrics {
+            *sums.entry(k.clone()).or_default() += m.rms_error / n as f64;
+        }
+    }
+    sums.into_iter().collect()
+}
+
 fn recover(name: &str) -> (f64, f64, f64, f64) {
     let t = truth(name);
     let dir = std::env::temp_dir().join(format!(
@@ -112,6 +135,18 @@ fn recover(name: &str) -> (f64, f64, f64, f64) {
         i_med < s_med && i_max < s_max,
         "identified poles no closer to the truth's"
     );
+    // the LQI designed on the identified, the true and the start model,
+    // flown on the true helicopter (5 seeds). Measured: all within 0.6 % of
+    // each other (identified/truth 0.999–1.005): demo.toml's steps under
+    // turbulence do not tell these designs apart, the LQI is robust to the
+    // start model's errors too.
+    let on_id = monte_carlo(&t, &id.identified, 5);
+    let on_truth = monte_carlo(&t, &t, 5);
+    let on_start = monte_carlo(&t, &start, 5);
+    for ((k, a), ((_, b), (_, c))) in on_id.iter().zip(on_truth.iter().zip(&on_start)) {
+        println!("  demo.toml RMS error {k}: designed on identified {a:.5}, truth {b:.5}, start {c:.5}");
+        assert!(*a <= 1.02 * b, "{k}: designed on the identified model {a} vs on the truth {b}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
     (
         worst_pct,
@@ -132,6 +167,8 @@ fn recover(name: &str) -> (f64, f64, f64, f64) {
 /// they describe bias — the "within 2× CR" is not met, and the test
 /// asserts what is (12 %). The hover poles of 0.5–40 rad/s move closer to
 /// the truth's: median relative distance 0.045 → 0.007, worst 0.078 → 0.037.
+/// The LQI designed on the identified model flies the truth through
+/// `scenarios/demo.toml` (5 seeds) within 2 % of the one designed on the truth.
 #[test]
 fn truth_a_is_recovered_from_flown_noisy_data() {
     let (worst_pct, worst_cr, ratio, vs_truth) = recover("truth-a");
