@@ -300,11 +300,7 @@ pub type AccuracyParts = (Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
 
 /// Accuracy of the free parameters at `values`: (CR %, insensitivity %,
 /// correlation); CR is ∞ where the information matrix is singular.
-pub fn accuracy(
-    cost: &Cost,
-    free: &[usize],
-    values: &[f64],
-) -> Result<AccuracyParts> {
+pub fn accuracy(cost: &Cost, free: &[usize], values: &[f64]) -> Result<AccuracyParts> {
     let r0 = cost.residuals(values)?;
     let np = free.len();
     let cols: Vec<Result<DVector<f64>>> = free

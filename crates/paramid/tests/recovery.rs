@@ -61,7 +61,12 @@ fn monte_carlo(truth: &Params, design: &Params, n: u64) -> Vec<(String, f64)> {
         let mut p = prepare_with_params(&s, *truth).unwrap();
         p.gains = prepare_with_params(&s, *design).unwrap().gains;
         let f = fly(&s, &p, None).unwrap();
-        assert_eq!(f.summary.outcome, Outcome::Completed, "{:?}", f.summary.reason);
+        assert_eq!(
+            f.summary.outcome,
+            Outcome::Completed,
+            "{:?}",
+            f.summary.reason
+        );
         for (k, m) in &f.summary.metrics {
             *sums.entry(k.clone()).or_default() += m.rms_error / n as f64;
         }
@@ -144,8 +149,13 @@ fn recover(name: &str) -> (f64, f64, f64, f64) {
     let on_truth = monte_carlo(&t, &t, 5);
     let on_start = monte_carlo(&t, &start, 5);
     for ((k, a), ((_, b), (_, c))) in on_id.iter().zip(on_truth.iter().zip(&on_start)) {
-        println!("  demo.toml RMS error {k}: designed on identified {a:.5}, truth {b:.5}, start {c:.5}");
-        assert!(*a <= 1.02 * b, "{k}: designed on the identified model {a} vs on the truth {b}");
+        println!(
+            "  demo.toml RMS error {k}: designed on identified {a:.5}, truth {b:.5}, start {c:.5}"
+        );
+        assert!(
+            *a <= 1.02 * b,
+            "{k}: designed on the identified model {a} vs on the truth {b}"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
     (
