@@ -267,3 +267,23 @@ impl Cost {
 pub fn wrap_deg(d: f64) -> f64 {
     d - 360.0 * ((d - 180.0) / 360.0).ceil()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::wrap_deg;
+
+    #[test]
+    fn phase_differences_wrap_to_plus_minus_180() {
+        for (d, w) in [
+            (0.0, 0.0),
+            (180.0, 180.0),
+            (-180.0, 180.0),
+            (190.0, -170.0),
+            (-190.0, 170.0),
+            (725.0, 5.0),
+            (-359.0, 1.0),
+        ] {
+            assert!((wrap_deg(d) - w).abs() < 1e-12, "{d} -> {}", wrap_deg(d));
+        }
+    }
+}

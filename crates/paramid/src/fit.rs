@@ -19,7 +19,10 @@
 //! to θ (forward differences, step 1e-6), M = JᵀJ and s² = J_min/(n_r − n_p),
 //! the Cramér–Rao bound of p_i is s √(M⁻¹)_ii · p0_i, the insensitivity
 //! s/√M_ii · p0_i, both in per cent of the identified value, and the
-//! correlation ρ_ij = (M⁻¹)_ij/√((M⁻¹)_ii (M⁻¹)_jj). CIFER's guidelines:
+//! correlation ρ_ij = (M⁻¹)_ij/√((M⁻¹)_ii (M⁻¹)_jj); a parameter whose
+//! √M_ii is below 1e-4 of the largest carries no information (its column is
+//! the trims' round-off through the finite difference) and is infinitely
+//! insensitive. CIFER's guidelines:
 //! CR ≤ 20 %, insensitivity ≤ 10 %. With `auto_fix`, the parameters failing
 //! the insensitivity guideline are fixed at their start values (all at once),
 //! else the one with the largest CR bound, and the fit is repeated until all
@@ -318,7 +321,16 @@ pub fn accuracy(cost: &Cost, free: &[usize], values: &[f64]) -> Result<AccuracyP
     }
     let s2 = r0.norm_squared() / (r0.len() - np).max(1) as f64;
     let m = jac.transpose() * &jac;
-    let d: Vec<f64> = (0..np).map(|i| m[(i, i)].sqrt()).collect();
+    // a column below 1e-4 of the largest is the trim's round-off seen
+    // through the finite difference (trim tolerance 1e-10 over the step
+    // 1e-6 gives ~1e-4 relative; a parameter the responses do not depend on
+    // measured 5e-5): no information, infinitely insensitive
+    let raw: Vec<f64> = (0..np).map(|i| m[(i, i)].sqrt()).collect();
+    let dmax = raw.iter().copied().fold(0.0, f64::max);
+    let d: Vec<f64> = raw
+        .iter()
+        .map(|&v| if v > 1e-4 * dmax { v } else { 0.0 })
+        .collect();
     // θ units → per cent of the identified value
     let pct: Vec<f64> = free
         .iter()
@@ -487,4 +499,32 @@ pub fn identify(cost: &Cost, opts: &FitOptions) -> Result<FitResult> {
         passes,
         residuals: r_start.len(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::keys;
+
+    #[test]
+    fn the_sine_transform_keeps_values_inside_the_bounds_and_round_trips() {
+        let d = keys::find("body.iyy_kg_m2").unwrap_or_else(|| unreachable!());
+        let p = Parameter {
+            descriptor: d,
+            start: 0.62,
+            min: 0.31,
+            max: 1.24,
+        };
+        let t = Transform::new(&p);
+        for v in [0.31, 0.4, 0.62, 1.0, 1.24] {
+            let back = t.value(t.xi(v));
+            assert!((back - v).abs() < 1e-12 * v, "{v} -> {back}");
+        }
+        for xi in [-100.0, -2.0, 0.0, 1.0, 7.5, 1e6] {
+            let v = t.value(xi);
+            assert!((0.31 - 1e-12..=1.24 + 1e-12).contains(&v), "{xi} -> {v}");
+        }
+        // outside the bounds is clamped to the bound
+        assert!((t.value(t.xi(5.0)) - 1.24).abs() < 1e-12);
+    }
 }

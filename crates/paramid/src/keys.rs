@@ -36,3 +36,34 @@ pub fn get(p: &Params, d: &Descriptor) -> f64 {
 pub fn set(p: &mut Params, d: &Descriptor, v: f64) {
     *(d.field)(p) = v;
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_key_is_found_and_set_round_trips() {
+        let mut p = Params::bergen_twin();
+        for d in descriptors() {
+            let key = full_key(d);
+            let found = find(&key).unwrap_or_else(|| unreachable!("{key}"));
+            assert!(std::ptr::eq(found, d), "{key}");
+            let v = get(&p, d);
+            set(&mut p, d, v + 1.0);
+            assert_eq!(get(&p, d), v + 1.0, "{key}");
+            set(&mut p, d, v);
+        }
+        assert_eq!(p, Params::bergen_twin());
+        for bad in [
+            "",
+            "body",
+            "body.",
+            ".ixx_kg_m2",
+            "body.ixx",
+            "bodyxixx_kg_m2",
+            "servo.tail",
+        ] {
+            assert!(find(bad).is_none(), "{bad}");
+        }
+    }
+}

@@ -94,3 +94,75 @@ fn noise_free_cifer_cost_recovers_the_truth_to_1e_6() {
         1e-6,
     );
 }
+
+/// `auto_fix` on a parameter the responses cannot see: the tail servo's
+/// bandwidth does not enter S_lat → p or S_lon → q (its state is driven by
+/// S_tr alone), so it is flagged insensitive, fixed at its start with the
+/// reason, and the others are still recovered.
+#[test]
+fn auto_fix_flags_a_parameter_the_data_cannot_see() {
+    let text = r#"
+auto_fix = true
+points = 20
+[[operating_point]]
+name = "hover"
+log = "unused.csv"
+[[response]]
+input = "S_lat"
+output = "p"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[response]]
+input = "S_lon"
+output = "q"
+omega_min_rad_s = 1.5
+omega_max_rad_s = 25.0
+[[parameter]]
+key = "main_rotor.spring_n_m_per_rad"
+min = 100.0
+max = 400.0
+[[parameter]]
+key = "servo.tail.omega_n_rad_s"
+min = 50.0
+max = 200.0
+[[parameter]]
+key = "body.iyy_kg_m2"
+min = 0.31
+max = 1.24
+"#;
+    let cfg = IdentConfig::from_toml_str(text, "fix.toml", Path::new(".")).unwrap();
+    // the Bergen Twin with truth-a's hinge spring and pitch inertia
+    let mut truth = Params::bergen_twin();
+    for key in ["main_rotor.spring_n_m_per_rad", "body.iyy_kg_m2"] {
+        let d = keys::find(key).unwrap();
+        keys::set(&mut truth, d, keys::get(&truth_a(), d));
+    }
+    let data = from_model(&cfg, &truth).unwrap();
+    let cost = Cost::new(&cfg, &data).unwrap();
+    let fit = identify(
+        &cost,
+        &FitOptions {
+            optimiser: Optimiser::Lm,
+            max_iterations: 100,
+            auto_fix: true,
+        },
+    )
+    .unwrap();
+    assert_eq!(fit.passes.len(), 2, "{:?}", fit.passes);
+    let tail = &fit.parameters[1];
+    assert!(
+        !tail.identifiable && tail.identified == tail.start,
+        "{tail:?}"
+    );
+    assert!(
+        tail.reason.as_deref().unwrap().starts_with("insensitive"),
+        "{tail:?}"
+    );
+    assert!(tail.cramer_rao_pct.is_none());
+    for p in [&fit.parameters[0], &fit.parameters[2]] {
+        let want = keys::get(&truth, keys::find(&p.key).unwrap());
+        assert!(p.identifiable, "{p:?}");
+        assert!((p.identified - want).abs() < 1e-6 * want, "{p:?} vs {want}");
+    }
+    assert_eq!(fit.correlation_keys.len(), 2);
+}
