@@ -17,6 +17,7 @@
 //! velocity_ned_m_s = [0.0, 0.0, 0.0]
 //! log = "hover/log.csv"
 //! conditioned_on = ["S_col", "S_lat", "S_lon", "S_tr"]   # the default
+//! instruments = ["exc_col", "exc_lat", "exc_lon", "exc_tr"] # optional: H = G_eu⁻¹ G_ey
 //!
 //! [[response]]               # matched at every operating point (or per point)
 //! input = "S_lon"
@@ -125,6 +126,13 @@ pub struct OperatingPoint {
     /// default: a feedback law moves them all).
     #[serde(default = "default_servos")]
     pub conditioned_on: Vec<String>,
+    /// Instrumental variables, one per `conditioned_on` input (e.g. the
+    /// logged excitations `exc_col`, `exc_lat`, `exc_lon`, `exc_tr`): when
+    /// given, the responses are H = G_eu⁻¹ G_ey instead of conditioned on
+    /// the inputs, which removes the bias of a feedback law answering
+    /// turbulence and sensor noise (see [`crate::data`]). Empty: conditioned.
+    #[serde(default)]
+    pub instruments: Vec<String>,
     /// Responses of this point (default: the file's `[[response]]`).
     #[serde(default)]
     pub response: Vec<Response>,
@@ -606,6 +614,24 @@ fn check_points(raw: &Raw, file: &str, base: &Path) -> Result<Vec<OperatingPoint
                     f(&format!("conditioned_on[{k}]")),
                     c,
                     "given twice",
+                ));
+            }
+        }
+        if !op.instruments.is_empty() && op.instruments.len() != op.conditioned_on.len() {
+            return Err(invalid(
+                file,
+                f("instruments"),
+                op.instruments.len() as f64,
+                "needs one instrument per conditioned_on input",
+            ));
+        }
+        for (k, c) in op.instruments.iter().enumerate() {
+            if op.instruments[..k].contains(c) || op.conditioned_on.contains(c) {
+                return Err(text_invalid(
+                    file,
+                    f(&format!("instruments[{k}]")),
+                    c,
+                    "given twice, or also an input",
                 ));
             }
         }

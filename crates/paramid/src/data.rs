@@ -44,6 +44,73 @@ pub struct Record {
     pub columns: Vec<Vec<f64>>,
 }
 
+/// The response of `output` to input `which` of `inputs` with instrumental
+/// variables (the excitations added to the inputs, one per input): with
+/// y = Σ_b H_b u_b + n and n uncorrelated with the instruments e,
+/// G_ey = G_eu H, so H = G_eu⁻¹ G_ey at each frequency. A feedback law
+/// answering turbulence and sensor noise correlates the inputs with n, which
+/// biases the conditioned estimate G_uu⁻¹ G_uy; the instruments are not
+/// correlated with n. The coherence given is the multiple coherence of the
+/// output on the instruments, γ² = G_ye G_ee⁻¹ G_ey / G_yy (the part of the
+/// output the excitations explain), and the random error
+/// √(1 − γ²)/(|γ| √(2(n_d − q + 1))). Points where G_eu or G_ee is singular
+/// are left out.
+pub fn instrumented(
+    cs: &helicon_ident::frf::CrossSpectra,
+    instruments: &[usize],
+    inputs: &[usize],
+    output: usize,
+    which: usize,
+) -> std::result::Result<Frf, helicon_ident::IdentError> {
+    use helicon_ident::Complex64;
+    use nalgebra::{DMatrix, DVector};
+    let q = inputs.len();
+    let dof = cs.n_d - q as f64 + 1.0;
+    if instruments.len() != q || which >= q || dof.is_nan() || dof < 1.0 {
+        return Err(helicon_ident::IdentError::data(
+            "instrumented response",
+            format!(
+                "{} instruments for {q} inputs, {:.2} effective averages: use shorter windows or a longer record",
+                instruments.len(),
+                cs.n_d
+            ),
+        ));
+    }
+    let inverse = |m: DMatrix<Complex64>| -> Option<DMatrix<Complex64>> {
+        let scale = (0..m.nrows()).map(|i| m[(i, i)].norm()).fold(0.0, f64::max);
+        let inv = m.try_inverse()?;
+        let ok = scale > 0.0
+            && inv.iter().all(|v| v.re.is_finite() && v.im.is_finite())
+            && inv.iter().map(|v| v.norm()).fold(0.0, f64::max) * scale < 1e12;
+        ok.then_some(inv)
+    };
+    let mut f = Frf {
+        omega_rad_s: Vec::new(),
+        h: Vec::new(),
+        coherence: Vec::new(),
+        random_error: Vec::new(),
+    };
+    for (k, &om) in cs.omega_rad_s.iter().enumerate() {
+        let geu = DMatrix::from_fn(q, q, |a, b| cs.get(k, instruments[a], inputs[b]));
+        let gee = DMatrix::from_fn(q, q, |a, b| cs.get(k, instruments[a], instruments[b]));
+        let gey = DVector::from_fn(q, |a, _| cs.get(k, instruments[a], output));
+        let gyy = cs.get(k, output, output).re;
+        let (Some(ieu), Some(iee)) = (inverse(geu), inverse(gee)) else {
+            continue;
+        };
+        let h = ieu * &gey;
+        let g2 = (gey.dotc(&(iee * &gey)).re / gyy).clamp(0.0, 1.0);
+        let eps = (1.0 - g2).sqrt() / (g2.sqrt() * (2.0 * dof).sqrt());
+        if h[which].re.is_finite() && h[which].im.is_finite() && g2.is_finite() && eps.is_finite() {
+            f.omega_rad_s.push(om);
+            f.h.push(h[which]);
+            f.coherence.push(g2);
+            f.random_error.push(eps);
+        }
+    }
+    Ok(f)
+}
+
 /// Read `names` from the log at `path`, keep `[t0, t1]`, check the step is
 /// uniform (to 1e-6 of its median) and equals `expected_dt_s` (the control
 /// period, to 1e-6): the model's responses are those of a command held over
@@ -112,6 +179,8 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
     let field = format!("operating_point[{index}].log");
     let mut names: Vec<&str> = op.conditioned_on.iter().map(String::as_str).collect();
     let nq = names.len();
+    names.extend(op.instruments.iter().map(String::as_str));
+    let inst: Vec<usize> = (nq..names.len()).collect();
     for r in &op.response {
         if !names.contains(&r.output.as_str()) {
             names.push(&r.output);
@@ -192,9 +261,13 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
         let parts = spectra
             .iter()
             .map(|cs| {
-                conditioned(cs, &cond, out)
-                    .map(|(mut v, _)| v.swap_remove(pos))
-                    .map_err(frf_err(r.label()))
+                if inst.is_empty() {
+                    conditioned(cs, &cond, out)
+                        .map(|(mut v, _)| v.swap_remove(pos))
+                        .map_err(frf_err(r.label()))
+                } else {
+                    instrumented(cs, &inst, &cond, out, pos).map_err(frf_err(r.label()))
+                }
             })
             .collect::<Result<Vec<_>>>()?;
         let c = composite(&parts, &cfg.windows_s).map_err(frf_err(r.label()))?;

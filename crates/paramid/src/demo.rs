@@ -105,6 +105,9 @@ pub struct DemoOptions {
     pub points: usize,
     /// Parameters identified (default [`DEMO_PARAMETERS`]).
     pub parameters: Vec<String>,
+    /// Estimate the responses with the logged excitations as instruments
+    /// (default) instead of conditioning on the servos.
+    pub instruments: bool,
 }
 
 impl Default for DemoOptions {
@@ -117,6 +120,7 @@ impl Default for DemoOptions {
             verify: true,
             points: 40,
             parameters: DEMO_PARAMETERS.iter().map(|s| s.to_string()).collect(),
+            instruments: true,
         }
     }
 }
@@ -181,7 +185,12 @@ pub fn ident_toml(opts: &DemoOptions) -> String {
     {
         let _ = write!(
             s,
-            "\n[[operating_point]]\nname = \"{name}\"\nvelocity_ned_m_s = [{v:?}, 0.0, 0.0]\nlog = \"flights/{name}/log.csv\"\n"
+            "\n[[operating_point]]\nname = \"{name}\"\nvelocity_ned_m_s = [{v:?}, 0.0, 0.0]\nlog = \"flights/{name}/log.csv\"\n{}",
+            if opts.instruments {
+                "instruments = [\"exc_col\", \"exc_lat\", \"exc_lon\", \"exc_tr\"]\n"
+            } else {
+                ""
+            }
         );
     }
     // the cyclic responses, on axis and cross-coupled: the yaw and heave

@@ -74,13 +74,17 @@ fn monte_carlo(truth: &Params, design: &Params, n: u64) -> Vec<(String, f64)> {
     sums.into_iter().collect()
 }
 
-fn recover(name: &str) -> (f64, f64, f64, f64) {
+fn recover(name: &str, instruments: bool, controllers: bool) -> (f64, f64, f64, f64) {
     let t = truth(name);
     let dir = std::env::temp_dir().join(format!(
         "helicon-paramid-recovery-{name}-{}",
         std::process::id()
     ));
-    let id = run_demo(&t, &dir, &DemoOptions::default()).unwrap();
+    let opts = DemoOptions {
+        instruments,
+        ..DemoOptions::default()
+    };
+    let id = run_demo(&t, &dir, &opts).unwrap();
     let r = id.report();
     println!(
         "{name}: cost {:.4e} -> {:.4e} (ratio {:.2e}), fit {:.1} s, passes {}",
@@ -145,9 +149,10 @@ fn recover(name: &str) -> (f64, f64, f64, f64) {
     // each other (identified/truth 0.999–1.005): demo.toml's steps under
     // turbulence do not tell these designs apart, the LQI is robust to the
     // start model's errors too.
-    let on_id = monte_carlo(&t, &id.identified, 5);
-    let on_truth = monte_carlo(&t, &t, 5);
-    let on_start = monte_carlo(&t, &start, 5);
+    let n = if controllers { 5 } else { 0 };
+    let on_id = monte_carlo(&t, &id.identified, n);
+    let on_truth = monte_carlo(&t, &t, n);
+    let on_start = monte_carlo(&t, &start, n);
     for ((k, a), ((_, b), (_, c))) in on_id.iter().zip(on_truth.iter().zip(&on_start)) {
         println!(
             "  demo.toml RMS error {k}: designed on identified {a:.5}, truth {b:.5}, start {c:.5}"
@@ -166,29 +171,56 @@ fn recover(name: &str) -> (f64, f64, f64, f64) {
     )
 }
 
-/// Measured (seed 3): the six identifiable parameters within 7.6 % of the
-/// truth (worst: the stabilizer-bar lift slope +7.6 %, the main-rotor
-/// lift-curve slope −5.4 %), the cost down 25×, and the optimum below the
-/// cost of the truth itself on the same data (0.87 of it: the optimiser is
-/// not the limit, the data's bias is: flown without turbulence and sensor
-/// noise the lift-slope error falls to about 1.4 %, see docs/paramid.md).
-/// The errors are up to 5.5 Cramér–Rao bounds: the bounds treat the 40
-/// log-spaced points of a response as independent, and they are not, nor do
-/// they describe bias — the "within 2× CR" is not met, and the test
-/// asserts what is (12 %). The hover poles of 0.5–40 rad/s move closer to
-/// the truth's: median relative distance 0.045 → 0.007, worst 0.078 → 0.037.
-/// The LQI designed on the identified model flies the truth through
-/// `scenarios/demo.toml` (5 seeds) within 2 % of the one designed on the truth.
+/// The demo's default estimate (the logged excitations as instruments,
+/// H = G_eu⁻¹ G_ey). Measured (seed 3): the six identifiable parameters
+/// within 1.07 of their Cramér–Rao bounds (the "within 2×"; worst
+/// in per cent the stabilizer-bar lift slope +9.3 % with a 9.8 % bound, the
+/// main-rotor lift slope −3.8 % with 3.6 %), four flagged with reasons, the
+/// cost down 4.5× to the cost of the truth itself on the same data (0.993
+/// of it: the fit is at the noise floor; the "orders of magnitude"
+/// is not what a noisy flight allows). The hover poles of 0.5–40 rad/s move
+/// closer to the truth's: median relative distance 0.045 → 0.009, worst
+/// 0.078 → 0.026. The LQI designed on the identified model flies the truth
+/// through `scenarios/demo.toml` (5 seeds) within 2 % of the one designed
+/// on the truth (all three designs within 0.6 %: the scenario does not tell
+/// them apart).
 #[test]
 fn truth_a_is_recovered_from_flown_noisy_data() {
-    let (worst_pct, worst_cr, ratio, vs_truth) = recover("truth-a");
+    let (worst_pct, worst_cr, ratio, vs_truth) = recover("truth-a", true, true);
     println!(
         "worst {worst_pct:.2} %, {worst_cr:.2} CR bounds, cost ratio {ratio:.2e}, final/truth {vs_truth:.3}"
     );
+    assert!(
+        worst_cr <= 2.0,
+        "worst identifiable error {worst_cr} Cramér–Rao bounds"
+    );
     assert!(worst_pct < 12.0, "worst identifiable error {worst_pct} %");
-    assert!(ratio < 0.1, "cost ratio {ratio}");
+    assert!(ratio < 0.3, "cost ratio {ratio}");
     assert!(
         vs_truth <= 1.0,
         "the fit must do at least as well as the truth: {vs_truth}"
     );
+}
+
+/// The same flights with the responses conditioned on the servos (CIFER's
+/// way, no instruments). Measured: identifiable parameters within 7.6 %
+/// (stabilizer-bar lift slope +7.6 %, lift slope −5.4 %), but up to 5.5
+/// Cramér–Rao bounds off: the LQI answers the turbulence and the gyro
+/// noise, which correlates the servo commands with the disturbances and
+/// biases the conditioned estimate (flown without turbulence and sensor
+/// noise the lift-slope error falls from −4.2 % to −1.4 % for truth-c); the
+/// cost falls 25× to 0.87 of the truth's own cost on these data.
+#[test]
+fn conditioned_estimates_are_biased_by_the_feedback() {
+    let (worst_pct, worst_cr, ratio, vs_truth) = recover("truth-a", false, false);
+    println!(
+        "worst {worst_pct:.2} %, {worst_cr:.2} CR bounds, cost ratio {ratio:.2e}, final/truth {vs_truth:.3}"
+    );
+    assert!(worst_pct < 12.0, "worst identifiable error {worst_pct} %");
+    assert!(
+        worst_cr > 2.0,
+        "the conditioned estimate is no longer biased: {worst_cr} CR bounds"
+    );
+    assert!(ratio < 0.1, "cost ratio {ratio}");
+    assert!(vs_truth <= 1.0, "{vs_truth}");
 }
