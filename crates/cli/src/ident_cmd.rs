@@ -38,6 +38,10 @@ pub enum IdentCommand {
     ServoBench(crate::ident_servo::ServoBenchArgs),
     /// A ground experiment of thesis §11.1 (rotor drag, lift slopes, blade spring, Bell/Hiller gains, tail-fin loss): readings CSV in, parameter and standard error out.
     Ground(crate::ident_ground::GroundArgs),
+    /// Identify the model's physical parameters from flight responses at several operating points (IDENT.toml; thesis ch. 11).
+    Fit(crate::ident_fit::FitArgs),
+    /// The identification programme end to end on a simulated helicopter with known parameters.
+    Demo(crate::ident_fit::DemoArgs),
 }
 
 /// `helicon ident input`.
@@ -172,6 +176,8 @@ pub fn run(args: &IdentArgs) -> Result<()> {
         IdentCommand::Servo(a) => crate::ident_servo::run_servo(a),
         IdentCommand::ServoBench(a) => crate::ident_servo::run_bench(a),
         IdentCommand::Ground(a) => crate::ident_ground::run(a),
+        IdentCommand::Fit(a) => crate::ident_fit::run_fit(a),
+        IdentCommand::Demo(a) => crate::ident_fit::run_demo_cmd(a),
     }
 }
 

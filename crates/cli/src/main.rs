@@ -8,6 +8,7 @@ mod demo;
 mod design_cmd;
 mod gcs_cmd;
 mod ident_cmd;
+mod ident_fit;
 mod ident_ground;
 mod ident_servo;
 mod ident_ss;

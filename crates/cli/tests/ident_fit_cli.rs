@@ -1,0 +1,164 @@
+//! Runs `helicon ident demo` (short: the hover flight alone, 20 points, no
+//! verification flight) and `helicon ident fit` on its IDENT.toml as a user
+//! would: the outputs exist, report.json has the documented fields, the
+//! identified file loads as `--params`; bad inputs are refused naming the
+//! file and field.
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!(
+        "helicon_ident_fit_cli_{}_{name}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn helicon(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn demo_then_fit_write_the_documented_outputs() {
+    let d = tmpdir("demo");
+    let out = d.join("demo");
+    let (ok, stdout, stderr) = helicon(&[
+        "ident",
+        "demo",
+        "--flights",
+        "hover",
+        "--points",
+        "20",
+        "--no-verify",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    for f in [
+        "IDENT.toml",
+        "start.toml",
+        "identified.toml",
+        "report.json",
+        "report.md",
+        "flights/hover/log.csv",
+        "bode_hover_meas_p_S_lat.png",
+    ] {
+        assert!(out.join(f).exists(), "{f} missing:\n{stdout}");
+    }
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let params = r["parameters"].as_array().unwrap();
+    assert_eq!(params.len(), 10);
+    for p in params {
+        for k in [
+            "key",
+            "start",
+            "identified",
+            "change_pct",
+            "cramer_rao_pct",
+            "insensitivity_pct",
+            "identifiable",
+            "reason",
+        ] {
+            assert!(p.get(k).is_some(), "{k} missing in {p}");
+        }
+    }
+    let lift = params
+        .iter()
+        .find(|p| p["key"] == "main_rotor.lift_slope_per_rad")
+        .unwrap();
+    assert!(lift["identifiable"].as_bool().unwrap(), "{lift}");
+    // truth-a: 5.4; the hover flight alone gets within 10 %
+    let v = lift["identified"].as_f64().unwrap();
+    assert!((v - 5.4).abs() < 0.54, "{v}");
+    assert!(r["cost_identified"].as_f64().unwrap() < 0.1 * r["cost_start"].as_f64().unwrap());
+    let costs = r["costs"].as_array().unwrap();
+    assert_eq!(costs.len(), 4);
+    assert!(
+        costs
+            .iter()
+            .all(|c| c["operating_point"] == "hover" && c["start"].as_f64().is_some())
+    );
+    // the identified file is a parameter file: `helicon trim --params` takes it
+    let (ok, stdout, stderr) = helicon(&[
+        "trim",
+        "--params",
+        out.join("identified.toml").to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    // the same IDENT.toml through `ident fit` gives the same identified values
+    let out2 = d.join("fit");
+    let (ok, stdout, stderr) = helicon(&[
+        "ident",
+        "fit",
+        out.join("IDENT.toml").to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let r2: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out2.join("report.json")).unwrap()).unwrap();
+    for (a, b) in params.iter().zip(r2["parameters"].as_array().unwrap()) {
+        assert_eq!(a["identified"], b["identified"]);
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn bad_inputs_name_the_file_and_field() {
+    let d = tmpdir("bad");
+    let ident = d.join("IDENT.toml");
+    std::fs::write(
+        &ident,
+        "[[operating_point]]\nname = \"hover\"\nlog = \"missing.csv\"\n[[response]]\ninput = \"S_lon\"\noutput = \"q\"\nomega_min_rad_s = 1.0\nomega_max_rad_s = 20.0\n[[parameter]]\nkey = \"body.iyy_kg_m2\"\nmin = 0.3\nmax = 0.5\n",
+    )
+    .unwrap();
+    let (ok, _, stderr) = helicon(&[
+        "ident",
+        "fit",
+        ident.to_str().unwrap(),
+        "--out",
+        d.join("o").to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("IDENT.toml") && stderr.contains("parameter[0].min"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = helicon(&[
+        "ident",
+        "demo",
+        "--flights",
+        "cruise",
+        "--out",
+        d.join("o").to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("--flights"), "{stderr}");
+    let truth = d.join("truth.toml");
+    std::fs::write(&truth, "[body]\nixx_kg_m2 = -1.0\n").unwrap();
+    let (ok, _, stderr) = helicon(&[
+        "ident",
+        "demo",
+        "--truth",
+        truth.to_str().unwrap(),
+        "--out",
+        d.join("o").to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && stderr.contains("truth.toml") && stderr.contains("body.ixx_kg_m2"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}

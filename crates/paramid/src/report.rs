@@ -1,0 +1,319 @@
+//! The identification run and its outputs: `identified.toml` (a complete
+//! parameter file, loadable wherever `--params` is), `report.json` and
+//! `report.md`.
+
+use crate::config::IdentConfig;
+use crate::cost::Cost;
+use crate::data::{PointData, measure};
+use crate::error::{ParamIdError, Result};
+use crate::fit::{FitOptions, FitResult, ParameterResult, Pass, identify};
+use crate::verify::{VerificationResult, verify};
+use helicon_model::{ConfigError, Params};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// A finished identification.
+#[derive(Debug, Clone)]
+pub struct Identification {
+    /// The configuration.
+    pub config: IdentConfig,
+    /// Measured responses per operating point.
+    pub data: Vec<PointData>,
+    /// The cost (selected points and weights).
+    pub cost: Cost,
+    /// The fit.
+    pub fit: FitResult,
+    /// The identified parameter set (start with the identified values).
+    pub identified: Params,
+    /// Wall time of the fit alone (optimisation passes and accuracy), s.
+    pub fit_time_s: f64,
+    /// Time-domain verifications.
+    pub verification: Vec<VerificationResult>,
+}
+
+/// Estimate the responses of every operating point (in parallel), fit,
+/// and verify on the doublet logs.
+pub fn run(cfg: &IdentConfig) -> Result<Identification> {
+    let data: Vec<PointData> = (0..cfg.operating_points.len())
+        .into_par_iter()
+        .map(|i| measure(cfg, i))
+        .collect::<Result<_>>()?;
+    run_on(cfg, data)
+}
+
+/// As [`run`] on responses already estimated (or synthesised).
+pub fn run_on(cfg: &IdentConfig, data: Vec<PointData>) -> Result<Identification> {
+    let cost = Cost::new(cfg, &data)?;
+    let t0 = std::time::Instant::now();
+    let fit = identify(
+        &cost,
+        &FitOptions {
+            optimiser: cfg.optimiser,
+            max_iterations: cfg.max_iterations,
+            auto_fix: cfg.auto_fix,
+        },
+    )?;
+    let fit_time_s = t0.elapsed().as_secs_f64();
+    let identified = cost.params_at(&fit.values);
+    identified
+        .validate("identified parameters")
+        .map_err(|e| ParamIdError::Fit(e.to_string()))?;
+    let verification = (0..cfg.verification.len())
+        .map(|i| verify(cfg, i, &cfg.start, &identified))
+        .collect::<Result<_>>()?;
+    Ok(Identification {
+        config: cfg.clone(),
+        data,
+        cost,
+        fit,
+        identified,
+        fit_time_s,
+        verification,
+    })
+}
+
+/// One response's cost in the report.
+#[derive(Debug, Clone, Serialize)]
+pub struct ResponseCost {
+    /// Operating point.
+    pub operating_point: String,
+    /// `output/input`.
+    pub response: String,
+    /// Frequency points in the cost (γ² above the threshold).
+    pub points: usize,
+    /// Its cost at the start parameters.
+    pub start: f64,
+    /// Its cost at the identified parameters.
+    pub identified: f64,
+}
+
+/// `report.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Report {
+    /// The IDENT.toml.
+    pub ident_file: String,
+    /// `thesis` or `cifer`.
+    pub cost_form: crate::config::CostForm,
+    /// `lm` or `simplex`.
+    pub optimiser: crate::config::Optimiser,
+    /// Coherence threshold.
+    pub min_coherence: f64,
+    /// Fit wall time, s.
+    pub fit_time_s: f64,
+    /// Number of residuals.
+    pub residuals: usize,
+    /// Each parameter.
+    pub parameters: Vec<ParameterResult>,
+    /// Total cost at the start.
+    pub cost_start: f64,
+    /// Total cost at the identified parameters.
+    pub cost_identified: f64,
+    /// Per operating point and response.
+    pub costs: Vec<ResponseCost>,
+    /// Keys of the correlation matrix.
+    pub correlation_keys: Vec<String>,
+    /// Correlation matrix of the identified (free) parameters.
+    pub correlation: Vec<Vec<f64>>,
+    /// Optimisation passes.
+    pub passes: Vec<Pass>,
+    /// Time-domain verifications.
+    pub verification: Vec<VerificationResult>,
+    /// Responses left out of the cost, with why.
+    pub skipped_responses: Vec<String>,
+}
+
+impl Identification {
+    /// The report.
+    pub fn report(&self) -> Report {
+        let mut costs = Vec::new();
+        for (n, pt) in self.cost.points.iter().enumerate() {
+            for (k, r) in pt.responses.iter().enumerate() {
+                costs.push(ResponseCost {
+                    operating_point: pt.name.clone(),
+                    response: r.label.clone(),
+                    points: r.omega_rad_s.len(),
+                    start: self.fit.costs_start[n][k],
+                    identified: self.fit.costs_final[n][k],
+                });
+            }
+        }
+        Report {
+            ident_file: self.config.file.clone(),
+            cost_form: self.config.cost,
+            optimiser: self.config.optimiser,
+            min_coherence: self.config.min_coherence,
+            fit_time_s: self.fit_time_s,
+            residuals: self.fit.residuals,
+            parameters: self.fit.parameters.clone(),
+            cost_start: self.fit.cost_start,
+            cost_identified: self.fit.cost_final,
+            costs,
+            correlation_keys: self.fit.correlation_keys.clone(),
+            correlation: self.fit.correlation.clone(),
+            passes: self.fit.passes.clone(),
+            verification: self.verification.clone(),
+            skipped_responses: self.cost.skipped.clone(),
+        }
+    }
+
+    /// `identified.toml`: the complete parameter set.
+    pub fn identified_toml(&self) -> String {
+        let mut s = format!(
+            "# Identified by `helicon ident fit` from {} ({} of {} parameters identifiable;\n# see report.md). The other keys are the start values.\n",
+            self.config.file,
+            self.fit
+                .parameters
+                .iter()
+                .filter(|p| p.identifiable)
+                .count(),
+            self.fit.parameters.len()
+        );
+        s.push_str(&self.identified.to_toml());
+        s
+    }
+
+    /// Write `identified.toml`, `report.json` and `report.md` to `dir`.
+    pub fn write(&self, dir: &Path) -> Result<()> {
+        let io = |file: &Path| {
+            let f = file.display().to_string();
+            move |source| ConfigError::Io {
+                file: f,
+                action: "write",
+                source,
+            }
+        };
+        std::fs::create_dir_all(dir).map_err(io(dir))?;
+        let p = dir.join("identified.toml");
+        std::fs::write(&p, self.identified_toml()).map_err(io(&p))?;
+        let report = self.report();
+        let json = serde_json::to_string_pretty(&report)
+            .map_err(|e| ParamIdError::Fit(format!("report.json: {e}")))?;
+        let p = dir.join("report.json");
+        std::fs::write(&p, json + "\n").map_err(io(&p))?;
+        let p = dir.join("report.md");
+        std::fs::write(&p, markdown(&report)).map_err(io(&p))?;
+        Ok(())
+    }
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("–".into(), |v| format!("{v:.2}"))
+}
+
+/// `report.md`.
+pub fn markdown(r: &Report) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Parameter identification\n");
+    let _ = writeln!(
+        s,
+        "From `{}`: cost `{}`, optimiser `{}`, γ² > {}, {} residuals; fit {:.2} s.\n",
+        r.ident_file,
+        format!("{:?}", r.cost_form).to_lowercase(),
+        format!("{:?}", r.optimiser).to_lowercase(),
+        r.min_coherence,
+        r.residuals,
+        r.fit_time_s
+    );
+    let _ = writeln!(
+        s,
+        "Cost {:.4e} at the start, {:.4e} identified (ratio {:.2e}).\n",
+        r.cost_start,
+        r.cost_identified,
+        r.cost_identified / r.cost_start
+    );
+    for k in &r.skipped_responses {
+        let _ = writeln!(s, "- {k}");
+    }
+    if !r.skipped_responses.is_empty() {
+        let _ = writeln!(s);
+    }
+    let _ = writeln!(s, "## Parameters\n");
+    let _ = writeln!(
+        s,
+        "| key | start | identified | change % | CR % | insensitivity % | identifiable | reason |\n|---|---|---|---|---|---|---|---|"
+    );
+    for p in &r.parameters {
+        let _ = writeln!(
+            s,
+            "| `{}` | {} | {:.6} | {:+.2} | {} | {} | {} | {} |",
+            p.key,
+            p.start,
+            p.identified,
+            p.change_pct,
+            opt(p.cramer_rao_pct),
+            opt(p.insensitivity_pct),
+            if p.identifiable { "yes" } else { "**no**" },
+            p.reason.as_deref().unwrap_or("")
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nGuidelines (CIFER): Cramér–Rao bound ≤ 20 %, insensitivity ≤ 10 %.\n"
+    );
+    let _ = writeln!(s, "## Cost per response\n");
+    let _ = writeln!(
+        s,
+        "| operating point | response | points | start | identified |\n|---|---|---|---|---|"
+    );
+    for c in &r.costs {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.4e} | {:.4e} |",
+            c.operating_point, c.response, c.points, c.start, c.identified
+        );
+    }
+    if !r.correlation_keys.is_empty() {
+        let _ = writeln!(s, "\n## Correlation of the identified parameters\n");
+        let _ = write!(s, "| |");
+        for k in 0..r.correlation_keys.len() {
+            let _ = write!(s, " {} |", k + 1);
+        }
+        let _ = write!(s, "\n|---|");
+        for _ in &r.correlation_keys {
+            let _ = write!(s, "---|");
+        }
+        let _ = writeln!(s);
+        for (i, k) in r.correlation_keys.iter().enumerate() {
+            let _ = write!(s, "| {} `{k}` |", i + 1);
+            for v in &r.correlation[i] {
+                let _ = write!(s, " {v:+.2} |");
+            }
+            let _ = writeln!(s);
+        }
+    }
+    let _ = writeln!(s, "\n## Passes\n");
+    for (i, p) in r.passes.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "{}. {} free: cost {:.4e} → {:.4e}, {} evaluations, {}",
+            i + 1,
+            p.free.len(),
+            p.cost_start,
+            p.cost_end,
+            p.evaluations,
+            p.termination
+        );
+    }
+    if !r.verification.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n## Time-domain verification (Theil inequality coefficient)\n"
+        );
+        let _ = writeln!(
+            s,
+            "| log | point | output | start | identified |\n|---|---|---|---|---|"
+        );
+        for v in &r.verification {
+            for o in &v.outputs {
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {:.3} | {:.3} |",
+                    v.log, v.operating_point, o.output, o.theil_start, o.theil_identified
+                );
+            }
+        }
+    }
+    s
+}
