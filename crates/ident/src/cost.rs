@@ -104,64 +104,89 @@ pub(crate) fn select(frf: &Frf, opts: &CostOptions, omega_lo: f64, omega_hi: f64
 
 /// The accuracy of fitted parameters from the Jacobian of the weighted
 /// residuals at the optimum.
-pub(crate) struct Accuracy {
+#[derive(Debug, Clone)]
+pub struct Accuracy {
     /// Cramér–Rao bounds (one standard deviation); infinite for a parameter
-    /// the cost does not depend on.
+    /// the cost does not depend on, and for every parameter when the
+    /// information matrix is singular (`separable` false).
     pub cramer_rao: Vec<f64>,
     /// Insensitivities; infinite for a parameter the cost does not depend on.
     pub insensitivity: Vec<f64>,
     /// Parameter correlations (M⁻¹ normalised to a unit diagonal); NaN in
-    /// the rows and columns of parameters the cost does not depend on.
+    /// the rows and columns of parameters the cost does not depend on, and
+    /// everywhere when the information matrix is singular.
     pub correlation: DMatrix<f64>,
+    /// False when the information matrix of the parameters the cost depends
+    /// on is singular: some combination of them is not determined.
+    pub separable: bool,
 }
 
 /// Cramér–Rao bounds, insensitivities and correlations: with the
 /// information matrix M = JᵀJ and the residual variance s² = J_min/(n_r − n_p)
 /// (the cost's residuals treated as independent with equal variance),
 /// CR_i = s √(M⁻¹)_ii and I_i = s / √M_ii (I_i ≤ CR_i; they differ when
-/// parameters are correlated). A parameter whose Jacobian column is zero (or
-/// 1e-12 of the largest) is reported with infinite bounds and left out of
-/// M⁻¹. Errors when the remaining information matrix is singular.
-pub(crate) fn accuracy(jac: &DMatrix<f64>, cost: f64) -> Result<Accuracy> {
+/// parameters are correlated). A parameter whose Jacobian column norm is at
+/// most `no_information` times the largest one is reported with infinite
+/// bounds and left out of M⁻¹: 1e-12 for analytic Jacobians, larger for
+/// finite differences whose round-off shows up as a small column. Errors only
+/// on a non-finite Jacobian.
+pub fn accuracy(jac: &DMatrix<f64>, cost: f64, no_information: f64) -> Result<Accuracy> {
     let (nr, np) = jac.shape();
     let s2 = cost / nr.saturating_sub(np).max(1) as f64;
     let m = jac.transpose() * jac;
     // Scale to unit diagonal before inverting (the parameters span decades).
     let d: Vec<f64> = (0..np).map(|i| m[(i, i)].sqrt()).collect();
-    if d.iter().any(|v| !v.is_finite()) {
+    if d.iter().any(|v| !v.is_finite()) || !s2.is_finite() {
         return Err(IdentError::Fit("non-finite information matrix".into()));
     }
     let dmax = d.iter().copied().fold(0.0, f64::max);
-    let seen: Vec<usize> = (0..np).filter(|&i| d[i] > 1e-12 * dmax).collect();
+    let seen: Vec<usize> = (0..np).filter(|&i| d[i] > no_information * dmax).collect();
     let ns = seen.len();
     let ms = DMatrix::from_fn(ns, ns, |i, j| {
         let (a, b) = (seen[i], seen[j]);
         m[(a, b)] / (d[a] * d[b])
     });
-    let inv = ms.try_inverse().ok_or_else(|| {
-        IdentError::Fit("singular information matrix: parameters not separable".into())
-    })?;
     let mut cr = vec![f64::INFINITY; np];
     let mut ins = vec![f64::INFINITY; np];
     let mut corr = DMatrix::from_element(np, np, f64::NAN);
-    for (i, &a) in seen.iter().enumerate() {
-        cr[a] = (s2 * inv[(i, i)]).sqrt() / d[a];
+    for &a in &seen {
         ins[a] = s2.sqrt() / d[a];
+    }
+    let inv = ms
+        .try_inverse()
+        .filter(|inv| inv.iter().all(|v| v.is_finite()));
+    let Some(inv) = inv else {
+        return Ok(Accuracy {
+            cramer_rao: cr,
+            insensitivity: ins,
+            correlation: corr,
+            separable: false,
+        });
+    };
+    for (i, &a) in seen.iter().enumerate() {
+        cr[a] = (s2 * inv[(i, i)]).max(0.0).sqrt() / d[a];
         for (j, &b) in seen.iter().enumerate() {
             corr[(a, b)] = inv[(i, j)] / (inv[(i, i)] * inv[(j, j)]).sqrt();
         }
-    }
-    if seen
-        .iter()
-        .any(|&a| !(cr[a].is_finite() && ins[a].is_finite()))
-    {
-        return Err(IdentError::Fit("non-finite Cramér–Rao bound".into()));
     }
     Ok(Accuracy {
         cramer_rao: cr,
         insensitivity: ins,
         correlation: corr,
+        separable: true,
     })
+}
+
+/// [`accuracy`] for an analytic Jacobian, refusing a singular information
+/// matrix (the fit's parameters are not separable).
+pub(crate) fn separable_accuracy(jac: &DMatrix<f64>, cost: f64) -> Result<Accuracy> {
+    let acc = accuracy(jac, cost, 1e-12)?;
+    if !acc.separable {
+        return Err(IdentError::Fit(
+            "singular information matrix: parameters not separable".into(),
+        ));
+    }
+    Ok(acc)
 }
 
 /// `100 · v / |p|` for each pair: a bound in % of its parameter.

@@ -15,7 +15,7 @@
 //! Levenberg–Marquardt minimises J with the analytic Jacobian.
 
 pub use crate::cost::{CostOptions, coherence_weight};
-use crate::cost::{Points, accuracy, percent, select};
+use crate::cost::{Points, percent, select, separable_accuracy};
 use crate::error::{IdentError, Result};
 use crate::frf::Frf;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
@@ -259,7 +259,7 @@ pub fn fit_tf(
         .ok_or_else(|| IdentError::Fit("non-finite Jacobian at the optimum".into()))?;
     let cost = r.norm_squared();
     let params: Vec<f64> = problem.theta.iter().copied().collect();
-    let acc = accuracy(&jac, cost)?;
+    let acc = separable_accuracy(&jac, cost)?;
     if acc.cramer_rao.iter().chain(&params).any(|v| !v.is_finite()) {
         return Err(IdentError::Fit(
             "a parameter does not change the cost (insensitive): remove it".into(),

@@ -20,7 +20,7 @@
 //! The model and its responses can be read from TOML ([`SsSpec`]; see
 //! docs/ident.md for the format); errors name the file and the field.
 
-use crate::cost::{CostOptions, Points, accuracy, percent, select};
+use crate::cost::{CostOptions, Points, percent, select, separable_accuracy};
 use crate::error::{IdentError, Result};
 use crate::frf::Frf;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
@@ -711,7 +711,7 @@ pub fn fit_ss(model: &SsModel, responses: &[Response], opts: &CostOptions) -> Re
         .ok_or_else(|| IdentError::Fit("non-finite residuals at the optimum".into()))?;
     let (theta, _) = problem.theta();
     let cost = r.norm_squared();
-    let acc = accuracy(&jac, cost)?;
+    let acc = separable_accuracy(&jac, cost)?;
     let costs = data
         .iter()
         .zip(per_response(&r, &data))

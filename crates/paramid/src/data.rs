@@ -230,7 +230,11 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
     }
     let frf_err = |what: String| {
         let file = log.clone();
-        move |source| ParamIdError::Frf { file, what, source }
+        move |source| ParamIdError::Frf {
+            file,
+            what,
+            source: Box::new(source),
+        }
     };
     let grid = log_grid(lo, hi, cfg.points).map_err(frf_err("grid".into()))?;
     let refs: Vec<&[f64]> = rec.columns.iter().map(Vec::as_slice).collect();
@@ -314,7 +318,7 @@ pub fn from_model(cfg: &IdentConfig, truth: &helicon_model::Params) -> Result<Ve
                         ParamIdError::Frf {
                             file: cfg.file.clone(),
                             what: r.label(),
-                            source,
+                            source: Box::new(source),
                         }
                     })
                 })

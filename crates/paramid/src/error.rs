@@ -20,8 +20,8 @@ pub enum ParamIdError {
         file: String,
         /// Which response.
         what: String,
-        /// The cause.
-        source: helicon_ident::IdentError,
+        /// The cause (boxed: the error stays small on the happy path).
+        source: Box<helicon_ident::IdentError>,
     },
     /// The model could not be trimmed or linearised at an operating point
     /// with the given parameters.

@@ -319,57 +319,22 @@ pub fn accuracy(cost: &Cost, free: &[usize], values: &[f64]) -> Result<AccuracyP
     for (k, c) in cols.into_iter().enumerate() {
         jac.set_column(k, &c?);
     }
-    let s2 = r0.norm_squared() / (r0.len() - np).max(1) as f64;
-    let m = jac.transpose() * &jac;
     // a column below 1e-4 of the largest is the trim's round-off seen
     // through the finite difference (trim tolerance 1e-10 over the step
     // 1e-6 gives ~1e-4 relative; a parameter the responses do not depend on
     // measured 5e-5): no information, infinitely insensitive
-    let raw: Vec<f64> = (0..np).map(|i| m[(i, i)].sqrt()).collect();
-    let dmax = raw.iter().copied().fold(0.0, f64::max);
-    let d: Vec<f64> = raw
-        .iter()
-        .map(|&v| if v > 1e-4 * dmax { v } else { 0.0 })
-        .collect();
-    // θ units → per cent of the identified value
+    let acc = helicon_ident::cost::accuracy(&jac, r0.norm_squared(), 1e-4)
+        .map_err(|e| ParamIdError::Fit(e.to_string()))?;
+    // θ units (fractions of the start value) → per cent of the identified value
     let pct: Vec<f64> = free
         .iter()
         .map(|&i| 100.0 * cost.parameters[i].start / values[i].abs())
         .collect();
-    let ins: Vec<f64> = (0..np)
-        .map(|k| {
-            if d[k] > 0.0 {
-                s2.sqrt() / d[k] * pct[k]
-            } else {
-                f64::INFINITY
-            }
-        })
+    let scale = |v: &[f64]| -> Vec<f64> { v.iter().zip(&pct).map(|(v, p)| v * p).collect() };
+    let corr = (0..np)
+        .map(|i| (0..np).map(|j| acc.correlation[(i, j)]).collect())
         .collect();
-    let scaled = DMatrix::from_fn(np, np, |i, j| {
-        if d[i] > 0.0 && d[j] > 0.0 {
-            m[(i, j)] / (d[i] * d[j])
-        } else if i == j {
-            1.0
-        } else {
-            0.0
-        }
-    });
-    match scaled.try_inverse() {
-        Some(inv) if d.iter().all(|v| *v > 0.0) && inv.iter().all(|v| v.is_finite()) => {
-            let cr = (0..np)
-                .map(|k| (s2 * inv[(k, k)]).max(0.0).sqrt() / d[k] * pct[k])
-                .collect();
-            let corr = (0..np)
-                .map(|i| {
-                    (0..np)
-                        .map(|j| inv[(i, j)] / (inv[(i, i)] * inv[(j, j)]).sqrt())
-                        .collect()
-                })
-                .collect();
-            Ok((cr, ins, corr))
-        }
-        _ => Ok((vec![f64::INFINITY; np], ins, vec![vec![f64::NAN; np]; np])),
-    }
+    Ok((scale(&acc.cramer_rao), scale(&acc.insensitivity), corr))
 }
 
 fn finite(v: f64) -> Option<f64> {

@@ -144,7 +144,7 @@ pub fn verify(
             helicon_ident::fit::theil(&meas, sim).map_err(|e| ParamIdError::Frf {
                 file: v.log.display().to_string(),
                 what: format!("verification of {o}"),
-                source: e,
+                source: Box::new(e),
             })
         };
         outputs.push(VerifiedOutput {
