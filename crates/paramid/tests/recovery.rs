@@ -76,8 +76,10 @@ fn monte_carlo(truth: &Params, design: &Params, n: u64) -> Vec<(String, f64)> {
 
 fn recover(name: &str, instruments: bool, controllers: bool) -> (f64, f64, f64, f64) {
     let t = truth(name);
+    // one folder per test: the tests of this binary run in parallel in one process
     let dir = std::env::temp_dir().join(format!(
-        "helicon-paramid-recovery-{name}-{}",
+        "helicon-paramid-recovery-{name}-{}-{}",
+        if instruments { "iv" } else { "conditioned" },
         std::process::id()
     ));
     let opts = DemoOptions {
