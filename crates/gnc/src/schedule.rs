@@ -185,12 +185,7 @@ impl EnvelopeConfig {
 
     /// Read an envelope file (relative paths resolve against its folder).
     pub fn from_file(path: &Path) -> Result<Self, ConfigError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-            file: file.clone(),
-            action: "read",
-            source,
-        })?;
+        let (file, text) = helicon_model::ConfigError::read_file(path)?;
         let mut cfg = Self::from_toml_str(&text, &file)?;
         cfg.base_dir = path.parent().map(Path::to_path_buf);
         Ok(cfg)

@@ -42,6 +42,20 @@ pub enum ConfigError {
 }
 
 impl ConfigError {
+    /// Read a configuration file whole: its name as errors print it, and its
+    /// text; a file that cannot be read is [`ConfigError::Io`] naming it.
+    pub fn read_file(path: &std::path::Path) -> Result<(String, String), Self> {
+        let file = path.display().to_string();
+        match std::fs::read_to_string(path) {
+            Ok(text) => Ok((file, text)),
+            Err(source) => Err(ConfigError::Io {
+                file,
+                action: "read",
+                source,
+            }),
+        }
+    }
+
     /// An out-of-range number (`value` printed in its shortest round-trip
     /// form, so 1e-300 stays 1e-300).
     pub fn invalid(

@@ -329,12 +329,7 @@ fn text_invalid(file: &str, field: impl Into<String>, value: &str, rule: &str) -
 impl IdentConfig {
     /// Read and check an IDENT.toml; relative paths are taken from its folder.
     pub fn from_file(path: &Path) -> Result<Self, ConfigError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-            file: file.clone(),
-            action: "read",
-            source,
-        })?;
+        let (file, text) = helicon_model::ConfigError::read_file(path)?;
         let base = path.parent().unwrap_or(Path::new("."));
         Self::from_toml_str(&text, &file, base)
     }

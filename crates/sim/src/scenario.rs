@@ -466,12 +466,7 @@ impl Scenario {
 
     /// Load a scenario file (relative paths inside resolve against its folder).
     pub fn from_file(path: &Path) -> Result<Scenario, ScenarioError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
-            file: file.clone(),
-            action: "read",
-            source,
-        })?;
+        let (file, text) = helicon_model::ConfigError::read_file(path)?;
         let mut s = Self::from_toml_str(&text, &file)?;
         s.base_dir = path.parent().map(Path::to_path_buf);
         for v in &mut s.variants {

@@ -288,12 +288,7 @@ impl SensorConfig {
 
     /// Load and validate a TOML file.
     pub fn from_file(path: &Path) -> Result<Self, SensorConfigError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| SensorConfigError::Io {
-            file: file.clone(),
-            action: "read",
-            source,
-        })?;
+        let (file, text) = helicon_model::ConfigError::read_file(path)?;
         Self::from_toml_str(&text, &file)
     }
 

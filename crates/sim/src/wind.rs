@@ -559,12 +559,7 @@ impl WindConfig {
 
     /// Load and validate a TOML file.
     pub fn from_file(path: &std::path::Path) -> Result<Self, WindConfigError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| WindConfigError::Io {
-            file: file.clone(),
-            action: "read",
-            source,
-        })?;
+        let (file, text) = helicon_model::ConfigError::read_file(path)?;
         Self::from_toml_str(&text, &file)
     }
 }

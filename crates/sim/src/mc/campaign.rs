@@ -160,12 +160,7 @@ pub(super) fn param_field(name: &str) -> Option<helicon_model::params::Field> {
 impl Campaign {
     /// Load a campaign file (the scenario path resolves against its folder).
     pub fn from_file(path: &Path) -> Result<Campaign, McError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io {
-            file: file.clone(),
-            action: "read",
-            source,
-        })?;
+        let (file, text) = helicon_model::ConfigError::read_file(path)?;
         Self::from_toml_str(&text, &file, path.parent())
     }
 
