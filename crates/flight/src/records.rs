@@ -92,6 +92,24 @@ impl std::fmt::Write for Text {
     }
 }
 
+/// Format a text on the stack and write it to the log at `level` (no
+/// allocation; `fallback` if the formatted text is cut inside a character).
+fn log_fmt<W: Write>(
+    log: &mut FlightLog<W>,
+    level: LogLevel,
+    ts: u64,
+    args: std::fmt::Arguments<'_>,
+    fallback: &str,
+) -> Result<(), WriteError> {
+    let mut text = Text {
+        buf: [0; 160],
+        len: 0,
+    };
+    let _ = std::fmt::Write::write_fmt(&mut text, args);
+    let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or(fallback);
+    log.writer_mut().log(level, ts, s)
+}
+
 /// Write one ring item to the flight log (no allocation).
 pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Result<(), WriteError> {
     match r {
@@ -116,12 +134,15 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                     active: raised,
                 }))?;
             }
-            let mut text = Text {
-                buf: [0; 160],
-                len: 0,
+            let level = if is_failsafe(ev.to) {
+                LogLevel::Critical
+            } else {
+                LogLevel::Notice
             };
-            let _ = std::fmt::Write::write_fmt(
-                &mut text,
+            log_fmt(
+                log,
+                level,
+                ts,
                 format_args!(
                     "{}: {} -> {} at t = {:.4} s",
                     ev.reason.as_str(),
@@ -129,30 +150,11 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                     ev.to.as_str(),
                     ev.t_s
                 ),
-            );
-            let level = if is_failsafe(ev.to) {
-                LogLevel::Critical
-            } else {
-                LogLevel::Notice
-            };
-            let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("mode change");
-            log.writer_mut().log(level, ts, s)
+                "mode change",
+            )
         }
         FlightRecord::ImuHealth { t_s, change } => {
             let ts = timestamp_us(*t_s, "imu health")?;
-            let mut text = Text {
-                buf: [0; 160],
-                len: 0,
-            };
-            let _ = std::fmt::Write::write_fmt(
-                &mut text,
-                format_args!(
-                    "imu_health: flags {} -> {} at t = {t_s:.4} s: {}",
-                    change.previous,
-                    change.flags,
-                    change.text()
-                ),
-            );
             let level = if change.flags & ImuHealth::GRAVITY_DEFICIT != 0 {
                 LogLevel::Critical
             } else if change.flags & !change.previous != 0 {
@@ -160,8 +162,18 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
             } else {
                 LogLevel::Notice
             };
-            let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("imu health");
-            log.writer_mut().log(level, ts, s)
+            log_fmt(
+                log,
+                level,
+                ts,
+                format_args!(
+                    "imu_health: flags {} -> {} at t = {t_s:.4} s: {}",
+                    change.previous,
+                    change.flags,
+                    change.text()
+                ),
+                "imu health",
+            )
         }
         FlightRecord::RcLink { t_s, lost } => {
             let ts = timestamp_us(*t_s, "rc link")?;
@@ -177,16 +189,13 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
         }
         FlightRecord::Watchdog { t_s, silent_s } => {
             let ts = timestamp_us(*t_s, "watchdog")?;
-            let mut text = Text {
-                buf: [0; 160],
-                len: 0,
-            };
-            let _ = std::fmt::Write::write_fmt(
-                &mut text,
+            log_fmt(
+                log,
+                LogLevel::Emergency,
+                ts,
                 format_args!("watchdog: control task silent for {silent_s:.4} s: servos at trim"),
-            );
-            let s = std::str::from_utf8(&text.buf[..text.len]).unwrap_or("watchdog");
-            log.writer_mut().log(LogLevel::Emergency, ts, s)
+                "watchdog",
+            )
         }
     }
 }
