@@ -29,7 +29,7 @@ pub struct DemoArgs {
     #[arg(long)]
     pub truth: Option<PathBuf>,
     /// The identification flights to fly and fit, comma-separated (hover, fwd5, fwd10).
-    #[arg(long, value_delimiter = ',', default_value = "hover,fwd5")]
+    #[arg(long, value_delimiter = ',', default_value = "hover,fwd5,fwd10")]
     pub flights: Vec<String>,
     /// Turbulence and sensor-noise seed (default: the scenarios').
     #[arg(long)]

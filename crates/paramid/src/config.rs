@@ -37,7 +37,7 @@
 use crate::keys;
 use helicon_model::params::Descriptor;
 use helicon_model::{ConfigError, INPUT_NAMES, Params, Preset, REDUCED_STATE_NAMES};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// The cost's form.
@@ -167,6 +167,42 @@ pub struct Verification {
     /// End of the compared part, s.
     #[serde(default)]
     pub t_end_s: Option<f64>,
+    /// Where the replay starts: `"logged"` (the log's true 30-state at the
+    /// window's first sample, a simulator log), `"estimate"` (the model's
+    /// trim with the nine estimated states `est_*` of that sample, a real
+    /// flight) or `"trim"` (the model's trim). Default: the best the log has.
+    #[serde(default)]
+    pub initial_state: Option<InitialState>,
+    /// The wind flown: `"logged"` (columns `wind_n`, `wind_e`, `wind_d`, a
+    /// simulator log) or `"still"`. Default: logged when the log has it.
+    #[serde(default)]
+    pub wind: Option<WindSource>,
+}
+
+/// Where a verification replay starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum InitialState {
+    /// The logged true state (all 30 state columns) at the first sample;
+    /// the logged servo commands are flown as they are.
+    Logged,
+    /// The model's trim with attitude, body velocity and rates replaced by
+    /// the logged estimate (`est_*`) at the first sample; the logged servo
+    /// commands are flown as they are.
+    Estimate,
+    /// The model's trim at the operating point; the logged servo commands
+    /// are flown as perturbations from their first sample.
+    Trim,
+}
+
+/// The wind a verification replay flies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WindSource {
+    /// The logged wind, NED, held over each step.
+    Logged,
+    /// Still air.
+    Still,
 }
 
 fn default_verify_outputs() -> Vec<String> {

@@ -303,14 +303,20 @@ pub fn markdown(r: &Report) -> String {
         );
         let _ = writeln!(
             s,
-            "| log | point | output | start | identified |\n|---|---|---|---|---|"
+            "| log | point | start state | wind | output | start | identified |\n|---|---|---|---|---|---|---|"
         );
         for v in &r.verification {
             for o in &v.outputs {
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} | {:.3} | {:.3} |",
-                    v.log, v.operating_point, o.output, o.theil_start, o.theil_identified
+                    "| {} | {} | {:?} | {:?} | {} | {:.3} | {:.3} |",
+                    v.log,
+                    v.operating_point,
+                    v.initial_state,
+                    v.wind,
+                    o.output,
+                    o.theil_start,
+                    o.theil_identified
                 );
             }
         }
