@@ -265,7 +265,7 @@ fn ident_frf_conditioned_on_four_servos_on_the_flown_sweep_log() {
 
     // A quasi-steady u–q–θ model fitted to the flown q and u responses.
     let model = dir.join("model.toml");
-    std::fs::write(&model, FLOWN_MODEL).unwrap();
+    std::fs::write(&model, flown_model()).unwrap();
     let (ok, out, err) = helicon(&[
         "ident",
         "ss",
@@ -298,59 +298,13 @@ fn ident_frf_conditioned_on_four_servos_on_the_flown_sweep_log() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The hover longitudinal quasi-steady model of docs/ident.md, on the
-/// responses of the test above (`frf/frf.csv`).
-const FLOWN_MODEL: &str = r#"
-states = ["u", "q", "theta"]
-inputs = ["S_lon"]
-outputs = ["u", "q"]
-[A]
-u = ["X_u", 0.0, -9.81]
-q = ["M_u", "M_q", 0.0]
-theta = [0.0, 1.0, 0.0]
-[B]
-u = ["X_lon"]
-q = ["M_lon"]
-theta = [0.0]
-[C]
-u = [1, 0, 0]
-q = [0, 1, 0]
-[delay_s]
-S_lon = "tau"
-[[parameter]]
-name = "X_u"
-start = -0.1
-[[parameter]]
-name = "M_u"
-start = 0.1
-[[parameter]]
-name = "M_q"
-start = -20.0
-max = 0.0
-[[parameter]]
-name = "X_lon"
-start = 1.0
-[[parameter]]
-name = "M_lon"
-start = -120.0
-[[parameter]]
-name = "tau"
-start = 0.02
-min = 0.0
-max = 0.3
-[[response]]
-input = "S_lon"
-output = "q"
-frf = "frf/frf.csv"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 12.0
-[[response]]
-input = "S_lon"
-output = "u"
-frf = "frf/frf.csv"
-omega_min_rad_s = 1.5
-omega_max_rad_s = 10.0
-"#;
+/// The shipped hover longitudinal model (examples/ident), its response files
+/// pointed at the test's `frf/frf.csv`.
+fn flown_model() -> String {
+    include_str!("../../../examples/ident/hover-longitudinal.toml")
+        .replace("../../out/ident/frf/frf.csv", "frf/frf.csv")
+}
+
 
 /// A two-input, two-output model with a shared parameter: exact responses
 /// written to two frf.csv files, fitted by `ident ss` from perturbed starts.
