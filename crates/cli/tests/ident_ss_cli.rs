@@ -305,7 +305,6 @@ fn flown_model() -> String {
         .replace("../../out/ident/frf/frf.csv", "frf/frf.csv")
 }
 
-
 /// A two-input, two-output model with a shared parameter: exact responses
 /// written to two frf.csv files, fitted by `ident ss` from perturbed starts.
 const EXACT_MODEL: &str = r#"
