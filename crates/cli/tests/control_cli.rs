@@ -2,31 +2,15 @@
 
 #![allow(clippy::unwrap_used)] // test helpers outside #[test] fns
 
+mod common;
+use common::{helicon, tmpdir};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("helicon_control_cli_{}_{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
     let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
     p.display().to_string()
-}
-
-fn helicon(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_helicon"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 fn matrix(v: &serde_json::Value) -> Vec<Vec<f64>> {
@@ -485,8 +469,10 @@ const CORPUS: &[Case] = &[
     ),
 ];
 
-fn corpus_dir() -> PathBuf {
-    let d = tmpdir("corpus");
+/// The corpus files in a folder of their own for each test (`name`): the
+/// tests run in parallel and a fresh folder is emptied first.
+fn corpus_dir(name: &str) -> PathBuf {
+    let d = tmpdir(name);
     for (name, text) in FILES {
         write(&d, name, text);
     }
@@ -522,7 +508,7 @@ fn control(args: &[String]) -> (Option<i32>, String, String) {
 /// option, empty stdout, no panic. Collects all failures before reporting.
 #[test]
 fn hostile_corpus() {
-    let d = corpus_dir();
+    let d = corpus_dir("corpus");
     let mut failures = Vec::new();
     for c in CORPUS {
         let (code, out, err) = control(&expand(&d, c.args));
@@ -561,7 +547,7 @@ fn hostile_corpus() {
 /// Legal but extreme inputs succeed with finite numbers only (no NaN/null/inf in stdout).
 #[test]
 fn extreme_but_legal_inputs_print_finite_json() {
-    let d = corpus_dir();
+    let d = corpus_dir("extreme");
     // Tiny weights (1e-300), a stable system sampled at Ts = 1e6 s (Φ underflows to 0),
     // the MATLAB example in units scaled by 1e±45, and the c2d output read back as JSON.
     write(&d, "Qtiny.csv", "1e-300,0\n0,1e-300\n");

@@ -3,6 +3,8 @@
 //! `helicon ident ss` on exact and flown responses, run as a user would.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
+mod common;
+use common::{helicon, tmpdir};
 use helicon_ident::Complex64;
 use helicon_ident::frf::{WindowSpec, composite, conditioned, cross_spectra_grid, log_grid};
 use helicon_model::linearize::linearize;
@@ -10,26 +12,6 @@ use helicon_model::{InflowMode, REDUCED_STATE_NAMES};
 use nalgebra::{DMatrix, DVector, Vector3};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("helicon_ident_ss_{}_{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn helicon(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_helicon"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 fn scenario_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/ident-hover-sweep.toml")
