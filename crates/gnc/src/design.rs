@@ -1,7 +1,9 @@
 //! Controller and estimator design from a linear model at a trim (thesis
 //! chapters 14 and 15).
 //!
-//! * Outputs (14.4): y = Hs x = [ψ, u, v, w] (yaw and body velocities).
+//! * Outputs (14.4): y = Hs x = [ψ, u, v, w] (yaw and body velocities) at
+//!   hover; at speed the linearisation of what the on-board law integrates
+//!   (ψ and the NED velocity in body axes, [`integrator_output_map`]).
 //! * LQR with integral action (14.28)–(14.34) on the ZOH model (Φs, Γs) at Ts,
 //!   with Bryson weights (14.14)–(14.16): Qe = Qy = diag(1/y_max²) (14.23),
 //!   (14.35); Qi = `integral_weight`·Qe (14.36); Q2 = diag(1/u_max²) (14.24) or
@@ -17,11 +19,12 @@
 //! from `gains.json` (format version [`GAINS_FORMAT_VERSION`]) so the on-board
 //! runtime flies exactly the gains that were simulated.
 
+use helicon_core::frames::EulerTrig;
 use helicon_core::gains::{GainSet, LqiOptions};
 use helicon_core::state::{Input, NM, NU, NX_REDUCED, NY, OUTPUT_STATES, ReducedState};
 use helicon_lti::lqr::{alpha_from_settling_time, bryson, dlqr_integral, dlqr_pincer};
 use helicon_lti::{LtiError, dlqe};
-use nalgebra::{DMatrix, SMatrix};
+use nalgebra::{DMatrix, SMatrix, Vector3};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -288,6 +291,39 @@ pub fn output_matrix() -> DMatrix<f64> {
     hs
 }
 
+/// C (4×27): the linearised integrator input of the on-board law about a
+/// trim: ψ, and the NED velocity R_eb(Θ) v rotated back into body axes
+/// (at hover this is Hs (14.4); at speed the attitude enters through R_eb v:
+/// a yaw change δψ at speed V adds V δψ of sideways velocity, a pitch change
+/// δθ adds V δθ of vertical velocity). What [`design`] integrates.
+pub fn integrator_output_map(trim_x: &ReducedState) -> DMatrix<f64> {
+    let mut c = DMatrix::zeros(NY, NX_REDUCED);
+    c[(0, 2)] = 1.0;
+    let (phi, theta, psi) = (trim_x[0], trim_x[1], trim_x[2]);
+    let v = Vector3::new(trim_x[3], trim_x[4], trim_x[5]);
+    let r = EulerTrig::new(phi, theta, psi).ned_from_body();
+    let rt = r.transpose();
+    // ∂(R v)/∂Θ by central differences (h = 1e-6 rad: truncation ~1e-12 · |v|)
+    let h = 1e-6;
+    for a in 0..3 {
+        let mut p = [phi, theta, psi];
+        let mut m = p;
+        p[a] += h;
+        m[a] -= h;
+        let d = (EulerTrig::new(p[0], p[1], p[2]).ned_from_body() * v
+            - EulerTrig::new(m[0], m[1], m[2]).ned_from_body() * v)
+            / (2.0 * h);
+        let d_body = rt * d;
+        for row in 0..3 {
+            c[(1 + row, a)] = d_body[row];
+        }
+    }
+    for row in 0..3 {
+        c[(1 + row, 3 + row)] = 1.0;
+    }
+    c
+}
+
 /// Hm (9×27): the first nine reduced states (15.2).
 pub fn measurement_matrix() -> DMatrix<f64> {
     let mut hm = DMatrix::zeros(NM, NX_REDUCED);
@@ -299,6 +335,13 @@ pub fn measurement_matrix() -> DMatrix<f64> {
 
 /// Design the controller and estimator for the discrete model (Φs, Γs) at
 /// sample time `sample_time_s` about the trim (x_trim, u_trim).
+///
+/// The integrated outputs are what the on-board law integrates, linearised
+/// about this trim ([`integrator_output_map`]): at hover the thesis's
+/// Hs = [ψ u v w] (14.4); at speed ψ and the NED velocity in body axes,
+/// which depends on the attitude. A design at speed with Hs itself leaves a
+/// lateral–directional mode of the flown loop (≈ 1.6 rad/s at 10 m/s)
+/// damped at only −0.02 to −0.05 1/s, unstable at 15 m/s.
 pub fn design(
     phi: &DMatrix<f64>,
     gamma: &DMatrix<f64>,
@@ -310,7 +353,7 @@ pub fn design(
     design_with_outputs(
         phi,
         gamma,
-        &output_matrix(),
+        &integrator_output_map(x_trim),
         x_trim,
         u_trim,
         sample_time_s,
@@ -318,11 +361,11 @@ pub fn design(
     )
 }
 
-/// As [`design`] with the tracked outputs y = `hs` x (4×27) instead of
-/// Hs = [ψ, u, v, w] (14.4): the gain schedule passes the linearisation of
-/// what the on-board law integrates — ψ and the NED velocity rotated into
-/// body axes — which at speed also depends on the attitude (a pitch change
-/// δθ tilts the velocity vector by V δθ). At hover it is Hs.
+/// As [`design`] with the integrated outputs y = `hs` x (4×27) given: for
+/// analyses of other output choices (the thesis's Hs = [ψ, u, v, w] (14.4)
+/// at every speed is [`output_matrix`]). [`design`] and the gain schedule
+/// pass [`integrator_output_map`], the linearisation of what the on-board
+/// law integrates.
 pub fn design_with_outputs(
     phi: &DMatrix<f64>,
     gamma: &DMatrix<f64>,

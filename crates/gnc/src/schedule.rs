@@ -28,10 +28,10 @@
 //! gains: {…}}` where
 //! `gains` is exactly a `gains.json` object (format 2, checked the same way).
 
+pub use crate::design::integrator_output_map;
 use crate::design::{
     ControllerConfig, DesignError, GAINS_FORMAT_VERSION, Gains, design_with_outputs,
 };
-use helicon_core::frames::EulerTrig;
 use helicon_core::schedule::{GainSchedule, ScheduleAxes};
 use helicon_core::state::{NM, NU, NX_REDUCED, NY};
 use helicon_core::{CoreError, GainSet};
@@ -501,37 +501,6 @@ pub fn frozen_closed_loop(
     a.view_mut((n + NY, n + NY), (n, n))
         .copy_from(&(&phig - &gammag * &ls - &khm));
     a
-}
-
-/// C (4×27): the linearised integrator input of the on-board law about a
-/// trim: ψ, and the NED velocity R_eb(Θ) v rotated back into body axes
-/// (at hover this is Hs; at speed the attitude enters through R_eb v).
-pub fn integrator_output_map(trim_x: &ReducedState) -> DMatrix<f64> {
-    let mut c = DMatrix::zeros(NY, NX_REDUCED);
-    c[(0, 2)] = 1.0;
-    let (phi, theta, psi) = (trim_x[0], trim_x[1], trim_x[2]);
-    let v = Vector3::new(trim_x[3], trim_x[4], trim_x[5]);
-    let r = EulerTrig::new(phi, theta, psi).ned_from_body();
-    let rt = r.transpose();
-    // ∂(R v)/∂Θ by central differences (h = 1e-6 rad: truncation ~1e-12 · |v|)
-    let h = 1e-6;
-    for a in 0..3 {
-        let mut p = [phi, theta, psi];
-        let mut m = p;
-        p[a] += h;
-        m[a] -= h;
-        let d = (EulerTrig::new(p[0], p[1], p[2]).ned_from_body() * v
-            - EulerTrig::new(m[0], m[1], m[2]).ned_from_body() * v)
-            / (2.0 * h);
-        let d_body = rt * d;
-        for row in 0..3 {
-            c[(1 + row, a)] = d_body[row];
-        }
-    }
-    for row in 0..3 {
-        c[(1 + row, 3 + row)] = 1.0;
-    }
-    c
 }
 
 /// The points of the fine grid: each axis with `subdivisions` points
