@@ -56,14 +56,17 @@ fn the_flown_loop_at_10_m_s_is_the_design_and_hs_was_not() {
     let (t, phi, gamma, ts) = at(Params::bergen_twin(), 10.0);
     let g = design(&phi, &gamma, &t.x, &t.u, ts, &config()).unwrap();
     let flown = slowest(&frozen_closed_loop(&phi, &gamma, &t.x, &g.set), ts);
-    let designed = g
-        .spectral_radius()
-        .max(g.estimator_poles.iter().map(|z| z[0].hypot(z[1])).fold(0.0, f64::max));
+    let designed = g.spectral_radius().max(
+        g.estimator_poles
+            .iter()
+            .map(|z| z[0].hypot(z[1]))
+            .fold(0.0, f64::max),
+    );
     assert!((flown.0 - designed).abs() < 1e-9, "{flown:?} vs {designed}");
     assert!(flown.0 < 1.0 / g.set.alpha, "pincer: {flown:?}");
 
-    let hs = design_with_outputs(&phi, &gamma, &output_matrix(), &t.x, &t.u, ts, &config())
-        .unwrap();
+    let hs =
+        design_with_outputs(&phi, &gamma, &output_matrix(), &t.x, &t.u, ts, &config()).unwrap();
     let (r, w, s) = slowest(&frozen_closed_loop(&phi, &gamma, &t.x, &hs.set), ts);
     assert!(r > 0.9998 && r < 1.0, "Hs design's flown loop |z| = {r}");
     assert!((1.5..1.7).contains(&w), "Hs mode at {w} rad/s");
@@ -83,9 +86,12 @@ fn on_truth_a_the_design_keeps_its_margin() {
         let (tt, phit, gammat, _) = at(truth, speed);
         let g = design(&phi, &gamma, &t.x, &t.u, ts, &config()).unwrap();
         let (r, _, s) = slowest(&frozen_closed_loop(&phit, &gammat, &tt.x, &g.set), ts);
-        assert!(r < 0.998 && s < -1.0, "{speed} m/s: design on truth a |z| {r}, {s} 1/s");
-        let hs = design_with_outputs(&phi, &gamma, &output_matrix(), &t.x, &t.u, ts, &config())
-            .unwrap();
+        assert!(
+            r < 0.998 && s < -1.0,
+            "{speed} m/s: design on truth a |z| {r}, {s} 1/s"
+        );
+        let hs =
+            design_with_outputs(&phi, &gamma, &output_matrix(), &t.x, &t.u, ts, &config()).unwrap();
         let (r, _, _) = slowest(&frozen_closed_loop(&phit, &gammat, &tt.x, &hs.set), ts);
         assert!(r > hs_min, "{speed} m/s: Hs design on truth a |z| {r}");
     }
@@ -122,5 +128,8 @@ fn the_15_m_s_design_loses_stability_in_a_strong_head_wind() {
     let (_, _, s6) = flown_in(-6.0, 0.0);
     assert!((-1.0..-0.5).contains(&s6), "6 m/s head wind: {s6} 1/s");
     let (r8, w8, _) = flown_in(-8.0, 0.0);
-    assert!(r8 > 1.0 && (5.0..7.0).contains(&w8), "8 m/s head wind: |z| {r8}, {w8} rad/s");
+    assert!(
+        r8 > 1.0 && (5.0..7.0).contains(&w8),
+        "8 m/s head wind: |z| {r8}, {w8} rad/s"
+    );
 }

@@ -27,7 +27,10 @@ fn roll_excursion_rad(log: &std::path::Path) -> f64 {
 fn fwd10_flies_for_every_truth() {
     let (_, speed, text) = FLIGHTS.iter().find(|f| f.0 == "fwd10").unwrap();
     assert_eq!(*speed, 10.0);
-    assert!(text.contains("w20_m_s = 7.7"), "fwd10 in the light turbulence");
+    assert!(
+        text.contains("w20_m_s = 7.7"),
+        "fwd10 in the light turbulence"
+    );
     let dir = std::env::temp_dir().join(format!("helicon-paramid-fwd10-{}", std::process::id()));
     let mut worst = 0.0_f64;
     for (name, truth) in TRUTHS {
