@@ -168,21 +168,22 @@ fn readings_csv(kind: Kind, truth: &Params, rng: &mut ChaCha8Rng) -> Result<Stri
     Ok(s)
 }
 
-/// The seed of the ground readings for the demo's `seed` (its own stream:
-/// the flights' turbulence and sensor noise use `seed` itself).
-pub fn ground_seed(seed: Option<u64>) -> u64 {
-    seed.unwrap_or(0).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x6772_6f75_6e64 // "ground"
+/// The seed of the ground readings for the flights' seed `seed` (a stream
+/// of its own: the flights' turbulence and sensor noise use `seed` itself).
+pub fn ground_seed(seed: u64) -> u64 {
+    seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0x6772_6f75_6e64 // "ground"
 }
 
 /// Simulate the ground experiments [`GROUND_KINDS`] on `truth`, write their
 /// readings to `dir/<kind>.csv`, and run the calculators on them with the
 /// geometry of `geometry` (the start parameter file). Returns each measured
-/// value with its standard error.
+/// value with its standard error. `seed` is the flights' seed (the
+/// readings' errors come from [`ground_seed`] of it).
 pub fn measure_on_ground(
     truth: &Params,
     geometry: &Params,
     dir: &Path,
-    seed: Option<u64>,
+    seed: u64,
 ) -> Result<Vec<GroundValue>> {
     std::fs::create_dir_all(dir).map_err(|source| ConfigError::Io {
         file: dir.display().to_string(),
