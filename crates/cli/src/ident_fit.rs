@@ -89,7 +89,9 @@ pub fn run_demo_cmd(a: &DemoArgs) -> Result<()> {
 /// truth's model responses, and the truth beside the identified values.
 fn print_demo(id: &Identification, truth: &Params) -> Result<()> {
     if !id.ground.is_empty() {
-        println!("ground measurements on the true helicopter (in start.toml; mass and inertias weighed and pendulum-measured):");
+        println!(
+            "ground measurements on the true helicopter (in start.toml; mass and inertias weighed and pendulum-measured):"
+        );
     }
     for g in &id.ground {
         let d = helicon_paramid::keys::find(&g.key).context("ground key")?;
@@ -107,9 +109,9 @@ fn print_demo(id: &Identification, truth: &Params) -> Result<()> {
         );
     }
     if let Some(t) = id.truth_model_cost {
-        let before = t
-            .before_ground
-            .map_or(String::new(), |b| format!("{b:.4e} before the ground tests -> "));
+        let before = t.before_ground.map_or(String::new(), |b| {
+            format!("{b:.4e} before the ground tests -> ")
+        });
         println!(
             "cost against the truth's own model responses (no noise): {before}{:.4e} start -> {:.4e} identified ({:.0}x lower than the start)",
             t.start,

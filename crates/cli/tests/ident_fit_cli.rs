@@ -95,7 +95,11 @@ fn demo_then_fit_write_the_documented_outputs() {
         };
         assert!(se > 0.0 && (v - want).abs() < 5.0 * se, "{key}: {v} ± {se}");
         let d = helicon_paramid::keys::find(key).unwrap();
-        assert_eq!(helicon_paramid::keys::get(&start, d), v, "{key} in start.toml");
+        assert_eq!(
+            helicon_paramid::keys::get(&start, d),
+            v,
+            "{key} in start.toml"
+        );
     }
     let tm = &r["truth_model_cost"];
     assert!(

@@ -93,9 +93,19 @@ fn main() {
             if p.identifiable {
                 let cr = p.cramer_rao_pct.unwrap();
                 worst = worst.max(err.abs() / cr);
-                line += &format!(" {} {err:+.1}({cr:.1};{:.2})", short(&p.key), err.abs() / cr);
+                line += &format!(
+                    " {} {err:+.1}({cr:.1};{:.2})",
+                    short(&p.key),
+                    err.abs() / cr
+                );
             } else {
-                let why = p.reason.as_deref().unwrap_or("").split(':').next().unwrap_or("");
+                let why = p
+                    .reason
+                    .as_deref()
+                    .unwrap_or("")
+                    .split(':')
+                    .next()
+                    .unwrap_or("");
                 line += &format!(" {} flagged[{why}] {err:+.1}", short(&p.key));
             }
         }
@@ -120,7 +130,8 @@ fn main() {
             "{g}\n   worst {worst:.2} bounds; cost {:.0} -> {:.0}; truth-model {}{:.3e} -> {:.3e} ({:.0}x)",
             r.cost_start,
             r.cost_identified,
-            tm.before_ground.map_or(String::new(), |b| format!("before ground {b:.3e}, ")),
+            tm.before_ground
+                .map_or(String::new(), |b| format!("before ground {b:.3e}, ")),
             tm.start,
             tm.identified,
             tm.start / tm.identified

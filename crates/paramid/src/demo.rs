@@ -271,9 +271,11 @@ pub fn run_demo(truth: &Params, out: &Path, opts: &DemoOptions) -> Result<Identi
         // the flights' seed: the one given, else the scenarios' own
         let seed = match opts.seed {
             Some(s) => s,
-            None => Scenario::from_toml_str(FLIGHTS[0].2, "scenarios/ident/hover.toml")?
-                .wind
-                .seed,
+            None => {
+                Scenario::from_toml_str(FLIGHTS[0].2, "scenarios/ident/hover.toml")?
+                    .wind
+                    .seed
+            }
         };
         crate::ground_sim::measure_on_ground(truth, &start, &out.join("ground"), seed)?
     } else {

@@ -331,7 +331,11 @@ fn conditioned_estimates_are_biased_by_the_feedback() {
         "worst {:.2} %, {:.2} CR bounds, cost ratio {:.2e}, final/truth {:.3}",
         r.worst_pct, r.worst_cr, r.ratio, r.vs_truth
     );
-    assert!(r.worst_pct < 12.0, "worst identifiable error {} %", r.worst_pct);
+    assert!(
+        r.worst_pct < 12.0,
+        "worst identifiable error {} %",
+        r.worst_pct
+    );
     assert!(
         r.worst_cr > 2.0,
         "the conditioned estimate is no longer biased: {} CR bounds",
