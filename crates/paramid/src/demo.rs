@@ -311,10 +311,12 @@ pub fn run_demo(truth: &Params, out: &Path, opts: &DemoOptions) -> Result<Identi
 fn start_header(ground: &[crate::report::GroundValue]) -> String {
     let mut s = String::from(
         "# Start parameters of `helicon ident demo`: the Bergen Twin with the mass and the\n\
-         # body and paddle inertias weighed and pendulum-measured (taken from the truth),\n",
+         # body and paddle inertias weighed and pendulum-measured (taken from the truth)\n",
     );
     if ground.is_empty() {
-        s.push_str("# no ground experiments (--no-ground).\n");
+        s.push_str("# and no ground experiments (--no-ground).\n");
+    } else {
+        s.push_str("# and the values the simulated ground experiments (thesis 11.1) measured:\n");
     }
     for g in ground {
         let _ = writeln!(

@@ -121,6 +121,12 @@ fn recover(name: &str, instruments: bool, controllers: bool) -> Recovered {
         );
     }
     let tm = r.truth_model_cost.unwrap();
+    // the truth against its own responses: zero (the same linearisations)
+    let own = id.truth_model_cost(&t, Some(&t)).unwrap();
+    assert!(
+        own.before_ground.unwrap() < 1e-20,
+        "the truth's cost against itself {own:?}"
+    );
     println!(
         "  truth-model cost: before ground {:.4e}, start {:.4e}, identified {:.4e}",
         tm.before_ground.unwrap_or(f64::NAN),
