@@ -40,6 +40,10 @@ pub struct DemoArgs {
     /// Skip the doublet verification flight.
     #[arg(long)]
     pub no_verify: bool,
+    /// Skip the simulated ground experiments (§11.1): start from the Bergen
+    /// Twin's drag coefficient, lift slopes and hinge spring.
+    #[arg(long)]
+    pub no_ground: bool,
     /// Output directory: flights/, start.toml, IDENT.toml and the fit's outputs.
     #[arg(long)]
     pub out: PathBuf,
@@ -72,15 +76,53 @@ pub fn run_demo_cmd(a: &DemoArgs) -> Result<()> {
         seed: a.seed,
         verify: !a.no_verify,
         points: a.points,
+        ground: !a.no_ground,
         ..DemoOptions::default()
     };
     let t0 = std::time::Instant::now();
     let id = run_demo(&truth, &a.out, &opts)?;
     finish(&id, &a.out, t0.elapsed().as_secs_f64())?;
+    print_demo(&id, &truth)
+}
+
+/// The demo's own printout: the ground measurements, the cost against the
+/// truth's model responses, and the truth beside the identified values.
+fn print_demo(id: &Identification, truth: &Params) -> Result<()> {
+    if !id.ground.is_empty() {
+        println!(
+            "ground measurements on the true helicopter (in start.toml; mass and inertias weighed and pendulum-measured):"
+        );
+    }
+    for g in &id.ground {
+        let d = helicon_paramid::keys::find(&g.key).context("ground key")?;
+        let want = helicon_paramid::keys::get(truth, d);
+        println!(
+            "  {:38} {:>10.5} ± {:.2e} ({:.2} %, {} readings, {})  truth {:>10.5}  error {:+6.2} %",
+            g.key,
+            g.value,
+            g.std_error,
+            100.0 * g.std_error / g.value.abs(),
+            g.n_readings,
+            g.file,
+            want,
+            100.0 * (g.value - want) / want
+        );
+    }
+    if let Some(t) = id.truth_model_cost {
+        let before = t.before_ground.map_or(String::new(), |b| {
+            format!("{b:.4e} before the ground tests -> ")
+        });
+        println!(
+            "cost against the truth's own model responses (no noise): {before}{:.4e} start -> {:.4e} identified ({:.0}x lower than the start)",
+            t.start,
+            t.identified,
+            t.start / t.identified
+        );
+    }
     println!("truth vs identified (the truth is known in the demo):");
     for p in &id.fit.parameters {
         let d = helicon_paramid::keys::find(&p.key).context("parameter key")?;
-        let want = helicon_paramid::keys::get(&truth, d);
+        let want = helicon_paramid::keys::get(truth, d);
         println!(
             "  {:38} truth {:>10.5}  identified {:>10.5}  error {:+7.2} %{}",
             p.key,

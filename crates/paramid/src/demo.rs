@@ -108,6 +108,9 @@ pub struct DemoOptions {
     /// Estimate the responses with the logged excitations as instruments
     /// (default) instead of conditioning on the servos.
     pub instruments: bool,
+    /// Simulate the ground experiments (§11.1) on the truth and start from
+    /// their measured values ([`crate::ground_sim`]; default true).
+    pub ground: bool,
 }
 
 impl Default for DemoOptions {
@@ -121,6 +124,7 @@ impl Default for DemoOptions {
             points: 40,
             parameters: DEMO_PARAMETERS.iter().map(|s| s.to_string()).collect(),
             instruments: true,
+            ground: true,
         }
     }
 }
@@ -254,14 +258,37 @@ pub fn run_demo(truth: &Params, out: &Path, opts: &DemoOptions) -> Result<Identi
             )
         })
         .collect::<Result<Vec<()>>>()?;
+    // the ground experiments (§11.1) on the true helicopter: their measured
+    // values, not the truth's, go into the start parameters
     let mut start = Params::bergen_twin();
     for key in GROUND_MEASURED {
         if let Some(d) = crate::keys::find(key) {
             crate::keys::set(&mut start, d, crate::keys::get(truth, d));
         }
     }
+    let before_ground = start;
+    let ground = if opts.ground {
+        // the flights' seed: the one given, else the scenarios' own
+        let seed = match opts.seed {
+            Some(s) => s,
+            None => {
+                Scenario::from_toml_str(FLIGHTS[0].2, "scenarios/ident/hover.toml")?
+                    .wind
+                    .seed
+            }
+        };
+        crate::ground_sim::measure_on_ground(truth, &start, &out.join("ground"), seed)?
+    } else {
+        Vec::new()
+    };
+    for g in &ground {
+        if let Some(d) = crate::keys::find(&g.key) {
+            crate::keys::set(&mut start, d, g.value);
+        }
+    }
     let path = out.join("start.toml");
-    std::fs::write(&path, start.to_toml()).map_err(|source| ConfigError::Io {
+    let header = start_header(&ground);
+    std::fs::write(&path, header + &start.to_toml()).map_err(|source| ConfigError::Io {
         file: path.display().to_string(),
         action: "write",
         source,
@@ -273,5 +300,30 @@ pub fn run_demo(truth: &Params, out: &Path, opts: &DemoOptions) -> Result<Identi
         source,
     })?;
     let cfg = IdentConfig::from_file(&path)?;
-    run(&cfg)
+    let mut id = run(&cfg)?;
+    id.ground = ground;
+    let before = (!id.ground.is_empty()).then_some(&before_ground);
+    id.truth_model_cost = Some(id.truth_model_cost(truth, before)?);
+    Ok(id)
+}
+
+/// The comment heading `start.toml`: where its values come from.
+fn start_header(ground: &[crate::report::GroundValue]) -> String {
+    let mut s = String::from(
+        "# Start parameters of `helicon ident demo`: the Bergen Twin with the mass and the\n\
+         # body and paddle inertias weighed and pendulum-measured (taken from the truth)\n",
+    );
+    if ground.is_empty() {
+        s.push_str("# and no ground experiments (--no-ground).\n");
+    } else {
+        s.push_str("# and the values the simulated ground experiments (thesis 11.1) measured:\n");
+    }
+    for g in ground {
+        let _ = writeln!(
+            s,
+            "# {} = {} +- {:.3e} (1 sigma): helicon ident ground {} {}",
+            g.key, g.value, g.std_error, g.kind, g.file
+        );
+    }
+    s
 }

@@ -18,6 +18,7 @@
 //! - [`report`]: `identified.toml`, `report.json`, `report.md`;
 //! - [`verify`]: time-domain verification on doublet logs (Theil coefficient);
 //! - [`demo`]: the programme end to end on a simulated helicopter;
+//! - [`ground_sim`]: the §11.1 ground experiments simulated on the demo's truth;
 //! - [`keys`]: parameters by their `helicon params` key.
 
 pub mod config;
@@ -26,6 +27,7 @@ pub mod data;
 pub mod demo;
 pub mod error;
 pub mod fit;
+pub mod ground_sim;
 pub mod keys;
 pub mod linear;
 pub mod report;

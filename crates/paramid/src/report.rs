@@ -31,6 +31,102 @@ pub struct Identification {
     pub fit_time_s: f64,
     /// Time-domain verifications.
     pub verification: Vec<VerificationResult>,
+    /// Ground measurements that built the start parameters (the demo's;
+    /// empty for `helicon ident fit`).
+    pub ground: Vec<GroundValue>,
+    /// The cost against the true helicopter's own responses (the demo's,
+    /// where the truth is known; `None` otherwise).
+    pub truth_model_cost: Option<TruthModelCost>,
+}
+
+/// A parameter measured on the ground (thesis §11.1) and put into the start
+/// parameters.
+#[derive(Debug, Clone, Serialize)]
+pub struct GroundValue {
+    /// Its `helicon params` key.
+    pub key: String,
+    /// The measured value (SI).
+    pub value: f64,
+    /// Its standard error (one σ, SI).
+    pub std_error: f64,
+    /// The experiment (`helicon ident ground KIND`).
+    pub kind: String,
+    /// The readings file, relative to the output directory.
+    pub file: String,
+    /// Readings used.
+    pub n_readings: usize,
+}
+
+/// The cost (11.1) of the start and of the identified model against the
+/// true helicopter's own responses (its ZOH linearisations) at the same
+/// operating points, frequencies and weights, without noise: how much nearer
+/// the model came to the truth, independently of the flight data's noise.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct TruthModelCost {
+    /// Of the parameters before the ground experiments (the Bergen Twin with
+    /// the weighed mass and inertias), when there were ground experiments.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub before_ground: Option<f64>,
+    /// At the start parameters.
+    pub start: f64,
+    /// At the identified parameters.
+    pub identified: f64,
+}
+
+impl Identification {
+    /// The [`TruthModelCost`] of this identification for the true
+    /// helicopter `truth`: the cost's measured responses replaced by the
+    /// truth's model responses at the same frequencies (the weights kept);
+    /// also of `before_ground`, the parameters before the ground
+    /// experiments, when given.
+    pub fn truth_model_cost(
+        &self,
+        truth: &Params,
+        before_ground: Option<&Params>,
+    ) -> Result<TruthModelCost> {
+        let mut of_truth = self.cost.clone();
+        of_truth.base = *truth;
+        let truth_values: Vec<f64> = self
+            .cost
+            .parameters
+            .iter()
+            .map(|p| crate::keys::get(truth, p.descriptor))
+            .collect();
+        let h = of_truth.model_at(&truth_values)?;
+        let mut c = self.cost.clone();
+        for (pt, hp) in c.points.iter_mut().zip(h) {
+            for (r, hr) in pt.responses.iter_mut().zip(hp) {
+                r.h = hr;
+            }
+        }
+        let start: Vec<f64> = c.parameters.iter().map(|p| p.start).collect();
+        let before_ground = match before_ground {
+            Some(b) => {
+                let values: Vec<f64> = c
+                    .parameters
+                    .iter()
+                    .map(|p| crate::keys::get(b, p.descriptor))
+                    .collect();
+                let mut cb = c.clone();
+                cb.base = *b;
+                Some(cb.residuals(&values)?.norm_squared())
+            }
+            None => None,
+        };
+        let tc = TruthModelCost {
+            before_ground,
+            start: c.residuals(&start)?.norm_squared(),
+            identified: c.residuals(&self.fit.values)?.norm_squared(),
+        };
+        if tc.start.is_finite()
+            && tc.identified.is_finite()
+            && tc.before_ground.is_none_or(f64::is_finite)
+        {
+            Ok(tc)
+        } else {
+            Err(ParamIdError::Fit("non-finite truth-model cost".into()))
+        }
+    }
 }
 
 /// Estimate the responses of every operating point (in parallel), fit,
@@ -71,6 +167,8 @@ pub fn run_on(cfg: &IdentConfig, data: Vec<PointData>) -> Result<Identification>
         identified,
         fit_time_s,
         verification,
+        ground: Vec::new(),
+        truth_model_cost: None,
     })
 }
 
@@ -122,6 +220,12 @@ pub struct Report {
     pub verification: Vec<VerificationResult>,
     /// Responses left out of the cost, with why.
     pub skipped_responses: Vec<String>,
+    /// Ground measurements in the start parameters (the demo's; empty
+    /// for `helicon ident fit`).
+    pub ground: Vec<GroundValue>,
+    /// The demo's cost against the true helicopter's model responses.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub truth_model_cost: Option<TruthModelCost>,
 }
 
 impl Identification {
@@ -155,6 +259,8 @@ impl Identification {
             passes: self.fit.passes.clone(),
             verification: self.verification.clone(),
             skipped_responses: self.cost.skipped.clone(),
+            ground: self.ground.clone(),
+            truth_model_cost: self.truth_model_cost,
         }
     }
 
@@ -202,6 +308,43 @@ fn opt(v: Option<f64>) -> String {
     v.map_or("–".into(), |v| format!("{v:.2}"))
 }
 
+/// The demo's sections of `report.md`: the cost against the truth's model
+/// responses and the ground measurements.
+fn demo_sections(s: &mut String, r: &Report) {
+    if let Some(t) = r.truth_model_cost {
+        let before = t.before_ground.map_or(String::new(), |b| {
+            format!("{b:.4e} before the ground experiments, ")
+        });
+        let _ = writeln!(
+            s,
+            "Against the true helicopter's own model responses (same points, frequencies and weights, no noise): {before}{:.4e} at the start, {:.4e} identified (ratio {:.2e}).\n",
+            t.start,
+            t.identified,
+            t.identified / t.start
+        );
+    }
+    if !r.ground.is_empty() {
+        let _ = writeln!(
+            s,
+            "## Ground measurements (thesis §11.1, in the start parameters)\n\n| key | value | standard error | % | kind | readings |\n|---|---|---|---|---|---|"
+        );
+        for g in &r.ground {
+            let _ = writeln!(
+                s,
+                "| `{}` | {:.6} | {:.2e} | {:.2} | {} | {} ({}) |",
+                g.key,
+                g.value,
+                g.std_error,
+                100.0 * g.std_error / g.value.abs(),
+                g.kind,
+                g.file,
+                g.n_readings
+            );
+        }
+        let _ = writeln!(s);
+    }
+}
+
 /// `report.md`.
 pub fn markdown(r: &Report) -> String {
     let mut s = String::new();
@@ -223,6 +366,7 @@ pub fn markdown(r: &Report) -> String {
         r.cost_identified,
         r.cost_identified / r.cost_start
     );
+    demo_sections(&mut s, r);
     for k in &r.skipped_responses {
         let _ = writeln!(s, "- {k}");
     }

@@ -31,6 +31,11 @@ fn logged_start_verifies_the_identified_model_better() {
         flights: vec!["hover".into()],
         seed: Some(3),
         points: 20,
+        // the start of the Bergen Twin's rotor values, as these figures were
+        // measured: with the ground-measured start the start model already
+        // verifies at 0.082 and this hover-only fit (20 points) moves it to
+        // 0.161 (docs/paramid.md)
+        ground: false,
         ..DemoOptions::default()
     };
     let id = run_demo(&truth, &dir, &opts).unwrap();
