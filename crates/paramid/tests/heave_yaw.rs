@@ -126,9 +126,10 @@ fn noise_free_flight_heave_and_yaw_match_the_truth() {
 
 /// The shipped hover flight (turbulence, sensors in the loop, seed 3) with
 /// the demo's own IDENT.toml (its windows and responses): every response is
-/// kept, and the heave and yaw costs at the truth per point are within 4×
-/// the worst cyclic one and below 1.5 (measured: yaw 0.40–0.75, heave 0.62,
-/// cyclic 0.08–0.26; before the fix 8.9–33).
+/// kept, and the heave (w/S_col) and yaw (meas_r/S_tr) costs at the truth
+/// per point are within 4× the worst cyclic one and below 1.5 (measured:
+/// yaw 0.40, heave 0.62, cyclic 0.08–0.26; before the fix, with these
+/// windows, 17.7 on the yaw).
 #[test]
 fn shipped_hover_flight_heave_and_yaw_at_the_cyclic_level() {
     let dir = scratch("hover");
@@ -150,7 +151,7 @@ fn shipped_hover_flight_heave_and_yaw_at_the_cyclic_level() {
         .iter()
         .filter(|c| c.0.ends_with("/S_col") || c.0.ends_with("/S_tr"))
         .collect();
-    assert_eq!(heave_yaw.len(), 3);
+    assert_eq!(heave_yaw.len(), 2);
     for (label, n, c) in heave_yaw {
         assert!(*n >= 10, "{label}: {n} coherent points");
         assert!(
