@@ -46,15 +46,25 @@ pub struct Record {
 
 /// The response of `output` to input `which` of `inputs` with instrumental
 /// variables (the excitations added to the inputs, one per input): with
-/// y = Σ_b H_b u_b + n and n uncorrelated with the instruments e,
+/// y = Σ_b H_b u_b + v and v uncorrelated with the instruments e,
 /// G_ey = G_eu H, so H = G_eu⁻¹ G_ey at each frequency. A feedback law
-/// answering turbulence and sensor noise correlates the inputs with n, which
+/// answering turbulence and sensor noise correlates the inputs with v, which
 /// biases the conditioned estimate G_uu⁻¹ G_uy; the instruments are not
-/// correlated with n. The coherence given is the multiple coherence of the
-/// output on the instruments, γ² = G_ye G_ee⁻¹ G_ey / G_yy (the part of the
-/// output the excitations explain), and the random error
-/// √(1 − γ²)/(|γ| √(2(n_d − q + 1))). Points where G_eu or G_ee is singular
-/// are left out.
+/// correlated with v.
+///
+/// The coherence given is the one that states this estimate's own random
+/// error. With the equation error v = y − Σ_b H_b u_b (its spectrum G_vv
+/// from the spectra and the estimated H), Ĥ − H = G_eu⁻¹ G_ev has the
+/// covariance M G_vv / n_d, M = G_eu⁻¹ G_ee G_eu⁻ᴴ, so the relative random
+/// error of |H_w| is √(M_ww G_vv / (2 n_d |H_w|²)); the coherence
+/// γ² = |H_w|² / (|H_w|² + M_ww G_vv) gives it through the usual
+/// √(1 − γ²)/(|γ| √(2 n_d)) (with e = u it is the ordinary coherence).
+/// It is per input and open-loop: under feedback the law hides the
+/// disturbance from the output (so the multiple coherence of the output on
+/// the excitations stays high) while it moves the servos to cancel it, which
+/// is what spoils the estimate; M_ww is large where the excitation `which`
+/// moves its servo little against the others. Points where G_eu or G_ee is
+/// singular are left out.
 pub fn instrumented(
     cs: &helicon_ident::frf::CrossSpectra,
     instruments: &[usize],
@@ -95,11 +105,18 @@ pub fn instrumented(
         let gee = DMatrix::from_fn(q, q, |a, b| cs.get(k, instruments[a], instruments[b]));
         let gey = DVector::from_fn(q, |a, _| cs.get(k, instruments[a], output));
         let gyy = cs.get(k, output, output).re;
-        let (Some(ieu), Some(iee)) = (inverse(geu), inverse(gee)) else {
+        let (Some(ieu), Some(_)) = (inverse(geu), inverse(gee.clone())) else {
             continue;
         };
-        let h = ieu * &gey;
-        let g2 = (gey.dotc(&(iee * &gey)).re / gyy).clamp(0.0, 1.0);
+        let h = &ieu * &gey;
+        // equation-error spectrum G_vv = G_yy − 2 Re Σ_b H_b conj(G_uby) + Hᴴ G_uu H
+        let guu = DMatrix::from_fn(q, q, |a, b| cs.get(k, inputs[a], inputs[b]));
+        let guy = DVector::from_fn(q, |a, _| cs.get(k, inputs[a], output));
+        let cross: Complex64 = h.iter().zip(guy.iter()).map(|(hb, g)| hb * g.conj()).sum();
+        let gvv = (gyy - 2.0 * cross.re + h.dotc(&(&guu * &h)).re).max(0.0);
+        let m_ww = (&ieu * gee * ieu.adjoint())[(which, which)].re;
+        let h2 = h[which].norm_sqr();
+        let g2 = (h2 / (h2 + m_ww * gvv)).clamp(0.0, 1.0);
         let eps = (1.0 - g2).sqrt() / (g2.sqrt() * (2.0 * dof).sqrt());
         if h[which].re.is_finite() && h[which].im.is_finite() && g2.is_finite() && eps.is_finite() {
             f.omega_rad_s.push(om);
