@@ -30,13 +30,15 @@ pub enum FlightRecord {
         /// The change.
         change: ImuHealthChange,
     },
-    /// The receiver's failsafe raised (the pilot's link lost) or cleared
-    /// (written as a text message).
+    /// The pilot's link lost (the receiver's failsafe flag, or its
+    /// silence) or back (written as a text message).
     RcLink {
         /// On-board time (s).
         t_s: f64,
         /// Lost (true) or back.
         lost: bool,
+        /// Lost because the receiver went silent (not its failsafe flag).
+        silent: bool,
     },
     /// The watchdog commanded the trim: the control task was silent for
     /// this long (s).
@@ -175,9 +177,14 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 "imu health",
             )
         }
-        FlightRecord::RcLink { t_s, lost } => {
+        FlightRecord::RcLink { t_s, lost, silent } => {
             let ts = timestamp_us(*t_s, "rc link")?;
-            let (level, text) = if *lost {
+            let (level, text) = if *lost && *silent {
+                (
+                    LogLevel::Critical,
+                    "rc_link: receiver silent, the pilot's link lost",
+                )
+            } else if *lost {
                 (
                     LogLevel::Critical,
                     "rc_link: receiver failsafe, the pilot's link lost",
@@ -231,6 +238,7 @@ pub fn step_records(
         push(FlightRecord::RcLink {
             t_s: tick.now_s,
             lost,
+            silent: out.rc_link == crate::safety::RcLink::Silent,
         });
     }
     if let Some(ev) = out.event {

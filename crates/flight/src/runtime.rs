@@ -24,7 +24,7 @@ use crate::control::{ControlTask, StepReport, Tick};
 pub use crate::mission::{LastStep, Mission, flight_mode};
 use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
 use crate::records::{FlightRecord, step_records, write_record};
-use crate::safety::{Mode, RcInput};
+use crate::safety::{Mode, RcInput, RcLink};
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_gcs::link::VehicleEvent;
@@ -86,8 +86,14 @@ pub trait RcPort: Send + 'static {
 
 /// The servo side of the avionics board.
 pub trait ServoPort: Send + 'static {
-    /// Send one servo frame.
+    /// Send one servo frame, without waiting for its transmission.
     fn send(&mut self, u: &Input) -> Result<(), PortError>;
+
+    /// Frames dropped so far because the port could not take them (its
+    /// output buffer full): counted, not errors.
+    fn dropped(&self) -> u64 {
+        0
+    }
 }
 
 /// How the control task is paced.
@@ -132,8 +138,12 @@ pub struct RunReport {
     pub steps_without_imu: u64,
     /// Log records dropped (a ring full) or refused by the writer.
     pub log_dropped: u64,
-    /// Servo frames sent.
+    /// Servo frames handed to the port (including those it dropped).
     pub servo_frames: u64,
+    /// Servo frames the avionics port dropped: its output buffer could not
+    /// take them (the line slower than the frames, or nobody reading); the
+    /// control task never waits for the line.
+    pub servo_frames_dropped: u64,
     /// Watchdog trips.
     pub watchdog_trips: u64,
     /// Wake-up lateness after the deadline (clock pacing).
@@ -178,6 +188,7 @@ struct ControlResult {
 #[derive(Default)]
 struct ThreadResult {
     servo_frames: u64,
+    servo_dropped: u64,
     watchdog_trips: u64,
     latency: Option<LatencyStats>,
     log_dropped: u64,
@@ -448,6 +459,7 @@ impl RuntimeHandle {
             steps_without_imu: 0,
             log_dropped: 0,
             servo_frames: 0,
+            servo_frames_dropped: 0,
             watchdog_trips: 0,
             wakeup_jitter: LatencyStats::new().summary(),
             compute: LatencyStats::new().summary(),
@@ -460,6 +472,7 @@ impl RuntimeHandle {
             Ok(c) => {
                 if let Some(d) = c.direct {
                     report.servo_frames += d.servo_frames;
+                    report.servo_frames_dropped += d.servo_dropped;
                     if let Some(l) = d.latency {
                         report.sensor_to_servo = l.summary();
                     }
@@ -480,6 +493,7 @@ impl RuntimeHandle {
             match h.join() {
                 Ok(r) => {
                     report.servo_frames += r.servo_frames;
+                    report.servo_frames_dropped += r.servo_dropped;
                     report.watchdog_trips += r.watchdog_trips;
                     report.log_dropped += r.log_dropped;
                     if let Some(l) = r.latency {
@@ -679,7 +693,9 @@ fn control_loop(
         if let Some(lost) = out.rc_link_lost {
             mission.notify(
                 now_s,
-                VehicleEvent::Warning(if lost {
+                VehicleEvent::Warning(if lost && out.rc_link == RcLink::Silent {
+                    "RC: receiver silent, the pilot's link lost"
+                } else if lost {
                     "RC: receiver failsafe, the pilot's link lost"
                 } else {
                     "RC: the pilot's link back"
@@ -781,6 +797,7 @@ fn control_loop(
     ControlResult {
         direct: ctx.direct.map(|d| ThreadResult {
             servo_frames: d.frames,
+            servo_dropped: d.servos.dropped(),
             latency: Some(d.latency),
             error: d.error,
             ..ThreadResult::default()
@@ -853,6 +870,7 @@ fn avionics_loop<V: ServoPort>(
         }
         thread::park_timeout(Duration::from_secs_f64(options.watchdog_s / 4.0));
     }
+    result.servo_dropped = port.dropped();
     result
 }
 
