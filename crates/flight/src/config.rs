@@ -479,6 +479,10 @@ mod tests {
         );
         assert!(err("[stale]\nbogus = 1\n").contains("bogus"));
         assert_eq!(
+            err("[stale]\nrc_s = 0.0\n"),
+            "o.toml: `stale.rc_s` = 0: must be finite, > 0 and <= 10"
+        );
+        assert_eq!(
             err("[home]\nlatitude_deg = 91.0\n"),
             "o.toml: `home.latitude_deg` = 91: must be finite and within -90..=90"
         );
