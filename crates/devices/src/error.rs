@@ -76,9 +76,7 @@ pub enum TransportError {
     /// The device's output buffer could not take a frame (the line is
     /// slower than what is written, or nobody reads): the frame was
     /// dropped, `queued` of its `len` bytes written.
-    #[error(
-        "{path}: output buffer full: frame of {len} bytes dropped ({queued} bytes queued)"
-    )]
+    #[error("{path}: output buffer full: frame of {len} bytes dropped ({queued} bytes queued)")]
     Full {
         /// The device path.
         path: PathBuf,

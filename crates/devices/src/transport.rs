@@ -108,10 +108,13 @@ impl SerialLink {
                 path: self.path.clone(),
                 source,
             })?;
-        let writer = self.writer.try_clone().map_err(|source| TransportError::Io {
-            what: format!("cloning {}", self.path.display()),
-            source,
-        })?;
+        let writer = self
+            .writer
+            .try_clone()
+            .map_err(|source| TransportError::Io {
+                what: format!("cloning {}", self.path.display()),
+                source,
+            })?;
         Ok(Self {
             port,
             writer,

@@ -171,18 +171,28 @@ fn a_full_output_buffer_drops_frames_without_blocking() {
             let t = Instant::now();
             match link.write_all(frame.as_bytes()) {
                 Ok(()) => accepted += 1,
-                Err(TransportError::Full { path, queued, len: l }) => {
+                Err(TransportError::Full {
+                    path,
+                    queued,
+                    len: l,
+                }) => {
                     assert_eq!((path.as_path(), l), (slave.as_path(), len));
                     assert!(queued < len);
                     partial += u64::from(queued > 0);
                     refused += 1;
-                    message = TransportError::Full { path, queued, len: l }.to_string();
+                    message = TransportError::Full {
+                        path,
+                        queued,
+                        len: l,
+                    }
+                    .to_string();
                 }
                 Err(e) => panic!("{e}"),
             }
             worst = worst.max(t.elapsed());
         }
-        tx.send((accepted, refused, partial, worst, message)).unwrap();
+        tx.send((accepted, refused, partial, worst, message))
+            .unwrap();
         link
     });
     let (accepted, refused, partial, worst, message) = rx
@@ -198,7 +208,10 @@ fn a_full_output_buffer_drops_frames_without_blocking() {
     assert!(message.contains("output buffer full") && message.contains("/dev/pts"));
     // a refused write returns at once (a partial one waits at most
     // PARTIAL_WRITE_WAIT); the bound is loose for a loaded machine
-    assert!(worst < PARTIAL_WRITE_WAIT + Duration::from_millis(500), "{worst:?}");
+    assert!(
+        worst < PARTIAL_WRITE_WAIT + Duration::from_millis(500),
+        "{worst:?}"
+    );
     // the line holds the accepted frames whole (a frame taken in part and
     // dropped is skipped by its checksum, costing at most the next one)
     let mut decoder = AvionicsDecoder::new();

@@ -270,7 +270,11 @@ fn a_silent_receiver_in_manual_hands_over_to_the_hold() {
         .iter()
         .map(|t| *t as f64 * 1e-6)
         .collect();
-    let last = rc_t.iter().copied().filter(|t| *t < 2.0).fold(0.0, f64::max);
+    let last = rc_t
+        .iter()
+        .copied()
+        .filter(|t| *t < 2.0)
+        .fold(0.0, f64::max);
     assert!((last - 1.98).abs() < 1e-6, "{last}");
     assert!(rc_t.iter().all(|t| !(2.0..3.0).contains(t)), "silent");
     let hold = log.texts_with("rc_lost: manual -> hold");

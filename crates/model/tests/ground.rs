@@ -316,10 +316,8 @@ fn hand_worked_cases() {
 #[test]
 fn stabilizer_lift_slope_against_the_models_paddle_lift() {
     let mut p = Params::bergen_twin();
-    for (ri, ro, chord, cls, omega) in [
-        (0.5, 0.65, 0.1, 2.6, 100.0),
-        (0.3, 0.45, 0.06, 4.1, 150.0),
-    ] {
+    for (ri, ro, chord, cls, omega) in [(0.5, 0.65, 0.1, 2.6, 100.0), (0.3, 0.45, 0.06, 4.1, 150.0)]
+    {
         p.stabilizer_bar.inner_radius_m = ri;
         p.stabilizer_bar.outer_radius_m = ro;
         p.stabilizer_bar.chord_m = chord;
