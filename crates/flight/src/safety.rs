@@ -98,8 +98,8 @@ pub enum Reason {
     HoldElapsed,
     /// The IMU delivers again (or the navigation recovered): auto.
     ImuRecovered,
-    /// The receiver reports its failsafe (the pilot's link lost) while the
-    /// pilot flew: the law takes over.
+    /// The receiver reports its failsafe, or went silent for `stale.rc_s`
+    /// (the pilot's link lost), while the pilot flew: the law takes over.
     RcLost,
 }
 
