@@ -224,7 +224,7 @@ fn a_full_output_buffer_drops_frames_without_blocking() {
         if n == 0 {
             break;
         }
-        decoded += decoder.push(&buf[..n]).into_iter().count() as u64;
+        decoded += decoder.push(&buf[..n]).count() as u64;
     }
     assert!(decoded <= accepted && decoded + partial >= accepted);
     assert!(decoder.stats().checksum_failures <= partial);

@@ -43,7 +43,6 @@ fn a_full_servo_port_drops_and_counts_frames_without_blocking() {
         }
         got += decoder
             .push(&buf[..n])
-            .into_iter()
             .filter(|m| matches!(m, AvionicsMessage::Servo(_)))
             .count() as u64;
     }
