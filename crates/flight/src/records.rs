@@ -48,6 +48,15 @@ pub enum FlightRecord {
         /// Silence (s).
         silent_s: f64,
     },
+    /// The avionics port dropped servo frames, its output buffer full (the
+    /// line slower than the frames, the board not reading): the count so
+    /// far, logged at the first drop and at each doubling.
+    ServoDropped {
+        /// On-board time (s).
+        t_s: f64,
+        /// Frames dropped so far.
+        dropped: u64,
+    },
 }
 
 /// The log's flight mode of a supervisor mode.
@@ -193,6 +202,18 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 (LogLevel::Notice, "rc_link: the pilot's link back")
             };
             log.writer_mut().log(level, ts, text)
+        }
+        FlightRecord::ServoDropped { t_s, dropped } => {
+            let ts = timestamp_us(*t_s, "servo drop")?;
+            log_fmt(
+                log,
+                LogLevel::Warning,
+                ts,
+                format_args!(
+                    "avionics: {dropped} servo frame(s) dropped so far: the port's output buffer is full"
+                ),
+                "avionics: servo frames dropped",
+            )
         }
         FlightRecord::Watchdog { t_s, silent_s } => {
             let ts = timestamp_us(*t_s, "watchdog")?;

@@ -344,6 +344,7 @@ where
                         servos,
                         latency: LatencyStats::new(),
                         frames: 0,
+                        dropped_logged: 0,
                         error: None,
                     }),
                     options,
@@ -591,6 +592,8 @@ struct Direct {
     servos: Box<dyn ServoPort>,
     latency: LatencyStats,
     frames: u64,
+    /// The servo drop count last logged.
+    dropped_logged: u64,
     error: Option<String>,
 }
 
@@ -719,6 +722,17 @@ fn control_loop(
                     d.error.get_or_insert(e.to_string());
                 }
             }
+            let dropped = d.servos.dropped();
+            if drop_worth_logging(d.dropped_logged, dropped) {
+                d.dropped_logged = dropped;
+                let rec = FlightRecord::ServoDropped {
+                    t_s: now_s,
+                    dropped,
+                };
+                if ctx.log.push(rec).is_err() {
+                    log_dropped += 1;
+                }
+            }
             if let Some(a) = arrival {
                 d.latency
                     .push(realtime::monotonic_ns().saturating_sub(a.arrived_ns));
@@ -829,6 +843,7 @@ fn avionics_loop<V: ServoPort>(
     let watchdog_ns = (options.watchdog_s * 1e9) as u64;
     let t0 = realtime::monotonic_ns();
     let mut tripped = false;
+    let mut dropped_logged = 0u64;
     loop {
         let mut sent = false;
         while let Ok(item) = ring.pop() {
@@ -837,6 +852,18 @@ fn avionics_loop<V: ServoPort>(
             } else {
                 result.servo_frames += 1;
                 sent = true;
+            }
+            let dropped = port.dropped();
+            if drop_worth_logging(dropped_logged, dropped) {
+                dropped_logged = dropped;
+                let now = realtime::monotonic_ns();
+                let rec = FlightRecord::ServoDropped {
+                    t_s: now.saturating_sub(t0) as f64 * 1e-9,
+                    dropped,
+                };
+                if log.push(rec).is_err() {
+                    result.log_dropped += 1;
+                }
             }
             if let (Some(a), Some(l)) = (item.arrived_ns, result.latency.as_mut()) {
                 l.push(realtime::monotonic_ns().saturating_sub(a));
@@ -874,6 +901,12 @@ fn avionics_loop<V: ServoPort>(
     result
 }
 
+/// A servo drop count worth a log text: the first drop, then each doubling
+/// of the count last logged.
+fn drop_worth_logging(logged: u64, dropped: u64) -> bool {
+    dropped > logged && (logged == 0 || dropped.ilog2() > logged.ilog2())
+}
+
 fn logger_loop<W: Write>(
     mut log: FlightLog<W>,
     mut ring: rtrb::Consumer<FlightRecord>,
@@ -904,4 +937,23 @@ fn logger_loop<W: Write>(
         result.error.get_or_insert(e.to_string());
     }
     result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::drop_worth_logging;
+
+    /// Servo drops are logged at the first and at each doubling.
+    #[test]
+    fn servo_drops_are_logged_at_the_first_and_each_doubling() {
+        let mut logged = 0;
+        let mut at = Vec::new();
+        for n in 0..=40u64 {
+            if drop_worth_logging(logged, n) {
+                logged = n;
+                at.push(n);
+            }
+        }
+        assert_eq!(at, vec![1, 2, 4, 8, 16, 32]);
+    }
 }

@@ -26,6 +26,7 @@ fn fly(
     tag: &str,
     rc_until_s: Option<f64>,
     stale: &str,
+    duration_s: f64,
 ) -> (
     helicon_flight::runtime::RunReport,
     std::path::PathBuf,
@@ -106,7 +107,8 @@ fn fly(
         })
     };
     let (report, log) =
-        helicon_flight::onboard::run(&cfg, Some(Duration::from_secs(1)), false).unwrap();
+        helicon_flight::onboard::run(&cfg, Some(Duration::from_secs_f64(duration_s)), false)
+            .unwrap();
     done.store(true, Ordering::Relaxed);
     hw.join().unwrap();
     (report, log, dir)
@@ -114,7 +116,7 @@ fn fly(
 
 #[test]
 fn the_onboard_program_aligns_arms_flies_and_logs() {
-    let (report, log, dir) = fly("still", None, "");
+    let (report, log, dir) = fly("still", None, "", 1.0);
     assert!(report.error.is_none(), "{:?}", report.error);
     assert_eq!(report.steps, 400);
     assert_eq!(report.final_mode, "auto");
@@ -143,7 +145,7 @@ fn the_onboard_program_aligns_arms_flies_and_logs() {
 /// `failsafe.rs` check the timing.
 #[test]
 fn a_silent_receiver_on_the_clock_paced_program_is_logged_once() {
-    let (report, log, _) = fly("rc_silent", Some(0.4), "rc_s = 0.3");
+    let (report, log, _) = fly("rc_silent", Some(0.4), "rc_s = 0.3", 1.0);
     assert!(report.error.is_none(), "{:?}", report.error);
     assert_eq!(report.final_mode, "auto");
     let ulog = Ulog::read(&log);
@@ -158,4 +160,27 @@ fn a_silent_receiver_on_the_clock_paced_program_is_logged_once() {
     let after = lost[0].0 - last;
     eprintln!("loss {after:.4} s after the last frame logged");
     assert!(after > 0.3, "{after}");
+}
+
+/// Nobody reads the avionics port (the scripted hardware never does): once
+/// the kernel's buffer is full the servo frames are dropped, never waited
+/// for: every control step still runs, the drops are counted in the report
+/// and logged as texts at the first and at each doubling.
+#[test]
+fn servo_frames_the_avionics_port_cannot_take_are_dropped_and_logged() {
+    let (report, log, _) = fly("servo_full", None, "", 4.0);
+    assert!(report.error.is_none(), "{:?}", report.error);
+    assert_eq!(report.steps, 1600);
+    assert_eq!(report.servo_frames, 1600);
+    let dropped = report.servo_frames_dropped;
+    eprintln!("{dropped} of 1600 servo frames dropped");
+    assert!(dropped > 0 && dropped < 1600, "{dropped}");
+    let ulog = Ulog::read(&log);
+    let texts = ulog.texts_with("servo frame(s) dropped so far");
+    assert!(
+        texts[0].1.contains("avionics: 1 servo frame(s)"),
+        "{texts:?}"
+    );
+    let expected = (0..).take_while(|k| 1u64 << k <= dropped).count();
+    assert_eq!(texts.len(), expected, "{texts:?}");
 }
