@@ -26,7 +26,7 @@ use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, ServoCommand};
 use helicon_devices::{AvionicsDecoder, LocalNed, UbxDecoder, VnBinaryDecoder};
-use helicon_devices::{SerialLink, TransportError};
+use helicon_devices::{SerialLink, TransportError, Written};
 use std::path::Path;
 use std::time::Duration;
 
@@ -287,9 +287,10 @@ impl ServoPort for DeviceServos {
             message: e.to_string(),
         })?;
         self.seq = self.seq.wrapping_add(1);
-        match self.port.write_all(cmd.encode().as_bytes()) {
-            Ok(()) => Ok(()),
-            Err(TransportError::Full { .. }) => {
+        // try_write: a dropped frame allocates nothing (a hot path)
+        match self.port.try_write(cmd.encode().as_bytes()) {
+            Ok(Written::All) => Ok(()),
+            Ok(Written::Dropped { .. }) => {
                 self.dropped += 1;
                 Ok(())
             }
