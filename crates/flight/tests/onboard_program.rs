@@ -159,7 +159,8 @@ fn a_silent_receiver_on_the_clock_paced_program_is_logged_once() {
     let last = *rc_t.last().unwrap() as f64 * 1e-6;
     let after = lost[0].0 - last;
     eprintln!("loss {after:.4} s after the last frame logged");
-    assert!(after > 0.3, "{after}");
+    // (the log stamps in whole µs: the strict rule can read as equal)
+    assert!(after >= 0.3 - 1e-6, "{after}");
 }
 
 /// Nobody reads the avionics port (the scripted hardware never does): once
