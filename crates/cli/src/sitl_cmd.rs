@@ -61,13 +61,25 @@ pub struct SitlArgs {
     /// frames carry the failsafe flag.
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub rc_failsafe_at: Option<f64>,
+    /// The receiver goes silent from this time on (s): no frames at all (a
+    /// cut cable); lost after the on-board `stale.rc_s` (0.5 s).
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub rc_silent_at: Option<f64>,
+    /// The receiver's frames come back at this time (s; with `--rc-silent-at`).
+    #[arg(
+        long,
+        value_name = "S",
+        allow_negative_numbers = true,
+        requires = "rc_silent_at"
+    )]
+    pub rc_silent_until: Option<f64>,
     /// Fly with a ground station: start the MAVLink 2 server at
     /// `udpout:HOST:PORT` (it sends to the ground station listening there) or
     /// `udpin:HOST:PORT` (it listens). The helicopter then starts disarmed,
     /// the simulated receiver is silent, and the navigator flies what the
     /// operator commands (arm, takeoff, missions): the scenario's
     /// `[[reference]]` are ignored; its duration still ends the run.
-    #[arg(long, value_name = "ADDRESS", conflicts_with_all = ["manual_at", "rc_failsafe_at"])]
+    #[arg(long, value_name = "ADDRESS", conflicts_with_all = ["manual_at", "rc_failsafe_at", "rc_silent_at"])]
     pub gcs: Option<String>,
 }
 
@@ -86,6 +98,8 @@ pub fn run(a: &SitlArgs) -> Result<()> {
     check_time("--manual-at", a.manual_at)?;
     check_time("--manual-until", a.manual_until)?;
     check_time("--rc-failsafe-at", a.rc_failsafe_at)?;
+    check_time("--rc-silent-at", a.rc_silent_at)?;
+    check_time("--rc-silent-until", a.rc_silent_until)?;
     let o = overrides_from(None, None, a.duration)?;
     let source = format!("{}{}", a.scenario.display(), overrides_label(&o));
     let base = Scenario::from_file(&a.scenario)?.with_overrides(&o, &source)?;
@@ -118,6 +132,9 @@ pub fn run(a: &SitlArgs) -> Result<()> {
                 manual_from_s: a.manual_at,
                 manual_until_s: a.manual_until,
                 rc_failsafe_s: a.rc_failsafe_at.map(|t| (t, f64::INFINITY)),
+                rc_silent_s: a
+                    .rc_silent_at
+                    .map(|t| (t, a.rc_silent_until.unwrap_or(f64::INFINITY))),
                 ..Pilot::default()
             },
             stale: StaleLimits::default(),

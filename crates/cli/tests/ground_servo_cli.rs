@@ -202,6 +202,7 @@ fn ground_templates_run_and_hostile_readings_name_line_and_column() {
         "bell-gain",
         "hiller-gain",
         "tail-fin-loss",
+        "stabilizer-lift-slope",
     ] {
         let (ok, template, err) = helicon(&["ident", "ground", kind, "--template"]);
         assert!(ok, "{err}");
@@ -226,6 +227,7 @@ fn ground_templates_run_and_hostile_readings_name_line_and_column() {
         let truth = match kind {
             "rotor-drag" => 0.008,
             "main-lift-slope" | "tail-lift-slope" => 6.0,
+            "stabilizer-lift-slope" => 2.6,
             "blade-spring" => 200.0,
             "bell-gain" => 0.2,
             "hiller-gain" => 0.8,

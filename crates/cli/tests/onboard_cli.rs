@@ -111,6 +111,15 @@ fn sitl_bad_flags_and_a_short_run() {
         &["sitl", "ok.toml", "--rc-failsafe-at", "-1"],
         &["--rc-failsafe-at"],
     );
+    fails_with(
+        &d,
+        &["sitl", "ok.toml", "--rc-silent-at", "inf"],
+        &["--rc-silent-at"],
+    );
+    // --rc-silent-until needs --rc-silent-at: a usage error (clap's code 2)
+    let (code, _, err) = helicon(&d, &["sitl", "ok.toml", "--rc-silent-until", "1"]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("--rc-silent-at"), "{err}");
     fails_with(&d, &["sitl", "missing.toml"], &["missing.toml"]);
     let (code, out, err) = helicon(&d, &["sitl", "ok.toml", "--out", "o"]);
     assert_eq!(code, Some(0), "{err}");
@@ -131,4 +140,5 @@ fn sitl_bad_flags_and_a_short_run() {
         serde_json::from_str(&std::fs::read_to_string(d.join("o/timing.json")).unwrap()).unwrap();
     assert_eq!(timing["onboard"]["steps"], 201);
     assert_eq!(timing["onboard"]["servo_frames"], 201);
+    assert_eq!(timing["onboard"]["servo_frames_dropped"], 0);
 }

@@ -73,6 +73,18 @@ pub enum TransportError {
         /// The cause.
         source: std::io::Error,
     },
+    /// The device's output buffer could not take a frame (the line is
+    /// slower than what is written, or nobody reads): the frame was
+    /// dropped, `queued` of its `len` bytes written.
+    #[error("{path}: output buffer full: frame of {len} bytes dropped ({queued} bytes queued)")]
+    Full {
+        /// The device path.
+        path: PathBuf,
+        /// Bytes of the frame the kernel took.
+        queued: usize,
+        /// The frame's length.
+        len: usize,
+    },
     /// A pseudo-terminal could not be created or configured.
     #[error("pseudo-terminal: {step}: {source}")]
     Pty {

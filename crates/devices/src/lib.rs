@@ -74,6 +74,6 @@ pub use error::{EncodeError, TransportError};
 pub use framing::{DecoderStats, EncodedFrame, MAX_FRAME_BYTES, Messages, StreamDecoder};
 pub use geodetic::{Geodetic, LocalNed};
 pub use nmea0183::{Gga, NmeaDecoder, NmeaMessage, Rmc, Vtg};
-pub use transport::{PtyPair, SerialLink, StaleDetector};
+pub use transport::{PARTIAL_WRITE_WAIT, PtyPair, SerialLink, StaleDetector, Written};
 pub use ubx::{NavPvt, UbxDecoder};
 pub use vectornav::{VnAsciiDecoder, VnBinaryDecoder, VnCommon, VnMagPres, VnYmr};

@@ -105,6 +105,30 @@ fn decoders_and_encoders_do_not_allocate() {
     let p = NavPvt::from_gps_fix(&fix, &home, 0, 40.0).unwrap();
     let _ = black_box_fix(p.to_gps_fix(&home, 1.0));
     assert_eq!(allocations() - before, 0);
+
+    // a serial link's try_write, queued or dropped (a pty nobody reads,
+    // filled), allocates nothing
+    let pty = PtyPair::open().unwrap();
+    let mut link = SerialLink::open(
+        pty.slave_path(),
+        115_200,
+        std::time::Duration::from_millis(1),
+    )
+    .unwrap();
+    let frame = ServoCommand::from_inputs(1, true, &u).unwrap().encode();
+    let before = allocations();
+    let (mut queued, mut dropped) = (0, 0);
+    for _ in 0..5000 {
+        match link.try_write(frame.as_bytes()).unwrap() {
+            Written::All => queued += 1,
+            Written::Dropped { .. } => dropped += 1,
+        }
+    }
+    assert_eq!(allocations() - before, 0, "try_write allocated");
+    assert!(
+        queued > 0 && dropped > 0,
+        "{queued} queued, {dropped} dropped"
+    );
 }
 
 fn black_box_fix(f: GpsFix) -> GpsFix {

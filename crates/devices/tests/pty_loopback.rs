@@ -142,3 +142,94 @@ fn a_read_waits_at_most_its_own_timeout() {
         .unwrap();
     assert_eq!(&buf[..n], b"xy");
 }
+
+/// Nobody reads the pseudo-terminal (an avionics board that stopped
+/// reading, a line slower than the frames): the servo frames fill the
+/// kernel's buffer, then each is refused at once with
+/// `TransportError::Full` naming the device, never blocking; the frames the
+/// link accepted are whole on the line, and once the other side reads again
+/// the writes go through.
+#[test]
+fn a_full_output_buffer_drops_frames_without_blocking() {
+    let mut pty = PtyPair::open().unwrap();
+    let slave = pty.slave_path().to_path_buf();
+    let mut link = SerialLink::open(&slave, 115_200, Duration::from_millis(20)).unwrap();
+    let frame = ServoCommand {
+        seq: 3,
+        armed: true,
+        servo_counts: [1850, -7500, 7500, 3000],
+    }
+    .encode();
+    let len = frame.as_bytes().len();
+    // on a thread: a write that blocked would fail the test, not hang it
+    let (tx, rx) = std::sync::mpsc::channel();
+    let writer = std::thread::spawn(move || {
+        let (mut accepted, mut refused, mut partial) = (0u64, 0u64, 0u64);
+        let mut worst = Duration::ZERO;
+        let mut message = String::new();
+        while refused < 200 && accepted < 1_000_000 {
+            let t = Instant::now();
+            match link.write_all(frame.as_bytes()) {
+                Ok(()) => accepted += 1,
+                Err(TransportError::Full {
+                    path,
+                    queued,
+                    len: l,
+                }) => {
+                    assert_eq!((path.as_path(), l), (slave.as_path(), len));
+                    assert!(queued < len);
+                    partial += u64::from(queued > 0);
+                    refused += 1;
+                    message = TransportError::Full {
+                        path,
+                        queued,
+                        len: l,
+                    }
+                    .to_string();
+                }
+                Err(e) => panic!("{e}"),
+            }
+            worst = worst.max(t.elapsed());
+        }
+        tx.send((accepted, refused, partial, worst, message))
+            .unwrap();
+        link
+    });
+    let (accepted, refused, partial, worst, message) = rx
+        .recv_timeout(Duration::from_secs(30))
+        .expect("a write blocked on the full buffer");
+    let mut link = writer.join().unwrap();
+    eprintln!(
+        "{accepted} frames queued, then {refused} refused ({partial} in part); \
+         slowest write {worst:?}: {message}"
+    );
+    assert_eq!(refused, 200);
+    assert!(accepted > 100, "the buffer took {accepted} frames");
+    assert!(message.contains("output buffer full") && message.contains("/dev/pts"));
+    // a refused write returns at once (a partial one waits at most
+    // PARTIAL_WRITE_WAIT); the bound is loose for a loaded machine
+    assert!(
+        worst < PARTIAL_WRITE_WAIT + Duration::from_millis(500),
+        "{worst:?}"
+    );
+    // the line holds the accepted frames whole (a frame taken in part and
+    // dropped is skipped by its checksum, costing at most the next one)
+    let mut decoder = AvionicsDecoder::new();
+    let mut buf = [0u8; 4096];
+    let mut decoded = 0u64;
+    loop {
+        let n = pty
+            .read_timeout(&mut buf, Duration::from_millis(50))
+            .unwrap();
+        if n == 0 {
+            break;
+        }
+        decoded += decoder.push(&buf[..n]).count() as u64;
+    }
+    assert!(decoded <= accepted && decoded + partial >= accepted);
+    assert!(decoder.stats().checksum_failures <= partial);
+    // read again: the link writes again
+    link.write_all(frame.as_bytes()).unwrap();
+    let n = pty.read_timeout(&mut buf, Duration::from_secs(5)).unwrap();
+    assert_eq!(&buf[..n], frame.as_bytes());
+}

@@ -20,6 +20,7 @@
 //! imu_s = 0.02
 //! gps_s = 1.0
 //! mag_s = 0.5
+//! rc_s = 0.5
 //! [failsafe]
 //! hold_s = 5.0                            # hover hold before the descent
 //! descent_m_s = 0.5                       # then descend at this rate (down +)
@@ -75,6 +76,12 @@ pub struct StaleLimits {
     pub gps_s: f64,
     /// Magnetometer (s).
     pub mag_s: f64,
+    /// The avionics board's RC receiver frames (s; they come at about
+    /// 50 Hz): a receiver silent this long after its last frame is the
+    /// pilot's link lost, handled as the receiver's own failsafe flag
+    /// (not before its first frame: a flight without a receiver is flown
+    /// from the ground station).
+    pub rc_s: f64,
 }
 
 impl Default for StaleLimits {
@@ -83,6 +90,7 @@ impl Default for StaleLimits {
             imu_s: 0.02,
             gps_s: 1.0,
             mag_s: 0.5,
+            rc_s: 0.5,
         }
     }
 }
@@ -303,6 +311,7 @@ impl OnboardConfig {
         positive(file, "stale.imu_s", s.imu_s, 1.0)?;
         positive(file, "stale.gps_s", s.gps_s, 60.0)?;
         positive(file, "stale.mag_s", s.mag_s, 60.0)?;
+        positive(file, "stale.rc_s", s.rc_s, 10.0)?;
         let f = &self.failsafe;
         positive(file, "failsafe.hold_s", f.hold_s, 3600.0)?;
         positive(file, "failsafe.descent_m_s", f.descent_m_s, 5.0)?;
@@ -469,6 +478,10 @@ mod tests {
             err("[sensors.gps]\nrate_hz = -5.0\n").starts_with("o.toml: `sensors.gps.rate_hz`")
         );
         assert!(err("[stale]\nbogus = 1\n").contains("bogus"));
+        assert_eq!(
+            err("[stale]\nrc_s = 0.0\n"),
+            "o.toml: `stale.rc_s` = 0: must be finite, > 0 and <= 10"
+        );
         assert_eq!(
             err("[home]\nlatitude_deg = 91.0\n"),
             "o.toml: `home.latitude_deg` = 91: must be finite and within -90..=90"

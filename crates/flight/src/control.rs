@@ -4,7 +4,7 @@
 //! `SensorComputer` `helicon sim` flies) computes the law, the mode
 //! picks what goes to the servos. Allocation-free.
 
-use crate::safety::{Health, Mode, RcInput, SafetyEvent, Supervisor};
+use crate::safety::{Health, Mode, RcInput, RcLink, SafetyEvent, Supervisor};
 use helicon_core::imu_health::{ImuHealth, ImuHealthMonitor};
 use helicon_core::state::Input;
 use helicon_core::{Reference, SensorComputer, SensorFrame, Telemetry};
@@ -49,6 +49,9 @@ pub struct ControlOutput {
     /// The receiver's failsafe changed this sample: `Some(true)` the
     /// pilot's link lost, `Some(false)` back.
     pub rc_link_lost: Option<bool>,
+    /// The pilot's link after this sample ([`RcLink::Silent`]: lost because
+    /// the receiver is silent, not by its failsafe flag).
+    pub rc_link: RcLink,
 }
 
 /// A change of the IMU health monitor's flags (the settling flag aside):
@@ -202,16 +205,11 @@ impl ControlTask {
     /// failsafe, disarming) ends it for the rest of the flight. No
     /// allocation.
     pub fn step_with(&mut self, tick: &Tick, excitation: &Excitations) -> ControlOutput {
-        let mut rc_link_lost = None;
-        if let Some(rc) = tick.rc {
+        if let Some(rc) = tick.rc
+            && !rc.failsafe
+        {
             // a receiver in failsafe does not give the pilot's sticks
-            if !rc.failsafe {
-                self.rc = Some(rc);
-            }
-            if rc.failsafe != self.rc_lost {
-                self.rc_lost = rc.failsafe;
-                rc_link_lost = Some(rc.failsafe);
-            }
+            self.rc = Some(rc);
         }
         let health = Health {
             now_s: tick.now_s,
@@ -224,6 +222,14 @@ impl ControlTask {
         let event = self
             .supervisor
             .update(&health, tick.rc.as_ref(), self.heading_rad);
+        // the pilot's link: lost by the receiver's failsafe flag or its
+        // silence (the supervisor's stale.rc_s), told once per change
+        let rc_link = self.supervisor.rc_link();
+        let mut rc_link_lost = None;
+        if rc_link.is_lost() != self.rc_lost {
+            self.rc_lost = rc_link.is_lost();
+            rc_link_lost = Some(self.rc_lost);
+        }
         if let Some(ev) = &event
             && ev.to == Mode::Auto
         {
@@ -291,6 +297,7 @@ impl ControlTask {
             imu_health,
             imu_health_change,
             rc_link_lost,
+            rc_link,
         }
     }
 }

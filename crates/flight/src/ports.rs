@@ -26,7 +26,7 @@ use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, ServoCommand};
 use helicon_devices::{AvionicsDecoder, LocalNed, UbxDecoder, VnBinaryDecoder};
-use helicon_devices::{SerialLink, TransportError};
+use helicon_devices::{SerialLink, TransportError, Written};
 use std::path::Path;
 use std::time::Duration;
 
@@ -259,16 +259,24 @@ impl RcPort for DeviceRc {
     }
 }
 
-/// The servo side of the avionics port.
+/// The servo side of the avionics port. A frame the port's output buffer
+/// cannot take (the line slower than the frames, the board not reading) is
+/// dropped and counted, never waited for: the control task is not held up
+/// by the line ([`SerialLink::write_all`]).
 pub struct DeviceServos {
     port: SerialLink,
     seq: u8,
+    dropped: u64,
 }
 
 impl DeviceServos {
     /// The servos on (a handle of) the avionics port.
     pub fn new(port: SerialLink) -> Self {
-        DeviceServos { port, seq: 0 }
+        DeviceServos {
+            port,
+            seq: 0,
+            dropped: 0,
+        }
     }
 }
 
@@ -279,8 +287,18 @@ impl ServoPort for DeviceServos {
             message: e.to_string(),
         })?;
         self.seq = self.seq.wrapping_add(1);
-        self.port
-            .write_all(cmd.encode().as_bytes())
-            .map_err(|e| port_error(&self.port, "write", &e))
+        // try_write: a dropped frame allocates nothing (a hot path)
+        match self.port.try_write(cmd.encode().as_bytes()) {
+            Ok(Written::All) => Ok(()),
+            Ok(Written::Dropped { .. }) => {
+                self.dropped += 1;
+                Ok(())
+            }
+            Err(e) => Err(port_error(&self.port, "write", &e)),
+        }
+    }
+
+    fn dropped(&self) -> u64 {
+        self.dropped
     }
 }

@@ -30,13 +30,15 @@ pub enum FlightRecord {
         /// The change.
         change: ImuHealthChange,
     },
-    /// The receiver's failsafe raised (the pilot's link lost) or cleared
-    /// (written as a text message).
+    /// The pilot's link lost (the receiver's failsafe flag, or its
+    /// silence) or back (written as a text message).
     RcLink {
         /// On-board time (s).
         t_s: f64,
         /// Lost (true) or back.
         lost: bool,
+        /// Lost because the receiver went silent (not its failsafe flag).
+        silent: bool,
     },
     /// The watchdog commanded the trim: the control task was silent for
     /// this long (s).
@@ -45,6 +47,15 @@ pub enum FlightRecord {
         t_s: f64,
         /// Silence (s).
         silent_s: f64,
+    },
+    /// The avionics port dropped servo frames, its output buffer full (the
+    /// line slower than the frames, the board not reading): the count so
+    /// far, logged at the first drop and at each doubling.
+    ServoDropped {
+        /// On-board time (s).
+        t_s: f64,
+        /// Frames dropped so far.
+        dropped: u64,
     },
 }
 
@@ -175,9 +186,14 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 "imu health",
             )
         }
-        FlightRecord::RcLink { t_s, lost } => {
+        FlightRecord::RcLink { t_s, lost, silent } => {
             let ts = timestamp_us(*t_s, "rc link")?;
-            let (level, text) = if *lost {
+            let (level, text) = if *lost && *silent {
+                (
+                    LogLevel::Critical,
+                    "rc_link: receiver silent, the pilot's link lost",
+                )
+            } else if *lost {
                 (
                     LogLevel::Critical,
                     "rc_link: receiver failsafe, the pilot's link lost",
@@ -186,6 +202,18 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 (LogLevel::Notice, "rc_link: the pilot's link back")
             };
             log.writer_mut().log(level, ts, text)
+        }
+        FlightRecord::ServoDropped { t_s, dropped } => {
+            let ts = timestamp_us(*t_s, "servo drop")?;
+            log_fmt(
+                log,
+                LogLevel::Warning,
+                ts,
+                format_args!(
+                    "avionics: {dropped} servo frame(s) dropped so far: the port's output buffer is full"
+                ),
+                "avionics: servo frames dropped",
+            )
         }
         FlightRecord::Watchdog { t_s, silent_s } => {
             let ts = timestamp_us(*t_s, "watchdog")?;
@@ -231,6 +259,7 @@ pub fn step_records(
         push(FlightRecord::RcLink {
             t_s: tick.now_s,
             lost,
+            silent: out.rc_link == crate::safety::RcLink::Silent,
         });
     }
     if let Some(ev) = out.event {

@@ -24,7 +24,7 @@ use crate::control::{ControlTask, StepReport, Tick};
 pub use crate::mission::{LastStep, Mission, flight_mode};
 use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
 use crate::records::{FlightRecord, step_records, write_record};
-use crate::safety::{Mode, RcInput};
+use crate::safety::{Mode, RcInput, RcLink};
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_gcs::link::VehicleEvent;
@@ -86,8 +86,14 @@ pub trait RcPort: Send + 'static {
 
 /// The servo side of the avionics board.
 pub trait ServoPort: Send + 'static {
-    /// Send one servo frame.
+    /// Send one servo frame, without waiting for its transmission.
     fn send(&mut self, u: &Input) -> Result<(), PortError>;
+
+    /// Frames dropped so far because the port could not take them (its
+    /// output buffer full): counted, not errors.
+    fn dropped(&self) -> u64 {
+        0
+    }
 }
 
 /// How the control task is paced.
@@ -132,8 +138,12 @@ pub struct RunReport {
     pub steps_without_imu: u64,
     /// Log records dropped (a ring full) or refused by the writer.
     pub log_dropped: u64,
-    /// Servo frames sent.
+    /// Servo frames handed to the port (including those it dropped).
     pub servo_frames: u64,
+    /// Servo frames the avionics port dropped: its output buffer could not
+    /// take them (the line slower than the frames, or nobody reading); the
+    /// control task never waits for the line.
+    pub servo_frames_dropped: u64,
     /// Watchdog trips.
     pub watchdog_trips: u64,
     /// Wake-up lateness after the deadline (clock pacing).
@@ -178,6 +188,7 @@ struct ControlResult {
 #[derive(Default)]
 struct ThreadResult {
     servo_frames: u64,
+    servo_dropped: u64,
     watchdog_trips: u64,
     latency: Option<LatencyStats>,
     log_dropped: u64,
@@ -333,6 +344,7 @@ where
                         servos,
                         latency: LatencyStats::new(),
                         frames: 0,
+                        dropped_logged: 0,
                         error: None,
                     }),
                     options,
@@ -448,6 +460,7 @@ impl RuntimeHandle {
             steps_without_imu: 0,
             log_dropped: 0,
             servo_frames: 0,
+            servo_frames_dropped: 0,
             watchdog_trips: 0,
             wakeup_jitter: LatencyStats::new().summary(),
             compute: LatencyStats::new().summary(),
@@ -460,6 +473,7 @@ impl RuntimeHandle {
             Ok(c) => {
                 if let Some(d) = c.direct {
                     report.servo_frames += d.servo_frames;
+                    report.servo_frames_dropped += d.servo_dropped;
                     if let Some(l) = d.latency {
                         report.sensor_to_servo = l.summary();
                     }
@@ -480,6 +494,7 @@ impl RuntimeHandle {
             match h.join() {
                 Ok(r) => {
                     report.servo_frames += r.servo_frames;
+                    report.servo_frames_dropped += r.servo_dropped;
                     report.watchdog_trips += r.watchdog_trips;
                     report.log_dropped += r.log_dropped;
                     if let Some(l) = r.latency {
@@ -577,6 +592,8 @@ struct Direct {
     servos: Box<dyn ServoPort>,
     latency: LatencyStats,
     frames: u64,
+    /// The servo drop count last logged.
+    dropped_logged: u64,
     error: Option<String>,
 }
 
@@ -679,7 +696,9 @@ fn control_loop(
         if let Some(lost) = out.rc_link_lost {
             mission.notify(
                 now_s,
-                VehicleEvent::Warning(if lost {
+                VehicleEvent::Warning(if lost && out.rc_link == RcLink::Silent {
+                    "RC: receiver silent, the pilot's link lost"
+                } else if lost {
                     "RC: receiver failsafe, the pilot's link lost"
                 } else {
                     "RC: the pilot's link back"
@@ -701,6 +720,17 @@ fn control_loop(
                 Ok(()) => d.frames += 1,
                 Err(e) => {
                     d.error.get_or_insert(e.to_string());
+                }
+            }
+            let dropped = d.servos.dropped();
+            if drop_worth_logging(d.dropped_logged, dropped) {
+                d.dropped_logged = dropped;
+                let rec = FlightRecord::ServoDropped {
+                    t_s: now_s,
+                    dropped,
+                };
+                if ctx.log.push(rec).is_err() {
+                    log_dropped += 1;
                 }
             }
             if let Some(a) = arrival {
@@ -781,6 +811,7 @@ fn control_loop(
     ControlResult {
         direct: ctx.direct.map(|d| ThreadResult {
             servo_frames: d.frames,
+            servo_dropped: d.servos.dropped(),
             latency: Some(d.latency),
             error: d.error,
             ..ThreadResult::default()
@@ -812,6 +843,7 @@ fn avionics_loop<V: ServoPort>(
     let watchdog_ns = (options.watchdog_s * 1e9) as u64;
     let t0 = realtime::monotonic_ns();
     let mut tripped = false;
+    let mut dropped_logged = 0u64;
     loop {
         let mut sent = false;
         while let Ok(item) = ring.pop() {
@@ -820,6 +852,18 @@ fn avionics_loop<V: ServoPort>(
             } else {
                 result.servo_frames += 1;
                 sent = true;
+            }
+            let dropped = port.dropped();
+            if drop_worth_logging(dropped_logged, dropped) {
+                dropped_logged = dropped;
+                let now = realtime::monotonic_ns();
+                let rec = FlightRecord::ServoDropped {
+                    t_s: now.saturating_sub(t0) as f64 * 1e-9,
+                    dropped,
+                };
+                if log.push(rec).is_err() {
+                    result.log_dropped += 1;
+                }
             }
             if let (Some(a), Some(l)) = (item.arrived_ns, result.latency.as_mut()) {
                 l.push(realtime::monotonic_ns().saturating_sub(a));
@@ -853,7 +897,14 @@ fn avionics_loop<V: ServoPort>(
         }
         thread::park_timeout(Duration::from_secs_f64(options.watchdog_s / 4.0));
     }
+    result.servo_dropped = port.dropped();
     result
+}
+
+/// A servo drop count worth a log text: the first drop, then each doubling
+/// of the count last logged.
+fn drop_worth_logging(logged: u64, dropped: u64) -> bool {
+    dropped > logged && (logged == 0 || dropped.ilog2() > logged.ilog2())
 }
 
 fn logger_loop<W: Write>(
@@ -886,4 +937,23 @@ fn logger_loop<W: Write>(
         result.error.get_or_insert(e.to_string());
     }
     result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::drop_worth_logging;
+
+    /// Servo drops are logged at the first and at each doubling.
+    #[test]
+    fn servo_drops_are_logged_at_the_first_and_each_doubling() {
+        let mut logged = 0;
+        let mut at = Vec::new();
+        for n in 0..=40u64 {
+            if drop_worth_logging(logged, n) {
+                logged = n;
+                at.push(n);
+            }
+        }
+        assert_eq!(at, vec![1, 2, 4, 8, 16, 32]);
+    }
 }

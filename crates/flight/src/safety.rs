@@ -23,7 +23,10 @@
 //! frame never disarms nor hands the servos to the receiver); a pilot
 //! flying in manual hands over to the law's hold, latched (reason
 //! `rc_lost`), then the descent, until the link is back and the pilot
-//! takes over and hands back; in auto the mission flies on.
+//! takes over and hands back; in auto the mission flies on. A receiver
+//! that goes silent (no frame for `stale.rc_s` after its last one: a cut
+//! cable, the avionics board resetting) is the same loss, handled the same
+//! way, until its frames come back ([`RcLink::Silent`]).
 //!
 //! Arming: the receiver's arm switch arms or disarms when it moves (and at
 //! its first frame); the ground station's arm or disarm ([`Supervisor::arm`],
@@ -95,8 +98,8 @@ pub enum Reason {
     HoldElapsed,
     /// The IMU delivers again (or the navigation recovered): auto.
     ImuRecovered,
-    /// The receiver reports its failsafe (the pilot's link lost) while the
-    /// pilot flew: the law takes over.
+    /// The receiver reports its failsafe, or went silent for `stale.rc_s`
+    /// (the pilot's link lost), while the pilot flew: the law takes over.
     RcLost,
 }
 
@@ -153,6 +156,29 @@ pub struct RcInput {
     pub failsafe: bool,
 }
 
+/// The state of the pilot's link, as the receiver's frames tell it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum RcLink {
+    /// No receiver frame yet (a flight without a receiver is flown from
+    /// the ground station: not a loss).
+    #[default]
+    Unknown,
+    /// The last frame was the pilot's.
+    Ok,
+    /// The last frame carried the receiver's failsafe flag.
+    Failsafe,
+    /// No frame for longer than `stale.rc_s` after the last one: handled
+    /// as the failsafe flag until the frames come back.
+    Silent,
+}
+
+impl RcLink {
+    /// The pilot's link is lost (the receiver's failsafe or its silence).
+    pub fn is_lost(self) -> bool {
+        matches!(self, RcLink::Failsafe | RcLink::Silent)
+    }
+}
+
 /// What the supervisor is told each sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Health {
@@ -188,6 +214,9 @@ pub struct Supervisor {
     armed: bool,
     /// The receiver's arm switch at its last frame.
     rc_armed: Option<bool>,
+    /// When the receiver's last frame came (s; `None`: never).
+    last_rc_s: Option<f64>,
+    rc_link: RcLink,
     manual: bool,
     nav_failed: bool,
 }
@@ -208,6 +237,8 @@ impl Supervisor {
             misses: 0,
             armed: false,
             rc_armed: None,
+            last_rc_s: None,
+            rc_link: RcLink::Unknown,
             manual: false,
             nav_failed: false,
         }
@@ -227,6 +258,11 @@ impl Supervisor {
     /// The mode now.
     pub fn mode(&self) -> Mode {
         self.mode
+    }
+
+    /// The pilot's link after the last update.
+    pub fn rc_link(&self) -> RcLink {
+        self.rc_link
     }
 
     /// The latched failsafe reason, if any.
@@ -258,7 +294,25 @@ impl Supervisor {
             0
         };
         self.nav_failed |= h.navigation_failed;
-        if rc.is_some_and(|r| r.failsafe) {
+        // older than the limit by more than 1 ns: k·Ts sums do not flip a
+        // sample early by rounding
+        let stale = |last: f64, limit: f64| h.now_s - last > limit + 1e-9;
+        if let Some(r) = rc {
+            self.last_rc_s = Some(h.now_s);
+            self.rc_link = if r.failsafe {
+                RcLink::Failsafe
+            } else {
+                RcLink::Ok
+            };
+        } else if self.rc_link == RcLink::Ok
+            && self
+                .last_rc_s
+                .is_some_and(|last| stale(last, self.stale.rc_s))
+        {
+            // silent: the pilot's link lost, as with the failsafe flag
+            self.rc_link = RcLink::Silent;
+        }
+        if self.rc_link.is_lost() {
             // the pilot's link is lost: the receiver's switches are not the
             // pilot's (no disarming, no manual); a pilot flying hands over
             // to the law's hold (latched, as the other failsafes); the
@@ -284,9 +338,6 @@ impl Supervisor {
                 self.nav_failed = false;
             }
         }
-        // older than the limit by more than 1 ns: k·Ts sums do not flip a
-        // sample early by rounding
-        let stale = |last: f64, limit: f64| h.now_s - last > limit + 1e-9;
         let imu_lost = stale(self.last_imu_s, self.stale.imu_s) || self.nav_failed;
         if !self.armed {
             self.latched = None;
@@ -440,6 +491,56 @@ mod tests {
             .update(&health(0.6, true), Some(&rc(false, true)), 0.4)
             .unwrap();
         assert_eq!((ev.to, ev.reason), (Mode::Auto, Reason::PilotAuto));
+    }
+
+    /// A receiver that goes silent is its failsafe flag: the pilot's
+    /// flight handed to the hold once the last frame is older than
+    /// `stale.rc_s` (latched), the mission flown on in auto, and the
+    /// frames back give the pilot's switch again. Never before a first
+    /// frame.
+    #[test]
+    fn a_silent_receiver_is_the_receivers_failsafe() {
+        let stale = StaleLimits {
+            rc_s: 0.5,
+            ..StaleLimits::default()
+        };
+        let mut s = Supervisor::new(stale, FailsafeConfig::default(), 0.0);
+        // no receiver at all (a ground-station flight): never lost
+        s.arm();
+        s.update(&health(0.0, true), None, 0.0);
+        assert!(s.update(&health(2.0, true), None, 0.0).is_none());
+        assert_eq!(s.rc_link(), RcLink::Unknown);
+        // the pilot flies, the last frame at 2.1 s
+        let ev = s
+            .update(&health(2.1, true), Some(&rc(true, true)), 0.3)
+            .unwrap();
+        assert_eq!(ev.to, Mode::Manual);
+        assert!(s.update(&health(2.6, true), None, 0.3).is_none());
+        assert_eq!(s.rc_link(), RcLink::Ok);
+        let ev = s.update(&health(2.6025, true), None, 0.3).unwrap();
+        assert_eq!(
+            (ev.from, ev.to, ev.reason),
+            (Mode::Manual, Mode::Hold, Reason::RcLost)
+        );
+        assert_eq!(s.rc_link(), RcLink::Silent);
+        assert_eq!(s.latched(), Some(Reason::RcLost));
+        assert_eq!(s.reference(&Reference::default()).yaw_rad, 0.3);
+        // frames back at auto: latched (the hold flies on)
+        assert!(
+            s.update(&health(3.0, true), Some(&rc(false, true)), 0.3)
+                .is_none()
+        );
+        assert_eq!(s.rc_link(), RcLink::Ok);
+        // the pilot takes over and hands back: auto
+        s.update(&health(3.1, true), Some(&rc(true, true)), 0.3);
+        let ev = s
+            .update(&health(3.2, true), Some(&rc(false, true)), 0.3)
+            .unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Auto, Reason::PilotAuto));
+        // silent in auto: the mission flies on, never disarmed
+        assert!(s.update(&health(4.0, true), None, 0.3).is_none());
+        assert_eq!(s.rc_link(), RcLink::Silent);
+        assert_eq!(s.mode(), Mode::Auto);
     }
 
     #[test]

@@ -76,6 +76,9 @@ pub struct Pilot {
     /// transmitter and sends its failsafe values (sticks centred, the
     /// pilot's switch at manual, the arm switch off), flagged.
     pub rc_failsafe_s: Option<(f64, f64)>,
+    /// The receiver is silent over this interval (s): no frames at all (a
+    /// cut cable, the avionics board resetting).
+    pub rc_silent_s: Option<(f64, f64)>,
 }
 
 /// A SITL run's settings.
@@ -334,7 +337,11 @@ pub fn run(
     while let Some(s) = hw.sense() {
         let t = s.t_s;
         // the receiver at 50 Hz (silent when the ground station flies)
-        if s.k % 8 == 0 && server.is_none() {
+        let silent = options
+            .pilot
+            .rc_silent_s
+            .is_some_and(|(a, b)| t >= a && t < b);
+        if s.k % 8 == 0 && server.is_none() && !silent {
             let pilot = &options.pilot;
             let manual = pilot.manual_from_s.is_some_and(|m| t >= m)
                 && pilot.manual_until_s.is_none_or(|m| t < m);

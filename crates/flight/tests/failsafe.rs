@@ -245,3 +245,104 @@ fn a_receiver_failsafe_in_auto_flies_the_mission_on() {
     let source = log.u8s("servo_output", "source");
     assert!(source.iter().all(|s| *s == 0));
 }
+
+/// A receiver that goes silent while the pilot flies (no frames at all
+/// over 2–3 s: a cut cable) is its failsafe flag: the law's hold once the
+/// last frame is older than `stale.rc_s` (within one control period),
+/// latched, one text; when the frames come back the pilot's switch (still
+/// at manual) takes the servos at once.
+#[test]
+fn a_silent_receiver_in_manual_hands_over_to_the_hold() {
+    let s = scenario("demo.toml", 4.0);
+    let prepared = prepare(&s).unwrap();
+    let mut o = options("rc_silent_manual");
+    o.pilot.manual_from_s = Some(1.0);
+    o.pilot.rc_silent_s = Some((2.0, 3.0));
+    let ts = 0.0025;
+    let rc_s = o.stale.rc_s;
+    assert_eq!(rc_s, 0.5, "the default");
+    let r = sitl::run(&s, &prepared, &o).unwrap();
+    assert_eq!(r.summary.termination, Termination::Completed);
+    let log = Ulog::read(&r.ulog);
+    // the receiver's last frame before the silence, read from the log
+    let rc_t: Vec<f64> = log
+        .u64s("rc_input", "timestamp")
+        .iter()
+        .map(|t| *t as f64 * 1e-6)
+        .collect();
+    let last = rc_t
+        .iter()
+        .copied()
+        .filter(|t| *t < 2.0)
+        .fold(0.0, f64::max);
+    assert!((last - 1.98).abs() < 1e-6, "{last}");
+    assert!(rc_t.iter().all(|t| !(2.0..3.0).contains(t)), "silent");
+    let hold = log.texts_with("rc_lost: manual -> hold");
+    assert_eq!(hold.len(), 1, "{:?}", log.texts);
+    let after = hold[0].0 - last;
+    eprintln!("hold {after:.4} s after the last frame (stale.rc_s {rc_s} s)");
+    assert!((after - rc_s).abs() <= ts + 1e-6, "{after}");
+    let lost = log.texts_with("rc_link: receiver silent, the pilot's link lost");
+    assert_eq!(lost.len(), 1, "{:?}", log.texts);
+    assert_eq!(lost[0].0, hold[0].0);
+    assert!(log.texts_with("rc_link: receiver failsafe").is_empty());
+    assert_eq!(log.texts_with("rc_link: the pilot's link back").len(), 1);
+    let back = log.texts_with("pilot_manual: hold -> manual");
+    assert_eq!(back.len(), 1, "{:?}", log.texts);
+    assert!((back[0].0 - 3.0).abs() < 1e-6);
+    assert_eq!(
+        log.u8s("mode", "mode"),
+        vec![AUTOMATIC, MANUAL, FAILSAFE, MANUAL]
+    );
+    assert_eq!(log.u8s("failsafe", "reason"), vec![RC_LOSS, PILOT]);
+    assert_eq!(log.bools("failsafe", "active"), vec![true, false]);
+    // the servos: the pilot's (his last sticks) until the hold, the law's
+    // over the rest of the silence, the pilot's again from 3 s
+    let k_hold = (hold[0].0 / ts).round() as usize;
+    let trim = prepared.gains.set.u_trim;
+    let pilot = |k: usize| {
+        (0..4).all(|i| (r.received[k][i] - stick_command(stick_us(trim[i]))).abs() < 1e-9)
+    };
+    assert!((400..k_hold).all(pilot));
+    assert!((k_hold + 1..1200).all(|k| !pilot(k)));
+    assert!((1200..1601).all(pilot));
+    let control = log.f64s("control", "command[0]");
+    for k in k_hold..1200 {
+        assert!(
+            (r.received[k][0] - control[k]).abs() <= 0.5e-4 + 1e-12,
+            "k {k}"
+        );
+    }
+}
+
+/// A receiver silent in auto: the mission flies on, the loss and the
+/// return logged once each; a shorter silence than `stale.rc_s` is nothing.
+#[test]
+fn a_silent_receiver_in_auto_flies_the_mission_on() {
+    let s = scenario("demo.toml", 3.0);
+    let prepared = prepare(&s).unwrap();
+    let mut o = options("rc_silent_auto");
+    o.pilot.rc_silent_s = Some((1.0, 2.0));
+    o.stale.rc_s = 0.3;
+    let r = sitl::run(&s, &prepared, &o).unwrap();
+    assert_eq!(r.summary.termination, Termination::Completed);
+    let log = Ulog::read(&r.ulog);
+    assert_eq!(log.u8s("mode", "mode"), vec![AUTOMATIC]);
+    assert_eq!(r.onboard.final_mode, "auto");
+    let lost = log.texts_with("rc_link: receiver silent");
+    assert_eq!(lost.len(), 1, "{:?}", log.texts);
+    // last frame at 0.98 s, lost 0.3 s later (+ at most one period)
+    assert!((lost[0].0 - 1.28).abs() <= 0.0025 + 1e-6, "{}", lost[0].0);
+    let back = log.texts_with("rc_link: the pilot's link back");
+    assert_eq!(back.len(), 1);
+    assert!((back[0].0 - 2.0).abs() < 1e-6);
+    assert!(log.u8s("servo_output", "source").iter().all(|s| *s == 0));
+
+    // 0.25 s of silence with a 0.3 s limit: no loss
+    let mut o = options("rc_silent_short");
+    o.pilot.rc_silent_s = Some((1.0, 1.25));
+    o.stale.rc_s = 0.3;
+    let r = sitl::run(&s, &prepared, &o).unwrap();
+    let log = Ulog::read(&r.ulog);
+    assert!(log.texts_with("rc_link").is_empty(), "{:?}", log.texts);
+}

@@ -19,9 +19,21 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-#[test]
-fn the_onboard_program_aligns_arms_flies_and_logs() {
-    let dir = std::env::temp_dir().join(format!("helicon_onboard_prog_{}", std::process::id()));
+/// The program on pseudo-terminals for 1 s of control steps against the
+/// scripted hardware, whose receiver sends frames until `rc_until_s` of its
+/// own clock (always when `None`); `stale` is the `[stale]` section.
+fn fly(
+    tag: &str,
+    rc_until_s: Option<f64>,
+    stale: &str,
+    duration_s: f64,
+) -> (
+    helicon_flight::runtime::RunReport,
+    std::path::PathBuf,
+    std::path::PathBuf,
+) {
+    let dir =
+        std::env::temp_dir().join(format!("helicon_onboard_prog_{tag}_{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     // gains designed at hover for the Bergen Twin
@@ -36,12 +48,12 @@ fn the_onboard_program_aligns_arms_flies_and_logs() {
          [devices.imu]\npath = \"{}\"\nbaud = 921600\n\
          [devices.gps]\npath = \"{}\"\nbaud = 115200\n\
          [devices.avionics]\npath = \"{}\"\nbaud = 115200\n\
-         [stale]\nimu_s = 0.5\ngps_s = 5.0\nmag_s = 5.0\n\
+         [stale]\nimu_s = 0.5\ngps_s = 5.0\nmag_s = 5.0\n{stale}\n\
          [log]\ndir = \"logs\"\n\
          [realtime]\nsched_fifo = false\nmlockall = false\n",
         imu.slave_path().display(),
         gps.slave_path().display(),
-        av.slave_path().display()
+        av.slave_path().display(),
     );
     std::fs::write(dir.join("onboard.toml"), cfg_text).unwrap();
     let cfg = OnboardConfig::from_file(&dir.join("onboard.toml")).unwrap();
@@ -58,7 +70,7 @@ fn the_onboard_program_aligns_arms_flies_and_logs() {
             let mut k = 0u64;
             while !done.load(Ordering::Relaxed) && k < 400 * 20 {
                 let t = k as f64 * 0.0025;
-                if k % 8 == 0 {
+                if k % 8 == 0 && rc_until_s.is_none_or(|u| t < u) {
                     let mut channels_us = [1500u16; 8];
                     channels_us[4] = 2000;
                     let rc = RcFrame {
@@ -95,9 +107,16 @@ fn the_onboard_program_aligns_arms_flies_and_logs() {
         })
     };
     let (report, log) =
-        helicon_flight::onboard::run(&cfg, Some(Duration::from_secs(1)), false).unwrap();
+        helicon_flight::onboard::run(&cfg, Some(Duration::from_secs_f64(duration_s)), false)
+            .unwrap();
     done.store(true, Ordering::Relaxed);
     hw.join().unwrap();
+    (report, log, dir)
+}
+
+#[test]
+fn the_onboard_program_aligns_arms_flies_and_logs() {
+    let (report, log, dir) = fly("still", None, "", 1.0);
     assert!(report.error.is_none(), "{:?}", report.error);
     assert_eq!(report.steps, 400);
     assert_eq!(report.final_mode, "auto");
@@ -116,4 +135,53 @@ fn the_onboard_program_aligns_arms_flies_and_logs() {
     );
     let t = ulog.u64s("timing", "timestamp");
     assert!(t.windows(2).all(|w| w[1] > w[0]));
+}
+
+/// The receiver goes silent on the clock-paced program (its own receiver
+/// thread, the real avionics link on a pseudo-terminal): once its last
+/// frame is older than `stale.rc_s` the loss is logged once; in auto the
+/// flight goes on (no change of mode). The instant is the wall clock's
+/// here, so only the outcome is checked; the lock-step SITL tests of
+/// `failsafe.rs` check the timing.
+#[test]
+fn a_silent_receiver_on_the_clock_paced_program_is_logged_once() {
+    let (report, log, _) = fly("rc_silent", Some(0.4), "rc_s = 0.3", 1.0);
+    assert!(report.error.is_none(), "{:?}", report.error);
+    assert_eq!(report.final_mode, "auto");
+    let ulog = Ulog::read(&log);
+    assert_eq!(ulog.u8s("mode", "mode"), vec![2]);
+    let lost = ulog.texts_with("rc_link: receiver silent, the pilot's link lost");
+    assert_eq!(lost.len(), 1, "{:?}", ulog.texts);
+    assert!(ulog.texts_with("link back").is_empty(), "{:?}", ulog.texts);
+    // the last receiver frame the control task logged, then the loss
+    // after stale.rc_s (the control steps run on the clock, 2.5 ms apart)
+    let rc_t = ulog.u64s("rc_input", "timestamp");
+    let last = *rc_t.last().unwrap() as f64 * 1e-6;
+    let after = lost[0].0 - last;
+    eprintln!("loss {after:.4} s after the last frame logged");
+    // (the log stamps in whole µs: the strict rule can read as equal)
+    assert!(after >= 0.3 - 1e-6, "{after}");
+}
+
+/// Nobody reads the avionics port (the scripted hardware never does): once
+/// the kernel's buffer is full the servo frames are dropped, never waited
+/// for: every control step still runs, the drops are counted in the report
+/// and logged as texts at the first and at each doubling.
+#[test]
+fn servo_frames_the_avionics_port_cannot_take_are_dropped_and_logged() {
+    let (report, log, _) = fly("servo_full", None, "", 4.0);
+    assert!(report.error.is_none(), "{:?}", report.error);
+    assert_eq!(report.steps, 1600);
+    assert_eq!(report.servo_frames, 1600);
+    let dropped = report.servo_frames_dropped;
+    eprintln!("{dropped} of 1600 servo frames dropped");
+    assert!(dropped > 0 && dropped < 1600, "{dropped}");
+    let ulog = Ulog::read(&log);
+    let texts = ulog.texts_with("servo frame(s) dropped so far");
+    assert!(
+        texts[0].1.contains("avionics: 1 servo frame(s)"),
+        "{texts:?}"
+    );
+    let expected = (0..).take_while(|k| 1u64 << k <= dropped).count();
+    assert_eq!(texts.len(), expected, "{texts:?}");
 }

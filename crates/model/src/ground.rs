@@ -20,6 +20,7 @@
 //! | `bell-gain` | `swashplate_rad, blade_pitch_rad` | (4.2): blade cyclic pitch = Kb · swashplate tilt + offset |
 //! | `hiller-gain` | `flybar_rad, blade_pitch_rad` | (4.2): blade cyclic pitch = Kh · stabilizer-bar flap + offset |
 //! | `tail-fin-loss` | `thrust_no_fin_n, thrust_with_fin_n` | fin drag (7.61) in the tail-rotor wake: T − F = dtf Atf Ktf² T/(4π Rtr²) |
+//! | `stabilizer-lift-slope` | `pitch_rad, thrust_n` | the paddles' lift element of (6.52) summed over both paddles (Ri … Ro, no twist, bar locked level, main blades off) with momentum inflow over the annulus they sweep: T = Cls,sb·ρ csb Ω²·[θ (Ro³ − Ri³)/3 + λ Ro (Ro² − Ri²)/2], λ = −sgn(T)√(\|T\|/(2ρπ(Ro² − Ri²)(ΩRo)²)) |
 
 use crate::config_error::ConfigError;
 use crate::params::Params;
@@ -43,10 +44,14 @@ pub enum Kind {
     HillerGain,
     /// Tail-fin loss factor Ktf from the tail thrust with and without the fin.
     TailFinLoss,
+    /// Stabilizer-bar paddle lift-curve slope Cls,sb from the bar's thrust
+    /// versus paddle pitch on a whirl stand, (6.52): the one paddle
+    /// parameter flight data cannot separate from the paddle inertia.
+    StabilizerLiftSlope,
 }
 
 /// Every kind, in the order of the docs.
-pub const KINDS: [Kind; 7] = [
+pub const KINDS: [Kind; 8] = [
     Kind::RotorDrag,
     Kind::MainLiftSlope,
     Kind::TailLiftSlope,
@@ -54,6 +59,7 @@ pub const KINDS: [Kind; 7] = [
     Kind::BellGain,
     Kind::HillerGain,
     Kind::TailFinLoss,
+    Kind::StabilizerLiftSlope,
 ];
 
 impl Kind {
@@ -67,6 +73,7 @@ impl Kind {
             Kind::BellGain => "bell-gain",
             Kind::HillerGain => "hiller-gain",
             Kind::TailFinLoss => "tail-fin-loss",
+            Kind::StabilizerLiftSlope => "stabilizer-lift-slope",
         }
     }
 
@@ -81,7 +88,9 @@ impl Kind {
     pub fn columns(self) -> [&'static str; 2] {
         match self {
             Kind::RotorDrag => ["omega_rad_s", "torque_n_m"],
-            Kind::MainLiftSlope | Kind::TailLiftSlope => ["pitch_rad", "thrust_n"],
+            Kind::MainLiftSlope | Kind::TailLiftSlope | Kind::StabilizerLiftSlope => {
+                ["pitch_rad", "thrust_n"]
+            }
             Kind::BladeSpring => ["force_n", "flap_rad"],
             Kind::BellGain => ["swashplate_rad", "blade_pitch_rad"],
             Kind::HillerGain => ["flybar_rad", "blade_pitch_rad"],
@@ -107,13 +116,14 @@ impl Kind {
             Kind::BellGain => "main_rotor.bell_factor",
             Kind::HillerGain => "main_rotor.hiller_factor",
             Kind::TailFinLoss => "tail_rotor.fin_area_ratio",
+            Kind::StabilizerLiftSlope => "stabilizer_bar.lift_slope_per_rad",
         }
     }
 
     /// The parameter's SI unit ("1" for dimensionless).
     pub fn unit(self) -> &'static str {
         match self {
-            Kind::MainLiftSlope | Kind::TailLiftSlope => "1/rad",
+            Kind::MainLiftSlope | Kind::TailLiftSlope | Kind::StabilizerLiftSlope => "1/rad",
             Kind::BladeSpring => "N*m/rad",
             _ => "1",
         }
@@ -152,6 +162,10 @@ impl Kind {
                 "tail thrust at the same pitch without and with the tail fin",
                 &[(4.0, 3.9944), (8.0, 7.9891), (12.0, 11.9834)],
             ),
+            Kind::StabilizerLiftSlope => (
+                "stabilizer bar alone on the rotor head (main blades off) at the rotor speed of the parameters, bar locked level, both paddles at the same pitch: paddle pitch and the bar's thrust (positive in the direction a positive pitch pushes)",
+                &STABILIZER_TEMPLATE,
+            ),
         };
         let mut s = format!("# {}: {what}\n{a},{b}\n", self.name());
         for (x, y) in rows {
@@ -160,6 +174,10 @@ impl Kind {
         s
     }
 }
+
+/// The stabilizer-bar template's readings: what the Bergen Twin's bar gives
+/// at 0.05, 0.1, 0.15 rad (Cls,sb = 2.6/rad), rounded to 0.01 N.
+const STABILIZER_TEMPLATE: [(f64, f64); 3] = [(0.05, 3.67), (0.1, 9.28), (0.15, 15.47)];
 
 /// One reading: its line in the file and its two values.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -391,6 +409,11 @@ struct Rotor {
     omega_rad_s: f64,
     twist_rad: f64,
     rho: f64,
+    /// The area of the momentum inflow (m²): the disc πR² of a rotor, the
+    /// annulus π(Ro² − Ri²) the paddles sweep.
+    wake_area_m2: f64,
+    /// The parameter keys of the constants, for the result.
+    keys: [&'static str; 6],
 }
 
 impl Rotor {
@@ -404,6 +427,15 @@ impl Rotor {
             omega_rad_s: m.omega_rad_s,
             twist_rad: m.twist_rad,
             rho: p.environment.rho_kg_m3,
+            wake_area_m2: std::f64::consts::PI * m.radius_m * m.radius_m,
+            keys: [
+                "main_rotor.blades",
+                "main_rotor.chord_m",
+                "main_rotor.radius_m",
+                "main_rotor.hinge_offset_m",
+                "main_rotor.omega_rad_s",
+                "main_rotor.twist_rad",
+            ],
         }
     }
 
@@ -417,6 +449,41 @@ impl Rotor {
             omega_rad_s: p.omega_tr_rad_s(),
             twist_rad: 0.0,
             rho: p.environment.rho_kg_m3,
+            wake_area_m2: std::f64::consts::PI * t.radius_m * t.radius_m,
+            keys: [
+                "tail_rotor.blades",
+                "tail_rotor.chord_m",
+                "tail_rotor.radius_m",
+                "hinge offset (none on the tail rotor), m",
+                "tail-rotor speed G*main_rotor.omega_rad_s, rad/s",
+                "twist (none on the tail rotor), rad",
+            ],
+        }
+    }
+
+    /// The stabilizer bar's two paddles as a rotor: radius Ro, lifting from
+    /// Ri (the role of the hinge offset in the thrust integral), no twist,
+    /// turning with the main rotor; the inflow through their annulus.
+    fn stabilizer(p: &Params) -> Rotor {
+        let sb = &p.stabilizer_bar;
+        let (ro, ri) = (sb.outer_radius_m, sb.inner_radius_m);
+        Rotor {
+            blades: 2.0,
+            chord_m: sb.chord_m,
+            radius_m: ro,
+            hinge_m: ri,
+            omega_rad_s: p.main_rotor.omega_rad_s,
+            twist_rad: 0.0,
+            rho: p.environment.rho_kg_m3,
+            wake_area_m2: std::f64::consts::PI * (ro * ro - ri * ri),
+            keys: [
+                "paddles (two), count",
+                "stabilizer_bar.chord_m",
+                "stabilizer_bar.outer_radius_m",
+                "stabilizer_bar.inner_radius_m",
+                "main_rotor.omega_rad_s",
+                "twist (none on the paddles), rad",
+            ],
         }
     }
 
@@ -432,10 +499,11 @@ impl Rotor {
         (a, b)
     }
 
-    /// √(2ρπR²(ΩR)²): λ = −sgn(T) √|T| / this (momentum theory at rest, (7.29)).
+    /// √(2ρA(ΩR)²), A the wake area (πR² for a rotor): λ = −sgn(T) √|T| /
+    /// this (momentum theory at rest, (7.29)).
     fn momentum(&self) -> f64 {
         let r = self.radius_m;
-        (2.0 * self.rho * std::f64::consts::PI * r * r * (self.omega_rad_s * r).powi(2)).sqrt()
+        (2.0 * self.rho * self.wake_area_m2 * (self.omega_rad_s * r).powi(2)).sqrt()
     }
 
     /// The thrust at pitch θ with lift slope `cls` and converged momentum
@@ -448,26 +516,8 @@ impl Rotor {
     }
 
     /// The constants used, for the result.
-    fn constants(&self, main: bool) -> Vec<(&'static str, f64)> {
-        let keys = if main {
-            [
-                "main_rotor.blades",
-                "main_rotor.chord_m",
-                "main_rotor.radius_m",
-                "main_rotor.hinge_offset_m",
-                "main_rotor.omega_rad_s",
-                "main_rotor.twist_rad",
-            ]
-        } else {
-            [
-                "tail_rotor.blades",
-                "tail_rotor.chord_m",
-                "tail_rotor.radius_m",
-                "hinge offset (none on the tail rotor), m",
-                "tail-rotor speed G*main_rotor.omega_rad_s, rad/s",
-                "twist (none on the tail rotor), rad",
-            ]
-        };
+    fn constants(&self) -> Vec<(&'static str, f64)> {
+        let keys = self.keys;
         let values = [
             self.blades,
             self.chord_m,
@@ -507,8 +557,9 @@ pub fn calculate(readings: &Readings, params: &Params) -> Result<GroundResult, C
     check_physics(readings)?;
     match kind {
         Kind::RotorDrag => rotor_drag(readings, params),
-        Kind::MainLiftSlope => lift_slope(readings, Rotor::main(params), true),
-        Kind::TailLiftSlope => lift_slope(readings, Rotor::tail(params), false),
+        Kind::MainLiftSlope => lift_slope(readings, Rotor::main(params)),
+        Kind::TailLiftSlope => lift_slope(readings, Rotor::tail(params)),
+        Kind::StabilizerLiftSlope => lift_slope(readings, Rotor::stabilizer(params)),
         Kind::BladeSpring => blade_spring(readings, params),
         Kind::BellGain | Kind::HillerGain => mixing_gain(readings),
         Kind::TailFinLoss => fin_loss(readings, params),
@@ -532,7 +583,7 @@ fn check_physics(rd: &Readings) -> Result<(), ConfigError> {
                     ));
                 }
             }
-            Kind::MainLiftSlope | Kind::TailLiftSlope
+            Kind::MainLiftSlope | Kind::TailLiftSlope | Kind::StabilizerLiftSlope
                 if r.y != 0.0 && r.x != 0.0 && r.y.signum() != r.x.signum() =>
             {
                 return Err(rd.invalid(
@@ -659,10 +710,10 @@ fn rotor_drag(rd: &Readings, p: &Params) -> Result<GroundResult, ConfigError> {
     result(rd, cd, line.slope_se, &line, constants, |w| cd * k * w * w)
 }
 
-/// (7.9)/(7.47) with momentum inflow: one-parameter nonlinear least squares
-/// on the thrust (Gauss–Newton on the closed-form root), thrust carrying
-/// the error.
-fn lift_slope(rd: &Readings, rotor: Rotor, main: bool) -> Result<GroundResult, ConfigError> {
+/// (7.9)/(7.47), or the paddles' lift of (6.52), with momentum inflow:
+/// one-parameter nonlinear least squares on the thrust (Gauss–Newton on the
+/// closed-form root), thrust carrying the error.
+fn lift_slope(rd: &Readings, rotor: Rotor) -> Result<GroundResult, ConfigError> {
     let (pitch, thrust) = xy(rd);
     // start: no inflow, T = Cls·A
     let a: Vec<f64> = pitch.iter().map(|t| rotor.per_slope(*t).0).collect();
@@ -712,7 +763,7 @@ fn lift_slope(rd: &Readings, rotor: Rotor, main: bool) -> Result<GroundResult, C
         intercept: None,
         rms: (rss / n).sqrt(),
     };
-    result(rd, cls, line.slope_se, &line, rotor.constants(main), |t| {
+    result(rd, cls, line.slope_se, &line, rotor.constants(), |t| {
         rotor.thrust(t, cls)
     })
 }

@@ -29,6 +29,63 @@ fn at_rest(p: &Params, theta0: f64, theta_tr: f64) -> helicon_model::Aux {
     aux
 }
 
+/// The stabilizer bar's thrust on the whirl stand (both paddles at pitch
+/// θ, bar level, main blades off) from the model's own blade-element
+/// quadrature of the paddles' lift (`rotor::blade_integrals` over Ri…Ro,
+/// the lift element of (6.52)), with the momentum inflow through the
+/// annulus solved by bisection to round-off: an independent computation of
+/// what the calculator inverts in closed form.
+fn stabilizer_thrust(p: &Params, pitch_rad: f64) -> f64 {
+    use helicon_model::rotor::{BladeInputs, Grid, blade_integrals};
+    let sb = &p.stabilizer_bar;
+    let (ro, ri) = (sb.outer_radius_m, sb.inner_radius_m);
+    let om = p.main_rotor.omega_rad_s;
+    let rho = p.environment.rho_kg_m3;
+    let bi = blade_integrals(
+        &Grid::new(ri, ro),
+        &BladeInputs {
+            omega_rad_s: om,
+            hinge_offset_m: 0.0,
+            hub_u_m_s: 0.0,
+            hub_v_m_s: 0.0,
+            lambda_speed_m_s: om * ro,
+            p_rad_s: 0.0,
+            q_rad_s: 0.0,
+            flap_rad: Vector3::zeros(),
+            flap_rate_rad_s: Vector3::zeros(),
+            theta0_rad: pitch_rad,
+            cyclic_a_rad: 0.0,
+            cyclic_b_rad: 0.0,
+            twist_rad_per_m: 0.0,
+            k1: 0.0,
+            lift_k: 0.5 * rho * sb.chord_m * sb.lift_slope_per_rad,
+            drag_k: 0.0,
+        },
+    );
+    let area = std::f64::consts::PI * (ro * ro - ri * ri);
+    // λ of a thrust T (momentum theory through the annulus), then the
+    // residual T − 2·lift(λ), increasing in |T|
+    let residual = |t: f64| {
+        let lam = -t.signum() * (t.abs() / (2.0 * rho * area)).sqrt() / (om * ro);
+        t - 2.0 * bi.lift.at(lam)
+    };
+    let no_inflow = 2.0 * bi.lift.at(0.0);
+    let (mut lo, mut hi) = if no_inflow >= 0.0 {
+        (0.0, no_inflow)
+    } else {
+        (no_inflow, 0.0)
+    };
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if residual(mid) > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 fn csv(kind: Kind, rows: &[(f64, f64)]) -> String {
     let [a, b] = kind.columns();
     let mut s = format!("# made by the model\n{a},{b}\n");
@@ -91,6 +148,10 @@ fn readings(kind: Kind, sigma: f64, seed: u64) -> Vec<(f64, f64)> {
                     let x = -0.1 + 0.04 * f;
                     (x, -0.002 + p.main_rotor.hiller_factor * x + e())
                 }
+                Kind::StabilizerLiftSlope => {
+                    let t = -0.1 + 0.04 * f;
+                    (t, stabilizer_thrust(&p, t) + e())
+                }
             });
         }
     }
@@ -107,6 +168,7 @@ fn truth(kind: Kind) -> f64 {
         Kind::BellGain => p.main_rotor.bell_factor,
         Kind::HillerGain => p.main_rotor.hiller_factor,
         Kind::TailFinLoss => p.tail_rotor.fin_area_ratio,
+        Kind::StabilizerLiftSlope => p.stabilizer_bar.lift_slope_per_rad,
     }
 }
 
@@ -158,6 +220,7 @@ fn noisy_readings_give_values_within_their_standard_errors() {
         (Kind::BladeSpring, 0.001),
         (Kind::BellGain, 0.001),
         (Kind::HillerGain, 0.001),
+        (Kind::StabilizerLiftSlope, 0.2),
     ] {
         let mut z: Vec<f64> = (0..20)
             .map(|seed| {
@@ -244,6 +307,69 @@ fn hand_worked_cases() {
         / (q.fuselage.drag_tf * q.fuselage.area_tf_m2))
         .sqrt();
     assert!((r.value - want).abs() < 1e-12, "{} vs {want}", r.value);
+}
+
+/// The stabilizer bar's lift slope: the calculator's closed-form root
+/// against the model's quadrature and a bisected inflow, to 1e-12 relative,
+/// the Bergen Twin's and another bar's; a hand-worked case; the fitted
+/// thrust is the reading's.
+#[test]
+fn stabilizer_lift_slope_against_the_models_paddle_lift() {
+    let mut p = Params::bergen_twin();
+    for (ri, ro, chord, cls, omega) in [(0.5, 0.65, 0.1, 2.6, 100.0), (0.3, 0.45, 0.06, 4.1, 150.0)]
+    {
+        p.stabilizer_bar.inner_radius_m = ri;
+        p.stabilizer_bar.outer_radius_m = ro;
+        p.stabilizer_bar.chord_m = chord;
+        p.stabilizer_bar.lift_slope_per_rad = cls;
+        p.main_rotor.omega_rad_s = omega;
+        let rows: Vec<(f64, f64)> = [-0.12, -0.05, 0.03, 0.08, 0.15]
+            .iter()
+            .map(|t| (*t, stabilizer_thrust(&p, *t)))
+            .collect();
+        let r = run(Kind::StabilizerLiftSlope, &rows, &p);
+        let rel = (r.value - cls).abs() / cls;
+        eprintln!(
+            "stabilizer-lift-slope Ri {ri} Ro {ro}: {} (truth {cls}), rel {rel:.1e}, se {:.1e}",
+            r.value, r.std_error
+        );
+        assert!(rel < 1e-12, "{} vs {cls}", r.value);
+        assert!(r.std_error < 1e-10 * cls);
+        for pt in &r.points {
+            assert!((pt[1] - pt[2]).abs() <= 1e-12 * pt[1].abs().max(1.0));
+        }
+        assert_eq!(r.key, "stabilizer_bar.lift_slope_per_rad");
+        assert_eq!(r.unit, "1/rad");
+    }
+    // by hand: ρ = 1.2, csb = 0.1, Ω = 100, Ri = 0, Ro = 1 (so the annulus
+    // is the disc): T = Cls·1200·[θ/3 + λ/2], √(2ρπ(ΩRo)²) = 100√(2.4π);
+    // Cls = 3, θ = 0.1: T = 3(40 − 600 √T/(100√(2.4π))) → √T = (−β +
+    // √(β² + 480))/2, β = 18/√(2.4π)
+    p.environment.rho_kg_m3 = 1.2;
+    p.stabilizer_bar.inner_radius_m = 0.0;
+    p.stabilizer_bar.outer_radius_m = 1.0;
+    p.stabilizer_bar.chord_m = 0.1;
+    p.main_rotor.omega_rad_s = 100.0;
+    let beta = 18.0 / (2.4 * std::f64::consts::PI).sqrt();
+    let root = |c: f64| {
+        let s = 0.5 * (-beta + (beta * beta + c).sqrt());
+        s * s
+    };
+    let r = run(
+        Kind::StabilizerLiftSlope,
+        &[(0.1, root(480.0)), (0.2, root(960.0)), (-0.1, -root(480.0))],
+        &p,
+    );
+    assert!((r.value - 3.0).abs() < 1e-12, "{}", r.value);
+    // a thrust against the pitch names the line
+    let e = err(
+        Kind::StabilizerLiftSlope,
+        "pitch_rad,thrust_n\n0.1,9.3\n0.15,-15\n",
+    );
+    assert!(
+        e.contains("bench.csv: line 3") && e.contains("`thrust_n` = -15"),
+        "{e}"
+    );
 }
 
 fn err(kind: Kind, text: &str) -> String {
