@@ -131,9 +131,35 @@ pub struct Accuracy {
 /// finite differences whose round-off shows up as a small column. Errors only
 /// on a non-finite Jacobian.
 pub fn accuracy(jac: &DMatrix<f64>, cost: f64, no_information: f64) -> Result<Accuracy> {
+    accuracy_correlated(jac, cost, no_information, None)
+}
+
+/// [`accuracy`] for residuals that are correlated with each other, as the
+/// points of a frequency response estimated on a grid finer than its
+/// windows' resolution are: with the residuals' correlation matrix R
+/// (variance s² R) and `jrj` = JᵀRJ, the least-squares estimate's covariance
+/// is the sandwich s² M⁻¹ (JᵀRJ) M⁻¹ (the estimator is still the one of
+/// independent residuals; only its scatter is stated truly), so
+/// CR_i = s √(M⁻¹JᵀRJM⁻¹)_ii, I_i = s √(JᵀRJ)_ii / M_ii and the correlations
+/// are those of the sandwich. `None` is R = I, [`accuracy`].
+pub fn accuracy_correlated(
+    jac: &DMatrix<f64>,
+    cost: f64,
+    no_information: f64,
+    jrj: Option<&DMatrix<f64>>,
+) -> Result<Accuracy> {
     let (nr, np) = jac.shape();
     let s2 = cost / nr.saturating_sub(np).max(1) as f64;
     let m = jac.transpose() * jac;
+    let g = match jrj {
+        Some(g) if g.shape() == (np, np) && g.iter().all(|v| v.is_finite()) => g.clone(),
+        Some(_) => {
+            return Err(IdentError::Fit(
+                "residual correlation: JᵀRJ is not a finite square of the parameters".into(),
+            ));
+        }
+        None => m.clone(),
+    };
     // Scale to unit diagonal before inverting (the parameters span decades).
     let d: Vec<f64> = (0..np).map(|i| m[(i, i)].sqrt()).collect();
     if d.iter().any(|v| !v.is_finite()) || !s2.is_finite() {
@@ -142,15 +168,18 @@ pub fn accuracy(jac: &DMatrix<f64>, cost: f64, no_information: f64) -> Result<Ac
     let dmax = d.iter().copied().fold(0.0, f64::max);
     let seen: Vec<usize> = (0..np).filter(|&i| d[i] > no_information * dmax).collect();
     let ns = seen.len();
-    let ms = DMatrix::from_fn(ns, ns, |i, j| {
-        let (a, b) = (seen[i], seen[j]);
-        m[(a, b)] / (d[a] * d[b])
-    });
+    let scaled = |x: &DMatrix<f64>| {
+        DMatrix::from_fn(ns, ns, |i, j| {
+            let (a, b) = (seen[i], seen[j]);
+            x[(a, b)] / (d[a] * d[b])
+        })
+    };
+    let (ms, gs) = (scaled(&m), scaled(&g));
     let mut cr = vec![f64::INFINITY; np];
     let mut ins = vec![f64::INFINITY; np];
     let mut corr = DMatrix::from_element(np, np, f64::NAN);
-    for &a in &seen {
-        ins[a] = s2.sqrt() / d[a];
+    for (i, &a) in seen.iter().enumerate() {
+        ins[a] = (s2 * gs[(i, i)]).max(0.0).sqrt() / d[a];
     }
     let inv = ms
         .try_inverse()
@@ -163,10 +192,11 @@ pub fn accuracy(jac: &DMatrix<f64>, cost: f64, no_information: f64) -> Result<Ac
             separable: false,
         });
     };
+    let cov = &inv * gs * &inv;
     for (i, &a) in seen.iter().enumerate() {
-        cr[a] = (s2 * inv[(i, i)]).max(0.0).sqrt() / d[a];
+        cr[a] = (s2 * cov[(i, i)]).max(0.0).sqrt() / d[a];
         for (j, &b) in seen.iter().enumerate() {
-            corr[(a, b)] = inv[(i, j)] / (inv[(i, i)] * inv[(j, j)]).sqrt();
+            corr[(a, b)] = cov[(i, j)] / (cov[(i, i)] * cov[(j, j)]).sqrt();
         }
     }
     Ok(Accuracy {

@@ -631,6 +631,45 @@ pub fn composite(parts: &[Frf], window_s: &[f64]) -> Result<Frf> {
     Ok(out)
 }
 
+/// The correlation of two estimates at frequencies `delta_rad_s` apart made
+/// with a Hann window `window_s` long: the normalised transform of the
+/// squared window, |Σ w²(t) e^{−jδt}| / Σ w²(t) (the covariance of the
+/// windowed transforms of white noise at ω and ω + δ), in closed form for the
+/// continuous window, w² = 3/8 + ½ cos(Ωt) + ⅛ cos(2Ωt) about its centre,
+/// Ω = 2π/T:
+/// ρ(δ) = |D(δ) + ⅔[D(δ−Ω) + D(δ+Ω)] + ⅙[D(δ−2Ω) + D(δ+2Ω)]|,
+/// D(ν) = sin(νT/2)/(νT/2). It is 1 at δ = 0, 2/3 one bin apart (δ = Ω),
+/// 1/6 two bins apart — the textbook correlations of Hann-windowed DFT bins
+/// — and 0 at three and more whole bins, with sidelobes below 1 % between.
+/// Averaging half-overlapped segments does not change it.
+pub fn hann_correlation(delta_rad_s: f64, window_s: f64) -> f64 {
+    let d = |nu: f64| {
+        let x = 0.5 * nu * window_s;
+        if x.abs() < 1e-9 { 1.0 } else { x.sin() / x }
+    };
+    let om = 2.0 * PI / window_s;
+    let r = d(delta_rad_s)
+        + 2.0 / 3.0 * (d(delta_rad_s - om) + d(delta_rad_s + om))
+        + 1.0 / 6.0 * (d(delta_rad_s - 2.0 * om) + d(delta_rad_s + 2.0 * om));
+    r.abs().min(1.0)
+}
+
+/// The correlation of a composite estimate's points at `omega_a_rad_s` and
+/// `omega_b_rad_s` (see [`composite`]): the mean of [`hann_correlation`]
+/// over the window lengths that hold two periods of both frequencies (the
+/// composite's windows there); 0 when none does.
+pub fn composite_correlation(omega_a_rad_s: f64, omega_b_rad_s: f64, window_s: &[f64]) -> f64 {
+    let lo = omega_a_rad_s.min(omega_b_rad_s);
+    let (mut sum, mut n) = (0.0, 0usize);
+    for &tw in window_s {
+        if lo >= 4.0 * PI / tw {
+            sum += hann_correlation((omega_a_rad_s - omega_b_rad_s).abs(), tw);
+            n += 1;
+        }
+    }
+    if n == 0 { 0.0 } else { sum / n as f64 }
+}
+
 /// `n` frequencies spaced logarithmically from `lo` to `hi` rad/s.
 pub fn log_grid(lo: f64, hi: f64, n: usize) -> Result<Vec<f64>> {
     if !(lo > 0.0 && hi > lo && hi.is_finite()) || n < 2 {
@@ -647,6 +686,43 @@ pub fn log_grid(lo: f64, hi: f64, n: usize) -> Result<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hann_correlation_is_the_squared_windows_transform() {
+        // against the sum over a sampled Hann window (400 Hz, 12 s): the
+        // closed form is for the continuous window, so agreement is to the
+        // sampling's O(dt/T) and better
+        let (t_w, dt) = (12.0, 1.0 / 400.0);
+        let n = (t_w / dt) as usize;
+        let w2: Vec<f64> = (0..n)
+            .map(|k| (PI * (k as f64 + 0.5) / n as f64).sin().powi(4))
+            .collect();
+        let total: f64 = w2.iter().sum();
+        for delta in [0.0, 0.1, 0.26, 0.52, 0.8, 1.3, 1.57, 2.5] {
+            let (mut re, mut im) = (0.0, 0.0);
+            for (k, v) in w2.iter().enumerate() {
+                let ph = delta * (k as f64 + 0.5) * dt;
+                re += v * ph.cos();
+                im -= v * ph.sin();
+            }
+            let sum = (re * re + im * im).sqrt() / total;
+            let closed = hann_correlation(delta, t_w);
+            assert!((sum - closed).abs() < 1e-4, "δ {delta}: {sum} vs {closed}");
+        }
+        assert!((hann_correlation(0.0, t_w) - 1.0).abs() < 1e-15);
+        // the textbook correlations of Hann-windowed DFT bins: 2/3 one bin
+        // apart, 1/6 two bins apart, 0 from three whole bins on
+        let bin = 2.0 * PI / t_w;
+        assert!((hann_correlation(bin, t_w) - 2.0 / 3.0).abs() < 1e-12);
+        assert!((hann_correlation(2.0 * bin, t_w) - 1.0 / 6.0).abs() < 1e-12);
+        assert!(hann_correlation(3.0 * bin, t_w) < 1e-12);
+        // the composite: windows that do not hold two periods are left out
+        assert_eq!(composite_correlation(0.5, 0.6, &[6.0]), 0.0);
+        let both = composite_correlation(2.2, 2.3, &[12.0, 6.0]);
+        let mean = 0.5 * (hann_correlation(0.1, 12.0) + hann_correlation(0.1, 6.0));
+        assert!((both - mean).abs() < 1e-15);
+        assert!((composite_correlation(1.5, 1.6, &[12.0, 6.0]) - hann_correlation(0.1, 12.0)).abs() < 1e-15);
+    }
 
     #[test]
     fn unwrap_removes_jumps() {

@@ -5,7 +5,7 @@
 //! ratio, the flagged ones, the ground values' errors, the cost and the
 //! cost against the truth's model responses.
 //!
-//! `cargo run --release -p helicon-paramid --example demo_table -- [--no-ground] [--fix-ground] [TRUTH SEED]...`
+//! `cargo run --release -p helicon-paramid --example demo_table -- [--no-ground] [--fix-ground] [--fix=KEY]... [TRUTH SEED]...`
 //! (default: truth-a, truth-b, truth-c at seeds 1, 3 and 7).
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::print_stdout)]
 
@@ -42,6 +42,9 @@ fn main() {
                         | "tail_rotor.lift_slope_per_rad"
                 )
         })
+        // --fix=KEY (repeatable): KEY is not identified in flight (kept at
+        // its start value, the ground-measured one for a ground key)
+        .filter(|k| !args.iter().any(|a| a.strip_prefix("--fix=") == Some(**k)))
         .map(|k| k.to_string())
         .collect();
     let rest: Vec<&String> = args.iter().filter(|a| !a.starts_with("--")).collect();

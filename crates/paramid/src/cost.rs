@@ -31,7 +31,8 @@ use helicon_ident::Complex64;
 use helicon_ident::fit::coherence_weight;
 use helicon_model::trim::TrimTarget;
 use helicon_model::{Params, Preset};
-use nalgebra::DVector;
+use helicon_ident::frf::composite_correlation;
+use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
 /// 20 / ln 10: dB per neper.
@@ -69,6 +70,10 @@ pub struct PointCost {
     pub ts_s: f64,
     /// Responses.
     pub responses: Vec<Selected>,
+    /// The window lengths of the composite estimates, s: neighbouring
+    /// frequency points closer than their resolution are correlated
+    /// ([`Cost::residual_correlation`]).
+    pub windows_s: Vec<f64>,
 }
 
 /// The whole cost: operating points, the parameters it varies and the base
@@ -148,6 +153,7 @@ impl Cost {
                 target: target(op.velocity_ned_m_s, op.yaw_rad),
                 ts_s: d.sample_time_s,
                 responses,
+                windows_s: cfg.windows_s.clone(),
             });
         }
         let cost = Cost {
@@ -241,6 +247,43 @@ impl Cost {
         } else {
             Err(ParamIdError::Fit("non-finite residual".into()))
         }
+    }
+
+    /// JᵀRJ for the Jacobian `jac` of [`Cost::residuals`] (rows in their
+    /// order, one column per parameter) and R the residuals' correlation:
+    /// within a response, the magnitude residuals at ω_k and ω_l are
+    /// correlated by the composite estimate's window overlap
+    /// (`helicon_ident::frf::composite_correlation`), and so are the phase
+    /// residuals; magnitude and phase residuals, responses and operating
+    /// points are taken as uncorrelated. For the Cramér–Rao bounds of
+    /// correlated residuals (`helicon_ident::cost::accuracy_correlated`).
+    pub fn residual_correlation(&self, jac: &DMatrix<f64>) -> DMatrix<f64> {
+        let np = jac.ncols();
+        let mut g = DMatrix::zeros(np, np);
+        let mut o = 0;
+        for pt in &self.points {
+            for s in &pt.responses {
+                let w = &s.omega_rad_s;
+                for k in 0..w.len() {
+                    for l in 0..w.len() {
+                        let rho = if k == l {
+                            1.0
+                        } else {
+                            composite_correlation(w[k], w[l], &pt.windows_s)
+                        };
+                        if rho == 0.0 {
+                            continue;
+                        }
+                        for part in 0..2 {
+                            let (a, b) = (jac.row(o + 2 * k + part), jac.row(o + 2 * l + part));
+                            g += rho * a.transpose() * b;
+                        }
+                    }
+                }
+                o += 2 * w.len();
+            }
+        }
+        g
     }
 
     /// The cost of each response (points × responses) from residuals `r`.

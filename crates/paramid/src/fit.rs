@@ -323,8 +323,13 @@ pub fn accuracy(cost: &Cost, free: &[usize], values: &[f64]) -> Result<AccuracyP
     // through the finite difference (trim tolerance 1e-10 over the step
     // 1e-6 gives ~1e-4 relative; a parameter the responses do not depend on
     // measured 5e-5): no information, infinitely insensitive
-    let acc = helicon_ident::cost::accuracy(&jac, r0.norm_squared(), 1e-4)
-        .map_err(|e| ParamIdError::Fit(e.to_string()))?;
+    // the grid is finer than the windows' resolution at low frequency
+    // (40 log-spaced points: several per bin of a 12 s window below
+    // 3 rad/s), so the residuals are correlated: the sandwich covariance
+    let jrj = cost.residual_correlation(&jac);
+    let acc =
+        helicon_ident::cost::accuracy_correlated(&jac, r0.norm_squared(), 1e-4, Some(&jrj))
+            .map_err(|e| ParamIdError::Fit(e.to_string()))?;
     // θ units (fractions of the start value) → per cent of the identified value
     let pct: Vec<f64> = free
         .iter()
