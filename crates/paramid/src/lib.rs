@@ -18,7 +18,9 @@
 //! - [`report`]: `identified.toml`, `report.json`, `report.md`;
 //! - [`verify`]: time-domain verification on doublet logs (Theil coefficient);
 //! - [`demo`]: the programme end to end on a simulated helicopter;
-//! - [`keys`]: parameters by their `helicon params` key.
+//! - [`keys`]: parameters by their `helicon params` key;
+//! - [`source`]: a log's columns from `log.csv` or the flight computer's
+//!   ULog (`flight.ulg`).
 
 pub mod config;
 pub mod cost;
@@ -29,6 +31,7 @@ pub mod fit;
 pub mod keys;
 pub mod linear;
 pub mod report;
+pub mod source;
 pub mod verify;
 
 pub use error::{ParamIdError, Result};

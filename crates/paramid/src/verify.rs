@@ -21,7 +21,6 @@ use crate::error::{ParamIdError, Result};
 use crate::linear::{linear_model, target};
 use helicon_model::state::{REDUCED_OFFSET, STATE_NAMES, State, expand, ix};
 use helicon_model::{INPUT_NAMES, Input, Model, Params};
-use helicon_sim::log_csv::LogReader;
 use nalgebra::Vector3;
 use serde::Serialize;
 
@@ -151,8 +150,8 @@ fn replay(
 /// The start and wind of verification `v`: as configured, else the best the
 /// log's header offers.
 fn choose(v: &Verification) -> Result<(InitialState, WindSource)> {
-    let reader = LogReader::open(&v.log, &[])?;
-    let has = |names: &[&str]| names.iter().all(|n| reader.names().iter().any(|c| c == n));
+    let header = crate::source::log_names(&v.log)?;
+    let has = |names: &[&str]| names.iter().all(|n| header.iter().any(|c| c == n));
     let start = v.initial_state.unwrap_or(if has(&STATE_NAMES) {
         InitialState::Logged
     } else if has(&ESTIMATE_NAMES) {
