@@ -9,7 +9,9 @@
 //! - **Time base**: the `control` topic (one record per control step,
 //!   stamped with the time of the measurement the step used). The nominal
 //!   period T is the one given (the parameters' `control.sample_time_s`) or,
-//!   without one, the median step of the `control` timestamps.
+//!   without one, the median step of the `control` timestamps; a median step
+//!   further than the jitter tolerance from the period given is refused (a
+//!   log decimated, or flown at another rate).
 //! - **Jitter**: each step between consecutive `control` records must lie
 //!   within ±[`JITTER_FRACTION`]·T of a whole number m ≥ 1 of periods;
 //!   sample k is then placed at t₀ + n_k·T (n advancing by m), so the record
@@ -453,7 +455,7 @@ pub fn read_ulog_columns(
         },
     };
     let n0 = grid.slot[start];
-    let t0 = topics[0].t_us[0] as f64 * 1e-6;
+    let t0 = topics[0].t_us[0] as f64 / 1e6;
     let t: Vec<f64> = (n0..=grid.slot[grid.slot.len() - 1])
         .map(|n| t0 + n as f64 * grid.period_s)
         .collect();
@@ -465,7 +467,9 @@ pub fn read_ulog_columns(
     }
     for w in grid.slot[start..].windows(2) {
         if w[1] > w[0] + 1 {
-            out.filled.push((t0 + (w[0] + 1) as f64 * grid.period_s, w[1] - w[0] - 1));
+            // to the µs, the log's resolution
+            let t = ((t0 + (w[0] + 1) as f64 * grid.period_s) * 1e6).round() / 1e6;
+            out.filled.push((t, w[1] - w[0] - 1));
         }
     }
     out.columns.push(t);
@@ -542,7 +546,7 @@ fn collect(
                 let Some(index) = &td.index else {
                     return Ok(());
                 };
-                let time_s = timestamp_us as f64 * 1e-6;
+                let time_s = timestamp_us as f64 / 1e6;
                 if let Some(&prev) = td.t_us.last()
                     && timestamp_us < prev
                 {
@@ -550,7 +554,7 @@ fn collect(
                         file: file.to_string(),
                         topic: td.name.to_string(),
                         time_s,
-                        previous_s: prev as f64 * 1e-6,
+                        previous_s: prev as f64 / 1e6,
                     });
                 }
                 let mut row = Vec::with_capacity(index.len());
@@ -590,7 +594,7 @@ struct Grid {
 
 impl Grid {
     fn build(file: &str, t_us: &[u64], period_s: Option<f64>) -> Result<Grid, ColumnsError> {
-        let t_s: Vec<f64> = t_us.iter().map(|t| *t as f64 * 1e-6).collect();
+        let t_s: Vec<f64> = t_us.iter().map(|t| *t as f64 / 1e6).collect();
         if t_s.len() < 2 {
             return Err(ColumnsError::Record {
                 file: file.to_string(),
@@ -610,25 +614,30 @@ impl Grid {
                 });
             }
         }
-        let ts = match period_s {
-            Some(p) => p,
-            None => {
-                let mut steps: Vec<f64> = t_s.windows(2).map(|w| w[1] - w[0]).collect();
-                steps.sort_by(f64::total_cmp);
-                steps[steps.len() / 2]
-            }
-        };
+        // steps in whole µs, so the times printed are the log's
+        let mut steps: Vec<u64> = t_us.windows(2).map(|w| w[1].saturating_sub(w[0])).collect();
+        steps.sort_unstable();
+        let median = steps[steps.len() / 2] as f64 / 1e6;
+        let ts = period_s.unwrap_or(median);
         if !(ts.is_finite() && ts > 0.0) {
             return Err(ColumnsError::Record {
                 file: file.to_string(),
                 rule: format!("the control period {ts} s must be finite and > 0"),
             });
         }
+        if (median - ts).abs() > JITTER_FRACTION * ts {
+            return Err(ColumnsError::Record {
+                file: file.to_string(),
+                rule: format!(
+                    "the `control` records' median step is {median} s, not the control period {ts} s: log every control sample (and check control.sample_time_s)"
+                ),
+            });
+        }
         let mut slot = Vec::with_capacity(t_s.len());
         slot.push(0usize);
         let mut max_jitter_s: f64 = 0.0;
         for k in 1..t_s.len() {
-            let step = t_s[k] - t_s[k - 1];
+            let step = (t_us[k] - t_us[k - 1]) as f64 / 1e6;
             let m = (step / ts).round();
             if m < 1.0 || (step - m * ts).abs() > JITTER_FRACTION * ts {
                 return Err(ColumnsError::Jitter {
@@ -675,7 +684,7 @@ fn align(
     let mut start = 0;
     let mut held = Vec::with_capacity(topics.len().saturating_sub(1));
     for td in &topics[1..] {
-        let rec: Vec<f64> = td.t_us.iter().map(|t| *t as f64 * 1e-6).collect();
+        let rec: Vec<f64> = td.t_us.iter().map(|t| *t as f64 / 1e6).collect();
         let mut idx = Vec::with_capacity(grid.t_s.len());
         let mut j: Option<usize> = None;
         for (k, &t) in grid.t_s.iter().enumerate() {
@@ -703,7 +712,7 @@ fn align(
     }
     for (td, idx) in topics[1..].iter().zip(&held) {
         for k in start..grid.t_s.len() {
-            let age = grid.t_s[k] - td.t_us[idx[k]] as f64 * 1e-6;
+            let age = grid.t_s[k] - td.t_us[idx[k]] as f64 / 1e6;
             if age > max_age + 1e-9 {
                 return Err(ColumnsError::Stale {
                     file: file.to_string(),
