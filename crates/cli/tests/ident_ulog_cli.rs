@@ -33,14 +33,18 @@ fn frf_rows(path: &Path) -> Vec<(String, f64, helicon_ident::Complex64, f64, f64
         .collect()
 }
 
-fn ident_toml(log: &str) -> String {
+/// The IDENT.toml of the proof; `start`: the verification's start and wind
+/// lines (empty: the defaults).
+fn ident_toml(log: &str, start: &str) -> String {
     format!(
         "start = \"start.toml\"\npreset = \"physical\"\npoints = 20\nwindows_s = [24.0, 12.0, 6.0]\nauto_fix = false\n\n\
          [[operating_point]]\nname = \"hover\"\nvelocity_ned_m_s = [0.0, 0.0, 0.0]\nlog = \"{log}\"\n\
          instruments = [\"exc_col\", \"exc_lat\", \"exc_lon\", \"exc_tr\"]\n\n\
          [[response]]\ninput = \"S_lat\"\noutput = \"meas_p\"\nomega_min_rad_s = 1.5\nomega_max_rad_s = 25.0\n\n\
          [[response]]\ninput = \"S_lon\"\noutput = \"meas_q\"\nomega_min_rad_s = 1.5\nomega_max_rad_s = 25.0\n\n\
-         [[parameter]]\nkey = \"main_rotor.lift_slope_per_rad\"\nmin = 3.0\nmax = 12.0\n"
+         [[parameter]]\nkey = \"main_rotor.lift_slope_per_rad\"\nmin = 3.0\nmax = 12.0\n\n\
+         [[verification]]\noperating_point = \"hover\"\nlog = \"{log}\"\noutputs = [\"meas_p\", \"meas_q\"]\n\
+         t_start_s = 30.0\nt_end_s = 33.0\n{start}"
     )
 }
 
@@ -132,9 +136,17 @@ fn sitl_flight_ulog_identifies_as_its_log_csv() {
     )
     .unwrap();
     let mut fits = Vec::new();
-    for (tag, log) in [("ulg", "sitl/flight.ulg"), ("csv", "sitl/log.csv")] {
+    // the verification (3 s of the S_lat sweep, replayed open loop): the
+    // flight log's default start is the estimate in still air; log.csv is
+    // told the same
+    let csv_start = "initial_state = \"estimate\"\nwind = \"still\"\n";
+    let mut theil = Vec::new();
+    for (tag, log, start) in [
+        ("ulg", "sitl/flight.ulg", ""),
+        ("csv", "sitl/log.csv", csv_start),
+    ] {
         let file = d.join(format!("ident_{tag}.toml"));
-        std::fs::write(&file, ident_toml(log)).unwrap();
+        std::fs::write(&file, ident_toml(log, start)).unwrap();
         let o = d.join(format!("fit_{tag}"));
         let (ok, stdout, stderr) = helicon(&[
             "ident",
@@ -146,6 +158,12 @@ fn sitl_flight_ulog_identifies_as_its_log_csv() {
         assert!(ok, "{stdout}\n{stderr}");
         let r: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(o.join("report.json")).unwrap()).unwrap();
+        let v = &r["verification"][0];
+        assert_eq!(v["initial_state"], "estimate", "{v}");
+        assert_eq!(v["wind"], "still", "{v}");
+        for o in v["outputs"].as_array().unwrap() {
+            theil.push(o["theil_identified"].as_f64().unwrap());
+        }
         let p = &r["parameters"][0];
         fits.push((
             p["identified"].as_f64().unwrap(),
@@ -157,6 +175,30 @@ fn sitl_flight_ulog_identifies_as_its_log_csv() {
     // measured: 5.99821 (ULog) and 5.99852 (log.csv), CR 1.31 %
     assert!((a.0 - b.0).abs() < 0.05 * cr, "{a:?} {b:?}");
     assert!((a.0 - 6.0).abs() < 3.0 * cr, "{a:?}");
+    // measured: Theil 0.2082/0.2634 (ULog), 0.2082/0.2633 (log.csv)
+    for j in 0..2 {
+        assert!((theil[j] - theil[2 + j]).abs() < 0.01, "{theil:?}");
+    }
+    // a flight log has no true state: "logged" is refused naming the field
+    let file = d.join("ident_logged.toml");
+    std::fs::write(
+        &file,
+        ident_toml("sitl/flight.ulg", "initial_state = \"logged\"\n"),
+    )
+    .unwrap();
+    let (ok, _, stderr) = helicon(&[
+        "ident",
+        "fit",
+        file.to_str().unwrap(),
+        "--out",
+        d.join("fit_bad").to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && stderr.contains("ident_logged.toml")
+            && stderr.contains("verification[0].initial_state")
+            && stderr.contains("flight.ulg has no column x"),
+        "{stderr}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
 

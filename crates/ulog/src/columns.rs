@@ -598,10 +598,7 @@ impl Grid {
         if t_s.len() < 2 {
             return Err(ColumnsError::Record {
                 file: file.to_string(),
-                rule: format!(
-                    "{} `control` record(s): at least 16 are needed",
-                    t_s.len()
-                ),
+                rule: format!("{} `control` record(s): at least 16 are needed", t_s.len()),
             });
         }
         for w in t_s.windows(2) {
@@ -659,8 +656,7 @@ impl Grid {
                 });
             }
             slot.push(slot[k - 1] + missing + 1);
-            max_jitter_s =
-                max_jitter_s.max((t_s[k] - t_s[0] - slot[k] as f64 * ts).abs());
+            max_jitter_s = max_jitter_s.max((t_s[k] - t_s[0] - slot[k] as f64 * ts).abs());
         }
         Ok(Grid {
             period_s: ts,

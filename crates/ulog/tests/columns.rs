@@ -77,7 +77,10 @@ fn read(path: &Path) -> Result<helicon_ulog::columns::UlogColumns, ColumnsError>
 fn uniform_log_gives_the_logged_values_exactly() {
     let p = write_log("uniform", 200, |_| Some(0), |_| Some(0));
     let c = read(&p).unwrap();
-    assert_eq!(c.names, ["t_s", "S_lat", "meas_p", "est_q", "exc_lat", "exc_col"]);
+    assert_eq!(
+        c.names,
+        ["t_s", "S_lat", "meas_p", "est_q", "exc_lat", "exc_col"]
+    );
     assert_eq!(c.columns[0].len(), 200);
     assert!(c.filled.is_empty() && c.skipped_start == 0 && c.truncated_at.is_none());
     for k in 0..200u64 {
@@ -115,20 +118,37 @@ fn jittered_steps_are_placed_on_the_grid() {
 #[test]
 fn jitter_beyond_the_tolerance_is_refused_naming_the_time() {
     // step 50 stamped 300 µs late: 12 % of the period
-    let p = write_log("badjitter", 100, |k| Some(if k == 50 { 300 } else { 0 }), |_| Some(0));
+    let p = write_log(
+        "badjitter",
+        100,
+        |k| Some(if k == 50 { 300 } else { 0 }),
+        |_| Some(0),
+    );
     let e = read(&p).unwrap_err();
     assert!(matches!(e, ColumnsError::Jitter { .. }), "{e}");
     let s = e.to_string();
-    assert!(s.contains("badjitter.ulg") && s.contains("t = 1.1253 s"), "{s}");
+    assert!(
+        s.contains("badjitter.ulg") && s.contains("t = 1.1253 s"),
+        "{s}"
+    );
 }
 
 #[test]
 fn four_dropped_samples_are_interpolated_five_refused() {
-    let p = write_log("drop4", 120, |k| (!(60..64).contains(&k)).then_some(0), |_| Some(0));
+    let p = write_log(
+        "drop4",
+        120,
+        |k| (!(60..64).contains(&k)).then_some(0),
+        |_| Some(0),
+    );
     let c = read(&p).unwrap();
     assert_eq!(c.columns[0].len(), 120);
     assert_eq!(c.filled, vec![(1.0 + 60.0 * T_S, 4)]);
-    assert!(c.notes().iter().any(|n| n.contains("4 control sample(s) missing from t = 1.15 s")));
+    assert!(
+        c.notes()
+            .iter()
+            .any(|n| n.contains("4 control sample(s) missing from t = 1.15 s"))
+    );
     for i in 1..5 {
         let f = i as f64 / 5.0;
         let want = value(59, 26) + f * (value(64, 26) - value(59, 26));
@@ -137,7 +157,12 @@ fn four_dropped_samples_are_interpolated_five_refused() {
         assert!((c.columns[4][59 + i] - want).abs() < 1e-15);
     }
     assert_eq!(c.columns[2][64], value(64, 26));
-    let p = write_log("drop5", 120, |k| (!(60..65).contains(&k)).then_some(0), |_| Some(0));
+    let p = write_log(
+        "drop5",
+        120,
+        |k| (!(60..65).contains(&k)).then_some(0),
+        |_| Some(0),
+    );
     let e = read(&p).unwrap_err();
     assert!(matches!(e, ColumnsError::Gap { missing: 5, .. }), "{e}");
     assert!(e.to_string().contains("before t = 1.1625 s"), "{e}");
@@ -153,16 +178,29 @@ fn other_topics_are_held_start_late_and_must_not_stop() {
     assert!((c.columns[0][0] - (1.0 + 10.0 * T_S)).abs() < 1e-12);
     assert_eq!(c.columns[1][0], value(10, 1));
     // excitation missing for steps 40..43 (4 samples): held from step 39
-    let p = write_log("hold", 100, |_| Some(0), |k| (!(40..44).contains(&k)).then_some(0));
+    let p = write_log(
+        "hold",
+        100,
+        |_| Some(0),
+        |k| (!(40..44).contains(&k)).then_some(0),
+    );
     let c = read(&p).unwrap();
     for k in 40..44 {
         assert_eq!(c.columns[4][k], value(39, 31));
     }
     // ... for 5 samples: stopped
-    let p = write_log("stale", 100, |_| Some(0), |k| (!(40..46).contains(&k)).then_some(0));
+    let p = write_log(
+        "stale",
+        100,
+        |_| Some(0),
+        |k| (!(40..46).contains(&k)).then_some(0),
+    );
     let e = read(&p).unwrap_err();
     assert!(matches!(e, ColumnsError::Stale { .. }), "{e}");
-    assert!(e.to_string().contains("`excitation`") && e.to_string().contains("t = 1.1125 s"), "{e}");
+    assert!(
+        e.to_string().contains("`excitation`") && e.to_string().contains("t = 1.1125 s"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -170,9 +208,17 @@ fn bad_logs_are_refused_naming_file_topic_field() {
     // no excitation topic at all
     let p = write_log("noexc", 50, |_| Some(0), |_| None);
     let e = read(&p).unwrap_err().to_string();
-    assert!(e.contains("noexc.ulg") && e.contains("`excitation`") && e.contains("offset[1]") && e.contains("[[excitation]]"), "{e}");
+    assert!(
+        e.contains("noexc.ulg")
+            && e.contains("`excitation`")
+            && e.contains("offset[1]")
+            && e.contains("[[excitation]]"),
+        "{e}"
+    );
     // an unknown name
-    let e = read_ulog_columns(&p, &["x"], Some(T_S)).unwrap_err().to_string();
+    let e = read_ulog_columns(&p, &["x"], Some(T_S))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("no column `x`") && e.contains("meas_p"), "{e}");
     // a NaN in the measured rates
     let dir = p.parent().unwrap();
@@ -188,18 +234,35 @@ fn bad_logs_are_refused_naming_file_topic_field() {
         log.write(&r).unwrap();
     }
     log.finish().unwrap();
-    let e = read_ulog_columns(&path, &["meas_p"], Some(T_S)).unwrap_err().to_string();
-    assert!(e.contains("nan.ulg") && e.contains("`control.measured[6]`") && e.contains("t = 1.075 s") && e.contains("NaN"), "{e}");
+    let e = read_ulog_columns(&path, &["meas_p"], Some(T_S))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("nan.ulg")
+            && e.contains("`control.measured[6]`")
+            && e.contains("t = 1.075 s")
+            && e.contains("NaN"),
+        "{e}"
+    );
     // a log at another rate than the control period given
-    let e = read_ulog_columns(&path, &["S_lat"], Some(0.00125)).unwrap_err().to_string();
-    assert!(e.contains("median step is 0.0025 s, not the control period 0.00125 s"), "{e}");
+    let e = read_ulog_columns(&path, &["S_lat"], Some(0.00125))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("median step is 0.0025 s, not the control period 0.00125 s"),
+        "{e}"
+    );
     // a period that is not a time
-    let e = read_ulog_columns(&path, &["S_lat"], Some(f64::NAN)).unwrap_err().to_string();
+    let e = read_ulog_columns(&path, &["S_lat"], Some(f64::NAN))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("period"), "{e}");
     // a file that is not ULog
     let txt = dir.join("not.ulg");
     std::fs::write(&txt, "t_s,S_lat\n0,0\n").unwrap();
-    let e = read_ulog_columns(&txt, &["S_lat"], Some(T_S)).unwrap_err().to_string();
+    let e = read_ulog_columns(&txt, &["S_lat"], Some(T_S))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("not.ulg") && e.contains("not a ULog"), "{e}");
 }
 
@@ -211,7 +274,11 @@ fn a_log_cut_short_gives_what_is_before_the_cut() {
     std::fs::write(&cut, &bytes[..bytes.len() - 100]).unwrap();
     let c = read(&cut).unwrap();
     assert!(c.truncated_at.is_some());
-    assert!(c.columns[0].len() >= 190 && c.columns[0].len() < 200, "{}", c.columns[0].len());
+    assert!(
+        c.columns[0].len() >= 190 && c.columns[0].len() < 200,
+        "{}",
+        c.columns[0].len()
+    );
     assert!(c.notes().iter().any(|n| n.contains("cut short")));
 }
 
@@ -225,7 +292,10 @@ fn columns_fixture_matches_pyulog_and_the_rule_applied_in_python() {
     let cols = want["columns"].as_object().unwrap();
     let names: Vec<&str> = cols.keys().map(String::as_str).collect();
     let c = read_ulog_columns(&fix.join("columns_sample.ulg"), &names, Some(T_S)).unwrap();
-    assert_eq!(c.skipped_start as u64, want["skipped_start"].as_u64().unwrap());
+    assert_eq!(
+        c.skipped_start as u64,
+        want["skipped_start"].as_u64().unwrap()
+    );
     let filled: Vec<(f64, usize)> = want["filled"]
         .as_array()
         .unwrap()
