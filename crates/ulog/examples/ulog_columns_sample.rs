@@ -40,7 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if (101..104).contains(&k) {
             continue; // dropped
         }
-        let ts = u64::try_from(1_000_000 + 2500 * k as i64 + jitter_us(k))?;
+        let ts = u64::try_from(1_000_000 + 2500 * i64::try_from(k)? + jitter_us(k))?;
         if k >= 7 {
             log.write(&LogRecord::ImuHealth(ImuHealth {
                 timestamp: ts,

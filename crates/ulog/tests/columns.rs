@@ -56,10 +56,10 @@ fn write_log(
     let mut log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap();
     for k in 0..n {
         let Some(j) = stamp(k) else { continue };
-        let ts = u64::try_from(1_000_000 + k as i64 * T_US + j).unwrap();
+        let ts = u64::try_from(1_000_000 + i64::try_from(k).unwrap() * T_US + j).unwrap();
         log.write(&control(ts, k)).unwrap();
         if let Some(e) = exc(k) {
-            log.write(&excitation(u64::try_from(ts as i64 + e).unwrap(), k))
+            log.write(&excitation(ts.checked_add_signed(e).unwrap(), k))
                 .unwrap();
         }
     }
