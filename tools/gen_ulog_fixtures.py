@@ -17,10 +17,11 @@
 
 3. The columns fixture: columns_sample.ulg (cargo run -p helicon-ulog
    --example ulog_columns_sample -- FILE: jittered control steps, three
-   dropped samples, excitation stamped after its step, imu_health starting
-   late) read by pyulog, and the rule of helicon_ulog::columns (control
-   grid, ±10 % jitter, up to 4 missing samples filled by linear
-   interpolation, other topics held at or before t + T/2) applied here
+   dropped samples, excitation and servo_output stamped 4.7 ms after their
+   step on the step's clock, imu_health starting late) read by pyulog, and
+   the rule of helicon_ulog::columns (control grid, ±10 % jitter, up to 4
+   missing samples filled by linear interpolation, step-clock topics with
+   their control record, other topics held at or before t + T/2) applied here
    independently with numpy, written to columns_sample.columns.json.
 
 Floats are written with Python's repr (shortest round trip), so the Rust
@@ -137,6 +138,12 @@ def columns(ulg_path, json_path, period_s=0.0025):
     held = {}
     start = 0
     for topic in {t for t, _ in COLUMNS.values()} - {"control"}:
+        if topic in ("excitation", "servo_output"):
+            # stamped on the step's clock: the sample writes one record after
+            # each control record, so the k-th belongs to the k-th
+            assert len(data[topic]["timestamp"]) == len(tc)
+            held[topic] = np.arange(len(tc))
+            continue
         tr = data[topic]["timestamp"].astype(np.float64) * 1e-6
         idx = np.searchsorted(tr, tc + 0.5 * period_s, side="right") - 1
         first = int(np.argmax(idx >= 0))

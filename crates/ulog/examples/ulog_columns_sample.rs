@@ -2,7 +2,7 @@
 //! (`crates/ulog/tests/fixtures/columns_sample.ulg`): 240 control steps at
 //! 400 Hz whose timestamps jitter (up to ±120 µs, steps within ±230 µs of the period, inside the 250 µs
 //! tolerance), three control samples dropped after step 100, the
-//! `excitation` records stamped 300 µs after their control step, the
+//! `excitation` and `servo_output` records stamped 4.7 ms after their control step (on the step's clock, as under real time), the
 //! `imu_health` records starting at step 7, the `servo_output` records
 //! (source 0). `tools/gen_ulog_fixtures.py --columns` reads it with pyulog
 //! and applies the rule of `helicon_ulog::columns` independently.
@@ -64,12 +64,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             saturated: [false; 4],
         }))?;
         log.write(&LogRecord::Excitation(Excitation {
-            timestamp: ts + 300,
+            timestamp: ts + 4700,
             offset: std::array::from_fn(|i| f(k, i + 30)),
             active: k >= 20,
         }))?;
         log.write(&LogRecord::Servo(ServoOutput {
-            timestamp: ts + 300,
+            timestamp: ts + 4700,
             command: std::array::from_fn(|i| f(k, i)),
             source: 0,
         }))?;

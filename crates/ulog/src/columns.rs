@@ -22,11 +22,14 @@
 //!   interpolation between their neighbours (as `helicon ident frf` does for
 //!   an irregular CSV); more are refused naming the time and the count (the
 //!   spectra cannot bridge a drop-out: cut the log there).
-//! - **Other topics** (`excitation`, `imu_health`): sample and hold. At each
-//!   control sample a column takes its topic's latest record stamped at or
-//!   before the sample's time plus T/2 ([`ALIGN_FRACTION`]): records written
-//!   in the same control step, stamped a little after the measurement, count
-//!   as that step's. A held record older than ([`MAX_MISSING`] + 1)·T is
+//! - **Other topics**: sample and hold. A record of a topic stamped on the
+//!   step's clock ([`STEP_CLOCK_TOPICS`]: `excitation`, `servo_output`)
+//!   takes the time of the `control` record before it in the file (the
+//!   runtime writes a step's records together, `control` first); the others
+//!   (`imu_health`, `estimator_bias`) keep their own timestamps, on the
+//!   measurement's clock. At each control sample a column takes its topic's
+//!   latest record so timed at or before the sample's time plus T/2
+//!   ([`ALIGN_FRACTION`]). A held record older than ([`MAX_MISSING`] + 1)·T is
 //!   refused (the topic stopped being logged), naming the topic and the time.
 //!   The record starts at the first control sample at which every topic
 //!   asked for has a record ([`UlogColumns::skipped_start`] says how many
@@ -57,6 +60,13 @@ pub const ALIGN_FRACTION: f64 = 0.5;
 
 /// The topic whose records are the time base.
 pub const TIME_BASE_TOPIC: &str = "control";
+
+/// Topics the runtime writes in the control step after its `control` record
+/// and stamps with the step's own clock (the wake-up time), not the
+/// measurement's: they belong to the `control` record before them in the
+/// file. (Under real time the two clocks differ: 4.7 ms measured in a
+/// real-time SITL flight, nearly two periods.)
+pub const STEP_CLOCK_TOPICS: [&str; 2] = ["excitation", "servo_output"];
 
 /// One `log.csv` column and where it comes from in the flight log.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -304,9 +314,17 @@ impl UlogColumns {
                 self.skipped_start
             ));
         }
-        for (t, n) in &self.filled {
+        for (t, n) in self.filled.iter().take(10) {
             out.push(format!(
                 "{f}: {n} control sample(s) missing from t = {t} s, filled by linear interpolation"
+            ));
+        }
+        if self.filled.len() > 10 {
+            let all: usize = self.filled.iter().map(|g| g.1).sum();
+            out.push(format!(
+                "{f}: … and {} more drop-outs ({all} samples filled in all, {:.2} % of the record)",
+                self.filled.len() - 10,
+                100.0 * all as f64 / self.columns.first().map_or(1, Vec::len).max(1) as f64
             ));
         }
         if let Some(at) = self.truncated_at {
@@ -510,7 +528,19 @@ fn collect(
     wanted: &[&'static UlogColumn],
     topics: &mut [TopicData],
 ) -> Result<crate::visit::PassSummary, ColumnsError> {
+    // the newest `control` timestamp so far (the step of step-clock records)
+    let mut step_us: Option<u64> = None;
     visit::<_, ColumnsError>(open(path)?, |e| {
+        if let Event::Data {
+            topic,
+            timestamp_us,
+            ..
+        } = &e
+            && topic.multi_id == 0
+            && topic.name == TIME_BASE_TOPIC
+        {
+            step_us = Some(*timestamp_us);
+        }
         match e {
             Event::Subscribed { topic, .. } if topic.multi_id == 0 => {
                 let Some(td) = topics.iter_mut().find(|t| t.name == topic.name) else {
@@ -545,6 +575,13 @@ fn collect(
                 };
                 let Some(index) = &td.index else {
                     return Ok(());
+                };
+                let timestamp_us = if STEP_CLOCK_TOPICS.contains(&td.name) {
+                    // before the first control step: no sample to belong to
+                    let Some(step) = step_us else { return Ok(()) };
+                    step
+                } else {
+                    timestamp_us
                 };
                 let time_s = timestamp_us as f64 / 1e6;
                 if let Some(&prev) = td.t_us.last()

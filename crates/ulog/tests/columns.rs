@@ -116,6 +116,20 @@ fn jittered_steps_are_placed_on_the_grid() {
 }
 
 #[test]
+fn step_clock_records_stay_with_their_control_record() {
+    // excitation stamped 4.7 ms after its control record (nearly two
+    // periods: the step's wake-up clock under real time, as measured in a
+    // real-time SITL flight): it belongs to the control record before it in
+    // the file, not to the one its timestamp is nearest
+    let p = write_log("stepclock", 100, |_| Some(0), |_| Some(4700));
+    let c = read(&p).unwrap();
+    assert_eq!(c.columns[0].len(), 100);
+    for k in 0..100u64 {
+        assert_eq!(c.columns[4][k as usize], value(k, 31));
+    }
+}
+
+#[test]
 fn jitter_beyond_the_tolerance_is_refused_naming_the_time() {
     // step 50 stamped 300 µs late: 12 % of the period
     let p = write_log(
