@@ -337,12 +337,14 @@ impl UlogColumns {
 }
 
 /// The names a log at `path` can give: `t_s` and the columns of
-/// [`ULOG_COLUMNS`] whose topic it subscribes.
+/// [`ULOG_COLUMNS`] whose topic has records (the runtime subscribes every
+/// topic; a flight without `[[excitation]]` logs no `excitation` record).
 pub fn available_columns(path: &Path) -> Result<Vec<&'static str>, ColumnsError> {
     let mut topics = BTreeSet::new();
     visit::<_, ReadError>(open(path)?, |e| {
-        if let Event::Subscribed { topic, .. } = e
+        if let Event::Data { topic, .. } = e
             && topic.multi_id == 0
+            && !topics.contains(&topic.name)
         {
             topics.insert(topic.name.clone());
         }
