@@ -15,8 +15,18 @@
    ULog.write_ulog to px4_trimmed.ulg and parsed back by pyulog into
    px4_trimmed.pyulog.json.
 
+3. The columns fixture: columns_sample.ulg (cargo run -p helicon-ulog
+   --example ulog_columns_sample -- FILE: jittered control steps, three
+   dropped samples, excitation and servo_output stamped 4.7 ms after their
+   step on the step's clock, imu_health starting late) read by pyulog, and
+   the rule of helicon_ulog::columns (control grid, ±10 % jitter, up to 4
+   missing samples filled by linear interpolation, step-clock topics with
+   their control record, other topics held at or before t + T/2) applied here
+   independently with numpy, written to columns_sample.columns.json.
+
 Floats are written with Python's repr (shortest round trip), so the Rust
-tests compare bit for bit.
+tests compare bit for bit (the columns fixture to 1e-12: the interpolation
+is the same arithmetic in a possibly different order).
 
 Usage: python3 tools/gen_ulog_fixtures.py [--px4 sample_log_small.ulg]
 """
@@ -98,6 +108,63 @@ def trim_px4(src, dst):
     u.write_ulog(dst)
 
 
+# log.csv column -> (topic, field) for the columns fixture (the names of
+# helicon_ulog::columns::ULOG_COLUMNS that the sample's topics carry)
+COLUMNS = {
+    "S_col": ("control", "command[0]"), "S_lat": ("control", "command[1]"),
+    "S_lon": ("control", "command[2]"), "S_tr": ("control", "command[3]"),
+    "ref_vd": ("control", "ref_vel_ned_m_s[2]"), "ref_psi": ("control", "ref_yaw_rad"),
+    "est_p": ("control", "estimate[6]"), "meas_p": ("control", "measured[6]"),
+    "meas_q": ("control", "measured[7]"),
+    "exc_lat": ("excitation", "offset[1]"), "exc_active": ("excitation", "active"),
+    "imu_vib_rms_m_s2": ("imu_health", "vibration_rms_m_s2"),
+    "imu_health_flags": ("imu_health", "flags"),
+    "servo_source": ("servo_output", "source"),
+}
+
+
+def columns(ulg_path, json_path, period_s=0.0025):
+    """The columns of helicon_ulog::columns, computed from pyulog's data."""
+    u = ULog(ulg_path)
+    data = {d.name: d.data for d in u.data_list if d.multi_id == 0}
+    tc = data["control"]["timestamp"].astype(np.float64) * 1e-6
+    steps = np.diff(tc)
+    m = np.rint(steps / period_s)
+    assert np.all(np.abs(steps - m * period_s) <= 0.1 * period_s)
+    assert np.all(m - 1 <= 4)
+    slot = np.concatenate([[0], np.cumsum(m)]).astype(int)
+    # held record index per topic at each control sample; start = first
+    # sample where every topic has one
+    held = {}
+    start = 0
+    for topic in {t for t, _ in COLUMNS.values()} - {"control"}:
+        if topic in ("excitation", "servo_output"):
+            # stamped on the step's clock: the sample writes one record after
+            # each control record, so the k-th belongs to the k-th
+            assert len(data[topic]["timestamp"]) == len(tc)
+            held[topic] = np.arange(len(tc))
+            continue
+        tr = data[topic]["timestamp"].astype(np.float64) * 1e-6
+        idx = np.searchsorted(tr, tc + 0.5 * period_s, side="right") - 1
+        first = int(np.argmax(idx >= 0))
+        start = max(start, first)
+        held[topic] = idx
+    grid = np.arange(slot[start], slot[-1] + 1)
+    out = {"period_s": period_s, "skipped_start": start,
+           "t_s": [float(tc[0] + n * period_s) for n in grid], "columns": {}}
+    for name, (topic, field) in COLUMNS.items():
+        v = data[topic][field].astype(np.float64)
+        at = v[start:] if topic == "control" else v[held[topic][start:]]
+        # linear interpolation over the missing grid samples
+        out["columns"][name] = [float(x) for x in np.interp(grid, slot[start:], at)]
+    out["filled"] = [[float(tc[0] + (slot[k] + 1) * period_s), int(slot[k + 1] - slot[k] - 1)]
+                     for k in range(start, len(slot) - 1) if slot[k + 1] - slot[k] > 1]
+    with open(json_path, "w", encoding="utf-8") as f:
+        json.dump(out, f, indent=0, sort_keys=True)
+        f.write("\n")
+    print(f"{json_path}: {len(grid)} samples, {len(COLUMNS)} columns")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--px4", help="a PX4 ULog file to trim into px4_trimmed.ulg")
@@ -108,6 +175,9 @@ def main():
         trim_px4(args.px4, trimmed)
     if os.path.exists(trimmed):
         dump(trimmed, os.path.join(FIX, "px4_trimmed.pyulog.json"))
+    sample = os.path.join(FIX, "columns_sample.ulg")
+    if os.path.exists(sample):
+        columns(sample, os.path.join(FIX, "columns_sample.columns.json"))
 
 
 if __name__ == "__main__":

@@ -93,7 +93,7 @@ pub fn run_input(a: &InputArgs) -> Result<()> {
 /// `helicon ident frf`.
 #[derive(Args, Debug)]
 pub struct FrfArgs {
-    /// The log (CSV with a header row; `#` lines are comments).
+    /// The log: a CSV with a header row (`#` lines are comments), or a flight log (ULog, e.g. flight.ulg) read under log.csv's column names.
     pub log: PathBuf,
     /// Input column.
     #[arg(long)]
@@ -187,9 +187,14 @@ pub(crate) struct Table {
 }
 
 /// Read the named columns of `path`; every value must be a finite number
-/// (errors name the file, the column and the line).
+/// (errors name the file, the column and the line). A flight log (ULog) is
+/// read onto its control grid under log.csv's names
+/// ([`helicon_ulog::columns`]); its time column is `t_s`.
 pub(crate) fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
     let file = path.display().to_string();
+    if helicon_paramid::source::is_ulog(path) {
+        return read_ulog(path, names);
+    }
     let mut rdr = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
@@ -244,6 +249,33 @@ pub(crate) fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
         );
     }
     Ok(Table { columns })
+}
+
+/// [`read_columns`] of a flight log: the first name is the time column,
+/// which must be `t_s` (the control grid); what the reading did (samples
+/// filled, a cut) is said on stderr.
+fn read_ulog(path: &Path, names: &[&str]) -> Result<Table> {
+    let file = path.display().to_string();
+    if names.first().is_some_and(|t| *t != "t_s") {
+        bail!(
+            "{file}: a flight log's time column is `t_s` (the control samples), not `{}`",
+            names[0]
+        );
+    }
+    let u = helicon_ulog::columns::read_ulog_columns(path, names, None)?;
+    for n in u.notes() {
+        eprintln!("{n}");
+    }
+    eprintln!(
+        "{file}: flight log read on its control grid: {} samples every {} s (the median step; largest distance of a sample from the grid {:.1} µs)",
+        u.columns[0].len(),
+        u.period_s,
+        u.max_jitter_s * 1e6
+    );
+    if u.columns.len() != names.len() {
+        bail!("{file}: a column is named twice");
+    }
+    Ok(Table { columns: u.columns })
 }
 
 /// The sample time of the time column; an irregular column is resampled by

@@ -8,7 +8,6 @@ use crate::config::{IdentConfig, OperatingPoint, Response};
 use crate::error::{ParamIdError, Result};
 use helicon_ident::frf::{Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid};
 use helicon_model::ConfigError;
-use helicon_sim::log_csv::read_log_csv_with;
 
 /// One measured response.
 #[derive(Debug, Clone)]
@@ -128,7 +127,8 @@ pub fn instrumented(
     Ok(f)
 }
 
-/// Read `names` from the log at `path`, keep `[t0, t1]`, check the step is
+/// Read `names` from the log at `path` (a `log.csv` or a flight computer's
+/// ULog, [`crate::source`]), keep `[t0, t1]`, check the step is
 /// uniform (to 1e-6 of its median) and equals `expected_dt_s` (the control
 /// period, to 1e-6): the model's responses are those of a command held over
 /// one control period. `field` names the log's entry in the IDENT.toml.
@@ -141,8 +141,8 @@ pub fn read_record(
     file: &str,
     field: &str,
 ) -> Result<Record> {
-    let table = read_log_csv_with(path, names)?;
-    let t = table.time_s();
+    let table = crate::source::read_log(path, names, expected_dt_s)?;
+    let t = table.column("t_s");
     let keep: Vec<usize> = (0..t.len())
         .filter(|&k| t0.is_none_or(|a| t[k] >= a) && t1.is_none_or(|b| t[k] <= b))
         .collect();
@@ -180,7 +180,7 @@ pub fn read_record(
     }
     let mut columns = Vec::with_capacity(names.len());
     for n in names {
-        let c = table.column(n)?;
+        let c = table.column(n);
         columns.push(keep.iter().map(|&k| c[k]).collect());
     }
     Ok(Record {

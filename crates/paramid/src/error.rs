@@ -13,6 +13,9 @@ pub enum ParamIdError {
     /// A log could not be read.
     #[error(transparent)]
     Log(#[from] helicon_sim::log_csv::LogCsvError),
+    /// A flight log (ULog) could not be read as columns.
+    #[error(transparent)]
+    Ulog(#[from] helicon_ulog::columns::ColumnsError),
     /// The frequency-response estimate failed.
     #[error("{file}: {what}: {source}")]
     Frf {

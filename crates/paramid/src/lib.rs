@@ -19,7 +19,9 @@
 //! - [`verify`]: time-domain verification on doublet logs (Theil coefficient);
 //! - [`demo`]: the programme end to end on a simulated helicopter;
 //! - [`ground_sim`]: the §11.1 ground experiments simulated on the demo's truth;
-//! - [`keys`]: parameters by their `helicon params` key.
+//! - [`keys`]: parameters by their `helicon params` key;
+//! - [`source`]: a log's columns from `log.csv` or the flight computer's
+//!   ULog (`flight.ulg`).
 
 pub mod config;
 pub mod cost;
@@ -31,6 +33,7 @@ pub mod ground_sim;
 pub mod keys;
 pub mod linear;
 pub mod report;
+pub mod source;
 pub mod verify;
 
 pub use error::{ParamIdError, Result};

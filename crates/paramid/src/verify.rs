@@ -20,8 +20,7 @@ use crate::data::read_record;
 use crate::error::{ParamIdError, Result};
 use crate::linear::{linear_model, target};
 use helicon_model::state::{REDUCED_OFFSET, STATE_NAMES, State, expand, ix};
-use helicon_model::{INPUT_NAMES, Input, Model, Params};
-use helicon_sim::log_csv::LogReader;
+use helicon_model::{ConfigError, INPUT_NAMES, Input, Model, Params};
 use nalgebra::Vector3;
 use serde::Serialize;
 
@@ -150,9 +149,12 @@ fn replay(
 
 /// The start and wind of verification `v`: as configured, else the best the
 /// log's header offers.
-fn choose(v: &Verification) -> Result<(InitialState, WindSource)> {
-    let reader = LogReader::open(&v.log, &[])?;
-    let has = |names: &[&str]| names.iter().all(|n| reader.names().iter().any(|c| c == n));
+/// A start or wind configured that the log cannot give (a flight log has
+/// neither the true state nor the wind) is refused naming the field.
+fn choose(cfg: &IdentConfig, index: usize) -> Result<(InitialState, WindSource)> {
+    let v = &cfg.verification[index];
+    let header = crate::source::log_names(&v.log)?;
+    let has = |names: &[&str]| names.iter().all(|n| header.iter().any(|c| c == n));
     let start = v.initial_state.unwrap_or(if has(&STATE_NAMES) {
         InitialState::Logged
     } else if has(&ESTIMATE_NAMES) {
@@ -165,6 +167,35 @@ fn choose(v: &Verification) -> Result<(InitialState, WindSource)> {
     } else {
         WindSource::Still
     });
+    let needs = |field: &str, value: &str, names: &[&str]| -> Result<()> {
+        let missing: Vec<&str> = names
+            .iter()
+            .filter(|n| !header.iter().any(|c| c == *n))
+            .copied()
+            .collect();
+        if missing.is_empty() {
+            return Ok(());
+        }
+        Err(ConfigError::Invalid {
+            file: cfg.file.clone(),
+            field: format!("verification[{index}].{field}"),
+            value: format!("\"{value}\""),
+            rule: format!(
+                "{} has no column {} (a flight log has neither the true state nor the wind: use \"estimate\" and \"still\")",
+                v.log.display(),
+                missing.join(", ")
+            ),
+        }
+        .into())
+    };
+    match start {
+        InitialState::Logged => needs("initial_state", "logged", &STATE_NAMES)?,
+        InitialState::Estimate => needs("initial_state", "estimate", &ESTIMATE_NAMES)?,
+        InitialState::Trim => {}
+    }
+    if wind == WindSource::Logged {
+        needs("wind", "logged", &WIND_NAMES)?;
+    }
     Ok((start, wind))
 }
 
@@ -176,7 +207,7 @@ pub fn verify(
     identified: &Params,
 ) -> Result<VerificationResult> {
     let v = &cfg.verification[index];
-    let (initial_state, wind) = choose(v)?;
+    let (initial_state, wind) = choose(cfg, index)?;
     let mut names: Vec<&str> = INPUT_NAMES.to_vec();
     names.extend(v.outputs.iter().map(String::as_str));
     let n_fixed = names.len();

@@ -22,7 +22,9 @@
 //!   every complete message, then [`ReadError::Truncated`]); [`flat`]:
 //!   formats flattened to columns (nested types, arrays, padding);
 //!   [`visit`]: one pass with the formats resolved; [`export`]: CSV and
-//!   text export (`helicon log export`) and the summary (`helicon log info`).
+//!   text export (`helicon log export`) and the summary (`helicon log info`);
+//!   [`columns`]: a flight log as the simulator's `log.csv` columns on the
+//!   control grid (what identification reads).
 //!
 //! ## Writing a flight log
 //!
@@ -45,6 +47,7 @@
 //! The writer is not thread-safe by itself: the runtime's logger thread
 //! owns it and drains a ring of [`LogRecord`]s (all `Copy`, no heap).
 
+pub mod columns;
 pub mod error;
 pub mod export;
 pub mod flat;

@@ -1,0 +1,338 @@
+//! `helicon_ulog::columns`: a flight log read onto the control grid under
+//! log.csv's names. Each branch of the rule (docs/ulog.md, "Reading a
+//! flight log as columns"): exact values on a uniform log; jittered steps
+//! accepted and placed on the grid; jitter beyond the tolerance refused;
+//! up to four dropped samples filled by linear interpolation, five refused;
+//! other topics held (stamped after their step, starting late, stopping);
+//! non-finite values, missing topics, unknown names, a cut log. And the
+//! columns fixture against pyulog with the rule applied independently
+//! (tools/gen_ulog_fixtures.py).
+#![allow(clippy::unwrap_used, clippy::expect_used)] // tests: a failed unwrap is a failed test
+
+use helicon_ulog::columns::{ColumnsError, read_ulog_columns};
+use helicon_ulog::messages::{Control, Excitation};
+use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogRecord};
+use std::path::{Path, PathBuf};
+
+const T_US: i64 = 2500;
+const T_S: f64 = 0.0025;
+
+fn value(k: u64, i: usize) -> f64 {
+    ((k as f64) * 0.21 + i as f64).sin()
+}
+
+fn control(ts: u64, k: u64) -> LogRecord {
+    LogRecord::Control(Control {
+        timestamp: ts,
+        sample: k,
+        t_s: ts as f64 * 1e-6,
+        command: std::array::from_fn(|i| value(k, i)),
+        estimate: std::array::from_fn(|i| value(k, i + 10)),
+        measured: std::array::from_fn(|i| value(k, i + 20)),
+        ..Control::default()
+    })
+}
+
+fn excitation(ts: u64, k: u64) -> LogRecord {
+    LogRecord::Excitation(Excitation {
+        timestamp: ts,
+        offset: std::array::from_fn(|i| value(k, i + 30)),
+        active: true,
+    })
+}
+
+/// A log of `n` control steps; `stamp(k)` gives step k's control timestamp
+/// offset from k·T (µs) or `None` to drop it; `exc(k)` the excitation's
+/// offset from the control timestamp or `None` for none.
+fn write_log(
+    name: &str,
+    n: u64,
+    stamp: impl Fn(u64) -> Option<i64>,
+    exc: impl Fn(u64) -> Option<i64>,
+) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("helicon_ulog_columns_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.ulg"));
+    let mut log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap();
+    for k in 0..n {
+        let Some(j) = stamp(k) else { continue };
+        let ts = u64::try_from(1_000_000 + i64::try_from(k).unwrap() * T_US + j).unwrap();
+        log.write(&control(ts, k)).unwrap();
+        if let Some(e) = exc(k) {
+            log.write(&excitation(ts.checked_add_signed(e).unwrap(), k))
+                .unwrap();
+        }
+    }
+    log.finish().unwrap();
+    path
+}
+
+const NAMES: [&str; 5] = ["S_lat", "meas_p", "est_q", "exc_lat", "exc_col"];
+
+fn read(path: &Path) -> Result<helicon_ulog::columns::UlogColumns, ColumnsError> {
+    read_ulog_columns(path, &NAMES, Some(T_S))
+}
+
+#[test]
+fn uniform_log_gives_the_logged_values_exactly() {
+    let p = write_log("uniform", 200, |_| Some(0), |_| Some(0));
+    let c = read(&p).unwrap();
+    assert_eq!(
+        c.names,
+        ["t_s", "S_lat", "meas_p", "est_q", "exc_lat", "exc_col"]
+    );
+    assert_eq!(c.columns[0].len(), 200);
+    assert!(c.filled.is_empty() && c.skipped_start == 0 && c.truncated_at.is_none());
+    for k in 0..200u64 {
+        let kk = k as usize;
+        assert!((c.columns[0][kk] - (1.0 + k as f64 * T_S)).abs() < 1e-12);
+        assert_eq!(c.columns[1][kk], value(k, 1)); // command[1] = S_lat
+        assert_eq!(c.columns[2][kk], value(k, 26)); // measured[6] = p
+        assert_eq!(c.columns[3][kk], value(k, 17)); // estimate[7] = q
+        assert_eq!(c.columns[4][kk], value(k, 31)); // offset[1] = S_lat
+        assert_eq!(c.columns[5][kk], value(k, 30)); // offset[0] = S_col
+    }
+    assert_eq!(c.get("meas_p").unwrap(), c.columns[2].as_slice());
+    // the median step when no period is given
+    let m = read_ulog_columns(&p, &NAMES, None).unwrap();
+    assert!((m.period_s - T_S).abs() < 1e-12);
+}
+
+#[test]
+fn jittered_steps_are_placed_on_the_grid() {
+    // up to ±120 µs: steps within ±230 µs (±10 % of 2500 µs); excitation stamped 400 µs late
+    let jit = |k: u64| Some([0, 120, -110, 100, -60][(k % 5) as usize]);
+    let p = write_log("jitter", 200, jit, |_| Some(400));
+    let c = read(&p).unwrap();
+    assert_eq!(c.columns[0].len(), 200);
+    assert!((c.max_jitter_s - 120e-6).abs() < 1e-9, "{}", c.max_jitter_s);
+    let steps: Vec<f64> = c.columns[0].windows(2).map(|w| w[1] - w[0]).collect();
+    assert!(steps.iter().all(|d| (d - T_S).abs() < 1e-12));
+    // values are the records', in order; the late excitation is its own step's
+    for k in 0..200u64 {
+        assert_eq!(c.columns[1][k as usize], value(k, 1));
+        assert_eq!(c.columns[4][k as usize], value(k, 31));
+    }
+}
+
+#[test]
+fn step_clock_records_stay_with_their_control_record() {
+    // excitation stamped 4.7 ms after its control record (nearly two
+    // periods: the step's wake-up clock under real time, as measured in a
+    // real-time SITL flight): it belongs to the control record before it in
+    // the file, not to the one its timestamp is nearest
+    let p = write_log("stepclock", 100, |_| Some(0), |_| Some(4700));
+    let c = read(&p).unwrap();
+    assert_eq!(c.columns[0].len(), 100);
+    for k in 0..100u64 {
+        assert_eq!(c.columns[4][k as usize], value(k, 31));
+    }
+}
+
+#[test]
+fn jitter_beyond_the_tolerance_is_refused_naming_the_time() {
+    // step 50 stamped 300 µs late: 12 % of the period
+    let p = write_log(
+        "badjitter",
+        100,
+        |k| Some(if k == 50 { 300 } else { 0 }),
+        |_| Some(0),
+    );
+    let e = read(&p).unwrap_err();
+    assert!(matches!(e, ColumnsError::Jitter { .. }), "{e}");
+    let s = e.to_string();
+    assert!(
+        s.contains("badjitter.ulg") && s.contains("t = 1.1253 s"),
+        "{s}"
+    );
+}
+
+#[test]
+fn four_dropped_samples_are_interpolated_five_refused() {
+    let p = write_log(
+        "drop4",
+        120,
+        |k| (!(60..64).contains(&k)).then_some(0),
+        |_| Some(0),
+    );
+    let c = read(&p).unwrap();
+    assert_eq!(c.columns[0].len(), 120);
+    assert_eq!(c.filled, vec![(1.0 + 60.0 * T_S, 4)]);
+    assert!(
+        c.notes()
+            .iter()
+            .any(|n| n.contains("4 control sample(s) missing from t = 1.15 s"))
+    );
+    for i in 1..5 {
+        let f = i as f64 / 5.0;
+        let want = value(59, 26) + f * (value(64, 26) - value(59, 26));
+        assert!((c.columns[2][59 + i] - want).abs() < 1e-15);
+        let want = value(59, 31) + f * (value(64, 31) - value(59, 31));
+        assert!((c.columns[4][59 + i] - want).abs() < 1e-15);
+    }
+    assert_eq!(c.columns[2][64], value(64, 26));
+    let p = write_log(
+        "drop5",
+        120,
+        |k| (!(60..65).contains(&k)).then_some(0),
+        |_| Some(0),
+    );
+    let e = read(&p).unwrap_err();
+    assert!(matches!(e, ColumnsError::Gap { missing: 5, .. }), "{e}");
+    assert!(e.to_string().contains("before t = 1.1625 s"), "{e}");
+}
+
+#[test]
+fn other_topics_are_held_start_late_and_must_not_stop() {
+    // excitation from step 10 on: the record starts there
+    let p = write_log("late", 100, |_| Some(0), |k| (k >= 10).then_some(0));
+    let c = read(&p).unwrap();
+    assert_eq!(c.skipped_start, 10);
+    assert_eq!(c.columns[0].len(), 90);
+    assert!((c.columns[0][0] - (1.0 + 10.0 * T_S)).abs() < 1e-12);
+    assert_eq!(c.columns[1][0], value(10, 1));
+    // excitation missing for steps 40..43 (4 samples): held from step 39
+    let p = write_log(
+        "hold",
+        100,
+        |_| Some(0),
+        |k| (!(40..44).contains(&k)).then_some(0),
+    );
+    let c = read(&p).unwrap();
+    for k in 40..44 {
+        assert_eq!(c.columns[4][k], value(39, 31));
+    }
+    // ... for 5 samples: stopped
+    let p = write_log(
+        "stale",
+        100,
+        |_| Some(0),
+        |k| (!(40..46).contains(&k)).then_some(0),
+    );
+    let e = read(&p).unwrap_err();
+    assert!(matches!(e, ColumnsError::Stale { .. }), "{e}");
+    assert!(
+        e.to_string().contains("`excitation`") && e.to_string().contains("t = 1.1125 s"),
+        "{e}"
+    );
+}
+
+#[test]
+fn bad_logs_are_refused_naming_file_topic_field() {
+    // no excitation topic at all
+    let p = write_log("noexc", 50, |_| Some(0), |_| None);
+    let e = read(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("noexc.ulg")
+            && e.contains("`excitation`")
+            && e.contains("offset[1]")
+            && e.contains("[[excitation]]"),
+        "{e}"
+    );
+    // an unknown name
+    let e = read_ulog_columns(&p, &["x"], Some(T_S))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no column `x`") && e.contains("meas_p"), "{e}");
+    // a NaN in the measured rates
+    let dir = p.parent().unwrap();
+    let path = dir.join("nan.ulg");
+    let mut log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap();
+    for k in 0..50u64 {
+        let mut r = control(1_000_000 + k * 2500, k);
+        if let LogRecord::Control(c) = &mut r
+            && k == 30
+        {
+            c.measured[6] = f64::NAN;
+        }
+        log.write(&r).unwrap();
+    }
+    log.finish().unwrap();
+    let e = read_ulog_columns(&path, &["meas_p"], Some(T_S))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("nan.ulg")
+            && e.contains("`control.measured[6]`")
+            && e.contains("t = 1.075 s")
+            && e.contains("NaN"),
+        "{e}"
+    );
+    // a log at another rate than the control period given
+    let e = read_ulog_columns(&path, &["S_lat"], Some(0.00125))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("median step is 0.0025 s, not the control period 0.00125 s"),
+        "{e}"
+    );
+    // a period that is not a time
+    let e = read_ulog_columns(&path, &["S_lat"], Some(f64::NAN))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("period"), "{e}");
+    // a file that is not ULog
+    let txt = dir.join("not.ulg");
+    std::fs::write(&txt, "t_s,S_lat\n0,0\n").unwrap();
+    let e = read_ulog_columns(&txt, &["S_lat"], Some(T_S))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not.ulg") && e.contains("not a ULog"), "{e}");
+}
+
+#[test]
+fn a_log_cut_short_gives_what_is_before_the_cut() {
+    let p = write_log("cut", 200, |_| Some(0), |_| Some(0));
+    let bytes = std::fs::read(&p).unwrap();
+    let cut = p.with_file_name("cut_short.ulg");
+    std::fs::write(&cut, &bytes[..bytes.len() - 100]).unwrap();
+    let c = read(&cut).unwrap();
+    assert!(c.truncated_at.is_some());
+    assert!(
+        c.columns[0].len() >= 190 && c.columns[0].len() < 200,
+        "{}",
+        c.columns[0].len()
+    );
+    assert!(c.notes().iter().any(|n| n.contains("cut short")));
+}
+
+#[test]
+fn columns_fixture_matches_pyulog_and_the_rule_applied_in_python() {
+    let fix = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures");
+    let want: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(fix.join("columns_sample.columns.json")).unwrap(),
+    )
+    .unwrap();
+    let cols = want["columns"].as_object().unwrap();
+    let names: Vec<&str> = cols.keys().map(String::as_str).collect();
+    let c = read_ulog_columns(&fix.join("columns_sample.ulg"), &names, Some(T_S)).unwrap();
+    assert_eq!(
+        c.skipped_start as u64,
+        want["skipped_start"].as_u64().unwrap()
+    );
+    let filled: Vec<(f64, usize)> = want["filled"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| (f[0].as_f64().unwrap(), f[1].as_u64().unwrap() as usize))
+        .collect();
+    assert_eq!(c.filled.len(), 1);
+    assert_eq!(c.filled[0].1, filled[0].1);
+    assert!((c.filled[0].0 - filled[0].0).abs() < 1e-12);
+    let t = want["t_s"].as_array().unwrap();
+    assert_eq!(c.columns[0].len(), t.len());
+    let mut worst: f64 = 0.0;
+    for (a, b) in c.columns[0].iter().zip(t) {
+        worst = worst.max((a - b.as_f64().unwrap()).abs());
+    }
+    for n in &names {
+        let got = c.get(n).unwrap();
+        let exp = cols[*n].as_array().unwrap();
+        assert_eq!(got.len(), exp.len(), "{n}");
+        for (a, b) in got.iter().zip(exp) {
+            worst = worst.max((a - b.as_f64().unwrap()).abs());
+        }
+    }
+    // the same arithmetic, possibly in another order
+    assert!(worst < 1e-12, "{worst}");
+}
