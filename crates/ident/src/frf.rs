@@ -721,7 +721,10 @@ mod tests {
         let both = composite_correlation(2.2, 2.3, &[12.0, 6.0]);
         let mean = 0.5 * (hann_correlation(0.1, 12.0) + hann_correlation(0.1, 6.0));
         assert!((both - mean).abs() < 1e-15);
-        assert!((composite_correlation(1.5, 1.6, &[12.0, 6.0]) - hann_correlation(0.1, 12.0)).abs() < 1e-15);
+        assert!(
+            (composite_correlation(1.5, 1.6, &[12.0, 6.0]) - hann_correlation(0.1, 12.0)).abs()
+                < 1e-15
+        );
     }
 
     #[test]
