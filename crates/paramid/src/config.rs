@@ -148,6 +148,13 @@ pub struct ParameterSpec {
     pub min: f64,
     /// Upper bound (SI).
     pub max: f64,
+    /// A measurement of the parameter made elsewhere (a ground experiment),
+    /// SI: entered in the cost as a prior residual with `prior_std`.
+    #[serde(default)]
+    pub prior: Option<f64>,
+    /// The prior measurement's standard error (one σ, SI, > 0).
+    #[serde(default)]
+    pub prior_std: Option<f64>,
 }
 
 /// A time-domain verification flight (doublets not used in the fit).
@@ -289,6 +296,9 @@ pub struct Parameter {
     pub min: f64,
     /// Upper bound.
     pub max: f64,
+    /// A measurement made elsewhere and its standard error (SI), entered in
+    /// the cost as a prior residual ([`crate::cost::Cost::residuals`]).
+    pub prior: Option<(f64, f64)>,
 }
 
 impl std::fmt::Debug for Parameter {
@@ -298,6 +308,7 @@ impl std::fmt::Debug for Parameter {
             .field("start", &self.start)
             .field("min", &self.min)
             .field("max", &self.max)
+            .field("prior", &self.prior)
             .finish()
     }
 }
@@ -752,11 +763,47 @@ fn check_parameters(raw: &Raw, file: &str, start: &Params) -> Result<Vec<Paramet
                 "the start value is 0: parameters are scaled by their start, give a non-zero start",
             ));
         }
+        let prior = match (p.prior, p.prior_std) {
+            (None, None) => None,
+            (Some(v), Some(sd)) => {
+                d.check(v)
+                    .map_err(|rule| invalid(file, f("prior"), v, &rule))?;
+                if !(p.min < v && v < p.max) {
+                    return Err(invalid(
+                        file,
+                        f("prior"),
+                        v,
+                        "must lie strictly between min and max",
+                    ));
+                }
+                if !(sd.is_finite() && sd > 0.0 && sd < p.max - p.min) {
+                    return Err(invalid(
+                        file,
+                        f("prior_std"),
+                        sd,
+                        "must be finite, > 0 and below max − min",
+                    ));
+                }
+                Some((v, sd))
+            }
+            (Some(v), None) => {
+                return Err(invalid(
+                    file,
+                    f("prior_std"),
+                    v,
+                    "a prior needs its prior_std",
+                ));
+            }
+            (None, Some(sd)) => {
+                return Err(invalid(file, f("prior"), sd, "prior_std without a prior"));
+            }
+        };
         out.push(Parameter {
             descriptor: d,
             start: s,
             min: p.min,
             max: p.max,
+            prior,
         });
     }
     Ok(out)

@@ -57,6 +57,9 @@ pub struct Selected {
     pub scale_mag: Vec<f64>,
     /// √(weight) of the phase residual (deg).
     pub scale_ph: Vec<f64>,
+    /// Normalised random error ε of each point (Bendat & Piersol: the
+    /// relative standard deviation of |H|, and that of the phase in rad).
+    pub random_error: Vec<f64>,
 }
 
 /// One operating point of the cost.
@@ -90,6 +93,11 @@ pub struct Cost {
     pub parameters: Vec<Parameter>,
     /// Responses left out (no point above the coherence threshold), with why.
     pub skipped: Vec<String>,
+    /// The scale of a prior residual: the RMS standard deviation of the
+    /// data residuals, from the points' random errors (a data residual of
+    /// one standard deviation and a prior one standard error off weigh
+    /// alike); 0 for data without random error (a model's own responses).
+    pub prior_scale: f64,
 }
 
 /// The residual scales of one point: (magnitude, phase).
@@ -146,6 +154,7 @@ impl Cost {
                     coherence: idx.iter().map(|&k| f.coherence[k]).collect(),
                     scale_mag: sc.iter().map(|s| s.0).collect(),
                     scale_ph: sc.iter().map(|s| s.1).collect(),
+                    random_error: idx.iter().map(|&k| f.random_error[k]).collect(),
                 });
             }
             points.push(PointCost {
@@ -156,12 +165,14 @@ impl Cost {
                 windows_s: cfg.windows_s.clone(),
             });
         }
+        let prior_scale = data_residual_rms_std(&points);
         let cost = Cost {
             points,
             preset: cfg.preset,
             base: cfg.start,
             parameters: cfg.parameters.clone(),
             skipped,
+            prior_scale,
         };
         if cost.residual_count() <= cfg.parameters.len() {
             return Err(ParamIdError::Fit(format!(
@@ -175,6 +186,11 @@ impl Cost {
 
     /// Number of residuals (two per selected point).
     pub fn residual_count(&self) -> usize {
+        self.data_residual_count() + self.parameters.iter().filter(|p| p.prior.is_some()).count()
+    }
+
+    /// The residuals of the measured responses (the first ones).
+    pub fn data_residual_count(&self) -> usize {
         self.points
             .iter()
             .flat_map(|p| &p.responses)
@@ -242,6 +258,17 @@ impl Cost {
                 }
             }
         }
+        // the prior measurements (a ground experiment's value and standard
+        // error): r = s·(θ − θ_prior)/σ_prior with s the data residuals'
+        // standard deviation, so that J is the negative log-likelihood of
+        // data and priors together (up to s²) and its minimum the
+        // inverse-variance combination of the two
+        for (q, v) in self.parameters.iter().zip(values) {
+            if let Some((p0, sd)) = q.prior {
+                r[i] = self.prior_scale * (v - p0) / sd;
+                i += 1;
+            }
+        }
         if r.iter().all(|v| v.is_finite()) {
             Ok(r)
         } else {
@@ -283,6 +310,11 @@ impl Cost {
                 o += 2 * w.len();
             }
         }
+        // the prior rows: independent of everything
+        for k in o..jac.nrows() {
+            let a = jac.row(k);
+            g += a.transpose() * a;
+        }
         g
     }
 
@@ -303,6 +335,26 @@ impl Cost {
                     .collect()
             })
             .collect()
+    }
+}
+
+/// The RMS standard deviation of the data residuals, √(mean σ²) over the
+/// magnitude and phase residuals of every point: σ = scale · 8.69 dB · ε and
+/// scale · 57.3° · ε (Bendat & Piersol's small-error forms for log |H| and
+/// the phase).
+fn data_residual_rms_std(points: &[PointCost]) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for s in points.iter().flat_map(|p| &p.responses) {
+        for k in 0..s.omega_rad_s.len() {
+            let e = s.random_error[k];
+            sum += (s.scale_mag[k] * DB * e).powi(2) + (s.scale_ph[k] * e.to_degrees()).powi(2);
+            n += 2;
+        }
+    }
+    if n == 0 || !sum.is_finite() {
+        0.0
+    } else {
+        (sum / n as f64).sqrt()
     }
 }
 

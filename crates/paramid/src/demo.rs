@@ -208,6 +208,14 @@ pub fn fly_scenario(
 
 /// The demo's IDENT.toml (logs under `flights/<name>/log.csv`).
 pub fn ident_toml(opts: &DemoOptions) -> String {
+    ident_toml_with_ground(opts, &[])
+}
+
+/// [`ident_toml`] with the ground experiments' values: each identified
+/// parameter the ground measured gets its value and standard error as a
+/// prior (`prior`, `prior_std`), so that the fit weighs the ground and the
+/// flight by their errors.
+pub fn ident_toml_with_ground(opts: &DemoOptions, ground: &[crate::report::GroundValue]) -> String {
     let mut s = String::from(
         "# Written by `helicon ident demo`: the identification of a simulated helicopter\n\
          # from its identification flights (docs/paramid.md).\n\
@@ -264,6 +272,13 @@ pub fn ident_toml(opts: &DemoOptions) -> String {
             0.5 * v,
             2.0 * v
         );
+        if let Some(g) = ground.iter().find(|g| &g.key == key) {
+            let _ = write!(
+                s,
+                "prior = {:?}       # {}\nprior_std = {:?}\n",
+                g.value, g.file, g.std_error
+            );
+        }
     }
     if opts.verify && opts.flights.iter().any(|f| f == "hover") {
         for (t0, t1) in [(1.0, 4.0), (4.5, 7.5), (8.0, 11.0), (11.0, 14.0)] {
@@ -340,10 +355,12 @@ pub fn run_demo(truth: &Params, out: &Path, opts: &DemoOptions) -> Result<Identi
         source,
     })?;
     let path = out.join("IDENT.toml");
-    std::fs::write(&path, ident_toml(opts)).map_err(|source| ConfigError::Io {
-        file: path.display().to_string(),
-        action: "write",
-        source,
+    std::fs::write(&path, ident_toml_with_ground(opts, &ground)).map_err(|source| {
+        ConfigError::Io {
+            file: path.display().to_string(),
+            action: "write",
+            source,
+        }
     })?;
     let cfg = IdentConfig::from_file(&path)?;
     let mut id = run(&cfg)?;

@@ -73,6 +73,11 @@ pub struct ParameterResult {
     pub cramer_rao_pct: Option<f64>,
     /// Insensitivity, per cent of the identified value.
     pub insensitivity_pct: Option<f64>,
+    /// The prior measurement entered in the cost (IDENT.toml `prior`), SI:
+    /// its bound is then that of the data and the prior together.
+    pub prior: Option<f64>,
+    /// The prior's standard error, SI.
+    pub prior_std: Option<f64>,
     /// Passes the guidelines and was identified.
     pub identifiable: bool,
     /// Why it is not identifiable (or was fixed), when so.
@@ -442,6 +447,8 @@ pub fn identify(cost: &Cost, opts: &FitOptions) -> Result<FitResult> {
                 change_pct: 100.0 * (values[i] - p.start) / p.start,
                 cramer_rao_pct: c,
                 insensitivity_pct: s,
+                prior: p.prior.map(|q| q.0),
+                prior_std: p.prior.map(|q| q.1),
                 identifiable: k.is_some() && passes_rules && !at_bound,
                 reason,
                 min: p.min,
@@ -483,6 +490,7 @@ mod tests {
             start: 0.62,
             min: 0.31,
             max: 1.24,
+            prior: None,
         };
         let t = Transform::new(&p);
         for v in [0.31, 0.4, 0.62, 1.0, 1.24] {

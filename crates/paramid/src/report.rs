@@ -94,6 +94,8 @@ impl Identification {
             .collect();
         let h = of_truth.model_at(&truth_values)?;
         let mut c = self.cost.clone();
+        // the model's responses only: no prior measurement enters
+        c.prior_scale = 0.0;
         for (pt, hp) in c.points.iter_mut().zip(h) {
             for (r, hr) in pt.responses.iter_mut().zip(hp) {
                 r.h = hr;
@@ -376,14 +378,19 @@ pub fn markdown(r: &Report) -> String {
     let _ = writeln!(s, "## Parameters\n");
     let _ = writeln!(
         s,
-        "| key | start | identified | change % | CR % | insensitivity % | identifiable | reason |\n|---|---|---|---|---|---|---|---|"
+        "| key | start | prior ± σ | identified | change % | CR % | insensitivity % | identifiable | reason |\n|---|---|---|---|---|---|---|---|---|"
     );
     for p in &r.parameters {
+        let prior = match (p.prior, p.prior_std) {
+            (Some(v), Some(sd)) => format!("{v} ± {sd:.3e}"),
+            _ => "–".into(),
+        };
         let _ = writeln!(
             s,
-            "| `{}` | {} | {:.6} | {:+.2} | {} | {} | {} | {} |",
+            "| `{}` | {} | {} | {:.6} | {:+.2} | {} | {} | {} | {} |",
             p.key,
             p.start,
+            prior,
             p.identified,
             p.change_pct,
             opt(p.cramer_rao_pct),

@@ -190,3 +190,43 @@ fn a_missing_or_bad_log_names_the_log() {
     assert!(e.contains("log.csv"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A prior measurement (`prior`, `prior_std`) is checked like the bounds:
+/// both or neither, finite, inside the bounds, a positive standard error
+/// below the bounds' span.
+#[test]
+fn hostile_priors_name_the_field() {
+    let with = |extra: &str| GOOD.replace("max = 1.2\n", &format!("max = 1.2\n{extra}\n"));
+    let good = IdentConfig::from_toml_str(
+        &with("prior = 0.7\nprior_std = 0.02"),
+        "good.toml",
+        Path::new("."),
+    )
+    .unwrap();
+    assert_eq!(good.parameters[0].prior, Some((0.7, 0.02)));
+    for (text, field) in [
+        (with("prior = 0.7"), "parameter[0].prior_std"),
+        (with("prior_std = 0.02"), "parameter[0].prior"),
+        (with("prior = nan\nprior_std = 0.02"), "parameter[0].prior"),
+        (with("prior = 1.5\nprior_std = 0.02"), "parameter[0].prior"),
+        (
+            with("prior = 0.7\nprior_std = 0.0"),
+            "parameter[0].prior_std",
+        ),
+        (
+            with("prior = 0.7\nprior_std = -0.1"),
+            "parameter[0].prior_std",
+        ),
+        (
+            with("prior = 0.7\nprior_std = inf"),
+            "parameter[0].prior_std",
+        ),
+        (
+            with("prior = 0.7\nprior_std = 5.0"),
+            "parameter[0].prior_std",
+        ),
+    ] {
+        let e = err(&text);
+        assert!(e.contains("bad.toml") && e.contains(field), "{field}: {e}");
+    }
+}

@@ -277,8 +277,8 @@ fn check(name: &str, r: &Recovered, max_cr: f64, max_pct: f64, min_truth_model_f
     );
 }
 
-/// The demo's default programme (ground experiments, the tail lift slope
-/// kept at its ground value; the logged excitations as instruments,
+/// The demo's default programme (ground experiments as priors, the tail
+/// lift slope kept at its ground value; the logged excitations as instruments,
 /// H = G_eu⁻¹ G_ey; hover, 5 and 10 m/s; Cramér–Rao bounds of correlated
 /// frequency points) on truth-a at the scenarios' seed (3). Measured: the
 /// eight identifiable parameters within 1.86 Cramér–Rao bounds (the tail
@@ -307,11 +307,11 @@ fn truth_a_is_recovered_from_flown_noisy_data() {
 /// The same programme on truth-c (issue 15: its lift slope was +7.6 % with
 /// a 3.1 % bound before the ground experiments; the cause was the scatter of
 /// the estimate, not the parameters fixed at wrong values — docs/paramid.md).
-/// Measured at the scenarios' seed (3): main lift slope −0.2 % (0.16
-/// bounds), the worst the tail servo bandwidth +11.3 % (2.37 bounds) and the
-/// hinge spring +0.7 % (2.10); the ground values within 1.0 σ; the
-/// truth-model cost 2.49e3 before the ground → 33.5 at the start → 4.88
-/// identified (510×). Asserted as for truth a: ≤ 3.2 bounds, < 13 %, ≥ 50×.
+/// Measured at the scenarios' seed (3): main lift slope +0.3 % (0.26
+/// bounds), the worst the hinge spring +0.8 % (2.62 bounds) and the tail
+/// servo bandwidth +11.3 % (2.37); the ground values within 1.0 σ; the
+/// truth-model cost 2.49e3 before the ground → 33.5 at the start → 4.90
+/// identified (508×). Asserted as for truth a: ≤ 3.2 bounds, < 13 %, ≥ 50×.
 #[test]
 fn truth_c_is_recovered_from_flown_noisy_data() {
     let r = recover("truth-c", true, false);
