@@ -29,9 +29,9 @@ use crate::keys;
 use crate::linear::{point_responses, target};
 use helicon_ident::Complex64;
 use helicon_ident::fit::coherence_weight;
+use helicon_ident::frf::composite_correlation;
 use helicon_model::trim::TrimTarget;
 use helicon_model::{Params, Preset};
-use helicon_ident::frf::composite_correlation;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 

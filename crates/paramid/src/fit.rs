@@ -327,9 +327,8 @@ pub fn accuracy(cost: &Cost, free: &[usize], values: &[f64]) -> Result<AccuracyP
     // (40 log-spaced points: several per bin of a 12 s window below
     // 3 rad/s), so the residuals are correlated: the sandwich covariance
     let jrj = cost.residual_correlation(&jac);
-    let acc =
-        helicon_ident::cost::accuracy_correlated(&jac, r0.norm_squared(), 1e-4, Some(&jrj))
-            .map_err(|e| ParamIdError::Fit(e.to_string()))?;
+    let acc = helicon_ident::cost::accuracy_correlated(&jac, r0.norm_squared(), 1e-4, Some(&jrj))
+        .map_err(|e| ParamIdError::Fit(e.to_string()))?;
     // θ units (fractions of the start value) → per cent of the identified value
     let pct: Vec<f64> = free
         .iter()
