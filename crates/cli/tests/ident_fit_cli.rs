@@ -42,7 +42,9 @@ fn demo_then_fit_write_the_documented_outputs() {
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     let params = r["parameters"].as_array().unwrap();
-    assert_eq!(params.len(), 10);
+    // ten free, less the tail lift slope the demo keeps at its ground value
+    // (helicon_paramid::demo::GROUND_KEPT)
+    assert_eq!(params.len(), 9);
     for p in params {
         for k in [
             "key",
