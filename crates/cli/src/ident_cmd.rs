@@ -415,6 +415,12 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
         .omega_min
         .unwrap_or(4.0 * std::f64::consts::PI / (lens[0] as f64 * dt));
     let omega_max = a.omega_max.unwrap_or(0.4 * std::f64::consts::PI / dt);
+    let nyquist = std::f64::consts::PI / dt;
+    if omega_max > nyquist {
+        bail!(
+            "--omega-max {omega_max}: above the Nyquist frequency π/dt = {nyquist} rad/s of {file} (sample time {dt} s)"
+        );
+    }
     let grid = log_grid(omega_min, omega_max, a.points)
         .with_context(|| format!("--omega-min {omega_min} and --omega-max {omega_max}"))?;
     let chans: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();

@@ -13,7 +13,7 @@ use std::path::PathBuf;
 #[derive(Args, Debug)]
 pub struct GroundArgs {
     /// The experiment: rotor-drag, main-lift-slope, tail-lift-slope,
-    /// blade-spring, bell-gain, hiller-gain, tail-fin-loss.
+    /// blade-spring, bell-gain, hiller-gain, tail-fin-loss, stabilizer-lift-slope.
     pub kind: String,
     /// The readings (CSV: the kind's two columns, one reading per row; `#` lines are comments).
     #[arg(required_unless_present = "template")]

@@ -92,6 +92,43 @@ fn check_time(flag: &str, v: Option<f64>) -> Result<()> {
     Ok(())
 }
 
+/// The fault and pilot times of `a` must fall inside a flight of
+/// `duration_s` (`source` names the scenario), and each `--…-until` after
+/// its `--…-at`: an event that can never happen is refused, not flown
+/// without it.
+fn check_events(a: &SitlArgs, duration_s: f64, source: &str) -> Result<()> {
+    for (flag, v) in [
+        ("--gps-loss-at", a.gps_loss_at),
+        ("--manual-at", a.manual_at),
+        ("--rc-failsafe-at", a.rc_failsafe_at),
+        ("--rc-silent-at", a.rc_silent_at),
+    ] {
+        if let Some(t) = v
+            && t >= duration_s
+        {
+            anyhow::bail!(
+                "{flag} {t}: after the flight's end ({source}: {duration_s} s); use --duration for a longer flight"
+            );
+        }
+    }
+    for (at_flag, at, until_flag, until) in [
+        ("--manual-at", a.manual_at, "--manual-until", a.manual_until),
+        (
+            "--rc-silent-at",
+            a.rc_silent_at,
+            "--rc-silent-until",
+            a.rc_silent_until,
+        ),
+    ] {
+        if let (Some(at), Some(until)) = (at, until)
+            && until <= at
+        {
+            anyhow::bail!("{until_flag} {until}: must be after {at_flag} {at}");
+        }
+    }
+    Ok(())
+}
+
 /// Run `helicon sitl`.
 pub fn run(a: &SitlArgs) -> Result<()> {
     check_time("--gps-loss-at", a.gps_loss_at)?;
@@ -108,6 +145,9 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(format!("sitl-{}", folder_name(&base.name))));
     let cases = base.cases();
+    for case in &cases {
+        check_events(a, case.duration_s, &source)?;
+    }
     let mut con = Console::stdout();
     for mut case in cases.iter().cloned() {
         case.controller.fusion = true;

@@ -1279,3 +1279,119 @@ fn closed_stderr_is_not_a_panic() {
         }
     }
 }
+
+/// Hostile inputs to the features of the ULog identification, the
+/// stabilizer-bar ground experiment and the silent receiver: a short SITL
+/// flight gives a real `flight.ulg`, then each case as in the corpus.
+const TODAY: &[Case] = &[
+    fail(
+        "sitl",
+        "rc silent after the flight",
+        "sitl fly.toml --out o/s1 --rc-silent-at 10",
+        &["--rc-silent-at 10", "after the flight's end", "fly.toml"],
+    ),
+    fail(
+        "sitl",
+        "rc silent back before it goes",
+        "sitl fly.toml --out o/s2 --rc-silent-at 2 --rc-silent-until 1",
+        &["--rc-silent-until 1", "after --rc-silent-at 2"],
+    ),
+    fail(
+        "sitl",
+        "manual until = at",
+        "sitl fly.toml --out o/s3 --manual-at 3 --manual-until 3",
+        &["--manual-until 3", "--manual-at 3"],
+    ),
+    fail(
+        "sitl",
+        "gps loss after the flight",
+        "sitl fly.toml --out o/s4 --gps-loss-at 1e300",
+        &["--gps-loss-at", "after the flight's end"],
+    ),
+    ok(
+        "sitl",
+        "rc silent for a second",
+        "sitl fly.toml --out o/s5 --rc-silent-at 1 --rc-silent-until 2",
+        &["o/s5/summary.json"],
+    ),
+    fail(
+        "ident",
+        "frf omega max above Nyquist on a flight log",
+        "ident frf f/flight.ulg --input S_lat --output meas_p --out o/f1 --omega-max 1e6",
+        &["--omega-max", "flight.ulg", "Nyquist"],
+    ),
+    fail(
+        "ident",
+        "frf on a cut flight log",
+        "ident frf cut.ulg --input S_lat --output meas_p --out o/f2",
+        &["cut.ulg", "control"],
+    ),
+    fail(
+        "ident",
+        "frf on a log of the magic bytes only",
+        "ident frf magic.ulg --input S_lat --output meas_p --out o/f3",
+        &["magic.ulg"],
+    ),
+    fail(
+        "ident",
+        "stabilizer lift slope in degrees",
+        "ident ground stabilizer-lift-slope deg.csv --out o/g1",
+        &["deg.csv", "line 2", "`pitch_rad`", "degrees"],
+    ),
+    fail(
+        "ident",
+        "stabilizer lift slope zero thrust",
+        "ident ground stabilizer-lift-slope zero.csv --out o/g2",
+        &["zero.csv", "thrust_n"],
+    ),
+    ok(
+        "ident",
+        "stabilizer lift slope negative pitch",
+        "ident ground stabilizer-lift-slope neg.csv --out o/g3",
+        &[],
+    ),
+];
+
+#[test]
+fn todays_features_refuse_hostile_inputs() {
+    let d = tmpdir("today");
+    std::fs::write(d.join("fly.toml"), "name = \"fly\"\nduration_s = 8.0\n").unwrap();
+    let r = helicon(&d, &expand("sitl fly.toml --out f"), None);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let ulg = std::fs::read(d.join("f/flight.ulg")).unwrap();
+    std::fs::write(d.join("cut.ulg"), &ulg[..3000]).unwrap();
+    std::fs::write(d.join("magic.ulg"), &ulg[..7]).unwrap();
+    std::fs::write(
+        d.join("deg.csv"),
+        "pitch_rad,thrust_n\n3,3.67\n6,9.28\n9,15.47\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("zero.csv"), "pitch_rad,thrust_n\n0.05,0\n0.1,0\n").unwrap();
+    std::fs::write(
+        d.join("neg.csv"),
+        "pitch_rad,thrust_n\n-0.05,-3.67\n-0.1,-9.28\n-0.15,-15.47\n",
+    )
+    .unwrap();
+    let mut failures = Vec::new();
+    for c in TODAY {
+        let (problems, r) = check(&d, c);
+        if !problems.is_empty() {
+            failures.push(format!(
+                "[{}] helicon {}: {}\n  stderr: {}",
+                c.name,
+                c.args,
+                problems.join("; "),
+                r.stderr.trim()
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    // the result file (its optional fields are null by design): no NaN/inf
+    let g = std::fs::read_to_string(d.join("o/g3/ground_stabilizer_lift_slope.json")).unwrap();
+    let bad: Vec<String> = non_numbers(&g)
+        .into_iter()
+        .filter(|w| w != "null")
+        .collect();
+    assert!(bad.is_empty(), "{bad:?}");
+    let _ = std::fs::remove_dir_all(&d);
+}

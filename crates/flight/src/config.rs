@@ -482,6 +482,16 @@ mod tests {
             err("[stale]\nrc_s = 0.0\n"),
             "o.toml: `stale.rc_s` = 0: must be finite, > 0 and <= 10"
         );
+        for v in ["-0.5", "nan", "inf", "-inf", "1e300", "10.000001"] {
+            let e = err(&format!("[stale]\nrc_s = {v}\n"));
+            assert!(
+                e.starts_with("o.toml: `stale.rc_s` = ")
+                    && e.ends_with("must be finite, > 0 and <= 10"),
+                "{v}: {e}"
+            );
+        }
+        let e = err("[stale]\nrc_s = \"0.5\"\n");
+        assert!(e.contains("o.toml") && e.contains("rc_s"), "{e}");
         assert_eq!(
             err("[home]\nlatitude_deg = 91.0\n"),
             "o.toml: `home.latitude_deg` = 91: must be finite and within -90..=90"

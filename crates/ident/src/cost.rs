@@ -148,6 +148,16 @@ pub fn accuracy_correlated(
     no_information: f64,
     jrj: Option<&DMatrix<f64>>,
 ) -> Result<Accuracy> {
+    if !(cost.is_finite() && cost >= 0.0) {
+        return Err(IdentError::Fit(format!(
+            "accuracy: the cost {cost} must be finite and >= 0 (a sum of squares)"
+        )));
+    }
+    if !(no_information.is_finite() && (0.0..1.0).contains(&no_information)) {
+        return Err(IdentError::Fit(format!(
+            "accuracy: the no-information threshold {no_information} must be in [0, 1)"
+        )));
+    }
     let (nr, np) = jac.shape();
     let s2 = cost / nr.saturating_sub(np).max(1) as f64;
     let m = jac.transpose() * jac;

@@ -641,8 +641,13 @@ pub fn composite(parts: &[Frf], window_s: &[f64]) -> Result<Frf> {
 /// D(ν) = sin(νT/2)/(νT/2). It is 1 at δ = 0, 2/3 one bin apart (δ = Ω),
 /// 1/6 two bins apart — the textbook correlations of Hann-windowed DFT bins
 /// — and 0 at three and more whole bins, with sidelobes below 1 % between.
-/// Averaging half-overlapped segments does not change it.
+/// Averaging half-overlapped segments does not change it. NaN for a
+/// non-finite `delta_rad_s` or a `window_s` that is not finite and > 0 (so
+/// a caller's finiteness check sees it, rather than a correlation of 1).
 pub fn hann_correlation(delta_rad_s: f64, window_s: f64) -> f64 {
+    if !(delta_rad_s.is_finite() && window_s.is_finite() && window_s > 0.0) {
+        return f64::NAN;
+    }
     let d = |nu: f64| {
         let x = 0.5 * nu * window_s;
         if x.abs() < 1e-9 { 1.0 } else { x.sin() / x }
@@ -657,8 +662,16 @@ pub fn hann_correlation(delta_rad_s: f64, window_s: f64) -> f64 {
 /// The correlation of a composite estimate's points at `omega_a_rad_s` and
 /// `omega_b_rad_s` (see [`composite`]): the mean of [`hann_correlation`]
 /// over the window lengths that hold two periods of both frequencies (the
-/// composite's windows there); 0 when none does.
+/// composite's windows there); 0 when none does. NaN when a frequency is
+/// not finite and > 0 or a window is not finite and > 0.
 pub fn composite_correlation(omega_a_rad_s: f64, omega_b_rad_s: f64, window_s: &[f64]) -> f64 {
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    if !(positive(omega_a_rad_s)
+        && positive(omega_b_rad_s)
+        && window_s.iter().all(|w| positive(*w)))
+    {
+        return f64::NAN;
+    }
     let lo = omega_a_rad_s.min(omega_b_rad_s);
     let (mut sum, mut n) = (0.0, 0usize);
     for &tw in window_s {
@@ -686,6 +699,34 @@ pub fn log_grid(lo: f64, hi: f64, n: usize) -> Result<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Hostile arguments give NaN, never a plausible correlation (before:
+    /// a NaN frequency difference gave 1, a NaN frequency 0).
+    #[test]
+    fn correlations_of_non_finite_or_non_positive_arguments_are_nan() {
+        for (d, w) in [
+            (f64::NAN, 12.0),
+            (f64::INFINITY, 12.0),
+            (0.5, 0.0),
+            (0.5, -12.0),
+            (0.5, f64::NAN),
+            (0.5, f64::INFINITY),
+        ] {
+            assert!(hann_correlation(d, w).is_nan(), "{d} {w}");
+        }
+        for (a, b, w) in [
+            (f64::NAN, 2.0, vec![12.0]),
+            (2.0, f64::INFINITY, vec![12.0]),
+            (-2.0, 2.0, vec![12.0]),
+            (2.0, 2.1, vec![12.0, 0.0]),
+            (2.0, 2.1, vec![f64::NAN]),
+        ] {
+            assert!(composite_correlation(a, b, &w).is_nan(), "{a} {b} {w:?}");
+        }
+        // the good arguments still give the textbook values
+        assert!((hann_correlation(2.0 * PI / 12.0, 12.0) - 2.0 / 3.0).abs() < 1e-12);
+        assert_eq!(composite_correlation(2.0, 2.0, &[12.0]), 1.0);
+    }
 
     #[test]
     fn hann_correlation_is_the_squared_windows_transform() {

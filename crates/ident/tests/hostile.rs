@@ -126,3 +126,28 @@ fn inputs_refuse_bad_numbers() {
     // A band holding too many harmonics is refused, not allocated.
     assert!(Multisine::new(0.1, 1e5, 0.0, 1e5, 1, 0).is_err());
 }
+
+/// The Cramér–Rao bounds refuse a cost that is no sum of squares, a
+/// threshold outside [0, 1), and a residual correlation that is not finite
+/// (before: a negative cost gave bounds of 0, a NaN threshold infinite
+/// bounds, silently).
+#[test]
+fn accuracy_refuses_bad_costs_thresholds_and_correlations() {
+    use helicon_ident::cost::{accuracy, accuracy_correlated};
+    use helicon_ident::frf::composite_correlation;
+    use nalgebra::DMatrix;
+    let jac = DMatrix::from_row_slice(4, 2, &[1.0, 0.0, 0.0, 1.0, 1.0, 1.0, 2.0, -1.0]);
+    assert!(accuracy(&jac, 1.0, 1e-12).is_ok());
+    for cost in [-1.0, f64::NAN, f64::INFINITY] {
+        let e = accuracy(&jac, cost, 1e-12).unwrap_err().to_string();
+        assert!(e.contains("cost"), "{cost}: {e}");
+    }
+    for thr in [-1e-3, 1.0, f64::NAN] {
+        let e = accuracy(&jac, 1.0, thr).unwrap_err().to_string();
+        assert!(e.contains("threshold"), "{thr}: {e}");
+    }
+    // a correlation matrix built from a NaN frequency: refused, not R = 1
+    let rho = composite_correlation(f64::NAN, 2.0, &[12.0]);
+    let jrj = DMatrix::from_row_slice(2, 2, &[1.0, rho, rho, 1.0]);
+    assert!(accuracy_correlated(&jac, 1.0, 1e-12, Some(&jrj)).is_err());
+}

@@ -201,18 +201,43 @@ pub struct Readings {
     pub rows: Vec<Reading>,
 }
 
-/// The 1-based line of the record the reader places at byte `at` of `text`
-/// (its offset is where it started looking, before the blank lines it
-/// skipped).
-fn line_at(text: &str, at: u64) -> u64 {
-    let bytes = text.as_bytes();
-    let mut at = usize::try_from(at).map_or(bytes.len(), |b| b.min(bytes.len()));
-    let mut line = bytes[..at].iter().filter(|b| **b == b'\n').count() as u64 + 1;
-    while at < bytes.len() && (bytes[at] == b'\n' || bytes[at] == b'\r') {
-        line += u64::from(bytes[at] == b'\n');
-        at += 1;
+/// The 1-based line of the record the reader places at a byte offset of a
+/// text (its offset is where it started looking, before the blank lines it
+/// skipped). The records come in file order, so the newlines are counted
+/// from the previous record on: linear in the file, not quadratic.
+struct LineCounter<'a> {
+    bytes: &'a [u8],
+    /// Where the count stopped, and the newlines before it.
+    pos: usize,
+    newlines: u64,
+}
+
+impl<'a> LineCounter<'a> {
+    fn new(text: &'a str) -> Self {
+        LineCounter {
+            bytes: text.as_bytes(),
+            pos: 0,
+            newlines: 0,
+        }
     }
-    line
+
+    fn line_at(&mut self, at: u64) -> u64 {
+        let bytes = self.bytes;
+        let mut at = usize::try_from(at).map_or(bytes.len(), |b| b.min(bytes.len()));
+        if at < self.pos {
+            // not in file order (never, from the csv reader): count afresh
+            self.pos = 0;
+            self.newlines = 0;
+        }
+        self.newlines += bytes[self.pos..at].iter().filter(|b| **b == b'\n').count() as u64;
+        self.pos = at;
+        let mut line = self.newlines + 1;
+        while at < bytes.len() && (bytes[at] == b'\n' || bytes[at] == b'\r') {
+            line += u64::from(bytes[at] == b'\n');
+            at += 1;
+        }
+        line
+    }
 }
 
 fn parse_err(file: &str, message: String) -> ConfigError {
@@ -229,7 +254,7 @@ impl Readings {
     /// line and the column.
     pub fn parse_csv(text: &str, file: &str, kind: Kind) -> Result<Readings, ConfigError> {
         // `#` comment lines are blanked rather than left to the reader, and
-        // the line is counted from the record's byte offset ([`line_at`]):
+        // the line is counted from the record's byte offset ([`LineCounter`]):
         // the reader's own line count skips comment and blank lines.
         let blanked: String = text
             .lines()
@@ -284,9 +309,10 @@ impl Readings {
             };
         }
         let mut rows = Vec::new();
+        let mut lines = LineCounter::new(&blanked);
         for rec in rdr.records() {
             let rec = rec.map_err(|e| parse_err(file, format!("malformed CSV: {e}")))?;
-            let line = rec.position().map_or(0, |p| line_at(&blanked, p.byte()));
+            let line = rec.position().map_or(0, |p| lines.line_at(p.byte()));
             let mut v = [0.0; 2];
             for (c, &i) in idx.iter().enumerate() {
                 let name = kind.columns()[c];
@@ -566,6 +592,11 @@ pub fn calculate(readings: &Readings, params: &Params) -> Result<GroundResult, C
     }
 }
 
+/// The largest blade or paddle pitch a lift-slope reading may have, rad
+/// (45°): the lift is linear in the pitch only well below stall (about 12°
+/// to 15°), and a pitch of a few radians is a reading in degrees.
+pub const MAX_PITCH_RAD: f64 = std::f64::consts::FRAC_PI_4;
+
 /// The per-reading rules of each kind.
 fn check_physics(rd: &Readings) -> Result<(), ConfigError> {
     for r in &rd.rows {
@@ -582,6 +613,18 @@ fn check_physics(rd: &Readings) -> Result<(), ConfigError> {
                         "the drag torque is a magnitude (the torque the rotor takes), >= 0".into(),
                     ));
                 }
+            }
+            Kind::MainLiftSlope | Kind::TailLiftSlope | Kind::StabilizerLiftSlope
+                if r.x.abs() > MAX_PITCH_RAD =>
+            {
+                return Err(rd.invalid(
+                    r,
+                    0,
+                    r.x,
+                    format!(
+                        "a blade pitch beyond ±{MAX_PITCH_RAD:.4} rad (45°) is no lift-slope reading (the blade has stalled long before): is it in degrees?"
+                    ),
+                ));
             }
             Kind::MainLiftSlope | Kind::TailLiftSlope | Kind::StabilizerLiftSlope
                 if r.y != 0.0 && r.x != 0.0 && r.y.signum() != r.x.signum() =>

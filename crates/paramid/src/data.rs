@@ -9,6 +9,41 @@ use crate::error::{ParamIdError, Result};
 use helicon_ident::frf::{Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid};
 use helicon_model::ConfigError;
 
+/// The fewest samples a spectral window (`windows_s`) may hold.
+const MIN_WINDOW_SAMPLES: f64 = 8.0;
+
+/// Each of `cfg.windows_s` holds at least [`MIN_WINDOW_SAMPLES`] samples of
+/// `dt_s` and at most half the record of `record_s` (of the log `log`).
+fn check_windows(cfg: &IdentConfig, log: &str, dt_s: f64, record_s: f64) -> Result<()> {
+    for (i, w) in cfg.windows_s.iter().enumerate() {
+        // the spectra's own floor is 4 samples; 8 leaves its half-overlap
+        // windows a frequency to resolve
+        if *w < MIN_WINDOW_SAMPLES * dt_s {
+            return Err(ConfigError::invalid(
+                &cfg.file,
+                format!("windows_s[{i}]"),
+                *w,
+                format!(
+                    "{log}: a window must hold at least {MIN_WINDOW_SAMPLES} samples ({} s at {} s)",
+                    MIN_WINDOW_SAMPLES * dt_s,
+                    dt_s
+                ),
+            )
+            .into());
+        }
+        if 2.0 * w > record_s {
+            return Err(ConfigError::invalid(
+                &cfg.file,
+                format!("windows_s[{i}]"),
+                *w,
+                format!("{log}: a window must be at most half the record used ({record_s:.1} s), for averaging"),
+            )
+            .into());
+        }
+    }
+    Ok(())
+}
+
 /// One measured response.
 #[derive(Debug, Clone)]
 pub struct Measured {
@@ -214,17 +249,7 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
     )?;
     let log = op.log.display().to_string();
     let record_s = rec.dt_s * rec.t_s.len() as f64;
-    for (i, w) in cfg.windows_s.iter().enumerate() {
-        if 2.0 * w > record_s {
-            return Err(ConfigError::invalid(
-                &cfg.file,
-                format!("windows_s[{i}]"),
-                *w,
-                format!("{log}: a window must be at most half the record used ({record_s:.1} s), for averaging"),
-            )
-            .into());
-        }
-    }
+    check_windows(cfg, &log, rec.dt_s, record_s)?;
     let lo = op
         .response
         .iter()

@@ -229,4 +229,39 @@ fn hostile_priors_name_the_field() {
         let e = err(&text);
         assert!(e.contains("bad.toml") && e.contains(field), "{field}: {e}");
     }
+
+/// A spectral window shorter than a few samples is refused naming the
+/// IDENT file and `windows_s[i]` (before: the spectra's own error, naming
+/// the log and `window.len` but not the field to change).
+#[test]
+fn a_window_of_a_few_samples_names_the_field() {
+    let dir = std::env::temp_dir().join(format!("helicon-paramid-window-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut text = String::from("t_s,S_col,S_lat,S_lon,S_tr,meas_q\n");
+    for k in 0..4000 {
+        let t = f64::from(k) * 0.0025;
+        let s = |f: f64| (f * t).sin();
+        text.push_str(&format!(
+            "{t},{},{},{},{},{}\n",
+            s(1.0),
+            s(2.3),
+            s(3.7),
+            s(5.1),
+            s(0.9)
+        ));
+    }
+    std::fs::write(dir.join("log.csv"), &text).unwrap();
+    for w in ["1e-6", "0.0125"] {
+        let cfg =
+            IdentConfig::from_toml_str(&format!("windows_s = [{w}]\n{GOOD}"), "bad.toml", &dir)
+                .unwrap();
+        let e = helicon_paramid::report::run(&cfg).unwrap_err().to_string();
+        assert!(
+            e.contains("bad.toml")
+                && e.contains("`windows_s[0]`")
+                && e.contains("at least 8 samples"),
+            "{w}: {e}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
