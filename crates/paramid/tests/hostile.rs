@@ -229,6 +229,7 @@ fn hostile_priors_name_the_field() {
         let e = err(&text);
         assert!(e.contains("bad.toml") && e.contains(field), "{field}: {e}");
     }
+}
 
 /// A spectral window shorter than a few samples is refused naming the
 /// IDENT file and `windows_s[i]` (before: the spectra's own error, naming
