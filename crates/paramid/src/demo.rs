@@ -99,7 +99,8 @@ pub const DEMO_PARAMETERS: [&str; 10] = [
 /// error); identified again from the yaw responses it came out 7–10 % off
 /// (3.6–4.0 Cramér–Rao bounds) on four of nine runs (truths a, b, c at
 /// seeds 1, 3, 7), the sign changing with the seed, and pulled the tail
-/// servo's bandwidth with it (docs/paramid.md).
+/// servo's bandwidth with it; with its ground value as a prior still up to
+/// 5.2 % (4.2 bounds) (docs/paramid.md).
 pub const GROUND_KEPT: [&str; 1] = ["tail_rotor.lift_slope_per_rad"];
 
 /// The responses the demo fits at every operating point (input, output
