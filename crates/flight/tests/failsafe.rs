@@ -8,7 +8,7 @@ mod common;
 use common::{Ulog, options, scenario};
 use helicon_flight::ports::{stick_command, stick_us};
 use helicon_flight::sitl;
-use helicon_sim::closed_loop::{Termination, prepare};
+use helicon_sim::closed_loop::{Prepared, Termination, prepare};
 use helicon_sim::log_csv::read_log_csv;
 
 /// Codes of the log's message set (helicon-ulog): modes and failsafe reasons.
@@ -169,6 +169,43 @@ fn the_pilots_switch_takes_the_servos_at_once() {
 const RC_LOSS: u8 = 5;
 const PILOT: u8 = 6;
 
+/// After a lost link in manual (2 s, the hold) the link comes back and the
+/// pilot's switch (still at manual) takes the servos at 3 s: one text each,
+/// the modes auto → manual → failsafe → manual, the failsafe raised by the
+/// loss and cleared by the pilot.
+fn pilot_takes_back_at_3_s(log: &Ulog) {
+    assert_eq!(log.texts_with("rc_link: the pilot's link back").len(), 1);
+    let back = log.texts_with("pilot_manual: hold -> manual");
+    assert_eq!(back.len(), 1, "{:?}", log.texts);
+    assert!((back[0].0 - 3.0).abs() < 1e-6);
+    assert_eq!(
+        log.u8s("mode", "mode"),
+        vec![AUTOMATIC, MANUAL, FAILSAFE, MANUAL]
+    );
+    assert_eq!(log.u8s("failsafe", "reason"), vec![RC_LOSS, PILOT]);
+    assert_eq!(log.bools("failsafe", "active"), vec![true, false]);
+}
+
+/// The servos of such a flight: the pilot's sticks from 1 s until sample
+/// `k_hold`, the law's command (not the receiver's failsafe sticks) from
+/// then until 3 s, the pilot's again from 3 s.
+fn servos_pilot_law_pilot(r: &sitl::SitlResult, prepared: &Prepared, log: &Ulog, k_hold: usize) {
+    let trim = prepared.gains.set.u_trim;
+    let pilot = |k: usize| {
+        (0..4).all(|i| (r.received[k][i] - stick_command(stick_us(trim[i]))).abs() < 1e-9)
+    };
+    assert!((400..k_hold).all(pilot));
+    assert!((k_hold + 1..1200).all(|k| !pilot(k)));
+    assert!((1200..1601).all(pilot));
+    let control = log.f64s("control", "command[0]");
+    for k in k_hold..1200 {
+        assert!(
+            (r.received[k][0] - control[k]).abs() <= 0.5e-4 + 1e-12,
+            "k {k}"
+        );
+    }
+}
+
 /// The receiver's failsafe while the pilot flies: the law's hold takes
 /// over at the very sample (latched, reason `rc_lost`), the failsafe
 /// frame's switches (manual, arm off) are ignored, and when the link is
@@ -187,33 +224,10 @@ fn a_receiver_failsafe_in_manual_hands_over_to_the_hold() {
     assert_eq!(hold.len(), 1, "{:?}", log.texts);
     assert!((hold[0].0 - 2.0).abs() < 1e-6, "{}", hold[0].0);
     assert_eq!(log.texts_with("rc_link: receiver failsafe").len(), 1);
-    assert_eq!(log.texts_with("rc_link: the pilot's link back").len(), 1);
-    let back = log.texts_with("pilot_manual: hold -> manual");
-    assert_eq!(back.len(), 1, "{:?}", log.texts);
-    assert!((back[0].0 - 3.0).abs() < 1e-6);
-    assert_eq!(
-        log.u8s("mode", "mode"),
-        vec![AUTOMATIC, MANUAL, FAILSAFE, MANUAL]
-    );
-    // raised by the loss, cleared by the pilot taking over
-    assert_eq!(log.u8s("failsafe", "reason"), vec![RC_LOSS, PILOT]);
-    assert_eq!(log.bools("failsafe", "active"), vec![true, false]);
+    pilot_takes_back_at_3_s(&log);
     // the servos: the pilot's until 2 s, the law's (not the receiver's
     // failsafe sticks) over the loss, the pilot's again from 3 s
-    let trim = prepared.gains.set.u_trim;
-    let pilot = |k: usize| {
-        (0..4).all(|i| (r.received[k][i] - stick_command(stick_us(trim[i]))).abs() < 1e-9)
-    };
-    assert!((400..800).all(pilot));
-    assert!((801..1200).all(|k| !pilot(k)));
-    assert!((1200..1601).all(pilot));
-    let control = log.f64s("control", "command[0]");
-    for k in 800..1200 {
-        assert!(
-            (r.received[k][0] - control[k]).abs() <= 0.5e-4 + 1e-12,
-            "k {k}"
-        );
-    }
+    servos_pilot_law_pilot(&r, &prepared, &log, 800);
     // the receiver's frames logged with the loss
     let rc_t = log.u64s("rc_input", "timestamp");
     let lost = log.bools("rc_input", "signal_lost");
@@ -286,33 +300,11 @@ fn a_silent_receiver_in_manual_hands_over_to_the_hold() {
     assert_eq!(lost.len(), 1, "{:?}", log.texts);
     assert_eq!(lost[0].0, hold[0].0);
     assert!(log.texts_with("rc_link: receiver failsafe").is_empty());
-    assert_eq!(log.texts_with("rc_link: the pilot's link back").len(), 1);
-    let back = log.texts_with("pilot_manual: hold -> manual");
-    assert_eq!(back.len(), 1, "{:?}", log.texts);
-    assert!((back[0].0 - 3.0).abs() < 1e-6);
-    assert_eq!(
-        log.u8s("mode", "mode"),
-        vec![AUTOMATIC, MANUAL, FAILSAFE, MANUAL]
-    );
-    assert_eq!(log.u8s("failsafe", "reason"), vec![RC_LOSS, PILOT]);
-    assert_eq!(log.bools("failsafe", "active"), vec![true, false]);
+    pilot_takes_back_at_3_s(&log);
     // the servos: the pilot's (his last sticks) until the hold, the law's
     // over the rest of the silence, the pilot's again from 3 s
     let k_hold = (hold[0].0 / ts).round() as usize;
-    let trim = prepared.gains.set.u_trim;
-    let pilot = |k: usize| {
-        (0..4).all(|i| (r.received[k][i] - stick_command(stick_us(trim[i]))).abs() < 1e-9)
-    };
-    assert!((400..k_hold).all(pilot));
-    assert!((k_hold + 1..1200).all(|k| !pilot(k)));
-    assert!((1200..1601).all(pilot));
-    let control = log.f64s("control", "command[0]");
-    for k in k_hold..1200 {
-        assert!(
-            (r.received[k][0] - control[k]).abs() <= 0.5e-4 + 1e-12,
-            "k {k}"
-        );
-    }
+    servos_pilot_law_pilot(&r, &prepared, &log, k_hold);
 }
 
 /// A receiver silent in auto: the mission flies on, the loss and the
