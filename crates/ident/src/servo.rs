@@ -51,19 +51,28 @@ pub struct ServoModel {
 
 impl ServoModel {
     /// Time derivatives `(θ̇_position, θ̈)` at command `s_cmd` and state
-    /// `(θ, θ̇)`: the helicopter model's servo block, term for term.
+    /// `(θ, θ̇)`: the helicopter model's servo block (5.1)–(5.4),
+    /// `helicon_model::actuators::servo_derivative`.
     #[inline]
     pub fn derivative(&self, s_cmd: f64, theta_rad: f64, theta_dot_rad_s: f64) -> (f64, f64) {
-        let s = s_cmd.clamp(self.s_min, self.s_max);
-        let wn = self.omega_n_rad_s;
-        let mut acc = self.gain_rad * wn * wn * s
-            - 2.0 * self.zeta * wn * theta_dot_rad_s
-            - wn * wn * theta_rad;
-        let lim = self.rate_max_rad_s;
-        if theta_dot_rad_s.abs() >= lim && acc * theta_dot_rad_s > 0.0 {
-            acc = 0.0;
+        helicon_model::actuators::servo_derivative(
+            &self.as_servo(),
+            s_cmd,
+            theta_rad,
+            theta_dot_rad_s,
+        )
+    }
+
+    /// The model's servo parameters of this channel.
+    pub fn as_servo(&self) -> helicon_model::params::Servo {
+        helicon_model::params::Servo {
+            gain_rad: self.gain_rad,
+            omega_n_rad_s: self.omega_n_rad_s,
+            zeta: self.zeta,
+            rate_max_rad_s: self.rate_max_rad_s,
+            s_min: self.s_min,
+            s_max: self.s_max,
         }
-        (theta_dot_rad_s.clamp(-lim, lim), acc)
     }
 
     /// One RK4 step of length `dt_s` with the command held, the stages

@@ -65,7 +65,8 @@ fn identification_simulates_the_servo_as_the_model_does() {
         .zip(&b)
         .map(|(x, y)| (x[0] - y[0]).abs().max((x[1] - y[1]).abs()))
         .fold(0.0, f64::max);
-    // Same arithmetic in the same order: bit for bit.
+    // The derivative is the model's own; the RK4 stages are combined as
+    // the model's integrator combines them: bit for bit.
     assert_eq!(worst, 0.0);
     // and the bench input does reach the 5 rad/s limit
     assert!(b.iter().filter(|x| x[1].abs() >= 5.0).count() > 20);
