@@ -21,8 +21,11 @@
 //! - [`ground_sim`]: the §11.1 ground experiments simulated on the demo's truth;
 //! - [`keys`]: parameters by their `helicon params` key;
 //! - [`source`]: a log's columns from `log.csv` or the flight computer's
-//!   ULog (`flight.ulg`).
+//!   ULog (`flight.ulg`);
+//! - [`calibration`]: the random errors' calibration against the scatter
+//!   of the same responses over several flights.
 
+pub mod calibration;
 pub mod config;
 pub mod cost;
 pub mod data;
