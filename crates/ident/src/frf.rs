@@ -37,6 +37,17 @@ pub enum Taper {
     /// only bias the estimate (a Hann taper varies across the system's
     /// memory: ~1 % near a lightly damped resonance, measured in the tests).
     Rectangular,
+    /// Flat, with raised-cosine tapers of this many samples at each end,
+    /// the mean level under the tapers removed: for one window around one sweep of a
+    /// record that is not at rest at its ends (closed loop, turbulence).
+    /// Set the tapers where the sweep has not yet started or has ended and
+    /// the system has settled: the window is then 1 over everything the
+    /// sweep excites, so Y = H·X holds there as for a whole record, and the
+    /// tapers keep the record's slow motion at the window's edges from
+    /// leaking across the band. A Hann window instead varies across the
+    /// system's memory everywhere, a bias of ~0.1 dB that repeats with the
+    /// sweep (`helicon-paramid`'s docs measure it).
+    Tukey(usize),
 }
 
 /// The analysis window: `len` samples, consecutive windows sharing `overlap`
@@ -83,12 +94,41 @@ impl WindowSpec {
         Some(effective_averages(&self.weights(), step, k))
     }
 
-    fn weights(&self) -> Vec<f64> {
+    /// One flat window of `len` samples with raised-cosine tapers of
+    /// `taper` samples at each end ([`Taper::Tukey`]).
+    pub fn flat_top(len: usize, taper: usize) -> Self {
+        Self {
+            len,
+            overlap: 0,
+            taper: Taper::Tukey(taper),
+        }
+    }
+
+    /// The window's weights.
+    pub fn weights(&self) -> Vec<f64> {
         match self.taper {
             Taper::Hann => hann(self.len),
             Taper::Rectangular => vec![1.0; self.len],
+            Taper::Tukey(t) => tukey(self.len, t),
         }
     }
+}
+
+/// A flat window of `len` samples, 1 except for raised-cosine tapers of
+/// `taper` samples at each end (`taper` is capped at half the window):
+/// w[n] = ½(1 − cos(πn/taper)) for n < taper, mirrored at the other end.
+pub fn tukey(len: usize, taper: usize) -> Vec<f64> {
+    let t = taper.min(len / 2);
+    (0..len)
+        .map(|n| {
+            let j = n.min(len - 1 - n);
+            if j >= t {
+                1.0
+            } else {
+                0.5 * (1.0 - (PI * j as f64 / t as f64).cos())
+            }
+        })
+        .collect()
 }
 
 /// The averaged cross-spectral matrix of several channels on a frequency grid.
@@ -197,11 +237,23 @@ fn prepare(channels: &[&[f64]], dt_s: f64, spec: WindowSpec) -> Result<(Vec<usiz
             // Y = H·X off the FFT bins.
             means.push(match spec.taper {
                 Taper::Hann => x[s..s + spec.len].iter().sum::<f64>() / spec.len as f64,
+                // the level under the tapers, where the record is at rest
+                // (or as near as it gets): Y = H·X then holds across the
+                // flat part, which a whole-window mean would break
+                Taper::Tukey(t) => edge_mean(&x[s..s + spec.len], t),
                 Taper::Rectangular => 0.0,
             });
         }
     }
     Ok((starts, means))
+}
+
+/// The mean of `w` under tapers of `t` samples at each end (at least 1 and
+/// at most half of `w`): the record's level where the window is at rest.
+fn edge_mean(w: &[f64], t: usize) -> f64 {
+    let n = w.len();
+    let t = t.clamp(1, (n / 2).max(1));
+    (w[..t].iter().sum::<f64>() + w[n - t..].iter().sum::<f64>()) / (2 * t) as f64
 }
 
 /// Effective number of independent averages of `k` windows `w` shifted by
@@ -657,6 +709,24 @@ pub fn hann_correlation(delta_rad_s: f64, window_s: f64) -> f64 {
         + 2.0 / 3.0 * (d(delta_rad_s - om) + d(delta_rad_s + om))
         + 1.0 / 6.0 * (d(delta_rad_s - 2.0 * om) + d(delta_rad_s + 2.0 * om));
     r.abs().min(1.0)
+}
+
+/// The correlation of two estimates at frequencies `delta_rad_s` apart made
+/// with one flat window of `window_s` (a [`Taper::Tukey`] window whose
+/// tapers are short against it, taken as a rectangle of the same Σw²·dt):
+/// |sin(δT/2)/(δT/2)|, the normalised transform of the squared window as in
+/// [`hann_correlation`]. NaN for a non-finite `delta_rad_s` or a `window_s`
+/// that is not finite and > 0.
+pub fn flat_correlation(delta_rad_s: f64, window_s: f64) -> f64 {
+    if !(delta_rad_s.is_finite() && window_s.is_finite() && window_s > 0.0) {
+        return f64::NAN;
+    }
+    let x = 0.5 * delta_rad_s * window_s;
+    if x.abs() < 1e-9 {
+        1.0
+    } else {
+        (x.sin() / x).abs()
+    }
 }
 
 /// The correlation of a composite estimate's points at `omega_a_rad_s` and

@@ -201,6 +201,7 @@ mod tests {
                             random_error: vec![eps; 40],
                         },
                     }],
+                    sweep_windows_s: Vec::new(),
                 }]
             })
             .collect()

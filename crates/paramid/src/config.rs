@@ -9,6 +9,9 @@
 //! auto_fix = true            # fix parameters failing CR ≤ 20 %, insensitivity ≤ 10 %
 //! start = "params.toml"      # start parameters (default: the Bergen Twin)
 //! windows_s = [24.0, 12.0, 6.0]
+//! spectra = "welch"          # | "sweeps": one flat window per excitation (needs instruments)
+//! sweep_pad_s = 2.0          # "sweeps": the window starts and ends this long before/after
+//! sweep_taper_s = 2.0        # "sweeps": cosine tapers, inside the pads
 //! points = 40                # log-spaced frequencies per response
 //! min_points = 5             # responses with fewer coherent points are left out
 //!
@@ -246,6 +249,30 @@ fn default_optimiser() -> Optimiser {
 fn default_preset() -> String {
     "physical".into()
 }
+fn default_sweep_pad() -> f64 {
+    2.0
+}
+fn default_sweep_taper() -> f64 {
+    2.0
+}
+
+/// How the responses' spectra are estimated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Spectra {
+    /// Overlapped Hann windows of `windows_s`, their composite (the default).
+    #[default]
+    Welch,
+    /// One flat window per excitation (instrument), from `sweep_pad_s`
+    /// before its first non-zero sample to `sweep_pad_s` after its last,
+    /// with raised-cosine tapers of `sweep_taper_s` at the window's ends
+    /// ([`helicon_ident::frf::Taper::Tukey`]): flat over everything the
+    /// sweep excites, so without the Hann windows' bias; for flights whose
+    /// sweeps are separated by quiet gaps (docs/paramid.md). The random
+    /// error comes from the equation error's spectrum in the `windows_s`
+    /// spectra ([`crate::data::sweep_instrumented`]).
+    Sweeps,
+}
 
 /// The file as written.
 #[derive(Debug, Clone, Deserialize)]
@@ -271,6 +298,12 @@ struct Raw {
     max_iterations: usize,
     #[serde(default = "default_windows")]
     windows_s: Vec<f64>,
+    #[serde(default)]
+    spectra: Spectra,
+    #[serde(default = "default_sweep_pad")]
+    sweep_pad_s: f64,
+    #[serde(default = "default_sweep_taper")]
+    sweep_taper_s: f64,
     #[serde(default = "default_points")]
     points: usize,
     #[serde(default = "default_min_points")]
@@ -344,8 +377,17 @@ pub struct IdentConfig {
     pub auto_fix: bool,
     /// Optimiser iteration budget (LM: Jacobian evaluations; simplex: ×20 cost evaluations).
     pub max_iterations: usize,
-    /// Composite window lengths, s.
+    /// Composite window lengths, s (with [`Spectra::Sweeps`], the spectra
+    /// the random error comes from).
     pub windows_s: Vec<f64>,
+    /// How the responses are estimated.
+    pub spectra: Spectra,
+    /// [`Spectra::Sweeps`]: the window's margin before and after each
+    /// excitation, s.
+    pub sweep_pad_s: f64,
+    /// [`Spectra::Sweeps`]: the raised-cosine tapers at the window's ends
+    /// (within the margin), s.
+    pub sweep_taper_s: f64,
     /// Frequencies per response.
     pub points: usize,
     /// A response with fewer points above the coherence threshold is left
@@ -455,6 +497,9 @@ impl IdentConfig {
             auto_fix: raw.auto_fix,
             max_iterations: raw.max_iterations,
             windows_s: raw.windows_s,
+            spectra: raw.spectra,
+            sweep_pad_s: raw.sweep_pad_s,
+            sweep_taper_s: raw.sweep_taper_s,
             points: raw.points,
             min_points: raw.min_points,
             operating_points,
@@ -544,6 +589,39 @@ fn check_numbers(raw: &Raw, file: &str) -> Result<(), ConfigError> {
                 format!("windows_s[{i}]"),
                 *w,
                 "must be finite and > 0",
+            ));
+        }
+    }
+    if !(raw.sweep_pad_s.is_finite() && raw.sweep_pad_s > 0.0 && raw.sweep_pad_s <= 60.0) {
+        return Err(invalid(
+            file,
+            "sweep_pad_s",
+            raw.sweep_pad_s,
+            "must be in (0, 60] s",
+        ));
+    }
+    if !(raw.sweep_taper_s.is_finite()
+        && raw.sweep_taper_s >= 0.0
+        && raw.sweep_taper_s <= raw.sweep_pad_s)
+    {
+        return Err(invalid(
+            file,
+            "sweep_taper_s",
+            raw.sweep_taper_s,
+            "must be in [0, sweep_pad_s]: the tapers lie in the margins, outside the excitation",
+        ));
+    }
+    if raw.spectra == Spectra::Sweeps {
+        if let Some(i) = raw
+            .operating_point
+            .iter()
+            .position(|o| o.instruments.is_empty())
+        {
+            return Err(text_invalid(
+                file,
+                format!("operating_point[{i}].instruments"),
+                "[]",
+                "spectra = \"sweeps\" needs the excitations as instruments (one window each)",
             ));
         }
     }

@@ -29,7 +29,7 @@ use crate::keys;
 use crate::linear::{point_responses, target};
 use helicon_ident::Complex64;
 use helicon_ident::fit::coherence_weight;
-use helicon_ident::frf::composite_correlation;
+use helicon_ident::frf::{composite_correlation, flat_correlation};
 use helicon_model::trim::TrimTarget;
 use helicon_model::{Params, Preset};
 use nalgebra::{DMatrix, DVector};
@@ -77,6 +77,10 @@ pub struct PointCost {
     /// frequency points closer than their resolution are correlated
     /// ([`Cost::residual_correlation`]).
     pub windows_s: Vec<f64>,
+    /// With `spectra = "sweeps"`, the flat windows' lengths around each
+    /// excitation, s (used instead of `windows_s` for the correlation);
+    /// empty otherwise.
+    pub sweep_windows_s: Vec<f64>,
 }
 
 /// The whole cost: operating points, the parameters it varies and the base
@@ -163,6 +167,7 @@ impl Cost {
                 ts_s: d.sample_time_s,
                 responses,
                 windows_s: cfg.windows_s.clone(),
+                sweep_windows_s: d.sweep_windows_s.clone(),
             });
         }
         let prior_scale = data_residual_rms_std(&points);
@@ -280,7 +285,8 @@ impl Cost {
     /// order, one column per parameter) and R the residuals' correlation:
     /// within a response, the magnitude residuals at ω_k and ω_l are
     /// correlated by the composite estimate's window overlap
-    /// (`helicon_ident::frf::composite_correlation`), and so are the phase
+    /// (`helicon_ident::frf::composite_correlation`; with sweep windows the
+    /// mean of their `flat_correlation`s), and so are the phase
     /// residuals; magnitude and phase residuals, responses and operating
     /// points are taken as uncorrelated. For the Cramér–Rao bounds of
     /// correlated residuals (`helicon_ident::cost::accuracy_correlated`).
@@ -295,8 +301,16 @@ impl Cost {
                     for l in 0..w.len() {
                         let rho = if k == l {
                             1.0
-                        } else {
+                        } else if pt.sweep_windows_s.is_empty() {
                             composite_correlation(w[k], w[l], &pt.windows_s)
+                        } else {
+                            // each estimate holds every excitation's window:
+                            // their mean correlation
+                            pt.sweep_windows_s
+                                .iter()
+                                .map(|t| flat_correlation(w[k] - w[l], *t))
+                                .sum::<f64>()
+                                / pt.sweep_windows_s.len() as f64
                         };
                         if rho == 0.0 {
                             continue;

@@ -2,11 +2,15 @@
 //! frequency responses of its log (as `crates/sim/tests/excitation.rs` and
 //! `docs/ident.md` describe: half-overlapped Hann windows of each length in
 //! `windows_s`, every response conditioned on the operating point's
-//! `conditioned_on` inputs, the window lengths composited).
+//! `conditioned_on` inputs, the window lengths composited); or, with
+//! `spectra = "sweeps"`, one flat window around each excitation
+//! ([`sweep_instrumented`]).
 
-use crate::config::{IdentConfig, OperatingPoint, Response};
+use crate::config::{IdentConfig, OperatingPoint, Response, Spectra};
 use crate::error::{ParamIdError, Result};
-use helicon_ident::frf::{Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid};
+use helicon_ident::frf::{
+    CrossSpectra, Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid,
+};
 use helicon_model::ConfigError;
 
 /// The fewest samples a spectral window (`windows_s`) may hold.
@@ -66,6 +70,11 @@ pub struct PointData {
     pub sample_time_s: f64,
     /// Responses, in the point's order.
     pub responses: Vec<Measured>,
+    /// With `spectra = "sweeps"`: the length of each excitation's window,
+    /// s (neighbouring frequency points are correlated over the flat
+    /// window's resolution, [`crate::cost::Cost::residual_correlation`]);
+    /// empty for the `windows_s` composite.
+    pub sweep_windows_s: Vec<f64>,
 }
 
 /// A log's columns cut to `[t_start_s, t_end_s]`, checked for a uniform step.
@@ -100,14 +109,12 @@ pub struct Record {
 /// moves its servo little against the others. Points where G_eu or G_ee is
 /// singular are left out.
 pub fn instrumented(
-    cs: &helicon_ident::frf::CrossSpectra,
+    cs: &CrossSpectra,
     instruments: &[usize],
     inputs: &[usize],
     output: usize,
     which: usize,
 ) -> std::result::Result<Frf, helicon_ident::IdentError> {
-    use helicon_ident::Complex64;
-    use nalgebra::{DMatrix, DVector};
     let q = inputs.len();
     let dof = cs.n_d - q as f64 + 1.0;
     if instruments.len() != q || which >= q || dof.is_nan() || dof < 1.0 {
@@ -120,6 +127,46 @@ pub fn instrumented(
             ),
         ));
     }
+    let mut f = Frf {
+        omega_rad_s: Vec::new(),
+        h: Vec::new(),
+        coherence: Vec::new(),
+        random_error: Vec::new(),
+    };
+    for k in 0..cs.omega_rad_s.len() {
+        let Some((h, m)) = iv_point(cs, k, instruments, inputs, output) else {
+            continue;
+        };
+        let gvv = equation_error(cs, k, inputs, output, &h);
+        push_point(
+            &mut f,
+            cs.omega_rad_s[k],
+            h[which],
+            m[(which, which)].re,
+            gvv,
+            dof,
+        );
+    }
+    Ok(f)
+}
+
+/// The instrumental-variable estimate at frequency index `k` of `cs`:
+/// H = G_eu⁻¹ G_ey and M = G_eu⁻¹ G_ee G_eu⁻ᴴ (the covariance of Ĥ per unit
+/// equation-error spectrum and average); `None` where G_eu or G_ee is
+/// singular.
+fn iv_point(
+    cs: &CrossSpectra,
+    k: usize,
+    instruments: &[usize],
+    inputs: &[usize],
+    output: usize,
+) -> Option<(
+    nalgebra::DVector<helicon_ident::Complex64>,
+    nalgebra::DMatrix<helicon_ident::Complex64>,
+)> {
+    use helicon_ident::Complex64;
+    use nalgebra::{DMatrix, DVector};
+    let q = inputs.len();
     let inverse = |m: DMatrix<Complex64>| -> Option<DMatrix<Complex64>> {
         let scale = (0..m.nrows()).map(|i| m[(i, i)].norm()).fold(0.0, f64::max);
         let inv = m.try_inverse()?;
@@ -128,36 +175,122 @@ pub fn instrumented(
             && inv.iter().map(|v| v.norm()).fold(0.0, f64::max) * scale < 1e12;
         ok.then_some(inv)
     };
+    let geu = DMatrix::from_fn(q, q, |a, b| cs.get(k, instruments[a], inputs[b]));
+    let gee = DMatrix::from_fn(q, q, |a, b| cs.get(k, instruments[a], instruments[b]));
+    let gey = DVector::from_fn(q, |a, _| cs.get(k, instruments[a], output));
+    let (Some(ieu), Some(_)) = (inverse(geu), inverse(gee.clone())) else {
+        return None;
+    };
+    let h = &ieu * &gey;
+    let m = &ieu * gee * ieu.adjoint();
+    Some((h, m))
+}
+
+/// The equation-error spectrum at frequency index `k` of `cs` for the
+/// responses `h` of `output` to `inputs`:
+/// G_vv = G_yy − 2 Re Σ_b H_b conj(G_uby) + Hᴴ G_uu H (≥ 0).
+fn equation_error(
+    cs: &CrossSpectra,
+    k: usize,
+    inputs: &[usize],
+    output: usize,
+    h: &nalgebra::DVector<helicon_ident::Complex64>,
+) -> f64 {
+    use helicon_ident::Complex64;
+    use nalgebra::{DMatrix, DVector};
+    let q = inputs.len();
+    let gyy = cs.get(k, output, output).re;
+    let guu = DMatrix::from_fn(q, q, |a, b| cs.get(k, inputs[a], inputs[b]));
+    let guy = DVector::from_fn(q, |a, _| cs.get(k, inputs[a], output));
+    let cross: Complex64 = h.iter().zip(guy.iter()).map(|(hb, g)| hb * g.conj()).sum();
+    (gyy - 2.0 * cross.re + h.dotc(&(&guu * h)).re).max(0.0)
+}
+
+/// Append one point: the coherence that states the random error of an
+/// estimate with covariance `m_ww`·`gvv`/`dof` through the usual
+/// √(1 − γ²)/(|γ| √(2 dof)), γ² = |H|² / (|H|² + m_ww G_vv). Non-finite
+/// points are left out.
+fn push_point(f: &mut Frf, omega: f64, h: helicon_ident::Complex64, m_ww: f64, gvv: f64, dof: f64) {
+    let h2 = h.norm_sqr();
+    let g2 = (h2 / (h2 + m_ww * gvv)).clamp(0.0, 1.0);
+    let eps = (1.0 - g2).sqrt() / (g2.sqrt() * (2.0 * dof).sqrt());
+    if h.re.is_finite() && h.im.is_finite() && g2.is_finite() && eps.is_finite() {
+        f.omega_rad_s.push(omega);
+        f.h.push(h);
+        f.coherence.push(g2);
+        f.random_error.push(eps);
+    }
+}
+
+/// The response of `output` to input `which` of `inputs` from one flat
+/// window per instrument (`sweeps`: their spectra merged, window k around
+/// excitation k alone), H = G_eu⁻¹ G_ey as in [`instrumented`]. With as many
+/// windows as inputs the estimate leaves no residual to judge it by, so its
+/// random error takes the equation-error spectrum G_vv from the overlapped
+/// windows of the whole record (`welch`, with this H): Ĥ − H = G_eu⁻¹ G_ev
+/// has the covariance M G_vv / K over the K windows (each window's own
+/// normalisation cancels), stated as a coherence with K averages.
+pub fn sweep_instrumented(
+    sweeps: &CrossSpectra,
+    welch: &CrossSpectra,
+    instruments: &[usize],
+    inputs: &[usize],
+    output: usize,
+    which: usize,
+) -> std::result::Result<Frf, helicon_ident::IdentError> {
+    let q = inputs.len();
+    if instruments.len() != q
+        || which >= q
+        || sweeps.segments < q
+        || sweeps.omega_rad_s != welch.omega_rad_s
+    {
+        return Err(helicon_ident::IdentError::data(
+            "sweep-window response",
+            format!(
+                "{} instruments, {} windows for {q} inputs, or the two spectra on different grids",
+                instruments.len(),
+                sweeps.segments
+            ),
+        ));
+    }
+    let residual_dof_scale = welch.n_d / (welch.n_d - q as f64);
+    if !(residual_dof_scale.is_finite() && residual_dof_scale > 0.0) {
+        return Err(helicon_ident::IdentError::data(
+            "sweep-window response",
+            format!(
+                "{:.2} effective averages in the overlapped windows for {q} inputs: use shorter windows_s",
+                welch.n_d
+            ),
+        ));
+    }
     let mut f = Frf {
         omega_rad_s: Vec::new(),
         h: Vec::new(),
         coherence: Vec::new(),
         random_error: Vec::new(),
     };
-    for (k, &om) in cs.omega_rad_s.iter().enumerate() {
-        let geu = DMatrix::from_fn(q, q, |a, b| cs.get(k, instruments[a], inputs[b]));
-        let gee = DMatrix::from_fn(q, q, |a, b| cs.get(k, instruments[a], instruments[b]));
-        let gey = DVector::from_fn(q, |a, _| cs.get(k, instruments[a], output));
-        let gyy = cs.get(k, output, output).re;
-        let (Some(ieu), Some(_)) = (inverse(geu), inverse(gee.clone())) else {
+    for k in 0..sweeps.omega_rad_s.len() {
+        let (Some((h, m)), Some((hw, _))) = (
+            iv_point(sweeps, k, instruments, inputs, output),
+            iv_point(welch, k, instruments, inputs, output),
+        ) else {
             continue;
         };
-        let h = &ieu * &gey;
-        // equation-error spectrum G_vv = G_yy − 2 Re Σ_b H_b conj(G_uby) + Hᴴ G_uu H
-        let guu = DMatrix::from_fn(q, q, |a, b| cs.get(k, inputs[a], inputs[b]));
-        let guy = DVector::from_fn(q, |a, _| cs.get(k, inputs[a], output));
-        let cross: Complex64 = h.iter().zip(guy.iter()).map(|(hb, g)| hb * g.conj()).sum();
-        let gvv = (gyy - 2.0 * cross.re + h.dotc(&(&guu * &h)).re).max(0.0);
-        let m_ww = (&ieu * gee * ieu.adjoint())[(which, which)].re;
-        let h2 = h[which].norm_sqr();
-        let g2 = (h2 / (h2 + m_ww * gvv)).clamp(0.0, 1.0);
-        let eps = (1.0 - g2).sqrt() / (g2.sqrt() * (2.0 * dof).sqrt());
-        if h[which].re.is_finite() && h[which].im.is_finite() && g2.is_finite() && eps.is_finite() {
-            f.omega_rad_s.push(om);
-            f.h.push(h[which]);
-            f.coherence.push(g2);
-            f.random_error.push(eps);
-        }
+        // the equation error at the overlapped windows' own estimate: their
+        // taper's bias goes into it, not into the residual (at the sweep
+        // windows' H it would be counted as noise, ε ×2 measured); the
+        // residual of q estimated responses holds n_d − q of the n_d
+        // averages' worth of error (Bendat & Piersol), so scaled up by
+        // n_d/(n_d − q)
+        let gvv = equation_error(welch, k, inputs, output, &hw) * residual_dof_scale;
+        push_point(
+            &mut f,
+            welch.omega_rad_s[k],
+            h[which],
+            m[(which, which)].re,
+            gvv,
+            sweeps.segments as f64,
+        );
     }
     Ok(f)
 }
@@ -290,6 +423,24 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
         })
         .collect::<Result<Vec<_>>>()?;
     let cond: Vec<usize> = (0..nq).collect();
+    let (sweeps, sweep_windows_s) = match cfg.spectra {
+        Spectra::Sweeps => {
+            let (cs, lengths) =
+                sweep_spectra(cfg, index, &rec, &refs, &inst, &grid).map_err(|e| match e {
+                    SweepError::Frf(source) => {
+                        frf_err("spectra of the sweep windows".into())(source)
+                    }
+                    SweepError::Config(c) => c.into(),
+                })?;
+            (Some(cs), lengths)
+        }
+        Spectra::Welch => (None, Vec::new()),
+    };
+    // the equation error's spectrum for the sweep windows' random error:
+    // the longest overlapped windows (finest resolution)
+    let welch = spectra
+        .iter()
+        .max_by(|a, b| a.window_s.total_cmp(&b.window_s));
     let mut responses = Vec::with_capacity(op.response.len());
     for r in &op.response {
         let (Some(input), Some(state)) = (r.input_index(), r.state_index()) else {
@@ -304,6 +455,17 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
             .iter()
             .position(|c| *c == r.input)
             .unwrap_or(0);
+        if let (Some(sw), Some(welch)) = (&sweeps, welch) {
+            let frf = sweep_instrumented(sw, welch, &inst, &cond, out, pos)
+                .map_err(frf_err(r.label()))?;
+            responses.push(Measured {
+                response: r.clone(),
+                input,
+                state,
+                frf: within_band(&frf, r),
+            });
+            continue;
+        }
         let parts = spectra
             .iter()
             .map(|cs| {
@@ -317,30 +479,99 @@ pub fn measure(cfg: &IdentConfig, index: usize) -> Result<PointData> {
             })
             .collect::<Result<Vec<_>>>()?;
         let c = composite(&parts, &cfg.windows_s).map_err(frf_err(r.label()))?;
-        let keep: Vec<usize> = (0..c.len())
-            .filter(|&k| {
-                c.omega_rad_s[k] >= r.omega_min_rad_s * (1.0 - 1e-12)
-                    && c.omega_rad_s[k] <= r.omega_max_rad_s * (1.0 + 1e-12)
-            })
-            .collect();
-        let frf = Frf {
-            omega_rad_s: keep.iter().map(|&k| c.omega_rad_s[k]).collect(),
-            h: keep.iter().map(|&k| c.h[k]).collect(),
-            coherence: keep.iter().map(|&k| c.coherence[k]).collect(),
-            random_error: keep.iter().map(|&k| c.random_error[k]).collect(),
-        };
         responses.push(Measured {
             response: r.clone(),
             input,
             state,
-            frf,
+            frf: within_band(&c, r),
         });
     }
     Ok(PointData {
         name: op.name.clone(),
         sample_time_s: rec.dt_s,
         responses,
+        sweep_windows_s,
     })
+}
+
+/// The points of `c` within the response's band.
+fn within_band(c: &Frf, r: &Response) -> Frf {
+    let keep: Vec<usize> = (0..c.len())
+        .filter(|&k| {
+            c.omega_rad_s[k] >= r.omega_min_rad_s * (1.0 - 1e-12)
+                && c.omega_rad_s[k] <= r.omega_max_rad_s * (1.0 + 1e-12)
+        })
+        .collect();
+    Frf {
+        omega_rad_s: keep.iter().map(|&k| c.omega_rad_s[k]).collect(),
+        h: keep.iter().map(|&k| c.h[k]).collect(),
+        coherence: keep.iter().map(|&k| c.coherence[k]).collect(),
+        random_error: keep.iter().map(|&k| c.random_error[k]).collect(),
+    }
+}
+
+/// Why the sweep windows could not be made.
+enum SweepError {
+    Frf(helicon_ident::IdentError),
+    Config(ConfigError),
+}
+
+/// `spectra = "sweeps"`: one flat window per instrument of operating point
+/// `index`, from `sweep_pad_s` before the instrument's first non-zero
+/// sample to `sweep_pad_s` after its last (within the record), with
+/// raised-cosine tapers of `sweep_taper_s`; their spectra on `grid`,
+/// merged. Also the windows' lengths, s.
+fn sweep_spectra(
+    cfg: &IdentConfig,
+    index: usize,
+    rec: &Record,
+    channels: &[&[f64]],
+    inst: &[usize],
+    grid: &[f64],
+) -> std::result::Result<(CrossSpectra, Vec<f64>), SweepError> {
+    let op = &cfg.operating_points[index];
+    let n = rec.t_s.len();
+    let dt = rec.dt_s;
+    let pad = (cfg.sweep_pad_s / dt).round() as usize;
+    let taper = (cfg.sweep_taper_s / dt).round() as usize;
+    let mut parts = Vec::with_capacity(inst.len());
+    let mut lengths = Vec::with_capacity(inst.len());
+    for (j, &c) in inst.iter().enumerate() {
+        let x = channels[c];
+        let err = |what: String, v: f64| {
+            SweepError::Config(ConfigError::invalid(
+                &cfg.file,
+                format!("operating_point[{index}].instruments[{j}]"),
+                v,
+                format!("{}: `{}` {what}", op.log.display(), op.instruments[j]),
+            ))
+        };
+        let (Some(first), Some(last)) = (
+            x.iter().position(|v| *v != 0.0),
+            x.iter().rposition(|v| *v != 0.0),
+        ) else {
+            return Err(err(
+                "is zero over the time span used: spectra = \"sweeps\" needs each excitation in the log".into(),
+                0.0,
+            ));
+        };
+        let (start, end) = (first.saturating_sub(pad), (last + pad).min(n - 1));
+        let len = end - start + 1;
+        if (len as f64) < 2.0 * MIN_WINDOW_SAMPLES || len <= 2 * taper {
+            return Err(err(
+                format!("spans too few samples for a window with {taper}-sample tapers"),
+                len as f64,
+            ));
+        }
+        let slices: Vec<&[f64]> = channels.iter().map(|x| &x[start..=end]).collect();
+        parts.push(
+            cross_spectra_grid(&slices, dt, WindowSpec::flat_top(len, taper), grid)
+                .map_err(SweepError::Frf)?,
+        );
+        lengths.push(len as f64 * dt);
+    }
+    let merged = CrossSpectra::merge(&parts).map_err(SweepError::Frf)?;
+    Ok((merged, lengths))
 }
 
 /// Noise-free "measurements": the responses of the model with parameters
@@ -401,7 +632,121 @@ pub fn from_model(cfg: &IdentConfig, truth: &helicon_model::Params) -> Result<Ve
                 name: op.name.clone(),
                 sample_time_s: ts,
                 responses,
+                sweep_windows_s: Vec::new(),
             })
         })
         .collect()
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use helicon_ident::Complex64;
+    use helicon_ident::inputs::Sweep;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+    use rand_distr::{Distribution, Normal};
+
+    const SIGMA: f64 = 0.3;
+
+    /// One open-loop record: 40 s at 100 Hz, a 27 s sweep (1.2 → 30
+    /// rad/s) from 5 s, through y[n+1] = a·y[n] + b·(u[n] + n[n]), n white
+    /// of `sigma` (a disturbance through the plant, as turbulence is: the
+    /// signal-to-noise ratio is the same at every frequency); channels
+    /// e = u (the instrument), u, y.
+    fn record(sigma: f64, seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let dt = 0.01;
+        let sweep = Sweep::new(1.0, 1.2, 30.0, 27.0).unwrap();
+        let s: Vec<f64> = (0..2700).map(|k| sweep.value(k as f64 * dt)).collect();
+        let mut u = vec![0.0; 4000];
+        u[500..500 + s.len()].copy_from_slice(&s);
+        let (a, b) = ((-2.0f64 * dt).exp(), 0.05);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let noise = Normal::new(0.0, sigma).unwrap();
+        let mut x = 0.0;
+        let y = u
+            .iter()
+            .map(|uk| {
+                let out = x;
+                x = a * x + b * (uk + noise.sample(&mut rng));
+                out
+            })
+            .collect();
+        (u.clone(), u, y)
+    }
+
+    /// The sweep-window estimate and its random error on `grid`.
+    fn estimate(sigma: f64, seed: u64, grid: &[f64]) -> Frf {
+        let dt = 0.01;
+        let (e, u, y) = record(sigma, seed);
+        let ch: Vec<&[f64]> = vec![&e, &u, &y];
+        let welch = cross_spectra_grid(&ch, dt, WindowSpec::half_overlap(1200), grid).unwrap();
+        // the sweep from 5 s to 32 s, 2 s margins, 0.5 s tapers
+        let (start, len) = (300, 3100);
+        let slices: Vec<&[f64]> = ch.iter().map(|x| &x[start..start + len]).collect();
+        let sweeps = CrossSpectra::merge(&[cross_spectra_grid(
+            &slices,
+            dt,
+            WindowSpec::flat_top(len, 50),
+            grid,
+        )
+        .unwrap()])
+        .unwrap();
+        sweep_instrumented(&sweeps, &welch, &[0], &[1], 2, 0).unwrap()
+    }
+
+    /// Noise-free, the flat window around the sweep returns the system's
+    /// response: within 1e-3 relative (the response to the sweep's end
+    /// decays to e^{−4} inside the 2 s margin, at |H| ≪ 1 there). With a
+    /// disturbance, the random error it states is never optimistic against
+    /// the scatter over 40 records (per point below 1.45: 40 records give
+    /// a standard deviation ~11 % of sampling error), and where the
+    /// disturbance dominates (≥ 5 rad/s here) it is right: scatter/ε over
+    /// those 7 points 0.8–1.25 (measured 1.06; 1.2 without the residual's
+    /// n_d/(n_d − q)). Below, ε has a floor: the overlapped windows the
+    /// equation error comes from carry their own error where the sweep's
+    /// signal is large, which the sweep window's estimate does not
+    /// (scatter/ε 0.37–0.8 there).
+    #[test]
+    fn sweep_window_estimate_is_exact_noise_free_and_its_error_calibrated() {
+        let dt = 0.01;
+        let grid = log_grid(1.5, 25.0, 12).unwrap();
+        let (a, b) = ((-2.0f64 * dt).exp(), 0.05);
+        let truth: Vec<Complex64> = grid
+            .iter()
+            .map(|w| {
+                let zi = Complex64::from_polar(1.0, -w * dt);
+                b * zi / (1.0 - a * zi)
+            })
+            .collect();
+        let clean = estimate(0.0, 0, &grid);
+        assert_eq!(clean.h.len(), grid.len());
+        for (h, t) in clean.h.iter().zip(&truth) {
+            assert!((h / t - 1.0).norm() < 1e-3, "{h} vs {t}");
+        }
+        let runs: Vec<Frf> = (1..=40).map(|s| estimate(SIGMA, s, &grid)).collect();
+        let (mut ratio2, mut n) = (0.0, 0.0);
+        for k in 0..grid.len() {
+            let ln: Vec<f64> = runs.iter().map(|f| f.h[k].norm().ln()).collect();
+            let m = ln.iter().sum::<f64>() / ln.len() as f64;
+            let sd =
+                (ln.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (ln.len() - 1) as f64).sqrt();
+            let eps = (runs.iter().map(|f| f.random_error[k].powi(2)).sum::<f64>()
+                / runs.len() as f64)
+                .sqrt();
+            assert!(eps > 0.0 && eps < 0.3, "ε {eps} at {}", grid[k]);
+            assert!(
+                sd < 1.45 * eps,
+                "optimistic at {}: scatter {sd}, ε {eps}",
+                grid[k]
+            );
+            if grid[k] >= 5.0 {
+                ratio2 += (sd / eps).powi(2);
+                n += 1.0;
+            }
+        }
+        let ratio = (ratio2 / n).sqrt();
+        assert!(ratio > 0.8 && ratio < 1.25, "scatter / ε = {ratio}");
+    }
 }

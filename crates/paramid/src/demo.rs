@@ -8,7 +8,7 @@
 //! it before knowing the truth); the IDENT.toml is written and the fit run
 //! from the nominal Bergen Twin.
 
-use crate::config::IdentConfig;
+use crate::config::{IdentConfig, Spectra};
 use crate::error::{ParamIdError, Result};
 use crate::report::{Identification, run};
 use helicon_model::{ConfigError, Params};
@@ -146,6 +146,9 @@ pub struct DemoOptions {
     /// Simulate the ground experiments (§11.1) on the truth and start from
     /// their measured values ([`crate::ground_sim`]; default true).
     pub ground: bool,
+    /// With instruments: one flat window per sweep (default) or the
+    /// overlapped Hann windows.
+    pub spectra: Spectra,
 }
 
 impl Default for DemoOptions {
@@ -160,6 +163,7 @@ impl Default for DemoOptions {
             parameters: DEMO_PARAMETERS.iter().map(|s| s.to_string()).collect(),
             instruments: true,
             ground: true,
+            spectra: Spectra::Sweeps,
         }
     }
 }
@@ -225,10 +229,22 @@ pub fn ident_toml_with_ground(opts: &DemoOptions, ground: &[crate::report::Groun
          start = \"start.toml\"\n\
          cost = \"thesis\"\noptimiser = \"lm\"\nauto_fix = true\nmin_coherence = 0.6\n",
     );
-    if opts.instruments {
+    match (opts.instruments, opts.spectra) {
+        // one flat window per sweep: no Hann-window bias (docs/paramid.md,
+        // "How good are the Cramér–Rao bounds"); the 12 s overlapped
+        // windows give the equation error's spectrum for the random error
+        (true, Spectra::Sweeps) => s.push_str(
+            "# one flat window around each sweep (the flights rest 4 s between sweeps); the\n\
+             # random error from the equation error in 12 s overlapped windows (docs/paramid.md)\n\
+             spectra = \"sweeps\"\nsweep_pad_s = 2.0\nsweep_taper_s = 2.0\nwindows_s = [12.0]\n",
+        ),
         // each 27 s sweep spans several 12 s windows; in 24 s ones the tail
-        // sweep's last 6 s fell in none (docs/paramid.md)
-        s.push_str("# 12 and 6 s windows: each 27 s sweep spans several (docs/paramid.md)\nwindows_s = [12.0, 6.0]\n");
+        // sweep's last 6 s fell in none
+        (true, Spectra::Welch) => s.push_str(
+            "# 12 and 6 s overlapped windows: each 27 s sweep spans several (docs/paramid.md)\n\
+             windows_s = [12.0, 6.0]\n",
+        ),
+        (false, _) => {}
     }
     let _ = writeln!(s, "points = {}", opts.points);
     for (name, v, _) in FLIGHTS

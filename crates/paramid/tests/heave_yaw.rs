@@ -18,7 +18,7 @@
 
 use helicon_ident::frf::{WindowSpec, conditioned, cross_spectra_grid, log_grid};
 use helicon_model::Params;
-use helicon_paramid::config::IdentConfig;
+use helicon_paramid::config::{IdentConfig, Spectra};
 use helicon_paramid::cost::Cost;
 use helicon_paramid::data::{instrumented, measure};
 use helicon_paramid::demo::{DemoOptions, FLIGHTS, TRUTHS, fly_scenario, ident_toml};
@@ -125,40 +125,55 @@ fn noise_free_flight_heave_and_yaw_match_the_truth() {
 }
 
 /// The shipped hover flight (turbulence, sensors in the loop, seed 3) with
-/// the demo's own IDENT.toml (its windows and responses): every response is
-/// kept, and the heave (w/S_col) and yaw (meas_r/S_tr) costs at the truth
-/// per point are within 4× the worst cyclic one and below 1.5 (measured:
-/// yaw 0.40, heave 0.62, cyclic 0.08–0.26; before the fix, with these
-/// windows, 17.7 on the yaw).
+/// the demo's own IDENT.toml (its responses), estimated with the overlapped
+/// Hann windows and with one window per sweep: every response is kept, and
+/// the heave (w/S_col) and yaw (meas_r/S_tr) costs at the truth per point
+/// are within 4× the worst cyclic one; with the Hann windows also below 1.5
+/// (measured: yaw 0.40, heave 0.62, cyclic 0.08–0.26; before the fix, with
+/// these windows, 17.7 on the yaw). The sweep windows' estimate is noisier
+/// (its window holds the whole sweep's turbulence, while the sweep passes
+/// each frequency in a few seconds), so its costs at the truth are larger:
+/// yaw 2.14 per point, cyclic 0.33–0.75 (asserted yaw < 4× cyclic). Its
+/// heave estimate is poor at hover: 9 coherent points at 8.0 per point
+/// (asserted only kept, ≥ 5 points); this is why the demo flags the
+/// collective servo's bandwidth insensitive (docs/paramid.md).
 #[test]
 fn shipped_hover_flight_heave_and_yaw_at_the_cyclic_level() {
     let dir = scratch("hover");
     let log = dir.join("flights").join("hover").join("log.csv");
     fly_scenario("hover", &hover_text(false), &truth_a().0, Some(3), &log).unwrap();
-    let opts = DemoOptions {
-        flights: vec!["hover".into()],
-        verify: false,
-        ..DemoOptions::default()
-    };
-    let costs = costs_at_truth(&dir, &ident_toml(&opts));
-    let _ = std::fs::remove_dir_all(&dir);
-    let cyclic = costs
-        .iter()
-        .filter(|c| c.0.ends_with("/S_lat") || c.0.ends_with("/S_lon"))
-        .map(|c| c.2)
-        .fold(0.0, f64::max);
-    let heave_yaw: Vec<_> = costs
-        .iter()
-        .filter(|c| c.0.ends_with("/S_col") || c.0.ends_with("/S_tr"))
-        .collect();
-    assert_eq!(heave_yaw.len(), 2);
-    for (label, n, c) in heave_yaw {
-        assert!(*n >= 10, "{label}: {n} coherent points");
-        assert!(
-            *c < 1.5 && *c < 4.0 * cyclic,
-            "{label}: cost at the truth {c:.3} per point (cyclic up to {cyclic:.3})"
-        );
+    for spectra in [Spectra::Welch, Spectra::Sweeps] {
+        let opts = DemoOptions {
+            flights: vec!["hover".into()],
+            verify: false,
+            spectra,
+            ..DemoOptions::default()
+        };
+        let costs = costs_at_truth(&dir, &ident_toml(&opts));
+        let cyclic = costs
+            .iter()
+            .filter(|c| c.0.ends_with("/S_lat") || c.0.ends_with("/S_lon"))
+            .map(|c| c.2)
+            .fold(0.0, f64::max);
+        let heave_yaw: Vec<_> = costs
+            .iter()
+            .filter(|c| c.0.ends_with("/S_col") || c.0.ends_with("/S_tr"))
+            .collect();
+        assert_eq!(heave_yaw.len(), 2);
+        for (label, n, c) in heave_yaw {
+            if spectra == Spectra::Sweeps && label == "w/S_col" {
+                // kept, but poor: see the doc comment
+                assert!(*n >= 5, "{spectra:?} {label}: {n} coherent points");
+                continue;
+            }
+            assert!(*n >= 10, "{spectra:?} {label}: {n} coherent points");
+            assert!(
+                *c < 4.0 * cyclic && (spectra == Spectra::Sweeps || *c < 1.5),
+                "{spectra:?} {label}: cost at the truth {c:.3} per point (cyclic up to {cyclic:.3})"
+            );
+        }
     }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// With the excitation as its own instrument (open loop, e = u) the

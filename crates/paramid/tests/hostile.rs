@@ -74,6 +74,16 @@ fn hostile_files_name_the_file_and_field() {
         (format!("min_points = 0\n{GOOD}"), "min_points"),
         (format!("max_iterations = 0\n{GOOD}"), "max_iterations"),
         (format!("windows_s = []\n{GOOD}"), "windows_s"),
+        (format!("spectra = \"fft\"\n{GOOD}"), "spectra"),
+        (
+            format!("spectra = \"sweeps\"\n{GOOD}"),
+            "operating_point[0].instruments",
+        ),
+        (format!("sweep_pad_s = -1.0\n{GOOD}"), "sweep_pad_s"),
+        (format!("sweep_pad_s = nan\n{GOOD}"), "sweep_pad_s"),
+        (format!("sweep_pad_s = 1e9\n{GOOD}"), "sweep_pad_s"),
+        (format!("sweep_taper_s = 3.0\n{GOOD}"), "sweep_taper_s"),
+        (format!("sweep_taper_s = -0.5\n{GOOD}"), "sweep_taper_s"),
         (format!("windows_s = [24.0, -6.0]\n{GOOD}"), "windows_s[1]"),
         (format!("preset = \"fast\"\n{GOOD}"), "preset"),
         (format!("cost = \"l1\"\n{GOOD}"), "cost"),
@@ -264,5 +274,55 @@ fn a_window_of_a_few_samples_names_the_field() {
             "{w}: {e}"
         );
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `spectra = "sweeps"` on a log where an excitation never moves, or moves
+/// for too few samples for its window, is refused naming the IDENT file,
+/// `operating_point[0].instruments[j]`, the log and the column.
+#[test]
+fn sweep_windows_need_each_excitation_in_the_log() {
+    let dir = std::env::temp_dir().join(format!("helicon-paramid-sweeps-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let ident = format!(
+        "spectra = \"sweeps\"\nwindows_s = [2.0]\n{}",
+        GOOD.replace(
+            "log = \"log.csv\"\n",
+            "log = \"log.csv\"\ninstruments = [\"exc_col\", \"exc_lat\", \"exc_lon\", \"exc_tr\"]\n",
+        )
+    );
+    let cfg = IdentConfig::from_toml_str(&ident, "bad.toml", &dir).unwrap();
+    // exc_lon never moves
+    let log = |tr_len: usize| {
+        let mut text =
+            String::from("t_s,S_col,S_lat,S_lon,S_tr,meas_q,exc_col,exc_lat,exc_lon,exc_tr\n");
+        for k in 0..4000usize {
+            let t = k as f64 * 0.0025;
+            let s = |f: f64| (f * t).sin();
+            let on = |a: usize, b: usize| if (a..b).contains(&k) { s(4.0) } else { 0.0 };
+            text.push_str(&format!(
+                "{t},{},{},{},{},{},{},{},{},{}\n",
+                s(1.0),
+                s(2.3),
+                s(3.7),
+                s(5.1),
+                s(0.9),
+                on(0, 1000),
+                on(1000, 2000),
+                0.0,
+                on(3000, 3000 + tr_len)
+            ));
+        }
+        text
+    };
+    std::fs::write(dir.join("log.csv"), log(1000)).unwrap();
+    let e = helicon_paramid::report::run(&cfg).unwrap_err().to_string();
+    assert!(
+        e.contains("bad.toml")
+            && e.contains("operating_point[0].instruments[2]")
+            && e.contains("log.csv")
+            && e.contains("exc_lon"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

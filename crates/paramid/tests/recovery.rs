@@ -234,8 +234,8 @@ fn recover(name: &str, instruments: bool, controllers: bool) -> Recovered {
 
 /// Prints the figures and checks what the truth a and c tests share: the
 /// bound on the identifiable errors (in Cramér–Rao bounds and in per cent),
-/// the ground values within 3 standard errors of the truth, the fit at
-/// least as good as the truth on the same data, and the model nearer the
+/// the ground values within 3 standard errors of the truth, the fit about
+/// as good as the truth on the same data, and the model nearer the
 /// truth's own responses by `min_truth_model_fall` from the parameters
 /// before the ground experiments.
 fn check(name: &str, r: &Recovered, max_cr: f64, max_pct: f64, min_truth_model_fall: f64) {
@@ -261,9 +261,12 @@ fn check(name: &str, r: &Recovered, max_cr: f64, max_pct: f64, min_truth_model_f
         r.worst_pct
     );
     assert!(r.ratio < 1.0, "the cost did not fall: ratio {}", r.ratio);
+    // at most 1 % above the truth's own cost: a parameter flagged and kept at
+    // its (wrong) start value keeps the fit from the truth's minimum
+    // (truth c: the collective servo, +25 %: 1.003)
     assert!(
-        r.vs_truth <= 1.0,
-        "the fit must do at least as well as the truth: {}",
+        r.vs_truth <= 1.01,
+        "the fit must do about as well as the truth: {}",
         r.vs_truth
     );
     assert!(
@@ -279,54 +282,51 @@ fn check(name: &str, r: &Recovered, max_cr: f64, max_pct: f64, min_truth_model_f
 
 /// The demo's default programme (ground experiments as priors, the tail
 /// lift slope kept at its ground value; the logged excitations as instruments,
-/// H = G_eu⁻¹ G_ey; hover, 5 and 10 m/s; Cramér–Rao bounds of correlated
-/// frequency points) on truth-a at the scenarios' seed (3). Measured: the
-/// eight identifiable parameters within 1.86 Cramér–Rao bounds (the tail
-/// servo bandwidth +8.9 % with a 4.8 % bound, the worst also in per cent),
-/// Cd flagged "insensitive" at its ground value (−0.3 %); the ground values
-/// within 1.0 standard errors; the cost 241 → 93, at or below the cost of
-/// the truth itself on the same data (the noise floor); against the
-/// truth's own model responses 1.64e3 before the ground experiments → 187
-/// at the start → 5.36 identified (305×). Over truths a, b, c at seeds 1,
-/// 3 and 7 (docs/paramid.md): 1.85–3.10 bounds, errors ≤ 12.1 %,
-/// truth-model cost down 272–716×; the error/bound ratio over the 72
-/// estimates has RMS 1.49 (the bounds are still optimistic by about half)
-/// and 11 beyond 2. Asserted ≤ 3.2 bounds, < 13 %, ≥ 75×: the spread over
-/// seeds, not the issue's 2 bounds, which 2 of the 9 runs meet.
-/// The hover poles of 0.5–40 rad/s move closer to the truth's; the LQI
+/// H = G_eu⁻¹ G_ey, one flat window per sweep; hover, 5 and 10 m/s;
+/// Cramér–Rao bounds of correlated frequency points) on truth-a at the
+/// scenarios' seed (3). Measured: the eight identifiable parameters within
+/// 1.48 Cramér–Rao bounds and 4.8 % (the tail servo's bandwidth), the
+/// collective servo's flagged "insensitive"; the ground values within 1.0
+/// standard errors; the cost 571 → 412, 0.99 of the truth's own cost on
+/// the same data (the noise floor); against the truth's own model responses
+/// 1.53e3 before the ground experiments → 178 at the start → 2.64
+/// identified (577×). Over truths a, b, c at seeds 1, 3 and 7
+/// (docs/paramid.md): 8 of the 9 runs within 2 bounds (the ninth 2.64),
+/// errors ≤ 13.3 %, the error/bound ratio over 73 estimates RMS 1.05.
+/// Asserted: the issue's 2 bounds, < 8 %, ≥ 75×. The hover poles of
+/// 0.5–40 rad/s move closer to the truth's (median 0.045 → 0.002); the LQI
 /// designed on the identified model flies the truth through
 /// `scenarios/demo.toml` (5 seeds) within 2 % of the one designed on the
-/// truth (all three designs within 0.6 %: the scenario does not tell them
+/// truth (all three designs within 0.2 %: the scenario does not tell them
 /// apart).
 #[test]
 fn truth_a_is_recovered_from_flown_noisy_data() {
     let r = recover("truth-a", true, true);
-    check("truth-a", &r, 3.2, 13.0, 75.0);
+    check("truth-a", &r, 2.0, 8.0, 75.0);
 }
 
 /// The same programme on truth-c (issue 15: its lift slope was +7.6 % with
 /// a 3.1 % bound before the ground experiments; the cause was the scatter of
 /// the estimate, not the parameters fixed at wrong values — docs/paramid.md).
-/// Measured at the scenarios' seed (3): main lift slope +0.3 % (0.26
-/// bounds), the worst the hinge spring +0.8 % (2.62 bounds) and the tail
-/// servo bandwidth +11.3 % (2.37); the ground values within 1.0 σ; the
-/// truth-model cost 2.49e3 before the ground → 33.5 at the start → 4.90
-/// identified (508×). Asserted as for truth a: ≤ 3.2 bounds, < 13 %, ≥ 50×.
+/// Measured at the scenarios' seed (3): within 1.66 bounds and 5.6 %, the
+/// collective servo flagged; the ground values within 1.0 σ; the
+/// truth-model cost 1.87e3 before the ground → 20.4 at the start → 4.19
+/// identified (446×). Asserted as for truth a: 2 bounds, < 8 %, ≥ 50×.
 #[test]
 fn truth_c_is_recovered_from_flown_noisy_data() {
     let r = recover("truth-c", true, false);
-    check("truth-c", &r, 3.2, 13.0, 50.0);
+    check("truth-c", &r, 2.0, 8.0, 50.0);
 }
 
 /// The same flights with the responses conditioned on the servos (CIFER's
-/// way, no instruments). Measured (three points): identifiable parameters
-/// within 10.2 %, but up to 6.3 Cramér–Rao bounds off (two points: 7.6 %,
-/// 5.5 bounds): the LQI answers the turbulence and the gyro
+/// way, no instruments; the overlapped Hann windows). Measured (three
+/// points): identifiable parameters within 11.5 %, but up to 4.15
+/// Cramér–Rao bounds off (before the flights rested between sweeps: 10.2 %,
+/// 6.3 bounds): the LQI answers the turbulence and the gyro
 /// noise, which correlates the servo commands with the disturbances and
 /// biases the conditioned estimate (flown without turbulence and sensor
 /// noise the lift-slope error falls from −4.2 % to −1.4 % for truth-c); the
-/// cost falls 3.4× (0.29; 0.06 from the start before the ground
-/// experiments) to 0.87 of the truth's own cost on these data.
+/// cost falls 2.9× (0.34) to 0.89 of the truth's own cost on these data.
 #[test]
 fn conditioned_estimates_are_biased_by_the_feedback() {
     let r = recover("truth-a", false, false);
