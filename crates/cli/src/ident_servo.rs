@@ -192,8 +192,10 @@ pub fn run_servo(a: &ServoArgs) -> Result<()> {
     let mut con = crate::console::Console::stdout();
     writeln!(
         con,
-        "{file}: {} samples every {dt} s; residual RMS {:.3e} rad",
-        fit.n_samples, fit.residual_rms_rad
+        "{file}: {} samples every {} s; residual RMS {:.3e} rad",
+        fit.n_samples,
+        helicon_model::config_error::format_seconds(dt),
+        fit.residual_rms_rad
     );
     writeln!(con, "  K  = {} rad", pm(fit.gain_rad));
     writeln!(con, "  ωn = {} rad/s", pm(fit.omega_n_rad_s));
