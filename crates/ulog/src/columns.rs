@@ -771,12 +771,15 @@ fn align(
         for k in start..grid.t_s.len() {
             let age = grid.t_s[k] - td.t_us[idx[k]] as f64 / 1e6;
             if age > max_age + 1e-9 {
+                // to the µs, the log's resolution (a difference of times
+                // carries round-off digits)
+                let us = |v: f64| (v * 1e6).round() / 1e6;
                 return Err(ColumnsError::Stale {
                     file: file.to_string(),
                     topic: td.name.to_string(),
                     time_s: grid.t_s[k],
-                    age_s: age,
-                    max_s: max_age,
+                    age_s: us(age),
+                    max_s: us(max_age),
                 });
             }
         }
