@@ -123,9 +123,46 @@ pub struct FrfArgs {
     /// Longest window used, s: longer ones among record/2, record/4, … are left out.
     #[arg(long, allow_negative_numbers = true)]
     pub max_window_s: Option<f64>,
+    /// The part of the log used.
+    #[command(flatten)]
+    pub span: TimeSpan,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// The part of a log to use, on its time column (`--t-start`, `--t-end`).
+#[derive(Args, Debug, Clone, Copy, Default)]
+pub struct TimeSpan {
+    /// Use the log from this time on (the time column's value), s.
+    #[arg(long, allow_negative_numbers = true)]
+    pub t_start: Option<f64>,
+    /// Use the log up to this time (the time column's value), s.
+    #[arg(long, allow_negative_numbers = true)]
+    pub t_end: Option<f64>,
+}
+
+impl TimeSpan {
+    /// Whether time `t` is inside; a bound must be finite and the start
+    /// before the end (refused naming the options `flags`, e.g.
+    /// `--t-start/--t-end`).
+    fn check(&self, flags: &str) -> Result<()> {
+        for v in [self.t_start, self.t_end].into_iter().flatten() {
+            if !v.is_finite() {
+                bail!("{flags} {v}: must be a finite time, s");
+            }
+        }
+        if let (Some(a), Some(b)) = (self.t_start, self.t_end)
+            && a >= b
+        {
+            bail!("{flags} {a} … {b}: the start must be before the end");
+        }
+        Ok(())
+    }
+
+    fn contains(&self, t: f64) -> bool {
+        self.t_start.is_none_or(|a| t >= a) && self.t_end.is_none_or(|b| t <= b)
+    }
 }
 
 /// `helicon ident tf`.
@@ -165,6 +202,12 @@ pub struct TfArgs {
     /// Time column of the verification log.
     #[arg(long, default_value = "t_s")]
     pub verify_time: String,
+    /// Use the verification log from this time on, s.
+    #[arg(long, allow_negative_numbers = true)]
+    pub verify_t_start: Option<f64>,
+    /// Use the verification log up to this time, s.
+    #[arg(long, allow_negative_numbers = true)]
+    pub verify_t_end: Option<f64>,
 }
 
 /// Run `helicon ident`.
@@ -187,16 +230,23 @@ pub(crate) struct Table {
     pub(crate) columns: Vec<Vec<f64>>,
 }
 
-/// Read the named columns of `path` (the time column first); every value
-/// must be a finite number (errors name the file, the column and the line).
-/// A flight log (ULog) is read onto its control grid under log.csv's names
-/// ([`helicon_ulog::columns`]); its time column is `t_s`. A log that says
-/// who drove the servos (a `servo_source` column) is refused when the
-/// control law did not drive them throughout
+/// Read the named columns of `path` (the time column first) and keep the
+/// rows whose time is inside `span` (its options are `flags`, for the
+/// messages); every value must be a finite number (errors name the file,
+/// the column and the line). A flight log (ULog) is read onto its control
+/// grid under log.csv's names ([`helicon_ulog::columns`]); its time column
+/// is `t_s`. A log that says who drove the servos (a `servo_source` column)
+/// is refused when the control law did not drive them throughout the span
 /// ([`helicon_paramid::source::servo_spans`], naming the spans).
-pub(crate) fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
+pub(crate) fn read_columns(
+    path: &Path,
+    names: &[&str],
+    span: TimeSpan,
+    flags: &str,
+) -> Result<Table> {
     use helicon_paramid::source::{SERVO_SOURCE, describe_spans, servo_spans};
     let file = path.display().to_string();
+    span.check(flags)?;
     let mut table = if helicon_paramid::source::is_ulog(path) {
         let offered = helicon_paramid::source::log_names(path)?;
         if offered.iter().any(|n| n == SERVO_SOURCE) && !names.contains(&SERVO_SOURCE) {
@@ -209,6 +259,24 @@ pub(crate) fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
     } else {
         read_csv(path, names)?
     };
+    if span.t_start.is_some() || span.t_end.is_some() {
+        let keep: Vec<bool> = table.columns[0].iter().map(|t| span.contains(*t)).collect();
+        for c in &mut table.columns {
+            let mut k = keep.iter();
+            c.retain(|_| k.next().copied().unwrap_or(false));
+        }
+    }
+    if table.columns[0].len() < 16 {
+        bail!(
+            "{file}: {} data rows{}; at least 16 are needed",
+            table.columns[0].len(),
+            if span.t_start.is_some() || span.t_end.is_some() {
+                format!(" between {flags}")
+            } else {
+                String::new()
+            }
+        );
+    }
     if let Some(source) = table.columns.get(names.len()).or_else(|| {
         let j = names.iter().position(|n| *n == SERVO_SOURCE)?;
         table.columns.get(j)
@@ -216,8 +284,9 @@ pub(crate) fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
         let spans = servo_spans(&table.columns[0], source);
         if !spans.is_empty() {
             bail!(
-                "{file}: the control law did not drive the servos (servo_source ≠ 0) at {}: the logged law commands are not what the servos got and the law's excitation did not drive them; use a log, or a part of one, flown under the law",
-                describe_spans(&spans)
+                "{file}: the control law did not drive the servos (servo_source ≠ 0) at {}: the logged law commands are not what the servos got and the law's excitation did not drive them; use {flags} to leave {} out",
+                describe_spans(&spans),
+                if spans.len() == 1 { "it" } else { "them" }
             );
         }
     }
@@ -281,12 +350,6 @@ fn read_csv(path: &Path, names: &[&str]) -> Result<Table> {
             }
             columns[c].push(v);
         }
-    }
-    if columns[0].len() < 16 {
-        bail!(
-            "{file}: {} data rows; at least 16 are needed",
-            columns[0].len()
-        );
     }
     Ok(Table { columns })
 }
@@ -448,7 +511,7 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
             );
         }
     }
-    let table = read_columns(&a.log, &names)?;
+    let table = read_columns(&a.log, &names, a.span, "--t-start/--t-end")?;
     let mut cols = table.columns;
     let t = cols.remove(0);
     let dt = uniform(&file, &a.time, &t, &mut cols)?;
@@ -778,7 +841,16 @@ fn verify(a: &TfArgs, fit: &TfFit, stem: &str) -> Result<serde_json::Value> {
         return Ok(serde_json::Value::Null);
     };
     let file = log.display().to_string();
-    let table = read_columns(log, &[a.verify_time.as_str(), inp.as_str(), out.as_str()])?;
+    let span = TimeSpan {
+        t_start: a.verify_t_start,
+        t_end: a.verify_t_end,
+    };
+    let table = read_columns(
+        log,
+        &[a.verify_time.as_str(), inp.as_str(), out.as_str()],
+        span,
+        "--verify-t-start/--verify-t-end",
+    )?;
     let mut cols = table.columns;
     let t = cols.remove(0);
     let dt = uniform(&file, &a.verify_time, &t, &mut cols)?;

@@ -59,8 +59,8 @@ fn steady(k: u64) -> u64 {
     1_000_000 + k * 2500
 }
 
-fn frf(log: &Path, out: &Path) -> (bool, String, String) {
-    helicon(&[
+fn frf(log: &Path, out: &Path, extra: &[&str]) -> (bool, String, String) {
+    let mut args = vec![
         "ident",
         "frf",
         log.to_str().unwrap(),
@@ -70,7 +70,9 @@ fn frf(log: &Path, out: &Path) -> (bool, String, String) {
         "meas_p",
         "--out",
         out.to_str().unwrap(),
-    ])
+    ];
+    args.extend_from_slice(extra);
+    helicon(&args)
 }
 
 #[test]
@@ -78,7 +80,7 @@ fn frf_on_a_flight_log_prints_its_step_rounded() {
     let d = tmpdir("step");
     let ulg = d.join("flight.ulg");
     write_ulog(&ulg, 2000, steady, false, Some(&|_| 0));
-    let (ok, stdout, stderr) = frf(&ulg, &d.join("frf"));
+    let (ok, stdout, stderr) = frf(&ulg, &d.join("frf"), &[]);
     assert!(ok, "{stdout}\n{stderr}");
     assert!(stdout.contains("2000 samples every 0.0025 s"), "{stdout}");
     assert!(stderr.contains("every 0.0025 s"), "{stderr}");
@@ -101,15 +103,41 @@ fn frf_and_servo_refuse_a_span_the_law_did_not_fly() {
         false,
         Some(&|k| u8::from((400..600).contains(&k))),
     );
-    let (ok, stdout, stderr) = frf(&ulg, &d.join("frf"));
+    let (ok, stdout, stderr) = frf(&ulg, &d.join("frf"), &[]);
     assert!(!ok, "{stdout}");
     for part in [
         "flight.ulg",
         "servo_source",
         "t = 2 … 2.4975 s (pilot, 200 samples)",
+        "--t-start/--t-end",
     ] {
         assert!(stderr.contains(part), "`{part}`: {stderr}");
     }
+    // the part after it: accepted, 1400 samples from t = 2.5 s
+    let (ok, stdout, stderr) = frf(&ulg, &d.join("frf"), &["--t-start", "2.5"]);
+    assert!(ok, "{stdout}\n{stderr}");
+    assert!(stdout.contains("1400 samples every 0.0025 s"), "{stdout}");
+    // ending inside it: named up to the end of the part used
+    let (ok, _, stderr) = frf(
+        &ulg,
+        &d.join("frf"),
+        &["--t-start", "1.5", "--t-end", "2.1"],
+    );
+    assert!(
+        !ok && stderr.contains("t = 2 … 2.1 s (pilot, 41 samples)"),
+        "{stderr}"
+    );
+    // a span that is not one
+    let (ok, _, stderr) = frf(&ulg, &d.join("frf"), &["--t-start", "3", "--t-end", "2"]);
+    assert!(
+        !ok && stderr.contains("--t-start/--t-end 3 … 2"),
+        "{stderr}"
+    );
+    let (ok, _, stderr) = frf(&ulg, &d.join("frf"), &["--t-start", "6.5"]);
+    assert!(
+        !ok && stderr.contains("0 data rows between --t-start/--t-end"),
+        "{stderr}"
+    );
     // a bench or flight CSV with the column: the same check
     let mut text = String::from("t_s,cmd,pos,servo_source\n");
     for k in 0..400 {
