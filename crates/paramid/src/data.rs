@@ -185,7 +185,7 @@ pub fn read_record(
         ParamIdError::LogOf {
             file: file.to_string(),
             field: field.to_string(),
-            source,
+            source: Box::new(source),
         }
     })?;
     let t = table.column("t_s");

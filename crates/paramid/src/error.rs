@@ -22,9 +22,10 @@ pub enum ParamIdError {
         file: String,
         /// Its field naming the log (`operating_point[1].log`).
         field: String,
-        /// The reader's error.
+        /// The reader's error (boxed: the error stays small on the happy
+        /// path).
         #[source]
-        source: LogError,
+        source: Box<LogError>,
     },
     /// The part of a log used has samples in which the control law did not
     /// drive the servos (`servo_source` ≠ 0: the pilot, a failsafe), so the

@@ -156,7 +156,7 @@ fn choose(cfg: &IdentConfig, index: usize) -> Result<(InitialState, WindSource)>
     let header = crate::source::log_names(&v.log).map_err(|source| ParamIdError::LogOf {
         file: cfg.file.clone(),
         field: format!("verification[{index}].log"),
-        source,
+        source: Box::new(source),
     })?;
     let has = |names: &[&str]| names.iter().all(|n| header.iter().any(|c| c == n));
     let start = v.initial_state.unwrap_or(if has(&STATE_NAMES) {

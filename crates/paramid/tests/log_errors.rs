@@ -158,7 +158,7 @@ fn a_flight_log_error_names_the_ident_file_the_field_and_the_log() {
             "1.375",
         ],
     );
-    let start = cfg.start.clone();
+    let start = cfg.start;
     let e = helicon_paramid::verify::verify(&cfg, 0, &start, &start)
         .unwrap_err()
         .to_string();
@@ -190,7 +190,7 @@ fn a_log_csv_error_names_the_ident_file_the_field_and_the_log() {
         &e,
         &["bad.toml", "operating_point[1].log", "log.csv", "meas_q"],
     );
-    let start = cfg.start.clone();
+    let start = cfg.start;
     let e = helicon_paramid::verify::verify(&cfg, 0, &start, &start)
         .unwrap_err()
         .to_string();
@@ -305,7 +305,7 @@ fn a_span_not_flown_by_the_law_is_refused_naming_its_times() {
             "1.5 … 1.6975 s",
         ],
     );
-    let start = cfg.start.clone();
+    let start = cfg.start;
     let e = helicon_paramid::verify::verify(&cfg, 0, &start, &start)
         .unwrap_err()
         .to_string();
