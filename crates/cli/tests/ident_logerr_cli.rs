@@ -200,6 +200,8 @@ fn fit_names_the_ident_file_the_field_and_the_flight_logs_fault() {
     write_ulog(&d.join("nan.ulg"), 400, steady, true, None);
     let (ok, _, stderr) = fit("nan.ulg");
     assert!(!ok);
+    // the reader's error is the cause, said once
+    assert_eq!(stderr.matches("nan.ulg").count(), 1, "{stderr}");
     for part in [
         "IDENT.toml",
         "operating_point[0].log",
