@@ -9,6 +9,7 @@ use helicon_ident::fit::{CostOptions, TfFit, TfStructure, fit_tf};
 use helicon_ident::frf::{
     Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid, unwrap_deg,
 };
+use helicon_model::config_error::format_seconds;
 use helicon_sim::plot::{Figure, HLine, Panel, Series};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -122,9 +123,46 @@ pub struct FrfArgs {
     /// Longest window used, s: longer ones among record/2, record/4, … are left out.
     #[arg(long, allow_negative_numbers = true)]
     pub max_window_s: Option<f64>,
+    /// The part of the log used.
+    #[command(flatten)]
+    pub span: TimeSpan,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// The part of a log to use, on its time column (`--t-start`, `--t-end`).
+#[derive(Args, Debug, Clone, Copy, Default)]
+pub struct TimeSpan {
+    /// Use the log from this time on (the time column's value), s.
+    #[arg(long, allow_negative_numbers = true)]
+    pub t_start: Option<f64>,
+    /// Use the log up to this time (the time column's value), s.
+    #[arg(long, allow_negative_numbers = true)]
+    pub t_end: Option<f64>,
+}
+
+impl TimeSpan {
+    /// Whether time `t` is inside; a bound must be finite and the start
+    /// before the end (refused naming the options `flags`, e.g.
+    /// `--t-start/--t-end`).
+    fn check(&self, flags: &str) -> Result<()> {
+        for v in [self.t_start, self.t_end].into_iter().flatten() {
+            if !v.is_finite() {
+                bail!("{flags} {v}: must be a finite time, s");
+            }
+        }
+        if let (Some(a), Some(b)) = (self.t_start, self.t_end)
+            && a >= b
+        {
+            bail!("{flags} {a} … {b}: the start must be before the end");
+        }
+        Ok(())
+    }
+
+    fn contains(&self, t: f64) -> bool {
+        self.t_start.is_none_or(|a| t >= a) && self.t_end.is_none_or(|b| t <= b)
+    }
 }
 
 /// `helicon ident tf`.
@@ -164,6 +202,12 @@ pub struct TfArgs {
     /// Time column of the verification log.
     #[arg(long, default_value = "t_s")]
     pub verify_time: String,
+    /// Use the verification log from this time on, s.
+    #[arg(long, allow_negative_numbers = true)]
+    pub verify_t_start: Option<f64>,
+    /// Use the verification log up to this time, s.
+    #[arg(long, allow_negative_numbers = true)]
+    pub verify_t_end: Option<f64>,
 }
 
 /// Run `helicon ident`.
@@ -186,15 +230,75 @@ pub(crate) struct Table {
     pub(crate) columns: Vec<Vec<f64>>,
 }
 
-/// Read the named columns of `path`; every value must be a finite number
-/// (errors name the file, the column and the line). A flight log (ULog) is
-/// read onto its control grid under log.csv's names
-/// ([`helicon_ulog::columns`]); its time column is `t_s`.
-pub(crate) fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
+/// Read the named columns of `path` (the time column first) and keep the
+/// rows whose time is inside `span` (its options are `flags`, for the
+/// messages); every value must be a finite number (errors name the file,
+/// the column and the line). A flight log (ULog) is read onto its control
+/// grid under log.csv's names ([`helicon_ulog::columns`]); its time column
+/// is `t_s`. A log that says who drove the servos (a `servo_source` column)
+/// is refused when the control law did not drive them throughout the span
+/// ([`helicon_paramid::source::servo_spans`], naming the spans).
+pub(crate) fn read_columns(
+    path: &Path,
+    names: &[&str],
+    span: TimeSpan,
+    flags: &str,
+) -> Result<Table> {
+    use helicon_paramid::source::{SERVO_SOURCE, describe_spans, servo_spans};
     let file = path.display().to_string();
-    if helicon_paramid::source::is_ulog(path) {
-        return read_ulog(path, names);
+    span.check(flags)?;
+    let mut table = if helicon_paramid::source::is_ulog(path) {
+        let offered = helicon_paramid::source::log_names(path)?;
+        if offered.iter().any(|n| n == SERVO_SOURCE) && !names.contains(&SERVO_SOURCE) {
+            let mut ask = names.to_vec();
+            ask.push(SERVO_SOURCE);
+            read_ulog(path, &ask)?
+        } else {
+            read_ulog(path, names)?
+        }
+    } else {
+        read_csv(path, names)?
+    };
+    if span.t_start.is_some() || span.t_end.is_some() {
+        let keep: Vec<bool> = table.columns[0].iter().map(|t| span.contains(*t)).collect();
+        for c in &mut table.columns {
+            let mut k = keep.iter();
+            c.retain(|_| k.next().copied().unwrap_or(false));
+        }
     }
+    if table.columns[0].len() < 16 {
+        bail!(
+            "{file}: {} data rows{}; at least 16 are needed",
+            table.columns[0].len(),
+            if span.t_start.is_some() || span.t_end.is_some() {
+                format!(" between {flags}")
+            } else {
+                String::new()
+            }
+        );
+    }
+    if let Some(source) = table.columns.get(names.len()).or_else(|| {
+        let j = names.iter().position(|n| *n == SERVO_SOURCE)?;
+        table.columns.get(j)
+    }) {
+        let spans = servo_spans(&table.columns[0], source);
+        if !spans.is_empty() {
+            bail!(
+                "{file}: the control law did not drive the servos (servo_source ≠ 0) at {}: the logged law commands are not what the servos got and the law's excitation did not drive them; use {flags} to leave {} out",
+                describe_spans(&spans),
+                if spans.len() == 1 { "it" } else { "them" }
+            );
+        }
+    }
+    table.columns.truncate(names.len());
+    Ok(table)
+}
+
+/// [`read_columns`] of a CSV: the columns `names`, and `servo_source` last
+/// when the header has it and `names` does not.
+fn read_csv(path: &Path, names: &[&str]) -> Result<Table> {
+    use helicon_paramid::source::SERVO_SOURCE;
+    let file = path.display().to_string();
     let mut rdr = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
@@ -204,6 +308,11 @@ pub(crate) fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
         .headers()
         .with_context(|| format!("{file}: no header row"))?
         .clone();
+    let mut ask = names.to_vec();
+    if header.iter().any(|h| h == SERVO_SOURCE) && !names.contains(&SERVO_SOURCE) {
+        ask.push(SERVO_SOURCE);
+    }
+    let names = ask.as_slice();
     let mut idx = Vec::with_capacity(names.len());
     for n in names {
         let found: Vec<usize> = header
@@ -242,12 +351,6 @@ pub(crate) fn read_columns(path: &Path, names: &[&str]) -> Result<Table> {
             columns[c].push(v);
         }
     }
-    if columns[0].len() < 16 {
-        bail!(
-            "{file}: {} data rows; at least 16 are needed",
-            columns[0].len()
-        );
-    }
     Ok(Table { columns })
 }
 
@@ -269,7 +372,7 @@ fn read_ulog(path: &Path, names: &[&str]) -> Result<Table> {
     eprintln!(
         "{file}: flight log read on its control grid: {} samples every {} s (the median step; largest distance of a sample from the grid {:.1} µs)",
         u.columns[0].len(),
-        u.period_s,
+        format_seconds(u.period_s),
         u.max_jitter_s * 1e6
     );
     if u.columns.len() != names.len() {
@@ -287,8 +390,8 @@ pub(crate) fn uniform(file: &str, time: &str, t: &[f64], cols: &mut [Vec<f64>]) 
         bail!(
             "{file}: column `{time}` does not increase at data row {} ({} then {})",
             i + 2,
-            t[i],
-            t[i + 1]
+            format_seconds(t[i]),
+            format_seconds(t[i + 1])
         );
     }
     steps.sort_by(f64::total_cmp);
@@ -296,7 +399,9 @@ pub(crate) fn uniform(file: &str, time: &str, t: &[f64], cols: &mut [Vec<f64>]) 
     let (lo, hi) = (steps[0], steps[steps.len() - 1]);
     if hi > 5.0 * dt {
         bail!(
-            "{file}: column `{time}` has a gap of {hi} s (the median step is {dt} s): a drop-out the spectra cannot bridge; cut the log"
+            "{file}: column `{time}` has a gap of {} s (the median step is {} s): a drop-out the spectra cannot bridge; cut the log",
+            format_seconds(hi),
+            format_seconds(dt)
         );
     }
     if hi - lo <= 1e-6 * dt {
@@ -316,7 +421,10 @@ pub(crate) fn uniform(file: &str, time: &str, t: &[f64], cols: &mut [Vec<f64>]) 
         }
     }
     eprintln!(
-        "{file}: `{time}` steps range {lo} … {hi} s: resampled by linear interpolation to {n} samples every {dt} s (the median step)"
+        "{file}: `{time}` steps range {} … {} s: resampled by linear interpolation to {n} samples every {} s (the median step)",
+        format_seconds(lo),
+        format_seconds(hi),
+        format_seconds(dt)
     );
     Ok(dt)
 }
@@ -403,7 +511,7 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
             );
         }
     }
-    let table = read_columns(&a.log, &names)?;
+    let table = read_columns(&a.log, &names, a.span, "--t-start/--t-end")?;
     let mut cols = table.columns;
     let t = cols.remove(0);
     let dt = uniform(&file, &a.time, &t, &mut cols)?;
@@ -418,7 +526,8 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
     let nyquist = std::f64::consts::PI / dt;
     if omega_max > nyquist {
         bail!(
-            "--omega-max {omega_max}: above the Nyquist frequency π/dt = {nyquist} rad/s of {file} (sample time {dt} s)"
+            "--omega-max {omega_max}: above the Nyquist frequency π/dt = {nyquist} rad/s of {file} (sample time {} s)",
+            format_seconds(dt)
         );
     }
     let grid = log_grid(omega_min, omega_max, a.points)
@@ -448,7 +557,8 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
         "output,omega_rad_s,mag_db,phase_deg,coherence,random_error"
     )?;
     println!(
-        "{file}: {n} samples every {dt} s ({record_s:.3} s), windows {} s, input `{}`{}",
+        "{file}: {n} samples every {} s ({record_s:.3} s), windows {} s, input `{}`{}",
+        format_seconds(dt),
         secs.iter()
             .map(|s| format!("{s:.3}"))
             .collect::<Vec<_>>()
@@ -731,7 +841,16 @@ fn verify(a: &TfArgs, fit: &TfFit, stem: &str) -> Result<serde_json::Value> {
         return Ok(serde_json::Value::Null);
     };
     let file = log.display().to_string();
-    let table = read_columns(log, &[a.verify_time.as_str(), inp.as_str(), out.as_str()])?;
+    let span = TimeSpan {
+        t_start: a.verify_t_start,
+        t_end: a.verify_t_end,
+    };
+    let table = read_columns(
+        log,
+        &[a.verify_time.as_str(), inp.as_str(), out.as_str()],
+        span,
+        "--verify-t-start/--verify-t-end",
+    )?;
     let mut cols = table.columns;
     let t = cols.remove(0);
     let dt = uniform(&file, &a.verify_time, &t, &mut cols)?;

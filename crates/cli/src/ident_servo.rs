@@ -3,7 +3,7 @@
 //! write a simulated bench test of the model's own servo block (see
 //! docs/ground-and-servo.md).
 
-use crate::ident_cmd::{read_columns, uniform};
+use crate::ident_cmd::{TimeSpan, read_columns, uniform};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use helicon_ident::Complex64;
@@ -54,6 +54,9 @@ pub struct ServoArgs {
     /// RK4 steps per log sample (1 matches the model at the log's sample time).
     #[arg(long, default_value_t = 1)]
     pub substeps: usize,
+    /// The part of the log used (the servo from rest at its first command).
+    #[command(flatten)]
+    pub span: TimeSpan,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
@@ -167,7 +170,7 @@ pub fn run_servo(a: &ServoArgs) -> Result<()> {
             bail!("column `{n}` is named twice among --time, --command and --position");
         }
     }
-    let table = read_columns(&a.log, &names)?;
+    let table = read_columns(&a.log, &names, a.span, "--t-start/--t-end")?;
     let mut cols = table.columns;
     let t = cols.remove(0);
     let dt = uniform(&file, &a.time, &t, &mut cols)?;
@@ -192,8 +195,10 @@ pub fn run_servo(a: &ServoArgs) -> Result<()> {
     let mut con = crate::console::Console::stdout();
     writeln!(
         con,
-        "{file}: {} samples every {dt} s; residual RMS {:.3e} rad",
-        fit.n_samples, fit.residual_rms_rad
+        "{file}: {} samples every {} s; residual RMS {:.3e} rad",
+        fit.n_samples,
+        helicon_model::config_error::format_seconds(dt),
+        fit.residual_rms_rad
     );
     writeln!(con, "  K  = {} rad", pm(fit.gain_rad));
     writeln!(con, "  ωn = {} rad/s", pm(fit.omega_n_rad_s));

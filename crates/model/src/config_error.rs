@@ -112,6 +112,23 @@ pub fn format_number(v: f64) -> String {
     }
 }
 
+/// A time or a time step for a message, rounded to the nanosecond (finer
+/// than any log's resolution — a ULog stamps microseconds — and coarser
+/// than the round-off of a difference of times), in its shortest form: a
+/// step of 0.0024999999999999467 s computed from a log prints as 0.0025. A
+/// value too large to round so (beyond 2⁵³ ns, 104 days) or not finite is
+/// printed as it is.
+pub fn format_seconds(v: f64) -> String {
+    let ns = v * 1e9;
+    if v.is_finite() && ns.abs() < 9.007_199_254_740_992e15 {
+        // an integer count of ns over 1e9: correctly rounded, so the shortest
+        // form has at most nine decimals
+        format_number(ns.round() / 1e9)
+    } else {
+        format_number(v)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -128,5 +145,12 @@ mod tests {
         assert_eq!(format_number(2.5), "2.5");
         assert_eq!(format_number(1e308), "1e308");
         assert_eq!(format_number(86400.0), "86400");
+        assert_eq!(format_seconds(0.0024999999999999467), "0.0025");
+        assert_eq!(format_seconds(1.0 + 0.6), "1.6");
+        assert_eq!(format_seconds(1.0 / 3000.0), "0.000333333");
+        assert_eq!(format_seconds(1234.5678910000001), "1234.567891");
+        assert_eq!(format_seconds(-0.5), "-0.5");
+        assert_eq!(format_seconds(f64::NAN), "NaN");
+        assert_eq!(format_seconds(1e300), "1e300");
     }
 }

@@ -12,6 +12,7 @@ use helicon_ident::frf::{
     CrossSpectra, Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid,
 };
 use helicon_model::ConfigError;
+use helicon_model::config_error::format_seconds;
 
 /// The fewest samples a spectral window (`windows_s`) may hold.
 const MIN_WINDOW_SAMPLES: f64 = 8.0;
@@ -29,8 +30,8 @@ fn check_windows(cfg: &IdentConfig, log: &str, dt_s: f64, record_s: f64) -> Resu
                 *w,
                 format!(
                     "{log}: a window must hold at least {MIN_WINDOW_SAMPLES} samples ({} s at {} s)",
-                    MIN_WINDOW_SAMPLES * dt_s,
-                    dt_s
+                    format_seconds(MIN_WINDOW_SAMPLES * dt_s),
+                    format_seconds(dt_s)
                 ),
             )
             .into());
@@ -78,6 +79,7 @@ pub struct PointData {
 }
 
 /// A log's columns cut to `[t_start_s, t_end_s]`, checked for a uniform step.
+#[derive(Debug, Clone)]
 pub struct Record {
     /// Sample time, s.
     pub dt_s: f64,
@@ -296,10 +298,13 @@ pub fn sweep_instrumented(
 }
 
 /// Read `names` from the log at `path` (a `log.csv` or a flight computer's
-/// ULog, [`crate::source`]), keep `[t0, t1]`, check the step is
-/// uniform (to 1e-6 of its median) and equals `expected_dt_s` (the control
-/// period, to 1e-6): the model's responses are those of a command held over
-/// one control period. `field` names the log's entry in the IDENT.toml.
+/// ULog, [`crate::source`]), keep `[t0, t1]`, check that the control law
+/// drove the servos throughout (a log with a `servo_source` column,
+/// [`crate::source::servo_spans`]), that the step is uniform (to 1e-6 of
+/// its median) and equals `expected_dt_s` (the control period, to 1e-6):
+/// the model's responses are those of a command held over one control
+/// period. `field` names the log's entry in the IDENT.toml `file`; every
+/// error names both.
 pub fn read_record(
     path: &std::path::Path,
     names: &[&str],
@@ -309,12 +314,31 @@ pub fn read_record(
     file: &str,
     field: &str,
 ) -> Result<Record> {
-    let table = crate::source::read_log(path, names, expected_dt_s)?;
+    let table = crate::source::read_log(path, names, expected_dt_s).map_err(|source| {
+        ParamIdError::LogOf {
+            file: file.to_string(),
+            field: field.to_string(),
+            source: Box::new(source),
+        }
+    })?;
     let t = table.column("t_s");
     let keep: Vec<usize> = (0..t.len())
         .filter(|&k| t0.is_none_or(|a| t[k] >= a) && t1.is_none_or(|b| t[k] <= b))
         .collect();
     let log = path.display().to_string();
+    let ts: Vec<f64> = keep.iter().map(|&k| t[k]).collect();
+    if let Some(source) = &table.servo_source {
+        let used: Vec<f64> = keep.iter().map(|&k| source[k]).collect();
+        let spans = crate::source::servo_spans(&ts, &used);
+        if !spans.is_empty() {
+            return Err(ParamIdError::NotLawDriven {
+                file: file.to_string(),
+                field: field.to_string(),
+                log,
+                spans,
+            });
+        }
+    }
     if keep.len() < 64 {
         return Err(ConfigError::invalid(
             file,
@@ -324,26 +348,28 @@ pub fn read_record(
         )
         .into());
     }
-    let ts: Vec<f64> = keep.iter().map(|&k| t[k]).collect();
     let mut steps: Vec<f64> = ts.windows(2).map(|w| w[1] - w[0]).collect();
     steps.sort_by(f64::total_cmp);
     let dt = steps[steps.len() / 2];
+    let invalid_step = |rule: String| ConfigError::Invalid {
+        file: file.to_string(),
+        field: field.to_string(),
+        value: format_seconds(dt),
+        rule: format!("{log}: {rule}"),
+    };
     if (steps[0] - dt).abs() > 1e-6 * dt || (steps[steps.len() - 1] - dt).abs() > 1e-6 * dt {
-        return Err(ConfigError::invalid(
-            file,
-            field,
-            dt,
-            format!("{log}: the time step varies ({} to {} s): identification needs a uniform log (no decimation gaps)", steps[0], steps[steps.len() - 1]),
-        )
+        return Err(invalid_step(format!(
+            "the time step varies ({} to {} s): identification needs a uniform log (no decimation gaps)",
+            format_seconds(steps[0]),
+            format_seconds(steps[steps.len() - 1])
+        ))
         .into());
     }
     if (dt - expected_dt_s).abs() > 1e-6 * expected_dt_s {
-        return Err(ConfigError::invalid(
-            file,
-            field,
-            dt,
-            format!("{log}: the log's step must be the control period control.sample_time_s = {expected_dt_s} s (log every sample)"),
-        )
+        return Err(invalid_step(format!(
+            "the log's step must be the control period control.sample_time_s = {} s (log every sample)",
+            format_seconds(expected_dt_s)
+        ))
         .into());
     }
     let mut columns = Vec::with_capacity(names.len());

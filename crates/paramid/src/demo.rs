@@ -207,7 +207,7 @@ pub fn fly_scenario(
             source,
         })?;
     }
-    write_log(log, &f.log, 1)?;
+    write_log(log, &f.log, 1).map_err(crate::error::LogError::from)?;
     Ok(())
 }
 

@@ -153,7 +153,11 @@ fn replay(
 /// neither the true state nor the wind) is refused naming the field.
 fn choose(cfg: &IdentConfig, index: usize) -> Result<(InitialState, WindSource)> {
     let v = &cfg.verification[index];
-    let header = crate::source::log_names(&v.log)?;
+    let header = crate::source::log_names(&v.log).map_err(|source| ParamIdError::LogOf {
+        file: cfg.file.clone(),
+        field: format!("verification[{index}].log"),
+        source: Box::new(source),
+    })?;
     let has = |names: &[&str]| names.iter().all(|n| header.iter().any(|c| c == n));
     let start = v.initial_state.unwrap_or(if has(&STATE_NAMES) {
         InitialState::Logged

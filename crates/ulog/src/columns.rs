@@ -15,8 +15,9 @@
 //! - **Jitter**: each step between consecutive `control` records must lie
 //!   within ±[`JITTER_FRACTION`]·T of a whole number m ≥ 1 of periods;
 //!   sample k is then placed at t₀ + n_k·T (n advancing by m), so the record
-//!   handed on is uniform. A step further from the grid, or one that does
-//!   not increase, is refused naming its time.
+//!   handed on is uniform. A step further from the grid, or one that goes
+//!   back in time, is refused naming its time; two records with the same
+//!   time (a sample written twice) are refused as such.
 //! - **Dropped samples**: m − 1 samples are missing after a step of m
 //!   periods. Up to [`MAX_MISSING`] in a row are filled by linear
 //!   interpolation between their neighbours (as `helicon ident frf` does for
@@ -213,6 +214,20 @@ pub enum ColumnsError {
         time_s: f64,
         /// Time of the record before, s.
         previous_s: f64,
+    },
+    /// Two records of a topic with the same timestamp where each must
+    /// have its own (`control`: one record per control step): a logger
+    /// that wrote a sample twice.
+    #[error(
+        "{file}: `{topic}` has two records stamped t = {time_s} s: a sample written twice (a logger fault), not a step of the control task"
+    )]
+    Duplicate {
+        /// The log.
+        file: String,
+        /// The topic.
+        topic: String,
+        /// The time both records carry, s.
+        time_s: f64,
     },
     /// A control step off the sample grid.
     #[error(
@@ -641,7 +656,14 @@ impl Grid {
             });
         }
         for w in t_s.windows(2) {
-            if w[1] <= w[0] {
+            if w[1] == w[0] {
+                return Err(ColumnsError::Duplicate {
+                    file: file.to_string(),
+                    topic: TIME_BASE_TOPIC.into(),
+                    time_s: w[1],
+                });
+            }
+            if w[1] < w[0] {
                 return Err(ColumnsError::Backwards {
                     file: file.to_string(),
                     topic: TIME_BASE_TOPIC.into(),
@@ -749,12 +771,15 @@ fn align(
         for k in start..grid.t_s.len() {
             let age = grid.t_s[k] - td.t_us[idx[k]] as f64 / 1e6;
             if age > max_age + 1e-9 {
+                // to the µs, the log's resolution (a difference of times
+                // carries round-off digits)
+                let us = |v: f64| (v * 1e6).round() / 1e6;
                 return Err(ColumnsError::Stale {
                     file: file.to_string(),
                     topic: td.name.to_string(),
                     time_s: grid.t_s[k],
-                    age_s: age,
-                    max_s: max_age,
+                    age_s: us(age),
+                    max_s: us(max_age),
                 });
             }
         }

@@ -215,6 +215,12 @@ fn other_topics_are_held_start_late_and_must_not_stop() {
         e.to_string().contains("`excitation`") && e.to_string().contains("t = 1.1125 s"),
         "{e}"
     );
+    // the age and the limit to the µs, not with a difference's round-off
+    assert!(
+        e.to_string().contains("in the 0.015 s before")
+            && e.to_string().contains("(at most 0.0125 s)"),
+        "{e}"
+    );
 }
 
 #[test]

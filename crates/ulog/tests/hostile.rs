@@ -104,7 +104,11 @@ fn duplicated_or_backward_control_stamps_are_refused_naming_the_time() {
     let e = read_ulog_columns(&dup, &NAMES, None)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("dup.ulg") && e.contains("1.05"), "{e}");
+    assert!(
+        e.contains("dup.ulg") && e.contains("1.05") && e.contains("twice"),
+        "{e}"
+    );
+    assert!(!e.contains("back in time"), "{e}");
     let back = write_log("back", 40, |k| {
         if k == 25 {
             1_000_000
