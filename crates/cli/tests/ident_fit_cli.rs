@@ -1,5 +1,5 @@
-//! Runs `helicon ident demo` (short: the hover flight alone, 20 points, no
-//! verification flight) and `helicon ident fit` on its IDENT.toml as a user
+//! Runs `helicon ident demo` (short: the hover flight alone, no verification
+//! flight) and `helicon ident fit` on its IDENT.toml as a user
 //! would: the outputs exist, report.json has the documented fields, the
 //! identified file loads as `--params`; bad inputs are refused naming the
 //! file and field.
@@ -17,8 +17,6 @@ fn demo_then_fit_write_the_documented_outputs() {
         "demo",
         "--flights",
         "hover",
-        "--points",
-        "20",
         "--no-verify",
         "--out",
         out.to_str().unwrap(),
@@ -83,8 +81,10 @@ fn demo_then_fit_write_the_documented_outputs() {
     println!("cost {c0} -> {c1}");
     assert!(c1 < c0, "cost {c0} -> {c1}");
     let costs = r["costs"].as_array().unwrap();
-    // the four cyclic responses, meas_r/S_tr and w/S_col (issue 15)
-    assert_eq!(costs.len(), 6);
+    // the four cyclic responses, meas_r/S_tr and w/S_col (issue 15); the
+    // hover heave keeps about 9 coherent points of the 40 (with 20 points it
+    // keeps 2, fewer than min_points, and is left out with a note)
+    assert_eq!(costs.len(), 6, "{stdout}");
     assert!(
         costs
             .iter()
