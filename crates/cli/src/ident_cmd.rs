@@ -674,12 +674,7 @@ pub(crate) fn read_frf(path: &Path, output: &str) -> Result<Frf> {
             want.join(",")
         );
     }
-    let mut f = Frf {
-        omega_rad_s: Vec::new(),
-        h: Vec::new(),
-        coherence: Vec::new(),
-        random_error: Vec::new(),
-    };
+    let mut f = Frf::default();
     let mut seen = Vec::<String>::new();
     for rec in rdr.records() {
         let rec = rec.with_context(|| format!("{file}: malformed CSV"))?;

@@ -437,8 +437,9 @@ pub fn cross_spectra_grid(
     })
 }
 
-/// A frequency response from one input to one output.
-#[derive(Debug, Clone, PartialEq)]
+/// A frequency response from one input to one output (`Frf::default()`:
+/// no points yet).
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Frf {
     /// Frequencies, rad/s (increasing).
     pub omega_rad_s: Vec<f64>,
@@ -546,14 +547,7 @@ pub fn conditioned(
             ),
         ));
     }
-    let mut out: Vec<Frf> = (0..q)
-        .map(|_| Frf {
-            omega_rad_s: Vec::new(),
-            h: Vec::new(),
-            coherence: Vec::new(),
-            random_error: Vec::new(),
-        })
-        .collect();
+    let mut out: Vec<Frf> = (0..q).map(|_| Frf::default()).collect();
     let mut multiple = Vec::with_capacity(cs.omega_rad_s.len());
     for (k, &om) in cs.omega_rad_s.iter().enumerate() {
         let gxx = DMatrix::from_fn(q, q, |a, b| cs.get(k, inputs[a], inputs[b]));
@@ -645,12 +639,7 @@ pub fn composite(parts: &[Frf], window_s: &[f64]) -> Result<Frf> {
         .collect();
     grid.sort_by(f64::total_cmp);
     grid.dedup();
-    let mut out = Frf {
-        omega_rad_s: Vec::new(),
-        h: Vec::new(),
-        coherence: Vec::new(),
-        random_error: Vec::new(),
-    };
+    let mut out = Frf::default();
     for om in grid {
         let (mut sw, mut sh, mut sg, mut se) = (0.0, Complex64::new(0.0, 0.0), 0.0, 0.0);
         for (p, &tw) in parts.iter().zip(window_s) {

@@ -129,12 +129,7 @@ pub fn instrumented(
             ),
         ));
     }
-    let mut f = Frf {
-        omega_rad_s: Vec::new(),
-        h: Vec::new(),
-        coherence: Vec::new(),
-        random_error: Vec::new(),
-    };
+    let mut f = Frf::default();
     for k in 0..cs.omega_rad_s.len() {
         let Some((h, m)) = iv_point(cs, k, instruments, inputs, output) else {
             continue;
@@ -265,12 +260,7 @@ pub fn sweep_instrumented(
             ),
         ));
     }
-    let mut f = Frf {
-        omega_rad_s: Vec::new(),
-        h: Vec::new(),
-        coherence: Vec::new(),
-        random_error: Vec::new(),
-    };
+    let mut f = Frf::default();
     for k in 0..sweeps.omega_rad_s.len() {
         let (Some((h, m)), Some((hw, _))) = (
             iv_point(sweeps, k, instruments, inputs, output),

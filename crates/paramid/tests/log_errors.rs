@@ -136,6 +136,22 @@ fn all_in(e: &str, parts: &[&str]) {
     }
 }
 
+/// Reads the log `log` both as operating point 1 and as verification 0 of
+/// `cfg`: each error names the IDENT.toml, its own field, the log and the
+/// given parts (`op` for the operating point, `verification` for the
+/// verification flight).
+fn both_refuse(cfg: &IdentConfig, log: &str, op: &[&str], verification: &[&str]) {
+    let e = measure(cfg, 1).unwrap_err().to_string();
+    all_in(&e, &["bad.toml", "operating_point[1].log", log]);
+    all_in(&e, op);
+    let start = cfg.start;
+    let e = helicon_paramid::verify::verify(cfg, 0, &start, &start)
+        .unwrap_err()
+        .to_string();
+    all_in(&e, &["bad.toml", "verification[0].log", log]);
+    all_in(&e, verification);
+}
+
 #[test]
 fn a_flight_log_error_names_the_ident_file_the_field_and_the_log() {
     let d = dir("ulog_nan");
@@ -147,31 +163,8 @@ fn a_flight_log_error_names_the_ident_file_the_field_and_the_log() {
         None,
     );
     let cfg = ident(&d, "flight.ulg", "");
-    let e = measure(&cfg, 1).unwrap_err().to_string();
-    all_in(
-        &e,
-        &[
-            "bad.toml",
-            "operating_point[1].log",
-            "flight.ulg",
-            "control.measured[7]",
-            "1.375",
-        ],
-    );
-    let start = cfg.start;
-    let e = helicon_paramid::verify::verify(&cfg, 0, &start, &start)
-        .unwrap_err()
-        .to_string();
-    all_in(
-        &e,
-        &[
-            "bad.toml",
-            "verification[0].log",
-            "flight.ulg",
-            "control.measured[7]",
-            "1.375",
-        ],
-    );
+    let at = ["control.measured[7]", "1.375"];
+    both_refuse(&cfg, "flight.ulg", &at, &at);
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -185,19 +178,7 @@ fn a_log_csv_error_names_the_ident_file_the_field_and_the_log() {
         None,
     );
     let cfg = ident(&d, "log.csv", "");
-    let e = measure(&cfg, 1).unwrap_err().to_string();
-    all_in(
-        &e,
-        &["bad.toml", "operating_point[1].log", "log.csv", "meas_q"],
-    );
-    let start = cfg.start;
-    let e = helicon_paramid::verify::verify(&cfg, 0, &start, &start)
-        .unwrap_err()
-        .to_string();
-    all_in(
-        &e,
-        &["bad.toml", "verification[0].log", "log.csv", "meas_q"],
-    );
+    both_refuse(&cfg, "log.csv", &["meas_q"], &["meas_q"]);
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -295,28 +276,11 @@ fn a_span_not_flown_by_the_law_is_refused_naming_its_times() {
     }
     // through the IDENT.toml: operating point and verification
     let cfg = ident(&d, "flight.ulg", "");
-    let e = measure(&cfg, 1).unwrap_err().to_string();
-    all_in(
-        &e,
-        &[
-            "bad.toml",
-            "operating_point[1].log",
-            "flight.ulg",
-            "1.5 … 1.6975 s",
-        ],
-    );
-    let start = cfg.start;
-    let e = helicon_paramid::verify::verify(&cfg, 0, &start, &start)
-        .unwrap_err()
-        .to_string();
-    all_in(
-        &e,
-        &[
-            "bad.toml",
-            "verification[0].log",
-            "flight.ulg",
-            "1.75 … 1.7725 s",
-        ],
+    both_refuse(
+        &cfg,
+        "flight.ulg",
+        &["1.5 … 1.6975 s"],
+        &["1.75 … 1.7725 s"],
     );
     let _ = std::fs::remove_dir_all(&d);
 }
