@@ -478,6 +478,18 @@ impl Frf {
     pub fn is_empty(&self) -> bool {
         self.omega_rad_s.is_empty()
     }
+
+    /// The points at indices `keep`, in that order (an index beyond the
+    /// last point is skipped).
+    pub fn select(&self, keep: &[usize]) -> Frf {
+        let keep: Vec<usize> = keep.iter().copied().filter(|&k| k < self.len()).collect();
+        Frf {
+            omega_rad_s: keep.iter().map(|&k| self.omega_rad_s[k]).collect(),
+            h: keep.iter().map(|&k| self.h[k]).collect(),
+            coherence: keep.iter().map(|&k| self.coherence[k]).collect(),
+            random_error: keep.iter().map(|&k| self.random_error[k]).collect(),
+        }
+    }
 }
 
 /// Unwrap a phase in degrees: successive jumps brought into (−180, 180].
@@ -863,5 +875,30 @@ mod tests {
             WindowSpec::half_overlap(5000).effective_averages(4561),
             None
         );
+    }
+
+    /// `select` keeps the listed points, in order, every field together,
+    /// and skips an index beyond the last.
+    #[test]
+    fn select_keeps_the_listed_points_of_every_field() {
+        let f = Frf {
+            omega_rad_s: vec![1.0, 2.0, 3.0],
+            h: vec![
+                Complex64::new(1.0, 0.0),
+                Complex64::new(0.0, 2.0),
+                Complex64::new(3.0, 0.0),
+            ],
+            coherence: vec![0.9, 0.8, 0.7],
+            random_error: vec![0.1, 0.2, 0.3],
+        };
+        let s = f.select(&[2, 0, 7]);
+        assert_eq!(s.omega_rad_s, vec![3.0, 1.0]);
+        assert_eq!(
+            s.h,
+            vec![Complex64::new(3.0, 0.0), Complex64::new(1.0, 0.0)]
+        );
+        assert_eq!(s.coherence, vec![0.7, 0.9]);
+        assert_eq!(s.random_error, vec![0.3, 0.1]);
+        assert!(f.select(&[]).is_empty());
     }
 }

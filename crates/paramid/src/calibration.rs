@@ -33,7 +33,8 @@ pub struct ResponseCalibration {
     pub operating_point: String,
     /// Response label (`output/input`).
     pub label: String,
-    /// Frequencies used (ε ≤ the limit in every flight).
+    /// Frequencies used (ε ≤ the limit in every flight). With none, the
+    /// three figures below are NaN: there is nothing to compare.
     pub points: usize,
     /// RMS over frequencies of sd(ln|H|) / rms(ε).
     pub magnitude_ratio: f64,

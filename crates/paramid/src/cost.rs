@@ -149,16 +149,17 @@ impl Cost {
                     .iter()
                     .map(|&k| scales(cfg.cost, cfg.w_kappa, cfg.w_chi, f.coherence[k], idx.len()))
                     .collect();
+                let kept = f.select(&idx);
                 responses.push(Selected {
                     label: m.response.label(),
                     input: m.input,
                     state: m.state,
-                    omega_rad_s: idx.iter().map(|&k| f.omega_rad_s[k]).collect(),
-                    h: idx.iter().map(|&k| f.h[k]).collect(),
-                    coherence: idx.iter().map(|&k| f.coherence[k]).collect(),
+                    omega_rad_s: kept.omega_rad_s,
+                    h: kept.h,
+                    coherence: kept.coherence,
                     scale_mag: sc.iter().map(|s| s.0).collect(),
                     scale_ph: sc.iter().map(|s| s.1).collect(),
-                    random_error: idx.iter().map(|&k| f.random_error[k]).collect(),
+                    random_error: kept.random_error,
                 });
             }
             points.push(PointCost {

@@ -224,7 +224,8 @@ fn push_point(f: &mut Frf, omega: f64, h: helicon_ident::Complex64, m_ww: f64, g
 /// excitation k alone), H = G_eu⁻¹ G_ey as in [`instrumented`]. With as many
 /// windows as inputs the estimate leaves no residual to judge it by, so its
 /// random error takes the equation-error spectrum G_vv from the overlapped
-/// windows of the whole record (`welch`, with this H): Ĥ − H = G_eu⁻¹ G_ev
+/// windows of the whole record (`welch`, at their own estimate of H, so
+/// that their taper's bias is not counted as noise): Ĥ − H = G_eu⁻¹ G_ev
 /// has the covariance M G_vv / K over the K windows (each window's own
 /// normalisation cancels), stated as a coherence with K averages.
 pub fn sweep_instrumented(
@@ -518,12 +519,7 @@ fn within_band(c: &Frf, r: &Response) -> Frf {
                 && c.omega_rad_s[k] <= r.omega_max_rad_s * (1.0 + 1e-12)
         })
         .collect();
-    Frf {
-        omega_rad_s: keep.iter().map(|&k| c.omega_rad_s[k]).collect(),
-        h: keep.iter().map(|&k| c.h[k]).collect(),
-        coherence: keep.iter().map(|&k| c.coherence[k]).collect(),
-        random_error: keep.iter().map(|&k| c.random_error[k]).collect(),
-    }
+    c.select(&keep)
 }
 
 /// Why the sweep windows could not be made.
