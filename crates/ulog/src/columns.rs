@@ -319,7 +319,8 @@ impl UlogColumns {
     }
 
     /// One line per thing a user should know about the reading (samples
-    /// skipped, filled, the jitter, a cut), for a tool to print.
+    /// skipped, filled, a cut), for a tool to print (the period and
+    /// [`max_jitter_s`](Self::max_jitter_s) are the tool's to word).
     pub fn notes(&self) -> Vec<String> {
         let mut out = Vec::new();
         let f = &self.file;
@@ -394,7 +395,26 @@ struct TopicData {
     /// Column index of each field in the subscription's format.
     index: Option<Vec<usize>>,
     t_us: Vec<u64>,
-    values: Vec<Vec<f64>>,
+    /// The fields of every record, record after record (`fields.len()` a
+    /// record): one growing buffer, no allocation per record.
+    values: Vec<f64>,
+}
+
+impl TopicData {
+    fn new(name: &'static str) -> TopicData {
+        TopicData {
+            name,
+            fields: Vec::new(),
+            index: None,
+            t_us: Vec::new(),
+            values: Vec::new(),
+        }
+    }
+
+    /// Field `f` of record `k`.
+    fn value(&self, k: usize, f: usize) -> f64 {
+        self.values[k * self.fields.len() + f]
+    }
 }
 
 fn as_f64(v: &Value) -> Option<f64> {
@@ -437,25 +457,13 @@ pub fn read_ulog_columns(
             wanted.push(col);
         }
     }
-    let mut topics: Vec<TopicData> = vec![TopicData {
-        name: TIME_BASE_TOPIC,
-        fields: Vec::new(),
-        index: None,
-        t_us: Vec::new(),
-        values: Vec::new(),
-    }];
+    let mut topics: Vec<TopicData> = vec![TopicData::new(TIME_BASE_TOPIC)];
     let mut slot = Vec::with_capacity(wanted.len());
     for w in &wanted {
         let ti = match topics.iter().position(|t| t.name == w.topic) {
             Some(i) => i,
             None => {
-                topics.push(TopicData {
-                    name: w.topic,
-                    fields: Vec::new(),
-                    index: None,
-                    t_us: Vec::new(),
-                    values: Vec::new(),
-                });
+                topics.push(TopicData::new(w.topic));
                 topics.len() - 1
             }
         };
@@ -511,9 +519,9 @@ pub fn read_ulog_columns(
     for &(ti, fi) in &slot {
         let at = |k: usize| -> f64 {
             if ti == 0 {
-                topics[0].values[k][fi]
+                topics[0].value(k, fi)
             } else {
-                topics[ti].values[held[ti - 1][k]][fi]
+                topics[ti].value(held[ti - 1][k], fi)
             }
         };
         out.columns.push(fill(&grid.slot, start, at));
@@ -611,11 +619,10 @@ fn collect(
                         previous_s: prev as f64 / 1e6,
                     });
                 }
-                let mut row = Vec::with_capacity(index.len());
                 for (f, &i) in td.fields.iter().zip(index) {
                     let v = topic.format.value(payload, i);
                     match v.as_ref().and_then(as_f64) {
-                        Some(x) if x.is_finite() => row.push(x),
+                        Some(x) if x.is_finite() => td.values.push(x),
                         _ => {
                             return Err(ColumnsError::NotFinite {
                                 file: file.to_string(),
@@ -628,7 +635,6 @@ fn collect(
                     }
                 }
                 td.t_us.push(timestamp_us);
-                td.values.push(row);
             }
             _ => {}
         }
@@ -655,22 +661,13 @@ impl Grid {
                 rule: format!("{} `control` record(s): at least 16 are needed", t_s.len()),
             });
         }
-        for w in t_s.windows(2) {
-            if w[1] == w[0] {
-                return Err(ColumnsError::Duplicate {
-                    file: file.to_string(),
-                    topic: TIME_BASE_TOPIC.into(),
-                    time_s: w[1],
-                });
-            }
-            if w[1] < w[0] {
-                return Err(ColumnsError::Backwards {
-                    file: file.to_string(),
-                    topic: TIME_BASE_TOPIC.into(),
-                    time_s: w[1],
-                    previous_s: w[0],
-                });
-            }
+        // `collect` refused a stamp going back; one repeated is refused here
+        if let Some(w) = t_us.windows(2).find(|w| w[1] == w[0]) {
+            return Err(ColumnsError::Duplicate {
+                file: file.to_string(),
+                topic: TIME_BASE_TOPIC.into(),
+                time_s: w[1] as f64 / 1e6,
+            });
         }
         // steps in whole µs, so the times printed are the log's
         let mut steps: Vec<u64> = t_us.windows(2).map(|w| w[1].saturating_sub(w[0])).collect();
@@ -695,7 +692,8 @@ impl Grid {
         slot.push(0usize);
         let mut max_jitter_s: f64 = 0.0;
         for k in 1..t_s.len() {
-            let step = (t_us[k] - t_us[k - 1]) as f64 / 1e6;
+            // a step back (refused by `collect`) would be 0: refused as jitter
+            let step = t_us[k].saturating_sub(t_us[k - 1]) as f64 / 1e6;
             let m = (step / ts).round();
             if m < 1.0 || (step - m * ts).abs() > JITTER_FRACTION * ts {
                 return Err(ColumnsError::Jitter {
