@@ -437,9 +437,29 @@ pub fn read_ulog_columns(
     names: &[&str],
     period_s: Option<f64>,
 ) -> Result<UlogColumns, ColumnsError> {
+    read_ulog_columns_with(path, names, &[], period_s)
+}
+
+/// As [`read_ulog_columns`], and also the columns `optional` whose topic
+/// the log has records of (after those of `names`, in their order); one
+/// whose topic has none is left out rather than refused. One pass over the
+/// file: a caller need not list the log's topics first
+/// ([`available_columns`]) to know what it may ask for.
+pub fn read_ulog_columns_with(
+    path: &Path,
+    names: &[&str],
+    optional: &[&str],
+    period_s: Option<f64>,
+) -> Result<UlogColumns, ColumnsError> {
     let file = path.display().to_string();
     let mut wanted: Vec<&'static UlogColumn> = Vec::new();
-    for n in names {
+    // whether each of `wanted` was asked for in `names` (else `optional`)
+    let mut required: Vec<bool> = Vec::new();
+    for (n, req) in names
+        .iter()
+        .map(|n| (n, true))
+        .chain(optional.iter().map(|n| (n, false)))
+    {
         if *n == "t_s" {
             continue;
         }
@@ -455,6 +475,7 @@ pub fn read_ulog_columns(
         };
         if !wanted.iter().any(|w| w.name == col.name) {
             wanted.push(col);
+            required.push(req);
         }
     }
     let mut topics: Vec<TopicData> = vec![TopicData::new(TIME_BASE_TOPIC)];
@@ -471,11 +492,19 @@ pub fn read_ulog_columns(
         slot.push((ti, topics[ti].fields.len() - 1));
     }
     let summary = collect(path, &file, &wanted, &mut topics)?;
-    for (w, &(ti, _)) in wanted.iter().zip(&slot) {
-        if topics[ti].t_us.is_empty() {
+    for ((w, &(ti, _)), &req) in wanted.iter().zip(&slot).zip(&required) {
+        if req && topics[ti].t_us.is_empty() {
             return Err(missing_topic(&file, w.topic, w.field, w.name));
         }
     }
+    // what the log gives: every column asked for, the optional ones whose
+    // topic has records (`align` passes over a topic without)
+    let given: Vec<(&'static UlogColumn, (usize, usize))> = wanted
+        .iter()
+        .zip(&slot)
+        .filter(|(_, (ti, _))| !topics[*ti].t_us.is_empty())
+        .map(|(w, s)| (*w, *s))
+        .collect();
     if topics[0].t_us.is_empty() {
         return Err(missing_topic(&file, TIME_BASE_TOPIC, "timestamp", "t_s"));
     }
@@ -485,7 +514,7 @@ pub fn read_ulog_columns(
         file,
         period_s: grid.period_s,
         names: std::iter::once("t_s")
-            .chain(wanted.iter().map(|w| w.name))
+            .chain(given.iter().map(|(w, _)| w.name))
             .map(String::from)
             .collect(),
         columns: Vec::new(),
@@ -516,7 +545,7 @@ pub fn read_ulog_columns(
         }
     }
     out.columns.push(t);
-    for &(ti, fi) in &slot {
+    for &(_, (ti, fi)) in &given {
         let at = |k: usize| -> f64 {
             if ti == 0 {
                 topics[0].value(k, fi)
@@ -739,6 +768,11 @@ fn align(
     let mut start = 0;
     let mut held = Vec::with_capacity(topics.len().saturating_sub(1));
     for td in &topics[1..] {
+        if td.t_us.is_empty() {
+            // an optional column's topic without records: nothing read from it
+            held.push(Vec::new());
+            continue;
+        }
         let rec: Vec<f64> = td.t_us.iter().map(|t| *t as f64 / 1e6).collect();
         let mut idx = Vec::with_capacity(grid.t_s.len());
         let mut j: Option<usize> = None;
@@ -766,6 +800,9 @@ fn align(
         });
     }
     for (td, idx) in topics[1..].iter().zip(&held) {
+        if td.t_us.is_empty() {
+            continue;
+        }
         for k in start..grid.t_s.len() {
             let age = grid.t_s[k] - td.t_us[idx[k]] as f64 / 1e6;
             if age > max_age + 1e-9 {

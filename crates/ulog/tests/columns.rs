@@ -9,7 +9,7 @@
 //! (tools/gen_ulog_fixtures.py).
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests: a failed unwrap is a failed test
 
-use helicon_ulog::columns::{ColumnsError, read_ulog_columns};
+use helicon_ulog::columns::{ColumnsError, read_ulog_columns, read_ulog_columns_with};
 use helicon_ulog::messages::{Control, Excitation};
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogRecord};
 use std::path::{Path, PathBuf};
@@ -221,6 +221,28 @@ fn other_topics_are_held_start_late_and_must_not_stop() {
             && e.to_string().contains("(at most 0.0125 s)"),
         "{e}"
     );
+}
+
+#[test]
+fn optional_columns_are_given_when_their_topic_was_logged() {
+    // excitation logged: the optional column comes after those asked for,
+    // with the logged values; servo_output not logged: left out, no error
+    let p = write_log("optional", 50, |_| Some(0), |_| Some(0));
+    let c =
+        read_ulog_columns_with(&p, &["meas_p"], &["servo_source", "exc_lat"], Some(T_S)).unwrap();
+    assert_eq!(c.names, ["t_s", "meas_p", "exc_lat"]);
+    for k in 0..50u64 {
+        assert_eq!(c.columns[1][k as usize], value(k, 26)); // measured[6]
+        assert_eq!(c.columns[2][k as usize], value(k, 31)); // offset[1]
+    }
+    // no excitation at all: the optional column left out, the record whole
+    let p = write_log("optional_none", 50, |_| Some(0), |_| None);
+    let c = read_ulog_columns_with(&p, &["meas_p"], &["exc_lat"], Some(T_S)).unwrap();
+    assert_eq!(c.names, ["t_s", "meas_p"]);
+    assert_eq!((c.columns[0].len(), c.skipped_start), (50, 0));
+    // asked for, not optional: refused as before
+    let e = read_ulog_columns_with(&p, &["exc_lat"], &["meas_p"], Some(T_S)).unwrap_err();
+    assert!(matches!(e, ColumnsError::MissingTopic { .. }), "{e}");
 }
 
 #[test]
