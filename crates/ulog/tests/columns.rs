@@ -9,41 +9,20 @@
 //! (tools/gen_ulog_fixtures.py).
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests: a failed unwrap is a failed test
 
+use helicon_ulog::LogRecord;
 use helicon_ulog::columns::{ColumnsError, read_ulog_columns, read_ulog_columns_with};
-use helicon_ulog::messages::{Control, Excitation};
-use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogRecord};
+use helicon_ulog::messages::Excitation;
+use helicon_ulog::synthetic::{synthetic_value as value, write_control_log};
 use std::path::{Path, PathBuf};
 
 const T_US: i64 = 2500;
 const T_S: f64 = 0.0025;
 
-fn value(k: u64, i: usize) -> f64 {
-    ((k as f64) * 0.21 + i as f64).sin()
-}
-
-fn control(ts: u64, k: u64) -> LogRecord {
-    LogRecord::Control(Control {
-        timestamp: ts,
-        sample: k,
-        t_s: ts as f64 * 1e-6,
-        command: std::array::from_fn(|i| value(k, i)),
-        estimate: std::array::from_fn(|i| value(k, i + 10)),
-        measured: std::array::from_fn(|i| value(k, i + 20)),
-        ..Control::default()
-    })
-}
-
-fn excitation(ts: u64, k: u64) -> LogRecord {
-    LogRecord::Excitation(Excitation {
-        timestamp: ts,
-        offset: std::array::from_fn(|i| value(k, i + 30)),
-        active: true,
-    })
-}
-
 /// A log of `n` control steps; `stamp(k)` gives step k's control timestamp
 /// offset from k·T (µs) or `None` to drop it; `exc(k)` the excitation's
-/// offset from the control timestamp or `None` for none.
+/// offset from the control timestamp or `None` for none. Step k's values
+/// are `value(k, i)`: commands i = 0…3, estimate 10…18, measured 20…28,
+/// excitation offsets 30…33.
 fn write_log(
     name: &str,
     n: u64,
@@ -53,17 +32,25 @@ fn write_log(
     let dir = std::env::temp_dir().join(format!("helicon_ulog_columns_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.ulg"));
-    let mut log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap();
-    for k in 0..n {
-        let Some(j) = stamp(k) else { continue };
-        let ts = u64::try_from(1_000_000 + i64::try_from(k).unwrap() * T_US + j).unwrap();
-        log.write(&control(ts, k)).unwrap();
-        if let Some(e) = exc(k) {
-            log.write(&excitation(ts.checked_add_signed(e).unwrap(), k))
-                .unwrap();
-        }
-    }
-    log.finish().unwrap();
+    let stamp_us = |k: u64| {
+        let j = stamp(k)?;
+        Some(u64::try_from(1_000_000 + i64::try_from(k).unwrap() * T_US + j).unwrap())
+    };
+    write_control_log(
+        &path,
+        n,
+        stamp_us,
+        |_, _| {},
+        |k, c| {
+            let e = exc(k)?;
+            Some(LogRecord::Excitation(Excitation {
+                timestamp: c.timestamp.checked_add_signed(e).unwrap(),
+                offset: std::array::from_fn(|i| value(k, i + 30)),
+                active: true,
+            }))
+        },
+    )
+    .unwrap();
     path
 }
 
@@ -265,17 +252,18 @@ fn bad_logs_are_refused_naming_file_topic_field() {
     // a NaN in the measured rates
     let dir = p.parent().unwrap();
     let path = dir.join("nan.ulg");
-    let mut log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap();
-    for k in 0..50u64 {
-        let mut r = control(1_000_000 + k * 2500, k);
-        if let LogRecord::Control(c) = &mut r
-            && k == 30
-        {
-            c.measured[6] = f64::NAN;
-        }
-        log.write(&r).unwrap();
-    }
-    log.finish().unwrap();
+    write_control_log(
+        &path,
+        50,
+        |k| Some(1_000_000 + k * 2500),
+        |k, c| {
+            if k == 30 {
+                c.measured[6] = f64::NAN;
+            }
+        },
+        |_, _| None,
+    )
+    .unwrap();
     let e = read_ulog_columns(&path, &["meas_p"], Some(T_S))
         .unwrap_err()
         .to_string();
