@@ -355,17 +355,41 @@ impl UlogColumns {
 /// The names a log at `path` can give: `t_s` and the columns of
 /// [`ULOG_COLUMNS`] whose topic has records (the runtime subscribes every
 /// topic; a flight without `[[excitation]]` logs no `excitation` record).
+/// The file is read until a record of every topic of [`ULOG_COLUMNS`] has
+/// been seen (within the first control steps of a flight that logs them
+/// all), else to its end; a fault after that point is left to the reading
+/// of the columns to report.
 pub fn available_columns(path: &Path) -> Result<Vec<&'static str>, ColumnsError> {
-    let mut topics = BTreeSet::new();
-    visit::<_, ReadError>(open(path)?, |e| {
+    /// Why the pass ended early: a read error, or every topic seen.
+    enum Stop {
+        Read(ReadError),
+        AllSeen,
+    }
+    impl From<ReadError> for Stop {
+        fn from(e: ReadError) -> Stop {
+            Stop::Read(e)
+        }
+    }
+    // every topic a column comes from, the time base among them
+    let mut all: Vec<&'static str> = ULOG_COLUMNS.iter().map(|c| c.topic).collect();
+    all.sort_unstable();
+    all.dedup();
+    let mut topics: BTreeSet<&'static str> = BTreeSet::new();
+    let pass = visit::<_, Stop>(open(path)?, |e| {
         if let Event::Data { topic, .. } = e
             && topic.multi_id == 0
-            && !topics.contains(&topic.name)
+            && let Some(t) = all.iter().find(|t| **t == topic.name)
+            && topics.insert(t)
+            && topics.len() == all.len()
         {
-            topics.insert(topic.name.clone());
+            return Err(Stop::AllSeen);
         }
         Ok(())
-    })?;
+    });
+    match pass {
+        Ok(_) | Err(Stop::AllSeen) => {}
+        Err(Stop::Read(e)) => return Err(e.into()),
+    }
     let mut out = Vec::new();
     if topics.contains(TIME_BASE_TOPIC) {
         out.push("t_s");

@@ -10,7 +10,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests: a failed unwrap is a failed test
 
 use helicon_ulog::LogRecord;
-use helicon_ulog::columns::{ColumnsError, read_ulog_columns, read_ulog_columns_with};
+use helicon_ulog::columns::{
+    ColumnsError, ULOG_COLUMNS, available_columns, read_ulog_columns, read_ulog_columns_with,
+};
 use helicon_ulog::messages::Excitation;
 use helicon_ulog::synthetic::{synthetic_value as value, write_control_log};
 use std::path::{Path, PathBuf};
@@ -230,6 +232,84 @@ fn optional_columns_are_given_when_their_topic_was_logged() {
     // asked for, not optional: refused as before
     let e = read_ulog_columns_with(&p, &["exc_lat"], &["meas_p"], Some(T_S)).unwrap_err();
     assert!(matches!(e, ColumnsError::MissingTopic { .. }), "{e}");
+}
+
+/// The log `name`: 50 control steps, the first also with a record of every
+/// other topic a column comes from (`estimator_bias` only `with_bias`), then a subscription of a
+/// format the log does not define (a fault the reader refuses).
+fn all_topics_then_a_fault(name: &str, with_bias: bool) -> PathBuf {
+    use helicon_ulog::messages::{EstimatorBias, ImuHealth};
+    use helicon_ulog::synthetic::servo_record;
+    let dir = std::env::temp_dir().join(format!("helicon_ulog_columns_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.ulg"));
+    let mut log = helicon_ulog::FlightLog::create(
+        &path,
+        &helicon_ulog::LogInfo::default(),
+        helicon_ulog::FlushPolicy::default(),
+    )
+    .unwrap();
+    let c = helicon_ulog::messages::Control {
+        timestamp: 1_000_000,
+        ..Default::default()
+    };
+    let ts = c.timestamp;
+    let mut records = vec![
+        LogRecord::Control(c),
+        LogRecord::Excitation(Excitation {
+            timestamp: ts,
+            ..Default::default()
+        }),
+        servo_record(&c, 0),
+        LogRecord::ImuHealth(ImuHealth {
+            timestamp: ts,
+            ..Default::default()
+        }),
+        LogRecord::EstimatorBias(EstimatorBias {
+            timestamp: ts,
+            ..Default::default()
+        }),
+    ];
+    if !with_bias {
+        records.pop();
+    }
+    for r in &records {
+        log.write(r).unwrap();
+    }
+    for k in 1..50u64 {
+        let mut c = c;
+        c.timestamp = 1_000_000 + 2500 * k;
+        log.write(&LogRecord::Control(c)).unwrap();
+    }
+    log.finish().unwrap();
+    // 'A': multi_id 0, msg_id 999, a format name never defined
+    let name = b"nosuch";
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes.extend_from_slice(&u16::try_from(3 + name.len()).unwrap().to_le_bytes());
+    bytes.push(b'A');
+    bytes.push(0);
+    bytes.extend_from_slice(&999u16.to_le_bytes());
+    bytes.extend_from_slice(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+#[test]
+fn available_columns_stops_once_every_topic_was_seen() {
+    // every topic in the first step: the names come before the fault
+    let p = all_topics_then_a_fault("all_then_fault", true);
+    let names = available_columns(&p).unwrap();
+    assert_eq!(names.len(), 1 + ULOG_COLUMNS.len(), "{names:?}");
+    // the columns themselves read to the end and meet it
+    let e = read_ulog_columns(&p, &["S_lat"], Some(T_S)).unwrap_err();
+    assert!(matches!(e, ColumnsError::Read(_)), "{e}");
+    // a topic never logged: read to the end, the fault reported
+    let p = all_topics_then_a_fault("bias_missing_then_fault", false);
+    let e = available_columns(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("bias_missing_then_fault.ulg") && e.contains("'A'"),
+        "{e}"
+    );
 }
 
 #[test]
