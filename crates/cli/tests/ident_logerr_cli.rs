@@ -9,14 +9,14 @@
 
 mod common;
 use common::{helicon, tmpdir};
-use helicon_ulog::messages::{Control, ServoOutput};
-use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogRecord};
+use helicon_ulog::synthetic::{servo_record, write_control_log};
 use std::path::Path;
 
 /// A flight log of `n` control steps of 2500 µs from t = 1 s (step `k`
-/// stamped `stamp(k)` µs), the servo commands and rates pseudo-random;
-/// `meas_q` of step 150 (t = 1.375 s) NaN when `nan`; a `servo_output`
-/// record after each step with the source `source(k)` when given.
+/// stamped `stamp(k)` µs), the servo commands and rates the synthetic
+/// log's; `meas_q` of step 150 (t = 1.375 s) NaN when `nan`; a
+/// `servo_output` record after each step with the source `source(k)` when
+/// given.
 fn write_ulog(
     path: &Path,
     n: u64,
@@ -24,35 +24,18 @@ fn write_ulog(
     nan: bool,
     source: Option<&dyn Fn(u64) -> u8>,
 ) {
-    let mut log = FlightLog::create(path, &LogInfo::default(), FlushPolicy::default()).unwrap();
-    for k in 0..n {
-        let ts = stamp(k);
-        let v = |i: usize| ((k as f64) * 0.37 + 1.7 * i as f64).sin();
-        let command: [f64; 4] = std::array::from_fn(v);
-        let mut measured: [f64; 9] = std::array::from_fn(|i| v(i + 4));
-        if nan && k == 150 {
-            measured[7] = f64::NAN;
-        }
-        log.write(&LogRecord::Control(Control {
-            timestamp: ts,
-            sample: k,
-            t_s: ts as f64 * 1e-6,
-            command,
-            estimate: measured,
-            measured,
-            ..Control::default()
-        }))
-        .unwrap();
-        if let Some(s) = source {
-            log.write(&LogRecord::Servo(ServoOutput {
-                timestamp: ts,
-                command,
-                source: s(k),
-            }))
-            .unwrap();
-        }
-    }
-    log.finish().unwrap();
+    write_control_log(
+        path,
+        n,
+        |k| Some(stamp(k)),
+        |k, c| {
+            if nan && k == 150 {
+                c.measured[7] = f64::NAN;
+            }
+        },
+        |k, c| source.map(|s| servo_record(c, s(k))),
+    )
+    .unwrap();
 }
 
 fn steady(k: u64) -> u64 {

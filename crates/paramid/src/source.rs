@@ -14,7 +14,7 @@
 use crate::error::LogError;
 use helicon_model::config_error::format_seconds;
 use helicon_sim::log_csv::{LogReader, read_log_csv_with};
-use helicon_ulog::columns::{available_columns, read_ulog_columns};
+use helicon_ulog::columns::{available_columns, read_ulog_columns_with};
 use std::io::Read;
 use std::path::Path;
 
@@ -56,16 +56,13 @@ impl LogColumns {
 }
 
 /// Read `t_s` and the columns `names` of the log at `path`: a ULog onto the
-/// control grid of period `period_s`, a CSV as it is; with the
-/// [`SERVO_SOURCE`] column when the log has it.
+/// control grid of period `period_s` (one pass over the file), a CSV as it
+/// is; with the [`SERVO_SOURCE`] column when the log has it.
 pub fn read_log(path: &Path, names: &[&str], period_s: f64) -> Result<LogColumns, LogError> {
-    let offered = log_names(path)?;
-    let mut ask: Vec<&str> = names.to_vec();
-    if offered.iter().any(|n| n == SERVO_SOURCE) && !ask.contains(&SERVO_SOURCE) {
-        ask.push(SERVO_SOURCE);
-    }
+    let asked = names.contains(&SERVO_SOURCE);
     let mut out = if is_ulog(path) {
-        let u = read_ulog_columns(path, &ask, Some(period_s))?;
+        let optional: &[&str] = if asked { &[] } else { &[SERVO_SOURCE] };
+        let u = read_ulog_columns_with(path, names, optional, Some(period_s))?;
         let notes = u.notes();
         LogColumns {
             names: u.names,
@@ -74,6 +71,15 @@ pub fn read_log(path: &Path, names: &[&str], period_s: f64) -> Result<LogColumns
             servo_source: None,
         }
     } else {
+        let mut ask: Vec<&str> = names.to_vec();
+        if !asked
+            && LogReader::open(path, &[])?
+                .names()
+                .iter()
+                .any(|n| n == SERVO_SOURCE)
+        {
+            ask.push(SERVO_SOURCE);
+        }
         let table = read_log_csv_with(path, &ask)?;
         let mut out = LogColumns {
             names: vec!["t_s".into()],
@@ -87,12 +93,12 @@ pub fn read_log(path: &Path, names: &[&str], period_s: f64) -> Result<LogColumns
         }
         out
     };
-    if ask.len() > names.len() {
-        // asked for here, not by the caller
+    if asked {
+        out.servo_source = Some(out.column(SERVO_SOURCE).to_vec());
+    } else if out.names.last().is_some_and(|n| n == SERVO_SOURCE) {
+        // read here, not asked for by the caller: the last column
         out.names.pop();
         out.servo_source = out.columns.pop();
-    } else if names.contains(&SERVO_SOURCE) {
-        out.servo_source = Some(out.column(SERVO_SOURCE).to_vec());
     }
     Ok(out)
 }

@@ -10,8 +10,7 @@
 
 use helicon_paramid::config::IdentConfig;
 use helicon_paramid::data::{measure, read_record};
-use helicon_ulog::messages::{Control, ServoOutput};
-use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogRecord};
+use helicon_ulog::synthetic::{servo_record, write_control_log};
 use std::path::{Path, PathBuf};
 
 /// The control period of the Bergen Twin's parameters (the IDENT.toml's
@@ -28,41 +27,24 @@ fn dir(name: &str) -> PathBuf {
     d
 }
 
-/// A flight log of `n` control steps of 2500 µs from t = 1 s; step `k`'s
-/// `measured[7]` (meas_q) is `meas_q(k)`; a `servo_output` record after each
-/// `control` record when `source` is given, with the source of step `k`.
+/// A flight log of `n` control steps of 2500 µs from t = 1 s (the
+/// synthetic log's values); step `k`'s `measured[7]` (meas_q) is
+/// `meas_q(k)`; a `servo_output` record after each `control` record when
+/// `source` is given, with the source of step `k`.
 fn write_ulog(
     path: &Path,
     n: u64,
     meas_q: impl Fn(u64) -> f64,
     source: Option<&dyn Fn(u64) -> u8>,
 ) {
-    let mut log = FlightLog::create(path, &LogInfo::default(), FlushPolicy::default()).unwrap();
-    for k in 0..n {
-        let ts = 1_000_000 + k * 2500;
-        let v = |i: usize| ((k as f64) * 0.37 + i as f64).sin();
-        let mut measured: [f64; 9] = std::array::from_fn(|i| v(i + 20));
-        measured[7] = meas_q(k);
-        log.write(&LogRecord::Control(Control {
-            timestamp: ts,
-            sample: k,
-            t_s: ts as f64 * 1e-6,
-            command: std::array::from_fn(v),
-            estimate: std::array::from_fn(|i| v(i + 10)),
-            measured,
-            ..Control::default()
-        }))
-        .unwrap();
-        if let Some(s) = source {
-            log.write(&LogRecord::Servo(ServoOutput {
-                timestamp: ts,
-                command: std::array::from_fn(v),
-                source: s(k),
-            }))
-            .unwrap();
-        }
-    }
-    log.finish().unwrap();
+    write_control_log(
+        path,
+        n,
+        |k| Some(1_000_000 + k * 2500),
+        |k, c| c.measured[7] = meas_q(k),
+        |k, c| source.map(|s| servo_record(c, s(k))),
+    )
+    .unwrap();
 }
 
 /// A log.csv of `n` rows every 2.5 ms from t = 1 s with the servo columns
@@ -186,18 +168,15 @@ fn a_log_csv_error_names_the_ident_file_the_field_and_the_log() {
 fn a_duplicated_control_stamp_is_a_sample_written_twice_not_time_going_back() {
     let d = dir("dup");
     let path = d.join("dup.ulg");
-    let mut log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap();
-    for k in 0..400u64 {
-        // step 101 stamped as step 100 (t = 1.25 s): written twice
-        let ts = 1_000_000 + (k - u64::from(k == 101)) * 2500;
-        log.write(&LogRecord::Control(Control {
-            timestamp: ts,
-            sample: k,
-            ..Control::default()
-        }))
-        .unwrap();
-    }
-    log.finish().unwrap();
+    // step 101 stamped as step 100 (t = 1.25 s): written twice
+    write_control_log(
+        &path,
+        400,
+        |k| Some(1_000_000 + (k - u64::from(k == 101)) * 2500),
+        |_, _| {},
+        |_, _| None,
+    )
+    .unwrap();
     let cfg = ident(&d, "dup.ulg", "");
     let e = measure(&cfg, 1).unwrap_err().to_string();
     all_in(

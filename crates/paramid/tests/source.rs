@@ -6,8 +6,7 @@
 use helicon_paramid::source::{is_ulog, log_names, read_log};
 use helicon_sim::log_csv::log_column;
 use helicon_ulog::columns::ULOG_COLUMNS;
-use helicon_ulog::messages::Control;
-use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogRecord};
+use helicon_ulog::synthetic::write_control_log;
 
 fn dir() -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("helicon_paramid_source_{}", std::process::id()));
@@ -40,17 +39,14 @@ fn the_file_not_its_name_decides() {
     let d = dir();
     // a flight log named .csv
     let ulg = d.join("flight.csv");
-    let mut log = FlightLog::create(&ulg, &LogInfo::default(), FlushPolicy::default()).unwrap();
-    for k in 0..100u64 {
-        log.write(&LogRecord::Control(Control {
-            timestamp: 2500 * k,
-            sample: k,
-            command: [0.0, 0.01 * k as f64, 0.0, 0.0],
-            ..Control::default()
-        }))
-        .unwrap();
-    }
-    log.finish().unwrap();
+    write_control_log(
+        &ulg,
+        100,
+        |k| Some(2500 * k),
+        |k, c| c.command[1] = 0.01 * k as f64,
+        |_, _| None,
+    )
+    .unwrap();
     assert!(is_ulog(&ulg));
     let c = read_log(&ulg, &["S_lat", "est_p"], 0.0025).unwrap();
     assert_eq!(c.names, ["t_s", "S_lat", "est_p"]);

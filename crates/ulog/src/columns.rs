@@ -319,7 +319,8 @@ impl UlogColumns {
     }
 
     /// One line per thing a user should know about the reading (samples
-    /// skipped, filled, the jitter, a cut), for a tool to print.
+    /// skipped, filled, a cut), for a tool to print (the period and
+    /// [`max_jitter_s`](Self::max_jitter_s) are the tool's to word).
     pub fn notes(&self) -> Vec<String> {
         let mut out = Vec::new();
         let f = &self.file;
@@ -354,17 +355,41 @@ impl UlogColumns {
 /// The names a log at `path` can give: `t_s` and the columns of
 /// [`ULOG_COLUMNS`] whose topic has records (the runtime subscribes every
 /// topic; a flight without `[[excitation]]` logs no `excitation` record).
+/// The file is read until a record of every topic of [`ULOG_COLUMNS`] has
+/// been seen (within the first control steps of a flight that logs them
+/// all), else to its end; a fault after that point is left to the reading
+/// of the columns to report.
 pub fn available_columns(path: &Path) -> Result<Vec<&'static str>, ColumnsError> {
-    let mut topics = BTreeSet::new();
-    visit::<_, ReadError>(open(path)?, |e| {
+    /// Why the pass ended early: a read error, or every topic seen.
+    enum Stop {
+        Read(ReadError),
+        AllSeen,
+    }
+    impl From<ReadError> for Stop {
+        fn from(e: ReadError) -> Stop {
+            Stop::Read(e)
+        }
+    }
+    // every topic a column comes from, the time base among them
+    let mut all: Vec<&'static str> = ULOG_COLUMNS.iter().map(|c| c.topic).collect();
+    all.sort_unstable();
+    all.dedup();
+    let mut topics: BTreeSet<&'static str> = BTreeSet::new();
+    let pass = visit::<_, Stop>(open(path)?, |e| {
         if let Event::Data { topic, .. } = e
             && topic.multi_id == 0
-            && !topics.contains(&topic.name)
+            && let Some(t) = all.iter().find(|t| **t == topic.name)
+            && topics.insert(t)
+            && topics.len() == all.len()
         {
-            topics.insert(topic.name.clone());
+            return Err(Stop::AllSeen);
         }
         Ok(())
-    })?;
+    });
+    match pass {
+        Ok(_) | Err(Stop::AllSeen) => {}
+        Err(Stop::Read(e)) => return Err(e.into()),
+    }
     let mut out = Vec::new();
     if topics.contains(TIME_BASE_TOPIC) {
         out.push("t_s");
@@ -394,7 +419,26 @@ struct TopicData {
     /// Column index of each field in the subscription's format.
     index: Option<Vec<usize>>,
     t_us: Vec<u64>,
-    values: Vec<Vec<f64>>,
+    /// The fields of every record, record after record (`fields.len()` a
+    /// record): one growing buffer, no allocation per record.
+    values: Vec<f64>,
+}
+
+impl TopicData {
+    fn new(name: &'static str) -> TopicData {
+        TopicData {
+            name,
+            fields: Vec::new(),
+            index: None,
+            t_us: Vec::new(),
+            values: Vec::new(),
+        }
+    }
+
+    /// Field `f` of record `k`.
+    fn value(&self, k: usize, f: usize) -> f64 {
+        self.values[k * self.fields.len() + f]
+    }
 }
 
 fn as_f64(v: &Value) -> Option<f64> {
@@ -417,9 +461,29 @@ pub fn read_ulog_columns(
     names: &[&str],
     period_s: Option<f64>,
 ) -> Result<UlogColumns, ColumnsError> {
+    read_ulog_columns_with(path, names, &[], period_s)
+}
+
+/// As [`read_ulog_columns`], and also the columns `optional` whose topic
+/// the log has records of (after those of `names`, in their order); one
+/// whose topic has none is left out rather than refused. One pass over the
+/// file: a caller need not list the log's topics first
+/// ([`available_columns`]) to know what it may ask for.
+pub fn read_ulog_columns_with(
+    path: &Path,
+    names: &[&str],
+    optional: &[&str],
+    period_s: Option<f64>,
+) -> Result<UlogColumns, ColumnsError> {
     let file = path.display().to_string();
     let mut wanted: Vec<&'static UlogColumn> = Vec::new();
-    for n in names {
+    // whether each of `wanted` was asked for in `names` (else `optional`)
+    let mut required: Vec<bool> = Vec::new();
+    for (n, req) in names
+        .iter()
+        .map(|n| (n, true))
+        .chain(optional.iter().map(|n| (n, false)))
+    {
         if *n == "t_s" {
             continue;
         }
@@ -435,27 +499,16 @@ pub fn read_ulog_columns(
         };
         if !wanted.iter().any(|w| w.name == col.name) {
             wanted.push(col);
+            required.push(req);
         }
     }
-    let mut topics: Vec<TopicData> = vec![TopicData {
-        name: TIME_BASE_TOPIC,
-        fields: Vec::new(),
-        index: None,
-        t_us: Vec::new(),
-        values: Vec::new(),
-    }];
+    let mut topics: Vec<TopicData> = vec![TopicData::new(TIME_BASE_TOPIC)];
     let mut slot = Vec::with_capacity(wanted.len());
     for w in &wanted {
         let ti = match topics.iter().position(|t| t.name == w.topic) {
             Some(i) => i,
             None => {
-                topics.push(TopicData {
-                    name: w.topic,
-                    fields: Vec::new(),
-                    index: None,
-                    t_us: Vec::new(),
-                    values: Vec::new(),
-                });
+                topics.push(TopicData::new(w.topic));
                 topics.len() - 1
             }
         };
@@ -463,11 +516,19 @@ pub fn read_ulog_columns(
         slot.push((ti, topics[ti].fields.len() - 1));
     }
     let summary = collect(path, &file, &wanted, &mut topics)?;
-    for (w, &(ti, _)) in wanted.iter().zip(&slot) {
-        if topics[ti].t_us.is_empty() {
+    for ((w, &(ti, _)), &req) in wanted.iter().zip(&slot).zip(&required) {
+        if req && topics[ti].t_us.is_empty() {
             return Err(missing_topic(&file, w.topic, w.field, w.name));
         }
     }
+    // what the log gives: every column asked for, the optional ones whose
+    // topic has records (`align` passes over a topic without)
+    let given: Vec<(&'static UlogColumn, (usize, usize))> = wanted
+        .iter()
+        .zip(&slot)
+        .filter(|(_, (ti, _))| !topics[*ti].t_us.is_empty())
+        .map(|(w, s)| (*w, *s))
+        .collect();
     if topics[0].t_us.is_empty() {
         return Err(missing_topic(&file, TIME_BASE_TOPIC, "timestamp", "t_s"));
     }
@@ -477,7 +538,7 @@ pub fn read_ulog_columns(
         file,
         period_s: grid.period_s,
         names: std::iter::once("t_s")
-            .chain(wanted.iter().map(|w| w.name))
+            .chain(given.iter().map(|(w, _)| w.name))
             .map(String::from)
             .collect(),
         columns: Vec::new(),
@@ -508,12 +569,12 @@ pub fn read_ulog_columns(
         }
     }
     out.columns.push(t);
-    for &(ti, fi) in &slot {
+    for &(_, (ti, fi)) in &given {
         let at = |k: usize| -> f64 {
             if ti == 0 {
-                topics[0].values[k][fi]
+                topics[0].value(k, fi)
             } else {
-                topics[ti].values[held[ti - 1][k]][fi]
+                topics[ti].value(held[ti - 1][k], fi)
             }
         };
         out.columns.push(fill(&grid.slot, start, at));
@@ -611,11 +672,10 @@ fn collect(
                         previous_s: prev as f64 / 1e6,
                     });
                 }
-                let mut row = Vec::with_capacity(index.len());
                 for (f, &i) in td.fields.iter().zip(index) {
                     let v = topic.format.value(payload, i);
                     match v.as_ref().and_then(as_f64) {
-                        Some(x) if x.is_finite() => row.push(x),
+                        Some(x) if x.is_finite() => td.values.push(x),
                         _ => {
                             return Err(ColumnsError::NotFinite {
                                 file: file.to_string(),
@@ -628,7 +688,6 @@ fn collect(
                     }
                 }
                 td.t_us.push(timestamp_us);
-                td.values.push(row);
             }
             _ => {}
         }
@@ -655,22 +714,13 @@ impl Grid {
                 rule: format!("{} `control` record(s): at least 16 are needed", t_s.len()),
             });
         }
-        for w in t_s.windows(2) {
-            if w[1] == w[0] {
-                return Err(ColumnsError::Duplicate {
-                    file: file.to_string(),
-                    topic: TIME_BASE_TOPIC.into(),
-                    time_s: w[1],
-                });
-            }
-            if w[1] < w[0] {
-                return Err(ColumnsError::Backwards {
-                    file: file.to_string(),
-                    topic: TIME_BASE_TOPIC.into(),
-                    time_s: w[1],
-                    previous_s: w[0],
-                });
-            }
+        // `collect` refused a stamp going back; one repeated is refused here
+        if let Some(w) = t_us.windows(2).find(|w| w[1] == w[0]) {
+            return Err(ColumnsError::Duplicate {
+                file: file.to_string(),
+                topic: TIME_BASE_TOPIC.into(),
+                time_s: w[1] as f64 / 1e6,
+            });
         }
         // steps in whole µs, so the times printed are the log's
         let mut steps: Vec<u64> = t_us.windows(2).map(|w| w[1].saturating_sub(w[0])).collect();
@@ -695,7 +745,8 @@ impl Grid {
         slot.push(0usize);
         let mut max_jitter_s: f64 = 0.0;
         for k in 1..t_s.len() {
-            let step = (t_us[k] - t_us[k - 1]) as f64 / 1e6;
+            // a step back (refused by `collect`) would be 0: refused as jitter
+            let step = t_us[k].saturating_sub(t_us[k - 1]) as f64 / 1e6;
             let m = (step / ts).round();
             if m < 1.0 || (step - m * ts).abs() > JITTER_FRACTION * ts {
                 return Err(ColumnsError::Jitter {
@@ -741,6 +792,11 @@ fn align(
     let mut start = 0;
     let mut held = Vec::with_capacity(topics.len().saturating_sub(1));
     for td in &topics[1..] {
+        if td.t_us.is_empty() {
+            // an optional column's topic without records: nothing read from it
+            held.push(Vec::new());
+            continue;
+        }
         let rec: Vec<f64> = td.t_us.iter().map(|t| *t as f64 / 1e6).collect();
         let mut idx = Vec::with_capacity(grid.t_s.len());
         let mut j: Option<usize> = None;
@@ -768,6 +824,9 @@ fn align(
         });
     }
     for (td, idx) in topics[1..].iter().zip(&held) {
+        if td.t_us.is_empty() {
+            continue;
+        }
         for k in start..grid.t_s.len() {
             let age = grid.t_s[k] - td.t_us[idx[k]] as f64 / 1e6;
             if age > max_age + 1e-9 {

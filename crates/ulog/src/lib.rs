@@ -25,6 +25,8 @@
 //!   text export (`helicon log export`) and the summary (`helicon log info`);
 //!   [`columns`]: a flight log as the simulator's `log.csv` columns on the
 //!   control grid (what identification reads).
+//! - [`synthetic`]: synthetic flight logs (stamps chosen, values a test
+//!   recomputes), written by the project's writer, for tests and examples.
 //!
 //! ## Writing a flight log
 //!
@@ -55,6 +57,7 @@ pub mod format;
 pub mod messages;
 pub mod reader;
 pub mod spec;
+pub mod synthetic;
 pub mod visit;
 pub mod writer;
 

@@ -9,41 +9,22 @@
 //! (tools/gen_ulog_fixtures.py).
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests: a failed unwrap is a failed test
 
-use helicon_ulog::columns::{ColumnsError, read_ulog_columns};
-use helicon_ulog::messages::{Control, Excitation};
-use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogRecord};
+use helicon_ulog::LogRecord;
+use helicon_ulog::columns::{
+    ColumnsError, ULOG_COLUMNS, available_columns, read_ulog_columns, read_ulog_columns_with,
+};
+use helicon_ulog::messages::Excitation;
+use helicon_ulog::synthetic::{synthetic_value as value, write_control_log};
 use std::path::{Path, PathBuf};
 
 const T_US: i64 = 2500;
 const T_S: f64 = 0.0025;
 
-fn value(k: u64, i: usize) -> f64 {
-    ((k as f64) * 0.21 + i as f64).sin()
-}
-
-fn control(ts: u64, k: u64) -> LogRecord {
-    LogRecord::Control(Control {
-        timestamp: ts,
-        sample: k,
-        t_s: ts as f64 * 1e-6,
-        command: std::array::from_fn(|i| value(k, i)),
-        estimate: std::array::from_fn(|i| value(k, i + 10)),
-        measured: std::array::from_fn(|i| value(k, i + 20)),
-        ..Control::default()
-    })
-}
-
-fn excitation(ts: u64, k: u64) -> LogRecord {
-    LogRecord::Excitation(Excitation {
-        timestamp: ts,
-        offset: std::array::from_fn(|i| value(k, i + 30)),
-        active: true,
-    })
-}
-
 /// A log of `n` control steps; `stamp(k)` gives step k's control timestamp
 /// offset from k·T (µs) or `None` to drop it; `exc(k)` the excitation's
-/// offset from the control timestamp or `None` for none.
+/// offset from the control timestamp or `None` for none. Step k's values
+/// are `value(k, i)`: commands i = 0…3, estimate 10…18, measured 20…28,
+/// excitation offsets 30…33.
 fn write_log(
     name: &str,
     n: u64,
@@ -53,17 +34,25 @@ fn write_log(
     let dir = std::env::temp_dir().join(format!("helicon_ulog_columns_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join(format!("{name}.ulg"));
-    let mut log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap();
-    for k in 0..n {
-        let Some(j) = stamp(k) else { continue };
-        let ts = u64::try_from(1_000_000 + i64::try_from(k).unwrap() * T_US + j).unwrap();
-        log.write(&control(ts, k)).unwrap();
-        if let Some(e) = exc(k) {
-            log.write(&excitation(ts.checked_add_signed(e).unwrap(), k))
-                .unwrap();
-        }
-    }
-    log.finish().unwrap();
+    let stamp_us = |k: u64| {
+        let j = stamp(k)?;
+        Some(u64::try_from(1_000_000 + i64::try_from(k).unwrap() * T_US + j).unwrap())
+    };
+    write_control_log(
+        &path,
+        n,
+        stamp_us,
+        |_, _| {},
+        |k, c| {
+            let e = exc(k)?;
+            Some(LogRecord::Excitation(Excitation {
+                timestamp: c.timestamp.checked_add_signed(e).unwrap(),
+                offset: std::array::from_fn(|i| value(k, i + 30)),
+                active: true,
+            }))
+        },
+    )
+    .unwrap();
     path
 }
 
@@ -224,6 +213,106 @@ fn other_topics_are_held_start_late_and_must_not_stop() {
 }
 
 #[test]
+fn optional_columns_are_given_when_their_topic_was_logged() {
+    // excitation logged: the optional column comes after those asked for,
+    // with the logged values; servo_output not logged: left out, no error
+    let p = write_log("optional", 50, |_| Some(0), |_| Some(0));
+    let c =
+        read_ulog_columns_with(&p, &["meas_p"], &["servo_source", "exc_lat"], Some(T_S)).unwrap();
+    assert_eq!(c.names, ["t_s", "meas_p", "exc_lat"]);
+    for k in 0..50u64 {
+        assert_eq!(c.columns[1][k as usize], value(k, 26)); // measured[6]
+        assert_eq!(c.columns[2][k as usize], value(k, 31)); // offset[1]
+    }
+    // no excitation at all: the optional column left out, the record whole
+    let p = write_log("optional_none", 50, |_| Some(0), |_| None);
+    let c = read_ulog_columns_with(&p, &["meas_p"], &["exc_lat"], Some(T_S)).unwrap();
+    assert_eq!(c.names, ["t_s", "meas_p"]);
+    assert_eq!((c.columns[0].len(), c.skipped_start), (50, 0));
+    // asked for, not optional: refused as before
+    let e = read_ulog_columns_with(&p, &["exc_lat"], &["meas_p"], Some(T_S)).unwrap_err();
+    assert!(matches!(e, ColumnsError::MissingTopic { .. }), "{e}");
+}
+
+/// The log `name`: 50 control steps, the first also with a record of every
+/// other topic a column comes from (`estimator_bias` only `with_bias`), then a subscription of a
+/// format the log does not define (a fault the reader refuses).
+fn all_topics_then_a_fault(name: &str, with_bias: bool) -> PathBuf {
+    use helicon_ulog::messages::{EstimatorBias, ImuHealth};
+    use helicon_ulog::synthetic::servo_record;
+    let dir = std::env::temp_dir().join(format!("helicon_ulog_columns_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("{name}.ulg"));
+    let mut log = helicon_ulog::FlightLog::create(
+        &path,
+        &helicon_ulog::LogInfo::default(),
+        helicon_ulog::FlushPolicy::default(),
+    )
+    .unwrap();
+    let c = helicon_ulog::messages::Control {
+        timestamp: 1_000_000,
+        ..Default::default()
+    };
+    let ts = c.timestamp;
+    let mut records = vec![
+        LogRecord::Control(c),
+        LogRecord::Excitation(Excitation {
+            timestamp: ts,
+            ..Default::default()
+        }),
+        servo_record(&c, 0),
+        LogRecord::ImuHealth(ImuHealth {
+            timestamp: ts,
+            ..Default::default()
+        }),
+        LogRecord::EstimatorBias(EstimatorBias {
+            timestamp: ts,
+            ..Default::default()
+        }),
+    ];
+    if !with_bias {
+        records.pop();
+    }
+    for r in &records {
+        log.write(r).unwrap();
+    }
+    for k in 1..50u64 {
+        let mut c = c;
+        c.timestamp = 1_000_000 + 2500 * k;
+        log.write(&LogRecord::Control(c)).unwrap();
+    }
+    log.finish().unwrap();
+    // 'A': multi_id 0, msg_id 999, a format name never defined
+    let name = b"nosuch";
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes.extend_from_slice(&u16::try_from(3 + name.len()).unwrap().to_le_bytes());
+    bytes.push(b'A');
+    bytes.push(0);
+    bytes.extend_from_slice(&999u16.to_le_bytes());
+    bytes.extend_from_slice(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+#[test]
+fn available_columns_stops_once_every_topic_was_seen() {
+    // every topic in the first step: the names come before the fault
+    let p = all_topics_then_a_fault("all_then_fault", true);
+    let names = available_columns(&p).unwrap();
+    assert_eq!(names.len(), 1 + ULOG_COLUMNS.len(), "{names:?}");
+    // the columns themselves read to the end and meet it
+    let e = read_ulog_columns(&p, &["S_lat"], Some(T_S)).unwrap_err();
+    assert!(matches!(e, ColumnsError::Read(_)), "{e}");
+    // a topic never logged: read to the end, the fault reported
+    let p = all_topics_then_a_fault("bias_missing_then_fault", false);
+    let e = available_columns(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("bias_missing_then_fault.ulg") && e.contains("'A'"),
+        "{e}"
+    );
+}
+
+#[test]
 fn bad_logs_are_refused_naming_file_topic_field() {
     // no excitation topic at all
     let p = write_log("noexc", 50, |_| Some(0), |_| None);
@@ -243,17 +332,18 @@ fn bad_logs_are_refused_naming_file_topic_field() {
     // a NaN in the measured rates
     let dir = p.parent().unwrap();
     let path = dir.join("nan.ulg");
-    let mut log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap();
-    for k in 0..50u64 {
-        let mut r = control(1_000_000 + k * 2500, k);
-        if let LogRecord::Control(c) = &mut r
-            && k == 30
-        {
-            c.measured[6] = f64::NAN;
-        }
-        log.write(&r).unwrap();
-    }
-    log.finish().unwrap();
+    write_control_log(
+        &path,
+        50,
+        |k| Some(1_000_000 + k * 2500),
+        |k, c| {
+            if k == 30 {
+                c.measured[6] = f64::NAN;
+            }
+        },
+        |_, _| None,
+    )
+    .unwrap();
     let e = read_ulog_columns(&path, &["meas_p"], Some(T_S))
         .unwrap_err()
         .to_string();
@@ -322,9 +412,14 @@ fn columns_fixture_matches_pyulog_and_the_rule_applied_in_python() {
         .iter()
         .map(|f| (f[0].as_f64().unwrap(), f[1].as_u64().unwrap() as usize))
         .collect();
-    assert_eq!(c.filled.len(), 1);
-    assert_eq!(c.filled[0].1, filled[0].1);
-    assert!((c.filled[0].0 - filled[0].0).abs() < 1e-12);
+    assert!(!filled.is_empty(), "the fixture has dropped samples");
+    assert_eq!(c.filled.len(), filled.len());
+    for (got, want) in c.filled.iter().zip(&filled) {
+        assert_eq!(got.1, want.1);
+        // times of order 1 s to the µs, rounded by the reader: 1e-12 is
+        // far below the µs and far above f64 round-off (2e-16 s)
+        assert!((got.0 - want.0).abs() < 1e-12, "{got:?} vs {want:?}");
+    }
     let t = want["t_s"].as_array().unwrap();
     assert_eq!(c.columns[0].len(), t.len());
     let mut worst: f64 = 0.0;
@@ -339,6 +434,10 @@ fn columns_fixture_matches_pyulog_and_the_rule_applied_in_python() {
             worst = worst.max((a - b.as_f64().unwrap()).abs());
         }
     }
-    // the same arithmetic, possibly in another order
+    // the same arithmetic, possibly in another order (numpy's interp forms
+    // the fraction differently): a few ulp of values and times of order 1,
+    // ~1e-15; 1e-12 leaves that a margin of 1000 and is far below the
+    // 3e-7 (median 1e-3) by which neighbouring samples of the fixture's
+    // varying columns differ, so a sample taken from the wrong record fails
     assert!(worst < 1e-12, "{worst}");
 }

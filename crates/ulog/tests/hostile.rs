@@ -5,9 +5,10 @@
 //! columns given.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests: a failed unwrap is a failed test
 
+use helicon_ulog::LogRecord;
 use helicon_ulog::columns::read_ulog_columns;
-use helicon_ulog::messages::{Control, Excitation};
-use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogRecord};
+use helicon_ulog::messages::Excitation;
+use helicon_ulog::synthetic::{synthetic_value, write_control_log};
 use std::path::{Path, PathBuf};
 
 const T_S: f64 = 0.0025;
@@ -23,28 +24,20 @@ fn dir() -> PathBuf {
 /// an excitation record.
 fn write_log(name: &str, n: u64, stamp: impl Fn(u64) -> u64) -> PathBuf {
     let path = dir().join(format!("{name}.ulg"));
-    let mut log = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap();
-    for k in 0..n {
-        let ts = stamp(k);
-        let v = |i: usize| ((k as f64) * 0.21 + i as f64).sin();
-        log.write(&LogRecord::Control(Control {
-            timestamp: ts,
-            sample: k,
-            t_s: ts as f64 * 1e-6,
-            command: std::array::from_fn(v),
-            estimate: std::array::from_fn(|i| v(i + 10)),
-            measured: std::array::from_fn(|i| v(i + 20)),
-            ..Control::default()
-        }))
-        .unwrap();
-        log.write(&LogRecord::Excitation(Excitation {
-            timestamp: ts,
-            offset: std::array::from_fn(|i| v(i + 30)),
-            active: true,
-        }))
-        .unwrap();
-    }
-    log.finish().unwrap();
+    write_control_log(
+        &path,
+        n,
+        |k| Some(stamp(k)),
+        |_, _| {},
+        |k, c| {
+            Some(LogRecord::Excitation(Excitation {
+                timestamp: c.timestamp,
+                offset: std::array::from_fn(|i| synthetic_value(k, i + 30)),
+                active: true,
+            }))
+        },
+    )
+    .unwrap();
     path
 }
 
