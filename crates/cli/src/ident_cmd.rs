@@ -248,14 +248,7 @@ pub(crate) fn read_columns(
     let file = path.display().to_string();
     span.check(flags)?;
     let mut table = if helicon_paramid::source::is_ulog(path) {
-        let offered = helicon_paramid::source::log_names(path)?;
-        if offered.iter().any(|n| n == SERVO_SOURCE) && !names.contains(&SERVO_SOURCE) {
-            let mut ask = names.to_vec();
-            ask.push(SERVO_SOURCE);
-            read_ulog(path, &ask)?
-        } else {
-            read_ulog(path, names)?
-        }
+        read_ulog(path, names)?
     } else {
         read_csv(path, names)?
     };
@@ -355,9 +348,11 @@ fn read_csv(path: &Path, names: &[&str]) -> Result<Table> {
 }
 
 /// [`read_columns`] of a flight log: the first name is the time column,
-/// which must be `t_s` (the control grid); what the reading did (samples
-/// filled, a cut) is said on stderr.
+/// which must be `t_s` (the control grid), and `servo_source` last when the
+/// log has servo records and `names` does not ask for it (one pass); what
+/// the reading did (samples filled, a cut) is said on stderr.
 fn read_ulog(path: &Path, names: &[&str]) -> Result<Table> {
+    use helicon_paramid::source::SERVO_SOURCE;
     let file = path.display().to_string();
     if names.first().is_some_and(|t| *t != "t_s") {
         bail!(
@@ -365,7 +360,12 @@ fn read_ulog(path: &Path, names: &[&str]) -> Result<Table> {
             names[0]
         );
     }
-    let u = helicon_ulog::columns::read_ulog_columns(path, names, None)?;
+    let optional: &[&str] = if names.contains(&SERVO_SOURCE) {
+        &[]
+    } else {
+        &[SERVO_SOURCE]
+    };
+    let u = helicon_ulog::columns::read_ulog_columns_with(path, names, optional, None)?;
     for n in u.notes() {
         eprintln!("{n}");
     }
@@ -375,8 +375,9 @@ fn read_ulog(path: &Path, names: &[&str]) -> Result<Table> {
         format_seconds(u.period_s),
         u.max_jitter_s * 1e6
     );
-    if u.columns.len() != names.len() {
-        bail!("{file}: a column is named twice");
+    // the reader gives `t_s` first and each column once
+    if u.names.len() < names.len() || u.names.iter().zip(names).any(|(a, b)| a != b) {
+        bail!("{file}: a column is named twice (or `t_s` not first)");
     }
     Ok(Table { columns: u.columns })
 }
