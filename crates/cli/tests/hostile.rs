@@ -1048,8 +1048,9 @@ fn expand(args: &str) -> Vec<String> {
     args.split_whitespace().map(str::to_string).collect()
 }
 
-/// Run one case: the list of its problems (empty when it passes).
-fn check(d: &Path, c: &Case) -> (Vec<String>, Run) {
+/// Run one case: its failure, the case, its problems and its stderr in one
+/// message (`None` when it passes).
+fn check(d: &Path, c: &Case) -> (Option<String>, Run) {
     let r = helicon(d, &expand(c.args), c.stdin);
     let mut problems = Vec::new();
     if r.stderr.contains("panicked") {
@@ -1100,7 +1101,16 @@ fn check(d: &Path, c: &Case) -> (Vec<String>, Run) {
             }
         }
     }
-    (problems, r)
+    let failure = (!problems.is_empty()).then(|| {
+        format!(
+            "[{}] helicon {}: {}\n  stderr: {}",
+            c.name,
+            c.args,
+            problems.join("; "),
+            r.stderr.trim()
+        )
+    });
+    (failure, r)
 }
 
 /// Every case of the corpus, all failures collected before reporting; the
@@ -1114,19 +1124,11 @@ fn hostile_corpus_every_subcommand() {
     let mut slowest = (Duration::ZERO, "");
     for c in CORPUS {
         *counts.entry(c.cmd).or_default() += 1;
-        let (problems, r) = check(&d, c);
+        let (failure, r) = check(&d, c);
         if r.elapsed > slowest.0 {
             slowest = (r.elapsed, c.name);
         }
-        if !problems.is_empty() {
-            failures.push(format!(
-                "[{}] helicon {}: {}\n  stderr: {}",
-                c.name,
-                c.args,
-                problems.join("; "),
-                r.stderr.trim()
-            ));
-        }
+        failures.extend(failure);
     }
     println!(
         "hostile corpus: {} cases ({counts:?}) in {:.1} s, slowest {:.2} s ({}); {} failed",
@@ -1372,19 +1374,7 @@ fn todays_features_refuse_hostile_inputs() {
         "pitch_rad,thrust_n\n-0.05,-3.67\n-0.1,-9.28\n-0.15,-15.47\n",
     )
     .unwrap();
-    let mut failures = Vec::new();
-    for c in TODAY {
-        let (problems, r) = check(&d, c);
-        if !problems.is_empty() {
-            failures.push(format!(
-                "[{}] helicon {}: {}\n  stderr: {}",
-                c.name,
-                c.args,
-                problems.join("; "),
-                r.stderr.trim()
-            ));
-        }
-    }
+    let failures: Vec<String> = TODAY.iter().filter_map(|c| check(&d, c).0).collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     // the result file (its optional fields are null by design): no NaN/inf
     let g = std::fs::read_to_string(d.join("o/g3/ground_stabilizer_lift_slope.json")).unwrap();

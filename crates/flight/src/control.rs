@@ -46,12 +46,10 @@ pub struct ControlOutput {
     pub imu_health: Option<ImuHealth>,
     /// The IMU health's flags changed this sample (settling aside).
     pub imu_health_change: Option<ImuHealthChange>,
-    /// The receiver's failsafe changed this sample: `Some(true)` the
-    /// pilot's link lost, `Some(false)` back.
-    pub rc_link_lost: Option<bool>,
-    /// The pilot's link after this sample ([`RcLink::Silent`]: lost because
-    /// the receiver is silent, not by its failsafe flag).
-    pub rc_link: RcLink,
+    /// The pilot's link was lost or came back this sample: its new state
+    /// ([`RcLink::Failsafe`] or [`RcLink::Silent`]: lost, and how;
+    /// [`RcLink::Ok`]: back).
+    pub rc_link_change: Option<RcLink>,
 }
 
 /// A change of the IMU health monitor's flags (the settling flag aside):
@@ -225,10 +223,10 @@ impl ControlTask {
         // the pilot's link: lost by the receiver's failsafe flag or its
         // silence (the supervisor's stale.rc_s), told once per change
         let rc_link = self.supervisor.rc_link();
-        let mut rc_link_lost = None;
+        let mut rc_link_change = None;
         if rc_link.is_lost() != self.rc_lost {
             self.rc_lost = rc_link.is_lost();
-            rc_link_lost = Some(self.rc_lost);
+            rc_link_change = Some(rc_link);
         }
         if let Some(ev) = &event
             && ev.to == Mode::Auto
@@ -296,8 +294,7 @@ impl ControlTask {
             excitation: offset.filter(|_| telemetry.is_some()),
             imu_health,
             imu_health_change,
-            rc_link_lost,
-            rc_link,
+            rc_link_change,
         }
     }
 }

@@ -3,7 +3,7 @@
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
 use crate::control::{ControlOutput, ImuHealthChange, Tick};
-use crate::safety::{Mode, RcInput, Reason, SafetyEvent};
+use crate::safety::{Mode, RcInput, RcLink, Reason, SafetyEvent};
 use helicon_core::imu_health::ImuHealth;
 use helicon_ulog::messages::{
     Control, EstimatorBias, Excitation, Failsafe, FailsafeReason, FlightMode,
@@ -35,10 +35,9 @@ pub enum FlightRecord {
     RcLink {
         /// On-board time (s).
         t_s: f64,
-        /// Lost (true) or back.
-        lost: bool,
-        /// Lost because the receiver went silent (not its failsafe flag).
-        silent: bool,
+        /// The new state: lost (the receiver's failsafe or its silence) or
+        /// back.
+        link: RcLink,
     },
     /// The watchdog commanded the trim: the control task was silent for
     /// this long (s).
@@ -186,22 +185,20 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 "imu health",
             )
         }
-        FlightRecord::RcLink { t_s, lost, silent } => {
+        FlightRecord::RcLink { t_s, link } => {
             let ts = timestamp_us(*t_s, "rc link")?;
-            let (level, text) = if *lost && *silent {
-                (
-                    LogLevel::Critical,
-                    "rc_link: receiver silent, the pilot's link lost",
-                )
-            } else if *lost {
-                (
-                    LogLevel::Critical,
-                    "rc_link: receiver failsafe, the pilot's link lost",
-                )
+            let level = if link.is_lost() {
+                LogLevel::Critical
             } else {
-                (LogLevel::Notice, "rc_link: the pilot's link back")
+                LogLevel::Notice
             };
-            log.writer_mut().log(level, ts, text)
+            log_fmt(
+                log,
+                level,
+                ts,
+                format_args!("rc_link: {}", link.text()),
+                "rc_link",
+            )
         }
         FlightRecord::ServoDropped { t_s, dropped } => {
             let ts = timestamp_us(*t_s, "servo drop")?;
@@ -255,11 +252,10 @@ pub fn step_records(
     if let Some(rc) = &tick.rc {
         push(FlightRecord::Log(LogRecord::Rc(rc_record(ts, rc))));
     }
-    if let Some(lost) = out.rc_link_lost {
+    if let Some(link) = out.rc_link_change {
         push(FlightRecord::RcLink {
             t_s: tick.now_s,
-            lost,
-            silent: out.rc_link == crate::safety::RcLink::Silent,
+            link,
         });
     }
     if let Some(ev) = out.event {

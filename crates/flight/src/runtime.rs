@@ -24,7 +24,7 @@ use crate::control::{ControlTask, StepReport, Tick};
 pub use crate::mission::{LastStep, Mission, flight_mode};
 use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
 use crate::records::{FlightRecord, step_records, write_record};
-use crate::safety::{Mode, RcInput, RcLink};
+use crate::safety::{Mode, RcInput};
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_gcs::link::VehicleEvent;
@@ -344,7 +344,7 @@ where
                         servos,
                         latency: LatencyStats::new(),
                         frames: 0,
-                        dropped_logged: 0,
+                        drop_log: DropLog::default(),
                         error: None,
                     }),
                     options,
@@ -592,8 +592,8 @@ struct Direct {
     servos: Box<dyn ServoPort>,
     latency: LatencyStats,
     frames: u64,
-    /// The servo drop count last logged.
-    dropped_logged: u64,
+    /// The servo drops logged so far.
+    drop_log: DropLog,
     error: Option<String>,
 }
 
@@ -693,17 +693,8 @@ fn control_loop(
         if let Some(c) = out.imu_health_change {
             mission.notify(now_s, VehicleEvent::Warning(c.text()));
         }
-        if let Some(lost) = out.rc_link_lost {
-            mission.notify(
-                now_s,
-                VehicleEvent::Warning(if lost && out.rc_link == RcLink::Silent {
-                    "RC: receiver silent, the pilot's link lost"
-                } else if lost {
-                    "RC: receiver failsafe, the pilot's link lost"
-                } else {
-                    "RC: the pilot's link back"
-                }),
-            );
+        if let Some(link) = out.rc_link_change {
+            mission.notify(now_s, VehicleEvent::Warning(link.rc_text()));
         }
         if out.telemetry.is_some() {
             last.telemetry = out.telemetry;
@@ -722,16 +713,10 @@ fn control_loop(
                     d.error.get_or_insert(e.to_string());
                 }
             }
-            let dropped = d.servos.dropped();
-            if drop_worth_logging(d.dropped_logged, dropped) {
-                d.dropped_logged = dropped;
-                let rec = FlightRecord::ServoDropped {
-                    t_s: now_s,
-                    dropped,
-                };
-                if ctx.log.push(rec).is_err() {
-                    log_dropped += 1;
-                }
+            if let Some(rec) = d.drop_log.record(d.servos.dropped(), || now_s)
+                && ctx.log.push(rec).is_err()
+            {
+                log_dropped += 1;
             }
             if let Some(a) = arrival {
                 d.latency
@@ -843,7 +828,7 @@ fn avionics_loop<V: ServoPort>(
     let watchdog_ns = (options.watchdog_s * 1e9) as u64;
     let t0 = realtime::monotonic_ns();
     let mut tripped = false;
-    let mut dropped_logged = 0u64;
+    let mut drop_log = DropLog::default();
     loop {
         let mut sent = false;
         while let Ok(item) = ring.pop() {
@@ -853,17 +838,11 @@ fn avionics_loop<V: ServoPort>(
                 result.servo_frames += 1;
                 sent = true;
             }
-            let dropped = port.dropped();
-            if drop_worth_logging(dropped_logged, dropped) {
-                dropped_logged = dropped;
-                let now = realtime::monotonic_ns();
-                let rec = FlightRecord::ServoDropped {
-                    t_s: now.saturating_sub(t0) as f64 * 1e-9,
-                    dropped,
-                };
-                if log.push(rec).is_err() {
-                    result.log_dropped += 1;
-                }
+            let t_s = || realtime::monotonic_ns().saturating_sub(t0) as f64 * 1e-9;
+            if let Some(rec) = drop_log.record(port.dropped(), t_s)
+                && log.push(rec).is_err()
+            {
+                result.log_dropped += 1;
             }
             if let (Some(a), Some(l)) = (item.arrived_ns, result.latency.as_mut()) {
                 l.push(realtime::monotonic_ns().saturating_sub(a));
@@ -901,10 +880,29 @@ fn avionics_loop<V: ServoPort>(
     result
 }
 
-/// A servo drop count worth a log text: the first drop, then each doubling
-/// of the count last logged.
-fn drop_worth_logging(logged: u64, dropped: u64) -> bool {
-    dropped > logged && (logged == 0 || dropped.ilog2() > logged.ilog2())
+/// The servo drops logged so far: a count is worth a log text at the first
+/// drop, then at each doubling of the count last logged. One for the
+/// control task's own port, one for the avionics thread's.
+#[derive(Debug, Default)]
+struct DropLog {
+    /// The count last logged (0: none yet).
+    logged: u64,
+}
+
+impl DropLog {
+    /// The record of `dropped` frames so far, stamped `t_s()`, when the
+    /// count is worth a text (then taken as logged). No allocation.
+    fn record(&mut self, dropped: u64, t_s: impl FnOnce() -> f64) -> Option<FlightRecord> {
+        let worth =
+            dropped > self.logged && (self.logged == 0 || dropped.ilog2() > self.logged.ilog2());
+        worth.then(|| {
+            self.logged = dropped;
+            FlightRecord::ServoDropped {
+                t_s: t_s(),
+                dropped,
+            }
+        })
+    }
 }
 
 fn logger_loop<W: Write>(
@@ -941,16 +939,21 @@ fn logger_loop<W: Write>(
 
 #[cfg(test)]
 mod tests {
-    use super::drop_worth_logging;
+    use super::DropLog;
+    use crate::records::FlightRecord;
 
-    /// Servo drops are logged at the first and at each doubling.
+    /// Servo drops are logged at the first and at each doubling (the powers
+    /// of two up to 40), stamped with the time given.
     #[test]
     fn servo_drops_are_logged_at_the_first_and_each_doubling() {
-        let mut logged = 0;
+        let mut log = DropLog::default();
         let mut at = Vec::new();
         for n in 0..=40u64 {
-            if drop_worth_logging(logged, n) {
-                logged = n;
+            if let Some(r) = log.record(n, || n as f64) {
+                assert!(
+                    matches!(r, FlightRecord::ServoDropped { t_s, dropped } if dropped == n && t_s == n as f64),
+                    "{r:?}"
+                );
                 at.push(n);
             }
         }

@@ -177,6 +177,22 @@ impl RcLink {
     pub fn is_lost(self) -> bool {
         matches!(self, RcLink::Failsafe | RcLink::Silent)
     }
+
+    /// The log's text of a change to this state: the pilot's link lost,
+    /// and how, or back.
+    pub fn text(self) -> &'static str {
+        self.rc_text().trim_start_matches("RC: ")
+    }
+
+    /// The operator's text of a change to this state (one MAVLink
+    /// STATUSTEXT): [`RcLink::text`] after `RC: `.
+    pub fn rc_text(self) -> &'static str {
+        match self {
+            RcLink::Silent => "RC: receiver silent, the pilot's link lost",
+            RcLink::Failsafe => "RC: receiver failsafe, the pilot's link lost",
+            RcLink::Ok | RcLink::Unknown => "RC: the pilot's link back",
+        }
+    }
 }
 
 /// What the supervisor is told each sample.
@@ -541,6 +557,21 @@ mod tests {
         assert!(s.update(&health(4.0, true), None, 0.3).is_none());
         assert_eq!(s.rc_link(), RcLink::Silent);
         assert_eq!(s.mode(), Mode::Auto);
+    }
+
+    /// The texts of the link's changes: the log's is the operator's after
+    /// `RC: `, and the operator's fits one MAVLink STATUSTEXT (50 bytes).
+    #[test]
+    fn the_link_texts_name_how_it_was_lost() {
+        for (link, text) in [
+            (RcLink::Silent, "receiver silent, the pilot's link lost"),
+            (RcLink::Failsafe, "receiver failsafe, the pilot's link lost"),
+            (RcLink::Ok, "the pilot's link back"),
+        ] {
+            assert_eq!(link.text(), text);
+            assert_eq!(link.rc_text(), format!("RC: {text}"));
+            assert!(link.rc_text().len() <= 50, "{}", link.rc_text());
+        }
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! (an avionics board that stopped reading, a line slower than the
 //! frames): `DeviceServos::send` never waits for the line; the frames the
 //! port cannot take are dropped and counted, not errors; every frame it
-//! took arrives whole.
+//! took arrives whole (but the one after a frame taken in part).
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test: a failed unwrap is a failed test
 
 use helicon_core::state::Input;
@@ -46,7 +46,12 @@ fn a_full_servo_port_drops_and_counts_frames_without_blocking() {
             .filter(|m| matches!(m, AvionicsMessage::Servo(_)))
             .count() as u64;
     }
-    eprintln!("{frames} frames: {got} on the line, {dropped} dropped");
-    assert_eq!(got + dropped, frames);
-    assert_eq!(decoder.stats().checksum_failures, 0);
+    let bad = decoder.stats().checksum_failures;
+    eprintln!("{frames} frames: {got} on the line, {dropped} dropped, {bad} bad checksums");
+    // every frame is on the line or counted dropped; a frame the kernel
+    // took in part (counted dropped) is a bad checksum on the line that can
+    // cost the whole frame after it, so at most `bad` frames are neither
+    // (a pseudo-terminal's buffer fills in whole frames here: bad = 0)
+    assert!(got + dropped <= frames, "{got} + {dropped}");
+    assert!(got + dropped + bad >= frames, "{got} + {dropped} + {bad}");
 }

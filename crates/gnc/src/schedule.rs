@@ -29,9 +29,7 @@
 //! `gains` is exactly a `gains.json` object (format 2, checked the same way).
 
 pub use crate::design::integrator_output_map;
-use crate::design::{
-    ControllerConfig, DesignError, GAINS_FORMAT_VERSION, Gains, design_with_outputs,
-};
+use crate::design::{ControllerConfig, DesignError, GAINS_FORMAT_VERSION, Gains, design};
 use helicon_core::schedule::{GainSchedule, ScheduleAxes};
 use helicon_core::state::{NM, NU, NX_REDUCED, NY};
 use helicon_core::{CoreError, GainSet};
@@ -407,9 +405,9 @@ pub fn design_schedule(
                 let (t, why) =
                     trim_at(model, &sigma, warm, cfg.grid.accept_unphysical).map_err(fail)?;
                 let (phi, gamma) = discrete_model(model, &t, ts).map_err(fail)?;
-                // the outputs the on-board law integrates (NED velocity), linearised here
-                let hs = integrator_output_map(&t.x);
-                let g = design_with_outputs(&phi, &gamma, &hs, &t.x, &t.u, ts, &cfg.controller)
+                // integrating what the on-board law integrates (NED
+                // velocity), linearised here: `design`'s own outputs
+                let g = design(&phi, &gamma, &t.x, &t.u, ts, &cfg.controller)
                     .map_err(|e| fail(e.to_string()))?;
                 let idx = axes.index(i, j, k);
                 unphysical[idx] = why;

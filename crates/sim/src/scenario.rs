@@ -753,6 +753,8 @@ impl Scenario {
             .map(|c| {
                 (
                     c.t_s,
+                    // `validate` (every load and override) refuses an output
+                    // not in OUTPUTS: the fallback is never taken on a file
                     OUTPUTS.iter().position(|o| *o == c.output).unwrap_or(0),
                     c.value,
                     c.ramp_s,
