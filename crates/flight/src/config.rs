@@ -84,6 +84,18 @@ pub struct StaleLimits {
     pub rc_s: f64,
 }
 
+/// The least stale limits accepted: one sample period of the fastest
+/// device of each kind the runtime reads (an IMU at the 400 Hz control rate,
+/// a 10 Hz GPS fix, a 100 Hz magnetometer, a 50 Hz receiver frame). A limit
+/// below its device's period would call the sensor lost between any two
+/// samples; the limits should hold several periods of the device flown.
+pub const STALE_FLOOR_S: StaleLimits = StaleLimits {
+    imu_s: 0.0025,
+    gps_s: 0.1,
+    mag_s: 0.01,
+    rc_s: 0.02,
+};
+
 impl Default for StaleLimits {
     fn default() -> Self {
         StaleLimits {
@@ -308,10 +320,26 @@ impl OnboardConfig {
         }
         helicon_sim::excitation::Excitations::new(&self.excitation, file)?;
         let s = &self.stale;
-        positive(file, "stale.imu_s", s.imu_s, 1.0)?;
-        positive(file, "stale.gps_s", s.gps_s, 60.0)?;
-        positive(file, "stale.mag_s", s.mag_s, 60.0)?;
-        positive(file, "stale.rc_s", s.rc_s, 10.0)?;
+        for (field, v, floor, max) in [
+            ("stale.imu_s", s.imu_s, STALE_FLOOR_S.imu_s, 1.0),
+            ("stale.gps_s", s.gps_s, STALE_FLOOR_S.gps_s, 60.0),
+            ("stale.mag_s", s.mag_s, STALE_FLOOR_S.mag_s, 60.0),
+            ("stale.rc_s", s.rc_s, STALE_FLOOR_S.rc_s, 10.0),
+        ] {
+            positive(file, field, v, max)?;
+            // below one period of the device it is stale between any two
+            // samples: its failsafe would latch with nothing wrong
+            if v < floor {
+                return Err(ConfigError::invalid(
+                    file,
+                    field,
+                    v,
+                    format!(
+                        "must be at least {floor} s, one sample period of the fastest such device (below it the sensor is stale between any two samples); use several of your device's periods"
+                    ),
+                ));
+            }
+        }
         let f = &self.failsafe;
         positive(file, "failsafe.hold_s", f.hold_s, 3600.0)?;
         positive(file, "failsafe.descent_m_s", f.descent_m_s, 5.0)?;
@@ -465,6 +493,18 @@ mod tests {
         assert_eq!(
             err("[stale]\nimu_s = nan\n"),
             "o.toml: `stale.imu_s` = NaN: must be finite, > 0 and <= 1"
+        );
+        // a receiver limit below its 50 Hz frame period (20 ms): lost
+        // between every two frames
+        let e = err("[stale]\nrc_s = 0.005\n");
+        assert!(
+            e.starts_with("o.toml: `stale.rc_s` = 0.005: must be at least 0.02 s"),
+            "{e}"
+        );
+        let e = err("[stale]\ngps_s = 0.05\n");
+        assert!(
+            e.contains("`stale.gps_s`") && e.contains("at least 0.1 s"),
+            "{e}"
         );
         assert_eq!(
             err("[realtime]\npriority = 0\n"),
