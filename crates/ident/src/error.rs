@@ -78,6 +78,16 @@ impl IdentError {
     }
 }
 
+impl From<helicon_setup::inputs::InputError> for IdentError {
+    fn from(e: helicon_setup::inputs::InputError) -> Self {
+        use helicon_setup::inputs::InputError;
+        match e {
+            InputError::Invalid { field, value, rule } => IdentError::Invalid { field, value, rule },
+            InputError::Data { what, reason } => IdentError::Data { what, reason },
+        }
+    }
+}
+
 /// Result with [`IdentError`].
 pub type Result<T> = std::result::Result<T, IdentError>;
 

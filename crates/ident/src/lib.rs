@@ -14,7 +14,8 @@ pub mod cost;
 pub mod error;
 pub mod fit;
 pub mod frf;
-pub mod inputs;
+/// The flight-test input programs (`helicon-setup`: the on-board program flies them too).
+pub use helicon_setup::inputs;
 pub mod servo;
 pub mod spectral;
 pub mod ssfit;

@@ -205,6 +205,7 @@ pub struct Readings {
 /// text (its offset is where it started looking, before the blank lines it
 /// skipped). The records come in file order, so the newlines are counted
 /// from the previous record on: linear in the file, not quadratic.
+#[cfg(feature = "readings-csv")]
 struct LineCounter<'a> {
     bytes: &'a [u8],
     /// Where the count stopped, and the newlines before it.
@@ -212,6 +213,7 @@ struct LineCounter<'a> {
     newlines: u64,
 }
 
+#[cfg(feature = "readings-csv")]
 impl<'a> LineCounter<'a> {
     fn new(text: &'a str) -> Self {
         LineCounter {
@@ -252,6 +254,7 @@ impl Readings {
     /// order, other columns ignored), `#` comment lines, one reading per
     /// row. Every value must be a finite number; errors name the file, the
     /// line and the column.
+    #[cfg(feature = "readings-csv")]
     pub fn parse_csv(text: &str, file: &str, kind: Kind) -> Result<Readings, ConfigError> {
         // `#` comment lines are blanked rather than left to the reader, and
         // the line is counted from the record's byte offset ([`LineCounter`]):

@@ -24,7 +24,10 @@
 //! ```
 
 pub mod actuators;
-pub mod config_error;
+/// The one configuration error shape (`helicon-config`), re-exported where it was first defined.
+pub mod config_error {
+    pub use helicon_config::*;
+}
 pub mod drag;
 pub mod flapping;
 pub mod ground;

@@ -3,15 +3,14 @@
 //! from the same configuration. The navigation itself lives in
 //! `helicon_core`: the closed loop and `helicon fuse` run that one type.
 
-use crate::sensors::{G0_M_S2, SensorConfig, SensorConfigError, SensorSuite};
+use crate::sensors::{SensorConfig, SensorConfigError, SensorSuite};
+pub use helicon_setup::builder::{eskf_at, navigation_filter_at, navigation_initial};
+pub use helicon_setup::sensors::{imu_noise, sensor_noise};
 use helicon_core::eskf::{Eskf, EskfConfig, ImuNoise};
 use helicon_core::fusion::FusionError;
 pub use helicon_core::navigation::NavigationConfig;
 use helicon_core::navigation::NavigationFilter;
 use helicon_core::sensor::SensorNoise;
-use helicon_model::State;
-use helicon_model::frames::EulerTrig;
-use helicon_model::state::ix;
 use nalgebra::{SVector, Vector3};
 
 /// The sensor suite of `config` sampled every `dt_s` (its IMU rate is set to
@@ -24,87 +23,6 @@ pub fn sensor_suite_at(
     let mut cfg = *config;
     cfg.imu.rate_hz = 1.0 / dt_s;
     SensorSuite::new(cfg, gravity_m_s2)
-}
-
-/// The noise figures of a sensor configuration, as the navigation needs
-/// them, in local gravity `gravity_m_s2`.
-pub fn sensor_noise(config: &SensorConfig, gravity_m_s2: f64) -> SensorNoise {
-    let g = &config.gps;
-    SensorNoise {
-        gps_sigma_m: Vector3::new(
-            g.horizontal_sigma_m,
-            g.horizontal_sigma_m,
-            g.vertical_sigma_m,
-        ),
-        gps_vel_sigma_m_s: Vector3::new(
-            g.velocity_sigma_m_s,
-            g.velocity_sigma_m_s,
-            2.0 * g.velocity_sigma_m_s,
-        ),
-        mag_field_ned: Vector3::from(config.mag.field_ned),
-        gravity_m_s2,
-    }
-}
-
-/// The navigation's initial state `[x y z vn ve vd φ θ ψ]` and body rates
-/// from a full model state (as after alignment on the ground).
-pub fn navigation_initial(x0: &State) -> (SVector<f64, 9>, Vector3<f64>) {
-    let trig = EulerTrig::new(x0[ix::PHI], x0[ix::THETA], x0[ix::PSI]);
-    let v_ned = trig.ned_from_body() * Vector3::new(x0[ix::U], x0[ix::V], x0[ix::W]);
-    let mut s0 = SVector::<f64, 9>::zeros();
-    for i in 0..3 {
-        s0[i] = x0[ix::X + i];
-        s0[3 + i] = v_ned[i];
-        s0[6 + i] = x0[ix::PHI + i];
-    }
-    (s0, Vector3::new(x0[ix::P], x0[ix::Q], x0[ix::R]))
-}
-
-/// A navigation filter initialised at the true full state `x0`.
-pub fn navigation_filter_at(
-    config: &SensorConfig,
-    nav: &NavigationConfig,
-    dt_s: f64,
-    gravity_m_s2: f64,
-    x0: &State,
-) -> Result<NavigationFilter, FusionError> {
-    let (s0, omega0) = navigation_initial(x0);
-    NavigationFilter::new(nav, &sensor_noise(config, gravity_m_s2), dt_s, &s0, &omega0)
-}
-
-/// The IMU and magnetometer figures of a sensor configuration, as the ESKF
-/// assumes them (the filter is tuned from the sensors' datasheet figures).
-pub fn imu_noise(config: &SensorConfig) -> ImuNoise {
-    let (a, g) = (&config.imu.accel, &config.imu.gyro);
-    ImuNoise {
-        accel_noise_density: a.noise_density,
-        accel_bias_walk: a.bias_random_walk,
-        // the scale-factor error on the 1 g the accelerometer carries in hover
-        // acts as a bias: the filter's initial bias σ covers both
-        accel_bias_sigma: a.initial_bias_sigma.hypot(a.scale_factor_sigma * G0_M_S2),
-        gyro_noise_density: g.noise_density,
-        gyro_bias_walk: g.bias_random_walk,
-        gyro_bias_sigma: g.initial_bias_sigma,
-        mag_sigma: config.mag.noise_sigma,
-    }
-}
-
-/// An ESKF navigation initialised at the true full state `x0`.
-pub fn eskf_at(
-    config: &SensorConfig,
-    eskf: &EskfConfig,
-    dt_s: f64,
-    gravity_m_s2: f64,
-    x0: &State,
-) -> Result<Eskf, FusionError> {
-    let (s0, _) = navigation_initial(x0);
-    Eskf::new(
-        eskf,
-        &imu_noise(config),
-        &sensor_noise(config, gravity_m_s2),
-        dt_s,
-        &s0,
-    )
 }
 
 /// How a navigation replaying a sensor log is initialised.

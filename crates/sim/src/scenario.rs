@@ -32,39 +32,11 @@ use std::path::{Path, PathBuf};
 /// error shape (file, field, value, rule; the `io::Error` kept as source).
 pub type ScenarioError = helicon_model::ConfigError;
 
-/// The trim the controller is designed at (and the initial condition's base).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct TrimSection {
-    /// Inertial velocity NED (m/s).
-    pub velocity_ned_m_s: [f64; 3],
-    /// Heading (rad).
-    pub yaw_rad: f64,
-}
-
-impl Default for TrimSection {
-    fn default() -> Self {
-        TrimSection {
-            velocity_ned_m_s: [0.0; 3],
-            yaw_rad: 0.0,
-        }
-    }
-}
-
-/// A reference change on one output.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ReferenceChange {
-    /// Start time (s).
-    pub t_s: f64,
-    /// Output: `vn`, `ve`, `vd` (NED velocity, m/s) or `psi` (rad).
-    pub output: String,
-    /// New value (absolute).
-    pub value: f64,
-    /// Ramp duration (s); 0 for a step.
-    #[serde(default)]
-    pub ramp_s: f64,
-}
+pub use helicon_setup::plan::{
+    MAX_HEADING_RAD, MAX_SPEED_M_S, OUTPUTS, ReferenceChange, ReferenceSchedule, TrimSection,
+    check_references, check_trim,
+};
+pub use helicon_setup::estimator::{EstimatorKind, EstimatorSection};
 
 /// How the plant's inflow is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -139,37 +111,6 @@ impl Default for ControllerSection {
             schedule: None,
             schedule_file: None,
         }
-    }
-}
-
-/// Which navigation flies ahead of the Kalman predictor (TOML `[estimator]`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "kebab-case")]
-pub enum EstimatorKind {
-    /// The thesis's chain: q-method attitude + the GPS/IMU fusion filter
-    /// without bias states (chapter 13).
-    #[default]
-    Thesis,
-    /// The error-state Kalman filter with gyro and accelerometer bias states,
-    /// GPS latency and innovation gating (`helicon_core::eskf`).
-    Eskf,
-}
-
-/// The estimator section: the kind and the ESKF's tuning (used when
-/// `controller.estimator` and `controller.fusion` put sensors in the loop).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
-#[serde(deny_unknown_fields, default)]
-pub struct EstimatorSection {
-    /// `thesis` (default) or `eskf`.
-    pub kind: EstimatorKind,
-    /// ESKF tuning (`[estimator.eskf]`).
-    pub eskf: helicon_core::eskf::EskfConfig,
-}
-
-impl EstimatorSection {
-    /// True for the default section (the thesis chain, default tuning).
-    pub fn is_default(&self) -> bool {
-        *self == EstimatorSection::default()
     }
 }
 
@@ -253,9 +194,9 @@ pub struct Scenario {
     #[serde(default)]
     pub reference: Vec<ReferenceChange>,
     /// Jerk-limited mission references instead of `[[reference]]`
-    /// ([`crate::envelope::TrajectorySection`]).
+    /// ([`helicon_setup::plan::TrajectorySection`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub trajectory: Option<crate::envelope::TrajectorySection>,
+    pub trajectory: Option<helicon_setup::plan::TrajectorySection>,
     /// Flight-test excitations added to the servo commands
     /// ([`crate::excitation::ExcitationEntry`]). Not written when empty, so
     /// the effective scenarios (and campaign hashes) without them are
@@ -309,42 +250,6 @@ mod preset_serde {
     }
 }
 
-/// Reference changes sorted by time ([`Scenario::reference_schedule`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ReferenceSchedule {
-    start: [f64; 4],
-    /// (t_s, output index, value, ramp_s), sorted by time.
-    changes: Vec<(f64, usize, f64, f64)>,
-    /// The `[trajectory]` mission, which replaces the changes.
-    mission: Option<helicon_core::trajectory::Mission>,
-}
-
-impl ReferenceSchedule {
-    /// The reference (vn, ve, vd, psi) at time `t_s`: each change ramps (or
-    /// steps) from the value before it, or the `[trajectory]` mission's
-    /// jerk-limited reference. Does not allocate.
-    pub fn at(&self, t_s: f64) -> [f64; 4] {
-        if let Some(m) = &self.mission {
-            let r = m.at(t_s);
-            let v = r.velocity_ned_m_s;
-            return [v.x, v.y, v.z, r.yaw_rad];
-        }
-        let mut r = self.start;
-        for &(t0, i, value, ramp) in &self.changes {
-            if t_s < t0 {
-                break;
-            }
-            let frac = if ramp > 0.0 {
-                ((t_s - t0) / ramp).min(1.0)
-            } else {
-                1.0
-            };
-            r[i] += frac * (value - r[i]);
-        }
-        r
-    }
-}
-
 /// Command-line overrides of a scenario (`helicon sim --params --seed
 /// --duration`), applied to the scenario and each of its `[[case]]`s.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -371,9 +276,6 @@ fn deep_merge(base: &mut toml::Table, over: toml::Table) {
     }
 }
 
-/// Output names of the metrics, in order.
-pub const OUTPUTS: [&str; 4] = ["vn", "ve", "vd", "psi"];
-
 /// Longest flight (s): one day.
 pub const MAX_DURATION_S: f64 = 86_400.0;
 
@@ -391,21 +293,8 @@ pub const MAX_INFLOW_ITERATIONS: u32 = 100;
 /// Largest total of plant RK4 steps in one flight ([`Scenario::check_work`]).
 pub const MAX_PLANT_STEPS: f64 = 1e8;
 
-/// Largest |velocity| of a trim or reference (m/s): a miniature helicopter
-/// flies well below 50 m/s; 100 m/s leaves room for hostile-but-finite
-/// studies while every metric (squared errors over a day) stays finite.
-pub const MAX_SPEED_M_S: f64 = 100.0;
-
-/// Largest |heading| of a trim or reference (rad): about 16 turns, room for
-/// multi-turn heading ramps (the heading is unwrapped) while the yaw error
-/// metrics stay finite.
-pub const MAX_HEADING_RAD: f64 = 100.0;
-
 /// Largest |initial deviation| (rad, rad/s or m/s).
 const MAX_INITIAL_DEVIATION: f64 = 100.0;
-
-const SPEED_RULE: &str = "must be finite and within +-100 m/s (MAX_SPEED_M_S)";
-const HEADING_RULE: &str = "must be finite and within +-100 rad (about 16 turns)";
 
 /// A number for a message: shortest round-trip text, in exponent form when
 /// extreme (`1e-300`, not 300 digits; `2.5`, `86400`).
@@ -544,18 +433,7 @@ impl Scenario {
                 "must be finite, > 0 and <= 86400 s (one day)",
             ));
         }
-        for (i, v) in self.trim.velocity_ned_m_s.iter().enumerate() {
-            if !(v.is_finite() && v.abs() <= MAX_SPEED_M_S) {
-                return Err(bad(
-                    &format!("trim.velocity_ned_m_s[{i}]"),
-                    num(*v),
-                    SPEED_RULE,
-                ));
-            }
-        }
-        if !(self.trim.yaw_rad.is_finite() && self.trim.yaw_rad.abs() <= MAX_HEADING_RAD) {
-            return Err(bad("trim.yaw_rad", num(self.trim.yaw_rad), HEADING_RULE));
-        }
+        check_trim(&self.trim, file)?;
         for (k, v) in &self.initial {
             let known = helicon_model::REDUCED_STATE_NAMES.contains(&k.as_str())
                 || matches!(k.as_str(), "vn" | "ve" | "vd");
@@ -575,34 +453,7 @@ impl Scenario {
                 ));
             }
         }
-        for (i, r) in self.reference.iter().enumerate() {
-            let field = |f: &str| format!("reference[{i}].{f}");
-            if !OUTPUTS.contains(&r.output.as_str()) {
-                return Err(bad(
-                    &field("output"),
-                    format!("{:?}", r.output),
-                    "must be vn, ve, vd or psi",
-                ));
-            }
-            if !(r.t_s.is_finite() && r.t_s >= 0.0) {
-                return Err(bad(&field("t_s"), num(r.t_s), "must be finite and >= 0 s"));
-            }
-            if !(r.ramp_s.is_finite() && r.ramp_s >= 0.0) {
-                return Err(bad(
-                    &field("ramp_s"),
-                    num(r.ramp_s),
-                    "must be finite and >= 0 s",
-                ));
-            }
-            let (limit, rule) = if r.output == "psi" {
-                (MAX_HEADING_RAD, HEADING_RULE)
-            } else {
-                (MAX_SPEED_M_S, SPEED_RULE)
-            };
-            if !(r.value.is_finite() && r.value.abs() <= limit) {
-                return Err(bad(&field("value"), num(r.value), rule));
-            }
-        }
+        check_references(&self.reference, file)?;
         if let Err(e) = self.controller.design.validate() {
             return Err(match e {
                 helicon_gnc::design::DesignError::Config { field, value, rule } => {
@@ -725,7 +576,7 @@ impl Scenario {
                     message: "[trajectory] replaces [[reference]]: give one of them".into(),
                 });
             }
-            t.mission(self, file)?;
+            t.mission(&self.trim, file)?;
         }
         let c = &self.controller;
         let given = [
@@ -747,36 +598,7 @@ impl Scenario {
     /// The reference changes sorted by time, ready for allocation-free
     /// lookups in the flight loop.
     pub fn reference_schedule(&self) -> ReferenceSchedule {
-        let mut changes: Vec<(f64, usize, f64, f64)> = self
-            .reference
-            .iter()
-            .map(|c| {
-                (
-                    c.t_s,
-                    // `validate` (every load and override) refuses an output
-                    // not in OUTPUTS: the fallback is never taken on a file
-                    OUTPUTS.iter().position(|o| *o == c.output).unwrap_or(0),
-                    c.value,
-                    c.ramp_s,
-                )
-            })
-            .collect();
-        changes.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let t = &self.trim;
-        ReferenceSchedule {
-            start: [
-                t.velocity_ned_m_s[0],
-                t.velocity_ned_m_s[1],
-                t.velocity_ned_m_s[2],
-                t.yaw_rad,
-            ],
-            changes,
-            // validated with the scenario (`validate_envelope`)
-            mission: self
-                .trajectory
-                .as_ref()
-                .and_then(|tr| tr.mission(self, "").ok()),
-        }
+        ReferenceSchedule::new(&self.trim, &self.reference, self.trajectory.as_ref())
     }
 
     /// The reference at time t: (vn, ve, vd, psi), starting from the trim.

@@ -12,7 +12,7 @@ use helicon_ident::frf::{WindowSpec, composite, conditioned, cross_spectra_grid,
 use helicon_ident::inputs::Sweep;
 use helicon_model::linearize::linearize;
 use helicon_model::{InflowMode, REDUCED_STATE_NAMES};
-use helicon_sim::closed_loop::{Flight, Outcome, fly, prepare, servo_limits};
+use helicon_sim::closed_loop::{Flight, Outcome, fly, prepare};
 use helicon_sim::log_csv::log_column;
 use helicon_sim::scenario::Scenario;
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -56,7 +56,7 @@ fn open_loop_holds_trim_plus_excitation_and_saturates_before_sending() {
     let p = prepare(&s).unwrap();
     let f = fly(&s, &p, None).unwrap();
     let u_trim = p.trim.u;
-    let lim = servo_limits(p.model.params());
+    let lim = p.model.params().servo_limits();
     let (mut lon_seen, mut tr_clipped) = (0.0_f64, 0);
     for r in &f.log {
         // the logged excitation is the ident input at the time since its start

@@ -51,6 +51,7 @@
 
 pub mod columns;
 pub mod error;
+#[cfg(feature = "export")]
 pub mod export;
 pub mod flat;
 pub mod format;

@@ -629,6 +629,14 @@ impl Params {
         Ok(())
     }
 
+    /// The servo range, as the control law saturates to it.
+    pub fn servo_limits(&self) -> helicon_core::ServoLimits {
+        helicon_core::ServoLimits {
+            min: helicon_core::state::Input::from_fn(|i, _| self.servos[i].s_min),
+            max: helicon_core::state::Input::from_fn(|i, _| self.servos[i].s_max),
+        }
+    }
+
     /// Ωtr = G·Ω, the tail-rotor speed (rad/s).
     pub fn omega_tr_rad_s(&self) -> f64 {
         self.tail_rotor.gear_ratio * self.main_rotor.omega_rad_s

@@ -15,16 +15,16 @@ use crate::metrics::{OutputMetrics, output_metrics};
 use crate::navigation::{navigation_filter_at, sensor_suite_at};
 use crate::scenario::{DesignInflow, OUTPUTS, PlantInflow, Scenario};
 use crate::sensor_log::{LoggedTruth, SensorLogRow};
-use crate::sensors::{SensorConfig, SensorSuite};
+use crate::sensors::SensorSuite;
 use crate::trajectory::TruthSample;
 use crate::vibration::RotorSpeeds;
 use crate::wind::{Wind, WindModel};
 use helicon_core::frames::{EulerTrig, wrap_pi};
-use helicon_core::imu_health::{ImuHealthConfig, ImuHealthMonitor};
-use helicon_core::navigation::{NavigationConfig, NavigationFilter};
+use helicon_core::imu_health::ImuHealthMonitor;
+use helicon_core::navigation::NavigationFilter;
 use helicon_core::{
-    CoreError, FlightComputer, GainSet, KalmanPredictor, Lqi, Reference, ServoLimits,
-    StateMeasurement, Telemetry, ThesisEstimator, TruthFeed, TruthMeasurement,
+    CoreError, FlightComputer, Reference,
+    StateMeasurement, Telemetry, TruthFeed, TruthMeasurement,
 };
 use helicon_gnc::design::{Gains, design};
 use helicon_model::gyro::YawGyroBlock;
@@ -42,7 +42,7 @@ mod summary;
 
 pub use hardware::{Hardware, HardwareSample, HardwareStep};
 use stages::{OnBoard, Plant, check_limits};
-pub use stages::{OnBoardSetup, flight_computer, servo_limits};
+pub use helicon_setup::builder::{OnBoardSetup, flight_computer, imu_health_at};
 use summary::summarize;
 pub use summary::{METRIC_TRACE_CAP, Outcome, Summary, SummaryAccumulator, Termination};
 
@@ -79,6 +79,9 @@ pub enum ClosedLoopError {
     /// The flight software could not be built from the gains.
     #[error("flight software: {0}")]
     Core(#[from] CoreError),
+    /// The flight computer could not be built (the one builder's error).
+    #[error(transparent)]
+    Build(#[from] helicon_setup::BuildError),
     /// A gains file designed for another sample time than the helicopter's.
     #[error(
         "{file}: the gains were designed for a sample time of {gains_s} s but the parameters' \
@@ -441,41 +444,13 @@ fn imu_health_monitor(
         return Ok(None);
     }
     imu_health_at(
-        prepared.model.params(),
+        prepared.model.params().environment.g_m_s2,
         prepared.gains.set.sample_time_s,
         &scenario.sensors,
         "<scenario>",
     )
     .map(Some)
-}
-
-/// The IMU health monitor the flight software runs (`helicon sim`, SITL
-/// and the on-board program alike): local gravity of `params`, one sample
-/// per control period, the accelerometer range of `sensors` (`file` names
-/// the configuration in the error).
-pub fn imu_health_at(
-    params: &Params,
-    sample_time_s: f64,
-    sensors: &SensorConfig,
-    file: &str,
-) -> Result<ImuHealthMonitor, ClosedLoopError> {
-    let cfg = ImuHealthConfig::new(
-        params.environment.g_m_s2,
-        sample_time_s,
-        sensors.imu.accel.range,
-    );
-    ImuHealthMonitor::new(cfg).ok_or_else(|| {
-        helicon_model::ConfigError::invalid(
-            file,
-            "sensors.imu.accel.range",
-            cfg.accel_range_m_s2,
-            format!(
-                "the IMU health monitor's `{}` must be finite and > 0",
-                cfg.first_invalid().unwrap_or("setting")
-            ),
-        )
-        .into()
-    })
+    .map_err(Into::into)
 }
 
 fn fly_with(

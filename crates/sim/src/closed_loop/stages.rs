@@ -3,11 +3,8 @@
 //! checks ([`check_limits`]).
 
 use super::*;
-use crate::navigation::eskf_at;
-use crate::scenario::{EstimatorKind, EstimatorSection};
-use helicon_core::schedule::{AnyPredictor, Law, ScheduledLqi, ScheduledPredictor};
-use helicon_core::{EskfEstimator, GainSchedule, SensorComputer};
-use std::sync::Arc;
+use helicon_core::SensorComputer;
+use helicon_core::schedule::{AnyPredictor, Law};
 
 /// The plant: the nonlinear model integrated with RK4 between controller
 /// samples, inputs and wind held, inflow warm-started from the last solution.
@@ -116,105 +113,6 @@ impl<'a> Plant<'a> {
     }
 }
 
-/// The servo range of the parameters, as the control law saturates to it.
-pub fn servo_limits(p: &Params) -> ServoLimits {
-    ServoLimits {
-        min: Input::from_fn(|i, _| p.servos[i].s_min),
-        max: Input::from_fn(|i, _| p.servos[i].s_max),
-    }
-}
-
-/// The predictor's initial reduced state: the nine measured states of `x0`
-/// and the trim for the rest.
-fn estimator_start(trim_x: &ReducedState, x0: &State) -> ReducedState {
-    let mut x0_est: ReducedState = *trim_x;
-    for i in 0..9 {
-        x0_est[i] = x0[i + REDUCED_OFFSET];
-    }
-    x0_est
-}
-
-/// What the on-board chain is built from, wherever it flies.
-#[derive(Debug, Clone, Copy)]
-pub struct OnBoardSetup<'a> {
-    /// The helicopter's parameters (servo range, gravity).
-    pub params: &'a Params,
-    /// The gains flown (their sample time is the control period); with a
-    /// schedule, its design point nearest the trim.
-    pub gains: &'a GainSet,
-    /// The gain schedule flown instead of `gains`, when one is configured.
-    pub schedule: Option<&'a Arc<GainSchedule>>,
-    /// The trim the predictor starts from for the states not measured.
-    pub trim_x: &'a ReducedState,
-    /// The sensors' noise figures and local magnetic field (the navigation's
-    /// measurement model).
-    pub sensors: &'a SensorConfig,
-    /// The thesis navigation's tuning.
-    pub navigation: &'a NavigationConfig,
-    /// Which navigation flies (thesis chain or ESKF) and the ESKF's tuning.
-    pub estimator: &'a EstimatorSection,
-    /// Feedback on (off: trim inputs held).
-    pub feedback: bool,
-    /// The full state the navigation and the predictor start from (after
-    /// alignment on the ground).
-    pub x0: &'a State,
-}
-
-impl OnBoardSetup<'_> {
-    /// The control law: one design's LQI or the schedule's.
-    fn law(&self) -> Result<Law, ClosedLoopError> {
-        let limits = servo_limits(self.params);
-        Ok(match self.schedule {
-            Some(s) => Law::Scheduled(ScheduledLqi::new(Arc::clone(s), limits, self.feedback)?),
-            None => Law::Fixed(Lqi::new(self.gains, limits, self.feedback)?),
-        })
-    }
-
-    /// The Kalman predictor, started from the measured states of `x0` and
-    /// the trim for the rest: one design's or the schedule's.
-    fn predictor(&self) -> Result<AnyPredictor, ClosedLoopError> {
-        let x0_est = estimator_start(self.trim_x, self.x0);
-        Ok(match self.schedule {
-            Some(s) => AnyPredictor::Scheduled(ScheduledPredictor::new(Arc::clone(s), &x0_est)?),
-            None => AnyPredictor::Fixed(KalmanPredictor::new(self.gains, &x0_est)?),
-        })
-    }
-}
-
-/// The sensor-fed on-board chain (navigation + Kalman predictor + LQI, the
-/// navigation being the thesis's or the ESKF as configured) exactly as the
-/// simulator flies it with `fusion = true`: `helicon sim`, `helicon sitl`
-/// and `helicon onboard` all build their flight computer here.
-pub fn flight_computer(setup: &OnBoardSetup<'_>) -> Result<SensorComputer, ClosedLoopError> {
-    let ts = setup.gains.sample_time_s;
-    let g = setup.params.environment.g_m_s2;
-    let law = setup.law()?;
-    let predictor = setup.predictor()?;
-    Ok(match setup.estimator.kind {
-        EstimatorKind::Thesis => {
-            let navigation =
-                navigation_filter_at(setup.sensors, setup.navigation, ts, g, setup.x0)?;
-            SensorComputer::Thesis(FlightComputer::new(
-                ThesisEstimator {
-                    navigation,
-                    predictor,
-                },
-                law,
-            ))
-        }
-        EstimatorKind::Eskf => {
-            let navigation = eskf_at(setup.sensors, &setup.estimator.eskf, ts, g, setup.x0)?;
-            SensorComputer::Eskf(FlightComputer::new(
-                EskfEstimator {
-                    navigation,
-                    predictor,
-                },
-                law,
-            ))
-        }
-    })
-}
-
 /// The on-board software flown in the loop, as the scenario's switches
 /// compose it from the core's parts.
 pub(super) enum OnBoard {
@@ -250,7 +148,8 @@ impl OnBoard {
         let g = p.environment.g_m_s2;
         let c = &scenario.controller;
         let setup = OnBoardSetup {
-            params: p,
+            servo_limits: p.servo_limits(),
+            gravity_m_s2: g,
             gains: set,
             schedule: prepared.schedule.as_ref(),
             trim_x: &prepared.trim.x,

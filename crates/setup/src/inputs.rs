@@ -4,7 +4,64 @@
 //! at once), the [`Doublet`] and the [`Input3211`]. Amplitudes are in the
 //! unit of the channel they are added to (a servo input in rad).
 
-use crate::error::{IdentError, Result, check_range};
+/// An input program's setting out of its range, or a program that cannot
+/// be built (the identification crate reports it as its own error).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum InputError {
+    /// A parameter out of its allowed range.
+    #[error("`{field}` = {value}: {rule}")]
+    Invalid {
+        /// Parameter name, e.g. `sweep.omega_max_rad_s`.
+        field: String,
+        /// The value given, as text.
+        value: String,
+        /// The rule broken.
+        rule: String,
+    },
+    /// The program cannot be built as asked, with the reason.
+    #[error("{what}: {reason}")]
+    Data {
+        /// What is concerned, e.g. `multisine`.
+        what: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+impl InputError {
+    /// A number out of range.
+    pub fn invalid(field: impl Into<String>, value: f64, rule: impl Into<String>) -> Self {
+        InputError::Invalid {
+            field: field.into(),
+            value: format!("{value}"),
+            rule: rule.into(),
+        }
+    }
+
+    /// A program that cannot be built.
+    pub fn data(what: impl Into<String>, reason: impl Into<String>) -> Self {
+        InputError::Data {
+            what: what.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// Result with [`InputError`].
+pub type Result<T> = std::result::Result<T, InputError>;
+
+/// `Ok(v)` when `v` is finite and inside `[lo, hi]`, else [`InputError::Invalid`].
+fn check_range(field: &str, v: f64, lo: f64, hi: f64) -> Result<f64> {
+    if v.is_finite() && v >= lo && v <= hi {
+        Ok(v)
+    } else {
+        Err(InputError::invalid(
+            field,
+            v,
+            format!("must be finite and in [{lo}, {hi}]"),
+        ))
+    }
+}
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -76,7 +133,7 @@ impl Sweep {
         )?;
         let t_low = 2.0 * PI / self.omega_min_rad_s;
         check_range("sweep.duration_s", self.duration_s, 5.0 * t_low, 1e6).map_err(|_| {
-            IdentError::invalid(
+            InputError::invalid(
                 "sweep.duration_s",
                 self.duration_s,
                 format!(
@@ -87,7 +144,7 @@ impl Sweep {
         })?;
         check_range("sweep.low_periods", self.low_periods, 0.0, 4.0)?;
         if self.low_periods * t_low >= self.duration_s {
-            return Err(IdentError::invalid(
+            return Err(InputError::invalid(
                 "sweep.low_periods",
                 self.low_periods,
                 "the low-frequency periods must leave time for the rise",
@@ -235,14 +292,14 @@ impl Multisine {
             1e5,
         )?;
         if self.repeats == 0 || self.repeats > 10_000 {
-            return Err(IdentError::invalid(
+            return Err(InputError::invalid(
                 "multisine.repeats",
                 self.repeats as f64,
                 "1 … 10000",
             ));
         }
         if self.axes == 0 || self.axes > 16 || self.axis >= self.axes {
-            return Err(IdentError::invalid(
+            return Err(InputError::invalid(
                 "multisine.axis",
                 self.axis as f64,
                 format!(
@@ -256,7 +313,7 @@ impl Multisine {
         let k_hi = (self.omega_max_rad_s / w0).floor() as u64;
         // Refuse a huge band before enumerating it (no hang, no huge allocation).
         if k_hi >= k_lo && (k_hi - k_lo) / u64::from(self.axes) >= MAX_HARMONICS as u64 {
-            return Err(IdentError::invalid(
+            return Err(InputError::invalid(
                 "multisine.omega_max_rad_s",
                 self.omega_max_rad_s,
                 format!(
@@ -268,7 +325,7 @@ impl Multisine {
             .filter(|k| (k - k_lo) % u64::from(self.axes) == u64::from(self.axis))
             .collect();
         if ks.is_empty() || ks.len() > MAX_HARMONICS {
-            return Err(IdentError::invalid(
+            return Err(InputError::invalid(
                 "multisine.omega_max_rad_s",
                 self.omega_max_rad_s,
                 format!(
@@ -292,7 +349,7 @@ impl Multisine {
             .map(|i| self.raw(self.period_s * i as f64 / n as f64).abs())
             .fold(0.0, f64::max);
         if peak.is_nan() || peak <= 0.0 {
-            return Err(IdentError::data(
+            return Err(InputError::data(
                 "multisine",
                 "the signal is identically zero",
             ));

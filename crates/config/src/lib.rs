@@ -1,8 +1,12 @@
+//! # helicon-config
+//!
 //! One error shape for the files and configurations the toolkit reads
-//! (sensor, wind and scenario configurations; the parameter file has its own
-//! [`crate::ParamError`] with the same content plus the file line): the file,
-//! the field, what was wrong and the allowed range, and the `io::Error`
-//! source kept when a file could not be read.
+//! (sensor, wind, scenario and on-board configurations; the parameter file
+//! has its own `helicon_model::ParamError` with the same content plus the
+//! file line): the file, the field, what was wrong and the allowed range,
+//! and the `io::Error` source kept when a file could not be read. The
+//! lowest crate that reads files: the model, the simulator and the on-board
+//! program all report through it, and it depends on nothing of theirs.
 
 /// An error reading or checking a configuration.
 #[derive(Debug, thiserror::Error)]
