@@ -37,9 +37,9 @@
 //! mlockall = true
 //! ```
 
-use helicon_model::config_error::ConfigError;
-use helicon_sim::scenario::EstimatorSection;
-use helicon_sim::sensors::SensorConfig;
+use helicon_config::ConfigError;
+use helicon_setup::estimator::EstimatorSection;
+use helicon_setup::sensors::SensorConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -243,7 +243,7 @@ pub struct OnboardConfig {
     /// the law's command in auto from the first entry into auto, ended for
     /// good when auto is left (the pilot's switch stops them).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub excitation: Vec<helicon_sim::excitation::ExcitationEntry>,
+    pub excitation: Vec<helicon_setup::excitation::ExcitationEntry>,
     /// The folder relative paths are resolved against (the file's folder).
     #[serde(skip)]
     pub base_dir: PathBuf,
@@ -279,7 +279,7 @@ impl OnboardConfig {
 
     /// Read and check a configuration file.
     pub fn from_file(path: &Path) -> Result<Self, ConfigError> {
-        let (file, text) = helicon_model::ConfigError::read_file(path)?;
+        let (file, text) = ConfigError::read_file(path)?;
         let mut cfg = Self::from_toml_str(&text, &file)?;
         cfg.base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Ok(cfg)
@@ -318,7 +318,7 @@ impl OnboardConfig {
                 ));
             }
         }
-        helicon_sim::excitation::Excitations::new(&self.excitation, file)?;
+        helicon_setup::excitation::Excitations::new(&self.excitation, file)?;
         let s = &self.stale;
         for (field, v, floor, max) in [
             ("stale.imu_s", s.imu_s, STALE_FLOOR_S.imu_s, 1.0),

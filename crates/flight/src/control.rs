@@ -8,7 +8,7 @@ use crate::safety::{Health, Mode, RcInput, RcLink, SafetyEvent, Supervisor};
 use helicon_core::imu_health::{ImuHealth, ImuHealthMonitor};
 use helicon_core::state::Input;
 use helicon_core::{Reference, SensorComputer, SensorFrame, Telemetry};
-use helicon_sim::excitation::Excitations;
+use helicon_setup::excitation::Excitations;
 
 /// What the control task is given for one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -163,8 +163,7 @@ impl ControlTask {
     }
 
     /// The same task running the IMU health monitor on each IMU sample
-    /// (as `helicon sim` does; `helicon_sim::closed_loop::imu_health_at`
-    /// builds it).
+    /// (as `helicon sim` does; `helicon_setup::imu_health_at` builds it).
     #[must_use]
     pub fn with_imu_health(mut self, monitor: ImuHealthMonitor) -> Self {
         self.health = Some(monitor);

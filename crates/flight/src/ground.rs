@@ -10,7 +10,7 @@ use helicon_gcs::config::GcsSection;
 use helicon_gcs::link::{Vehicle, channel};
 use helicon_gcs::navigator::Navigator;
 use helicon_gcs::server::{self, GcsError, ServerHandle};
-use helicon_model::config_error::ConfigError;
+use helicon_config::ConfigError;
 
 /// The rings' capacity between the control task and the server (at 400 Hz
 /// with statuses at 100 Hz: tens of seconds of a stalled server).

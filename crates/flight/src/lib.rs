@@ -3,8 +3,11 @@
 //! The on-board program of the thesis's helicopter (chapter 3, Figure 3.5)
 //! around the very flight software `helicon sim` flies
 //! (`helicon_core::SensorComputer`: the thesis's navigation or the ESKF,
-//! one design or a gain schedule, built by
-//! `helicon_sim::closed_loop::flight_computer`):
+//! one design or a gain schedule, built by `helicon_setup::flight_computer`,
+//! the one builder the simulator calls too). It stands on its own: it
+//! depends on the core, `helicon-setup`, the device protocols, the log and
+//! the ground station, never on the simulator (SITL, the simulator playing
+//! the hardware, is `helicon-sitl`, above both):
 //!
 //! - [`config`]: `onboard.toml` (devices, parameter and gains files, stale
 //!   limits, failsafes, log folder, real-time options), checked field by field;
@@ -30,4 +33,3 @@ pub mod realtime;
 pub mod records;
 pub mod runtime;
 pub mod safety;
-pub mod sitl;

@@ -8,8 +8,8 @@ use crate::control::ControlTask;
 use crate::safety::Mode;
 use helicon_core::{Reference, Telemetry};
 use helicon_gcs::link::{FlightMode, Vehicle, VehicleEvent};
-use helicon_sim::excitation::Excitations;
-use helicon_sim::scenario::ReferenceSchedule;
+use helicon_setup::excitation::Excitations;
+use helicon_setup::plan::ReferenceSchedule;
 use nalgebra::Vector3;
 
 /// Where the references come from.

@@ -17,10 +17,10 @@ use helicon_core::{Reference, SensorFrame};
 use helicon_devices::{Geodetic, LocalNed};
 use helicon_gnc::design::Gains;
 use helicon_model::Params;
-use helicon_model::config_error::ConfigError;
-use helicon_sim::closed_loop::{OnBoardSetup, flight_computer, imu_health_at};
-use helicon_sim::excitation::Excitations;
-use helicon_sim::scenario::Scenario;
+use helicon_config::ConfigError;
+use helicon_setup::excitation::Excitations;
+use helicon_setup::mission::MissionFile;
+use helicon_setup::{OnBoardSetup, flight_computer, imu_health_at};
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
 use nalgebra::Vector3;
 use std::path::PathBuf;
@@ -62,7 +62,7 @@ pub enum OnboardError {
     Ground(#[from] ground::GroundError),
     /// Building the flight software.
     #[error(transparent)]
-    Build(#[from] helicon_sim::closed_loop::ClosedLoopError),
+    Build(#[from] helicon_setup::BuildError),
     /// The flight log.
     #[error("{path}: {message}")]
     Log {
@@ -110,7 +110,7 @@ pub fn align(
 /// or the mission file's; both at once is refused (which one was meant?).
 fn mission_excitation(
     cfg: &OnboardConfig,
-    mission: Option<&Scenario>,
+    mission: Option<&MissionFile>,
 ) -> Result<Excitations, ConfigError> {
     match mission {
         Some(m) if !m.excitation.is_empty() => {
@@ -158,7 +158,7 @@ pub fn run(
         });
     }
     let mission_scenario = match &cfg.mission {
-        Some(m) => Some(Scenario::from_file(&cfg.resolve(m))?),
+        Some(m) => Some(MissionFile::from_file(&cfg.resolve(m))?),
         None => None,
     };
     let excitation = mission_excitation(cfg, mission_scenario.as_ref())?;
@@ -207,7 +207,8 @@ pub fn run(
         }
     };
     let computer = flight_computer(&OnBoardSetup {
-        params: &params,
+        servo_limits: params.servo_limits(),
+        gravity_m_s2: params.environment.g_m_s2,
         gains: &gains.set,
         schedule: None,
         trim_x: &gains.set.x_trim,
@@ -223,7 +224,12 @@ pub fn run(
         Supervisor::new(cfg.stale, cfg.failsafe, 0.0),
         u_trim,
     )
-    .with_imu_health(imu_health_at(&params, ts, &cfg.sensors, &cfg.file)?);
+    .with_imu_health(imu_health_at(
+        params.environment.g_m_s2,
+        ts,
+        &cfg.sensors,
+        &cfg.file,
+    )?);
     let dir = cfg.resolve(&cfg.log.dir);
     std::fs::create_dir_all(&dir).map_err(|e| OnboardError::Log {
         path: dir.display().to_string(),
@@ -306,8 +312,8 @@ mod tests {
         let mut with = OnboardConfig::from_toml_str(&format!("{MIN}{SWEEP}"), "o.toml").unwrap();
         with.mission = Some(PathBuf::from("m.toml"));
         let mission =
-            Scenario::from_toml_str(&format!("duration_s = 5.0\n{SWEEP}"), "m.toml").unwrap();
-        let bare = Scenario::from_toml_str("duration_s = 5.0\n", "m.toml").unwrap();
+            MissionFile::from_toml_str(&format!("duration_s = 5.0\n{SWEEP}"), "m.toml").unwrap();
+        let bare = MissionFile::from_toml_str("duration_s = 5.0\n", "m.toml").unwrap();
         assert!(mission_excitation(&plain, None).unwrap().is_empty());
         assert!(!mission_excitation(&with, Some(&bare)).unwrap().is_empty());
         assert!(

@@ -17,7 +17,7 @@
 use crate::navigator::NavigatorConfig;
 use crate::server::{STREAMS, ServerConfig, default_rates_hz, parse_address};
 use helicon_devices::Geodetic;
-use helicon_model::config_error::ConfigError;
+use helicon_config::ConfigError;
 use serde::Deserialize;
 
 /// The `[gcs]` section as written.

@@ -25,7 +25,8 @@ fn hardware_steps_reproduce_fly_bit_for_bit() {
     let x0 = *hw.state();
     let p = prepared.model.params();
     let mut computer = flight_computer(&OnBoardSetup {
-        params: p,
+        servo_limits: p.servo_limits(),
+        gravity_m_s2: p.environment.g_m_s2,
         gains: &prepared.gains.set,
         schedule: prepared.schedule.as_ref(),
         trim_x: &prepared.trim.x,

@@ -92,7 +92,8 @@ impl<'a> Harness<'a> {
         let hw = Hardware::new(scenario, prepared).unwrap();
         let x0 = *hw.state();
         let computer = flight_computer(&OnBoardSetup {
-            params: prepared.model.params(),
+            servo_limits: prepared.model.params().servo_limits(),
+            gravity_m_s2: prepared.model.params().environment.g_m_s2,
             gains: &prepared.gains.set,
             schedule: prepared.schedule.as_ref(),
             trim_x: &prepared.trim.x,

@@ -7,7 +7,7 @@ mod common;
 
 use common::{Ulog, options, scenario};
 use helicon_flight::ports::{stick_command, stick_us};
-use helicon_flight::sitl;
+use helicon_sitl;
 use helicon_sim::closed_loop::{Prepared, Termination, prepare};
 use helicon_sim::log_csv::read_log_csv;
 

@@ -3,7 +3,7 @@
 #![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
 
 use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
-use helicon_flight::sitl::{Faults, Pilot, SitlOptions, Speed};
+use helicon_sitl::{Faults, Pilot, SitlOptions, Speed};
 use helicon_sim::scenario::Scenario;
 use px4_ulog::full_parser::{Completeness, MultiId, SomeVec, read_file};
 use px4_ulog::stream_parser::{Message, SimpleCallbackResult, read_file_with_simple_callback};

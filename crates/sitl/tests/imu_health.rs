@@ -8,7 +8,7 @@ mod common;
 
 use common::{Ulog, options, scenario};
 use helicon_core::sensor::ImuSample;
-use helicon_flight::sitl;
+use helicon_sitl;
 use helicon_sim::closed_loop::{fly, imu_health_at, prepare};
 use helicon_sim::log_csv::{LogWriter, read_log_csv};
 use nalgebra::Vector3;
@@ -91,7 +91,7 @@ fn sitl_runs_the_imu_health_monitor_as_helicon_sim() {
     // replayed on the IMU samples the on-board program logged, a monitor
     // of its own gives the on-board records bit for bit
     let mut m = imu_health_at(
-        prepared.model.params(),
+        prepared.model.params().environment.g_m_s2,
         prepared.gains.set.sample_time_s,
         &s.sensors,
         "test",

@@ -8,7 +8,7 @@
 
 mod common;
 
-use helicon_flight::sitl;
+use helicon_sitl;
 use helicon_gcs::mavlink::dialects::common::*;
 use helicon_gcs::mavlink::{Connectable, Connection, MavConnection, MavHeader, UdpConfig, UdpMode};
 use helicon_sim::closed_loop::{Termination, prepare};

@@ -7,7 +7,7 @@
 mod common;
 
 use common::{Ulog, options, scenario};
-use helicon_flight::sitl;
+use helicon_sitl;
 use helicon_sim::closed_loop::{Termination, prepare};
 use helicon_sim::navigation::sensor_suite_at;
 

@@ -1,9 +1,13 @@
+//! # helicon-sitl
+//!
 //! Software in the loop: the simulator plays the helicopter's hardware
 //! (plant, wind, sensor models: `helicon_sim::closed_loop::Hardware`) and
 //! speaks the devices' byte protocols on pseudo-terminals; the on-board
-//! program ([`crate::runtime`]) opens the pty slave paths exactly as it
-//! would open `/dev/ttyS*`, reads them through its drivers
-//! ([`crate::ports`]), and its servo frames drive the plant.
+//! program (`helicon_flight::runtime`) opens the pty slave paths exactly as
+//! it would open `/dev/ttyS*`, reads them through its drivers
+//! (`helicon_flight::ports`), and its servo frames drive the plant. The
+//! simulator stands in for the drivers' devices, never inside the flight
+//! stack: this crate depends on both, and neither on it.
 //!
 //! Per control period the hardware writes, in this order: a receiver frame
 //! (every 8th period, 50 Hz), the GPS receiver's NAV-PVT when a fix is
@@ -20,13 +24,13 @@
 //! state (as `helicon sim` aligns its navigation), armed, and flies the
 //! scenario's references (the ground station's mission uplink).
 
-use crate::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
-use crate::control::{ControlTask, StepReport};
-use crate::ground;
-use crate::mission::{Mission, References};
-use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port, stick_us};
-use crate::runtime::{self, Pacing, RunReport, RuntimeOptions};
-use crate::safety::Supervisor;
+use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
+use helicon_flight::control::{ControlTask, StepReport};
+use helicon_flight::ground;
+use helicon_flight::mission::{Mission, References};
+use helicon_flight::ports::{DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port, stick_us};
+use helicon_flight::runtime::{self, Pacing, RunReport, RuntimeOptions};
+use helicon_flight::safety::Supervisor;
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, RcInput as RcFrame};
@@ -150,6 +154,12 @@ pub enum SitlError {
     /// Preparing the scenario or the flight software.
     #[error(transparent)]
     Prepare(#[from] ClosedLoopError),
+    /// Building the flight software.
+    #[error(transparent)]
+    Build(#[from] helicon_setup::BuildError),
+    /// A configuration value the flight software cannot use.
+    #[error(transparent)]
+    Config(#[from] helicon_config::ConfigError),
     /// A pseudo-terminal or device.
     #[error("{0}")]
     Device(String),
@@ -201,7 +211,8 @@ pub fn run(
     let x0 = *hw.state();
     let p = prepared.model.params();
     let computer = flight_computer(&OnBoardSetup {
-        params: p,
+        servo_limits: p.servo_limits(),
+        gravity_m_s2: p.environment.g_m_s2,
         gains: &prepared.gains.set,
         schedule: prepared.schedule.as_ref(),
         trim_x: &prepared.trim.x,
@@ -282,7 +293,7 @@ pub fn run(
         Excitations::new(&scenario.excitation, &scenario.name).map_err(ClosedLoopError::from)?,
     );
     let task = ControlTask::new(computer, supervisor, u_trim).with_imu_health(imu_health_at(
-        p,
+        p.environment.g_m_s2,
         ts,
         &scenario.sensors,
         &scenario.name,
@@ -314,7 +325,7 @@ pub fn run(
     if !lockstep
         && options.realtime.sched_fifo
         && let Err(e) =
-            crate::realtime::set_fifo(options.realtime.priority.saturating_add(1).min(99))
+            helicon_flight::realtime::set_fifo(options.realtime.priority.saturating_add(1).min(99))
     {
         eprintln!("warning: SCHED_FIFO for the simulated hardware not permitted ({e})");
     }
@@ -330,9 +341,9 @@ pub fn run(
     let mut received = Vec::with_capacity(hw.samples());
     let mut samples = 0u64;
     let timeout = Duration::from_secs(10);
-    let t0 = crate::realtime::monotonic_ns();
+    let t0 = helicon_flight::realtime::monotonic_ns();
     let wall0 = Instant::now();
-    let cpu0 = crate::realtime::process_cpu_s();
+    let cpu0 = helicon_flight::realtime::process_cpu_s();
     let mut failure = None;
     while let Some(s) = hw.sense() {
         let t = s.t_s;
@@ -428,7 +439,7 @@ pub fn run(
             }
         } else {
             let deadline = t0 + ((s.k + 1) as f64 * ts * 1e9) as u64;
-            crate::realtime::sleep_until_ns(deadline);
+            helicon_flight::realtime::sleep_until_ns(deadline);
             loop {
                 let n = helicon_devices::transport::read_with_timeout(
                     &mut servo_in,
@@ -480,7 +491,7 @@ pub fn run(
         }
     }
     let wall_s = wall0.elapsed().as_secs_f64();
-    let cpu_s = crate::realtime::process_cpu_s() - cpu0;
+    let cpu_s = helicon_flight::realtime::process_cpu_s() - cpu0;
     handle.stop();
     let onboard = handle.join();
     if let Some(server) = server {

@@ -29,7 +29,8 @@ fn a_control_step_and_its_log_allocate_nothing() {
     let mut hw = Hardware::new(&s, &prepared).unwrap();
     let x0 = *hw.state();
     let computer = flight_computer(&OnBoardSetup {
-        params: prepared.model.params(),
+        servo_limits: prepared.model.params().servo_limits(),
+        gravity_m_s2: prepared.model.params().environment.g_m_s2,
         gains: &prepared.gains.set,
         schedule: prepared.schedule.as_ref(),
         trim_x: &prepared.trim.x,
@@ -43,7 +44,7 @@ fn a_control_step_and_its_log_allocate_nothing() {
     let mut sup = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
     sup.arm();
     let health = imu_health_at(
-        prepared.model.params(),
+        prepared.model.params().environment.g_m_s2,
         prepared.gains.set.sample_time_s,
         &s.sensors,
         "demo",
@@ -120,7 +121,8 @@ fn a_ground_station_step_allocates_nothing() {
     let mut hw = Hardware::new(&s, &prepared).unwrap();
     let x0 = *hw.state();
     let computer = flight_computer(&OnBoardSetup {
-        params: prepared.model.params(),
+        servo_limits: prepared.model.params().servo_limits(),
+        gravity_m_s2: prepared.model.params().environment.g_m_s2,
         gains: &prepared.gains.set,
         schedule: prepared.schedule.as_ref(),
         trim_x: &prepared.trim.x,

@@ -8,7 +8,7 @@
 mod common;
 
 use common::options;
-use helicon_flight::sitl;
+use helicon_sitl;
 use helicon_sim::closed_loop::{fly, prepare};
 use helicon_sim::scenario::{OUTPUTS, Scenario};
 use std::path::Path;
