@@ -11,9 +11,9 @@ use crate::sim_cmd::{folder_name, overrides_from, overrides_label, prepare_step}
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
-use helicon_sitl::{self, Faults, Pilot, SitlOptions, Speed};
 use helicon_sim::output::finish_run;
 use helicon_sim::scenario::{OUTPUTS, Scenario};
+use helicon_sitl::{self as sitl, Faults, Pilot, SitlOptions, Speed};
 use std::path::PathBuf;
 
 /// How fast the simulator runs.

@@ -5,12 +5,12 @@
 //! waits for the server (a full ring drops a status and counts it).
 
 use crate::mission::{Mission, References};
+use helicon_config::ConfigError;
 use helicon_devices::Geodetic;
 use helicon_gcs::config::GcsSection;
 use helicon_gcs::link::{Vehicle, channel};
 use helicon_gcs::navigator::Navigator;
 use helicon_gcs::server::{self, GcsError, ServerHandle};
-use helicon_config::ConfigError;
 
 /// The rings' capacity between the control task and the server (at 400 Hz
 /// with statuses at 100 Hz: tens of seconds of a stalled server).

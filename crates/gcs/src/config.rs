@@ -16,8 +16,8 @@
 
 use crate::navigator::NavigatorConfig;
 use crate::server::{STREAMS, ServerConfig, default_rates_hz, parse_address};
-use helicon_devices::Geodetic;
 use helicon_config::ConfigError;
+use helicon_devices::Geodetic;
 use serde::Deserialize;
 
 /// The `[gcs]` section as written.

@@ -82,7 +82,9 @@ impl From<helicon_setup::inputs::InputError> for IdentError {
     fn from(e: helicon_setup::inputs::InputError) -> Self {
         use helicon_setup::inputs::InputError;
         match e {
-            InputError::Invalid { field, value, rule } => IdentError::Invalid { field, value, rule },
+            InputError::Invalid { field, value, rule } => {
+                IdentError::Invalid { field, value, rule }
+            }
             InputError::Data { what, reason } => IdentError::Data { what, reason },
         }
     }

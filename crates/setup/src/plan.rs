@@ -275,32 +275,32 @@ impl ReferenceSchedule {
         reference: &[ReferenceChange],
         trajectory: Option<&TrajectorySection>,
     ) -> Self {
-    let mut changes: Vec<(f64, usize, f64, f64)> = reference
-        .iter()
-        .map(|c| {
-            (
-                c.t_s,
-                // `check_references` (every load and override) refuses an
-                // output not in OUTPUTS: the fallback is never taken on a file
-                OUTPUTS.iter().position(|o| *o == c.output).unwrap_or(0),
-                c.value,
-                c.ramp_s,
-            )
-        })
-        .collect();
-    changes.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let t = trim;
-    ReferenceSchedule {
-        start: [
-            t.velocity_ned_m_s[0],
-            t.velocity_ned_m_s[1],
-            t.velocity_ned_m_s[2],
-            t.yaw_rad,
-        ],
-        changes,
-        // checked with the plan (`TrajectorySection::mission`)
-        mission: trajectory.and_then(|tr| tr.mission(trim, "").ok()),
-    }
+        let mut changes: Vec<(f64, usize, f64, f64)> = reference
+            .iter()
+            .map(|c| {
+                (
+                    c.t_s,
+                    // `check_references` (every load and override) refuses an
+                    // output not in OUTPUTS: the fallback is never taken on a file
+                    OUTPUTS.iter().position(|o| *o == c.output).unwrap_or(0),
+                    c.value,
+                    c.ramp_s,
+                )
+            })
+            .collect();
+        changes.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let t = trim;
+        ReferenceSchedule {
+            start: [
+                t.velocity_ned_m_s[0],
+                t.velocity_ned_m_s[1],
+                t.velocity_ned_m_s[2],
+                t.yaw_rad,
+            ],
+            changes,
+            // checked with the plan (`TrajectorySection::mission`)
+            mission: trajectory.and_then(|tr| tr.mission(trim, "").ok()),
+        }
     }
 
     /// The reference (vn, ve, vd, psi) at time `t_s`: each change ramps (or

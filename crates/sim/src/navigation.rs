@@ -4,13 +4,13 @@
 //! `helicon_core`: the closed loop and `helicon fuse` run that one type.
 
 use crate::sensors::{SensorConfig, SensorConfigError, SensorSuite};
-pub use helicon_setup::builder::{eskf_at, navigation_filter_at, navigation_initial};
-pub use helicon_setup::sensors::{imu_noise, sensor_noise};
 use helicon_core::eskf::{Eskf, EskfConfig, ImuNoise};
 use helicon_core::fusion::FusionError;
 pub use helicon_core::navigation::NavigationConfig;
 use helicon_core::navigation::NavigationFilter;
 use helicon_core::sensor::SensorNoise;
+pub use helicon_setup::builder::{eskf_at, navigation_filter_at, navigation_initial};
+pub use helicon_setup::sensors::{imu_noise, sensor_noise};
 use nalgebra::{SVector, Vector3};
 
 /// The sensor suite of `config` sampled every `dt_s` (its IMU rate is set to

@@ -32,11 +32,11 @@ use std::path::{Path, PathBuf};
 /// error shape (file, field, value, rule; the `io::Error` kept as source).
 pub type ScenarioError = helicon_model::ConfigError;
 
+pub use helicon_setup::estimator::{EstimatorKind, EstimatorSection};
 pub use helicon_setup::plan::{
     MAX_HEADING_RAD, MAX_SPEED_M_S, OUTPUTS, ReferenceChange, ReferenceSchedule, TrimSection,
     check_references, check_trim,
 };
-pub use helicon_setup::estimator::{EstimatorKind, EstimatorSection};
 
 /// How the plant's inflow is computed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]

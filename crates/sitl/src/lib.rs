@@ -24,17 +24,19 @@
 //! state (as `helicon sim` aligns its navigation), armed, and flies the
 //! scenario's references (the ground station's mission uplink).
 
-use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
-use helicon_flight::control::{ControlTask, StepReport};
-use helicon_flight::ground;
-use helicon_flight::mission::{Mission, References};
-use helicon_flight::ports::{DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port, stick_us};
-use helicon_flight::runtime::{self, Pacing, RunReport, RuntimeOptions};
-use helicon_flight::safety::Supervisor;
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, RcInput as RcFrame};
 use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCommon};
+use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
+use helicon_flight::control::{ControlTask, StepReport};
+use helicon_flight::ground;
+use helicon_flight::mission::{Mission, References};
+use helicon_flight::ports::{
+    DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port, stick_us,
+};
+use helicon_flight::runtime::{self, Pacing, RunReport, RuntimeOptions};
+use helicon_flight::safety::Supervisor;
 use helicon_gcs::config::GcsSection;
 use helicon_sim::closed_loop::{
     ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, flight_computer,

@@ -7,9 +7,9 @@
 mod common;
 
 use common::{Ulog, options, scenario};
-use helicon_sitl;
 use helicon_sim::closed_loop::{Termination, prepare};
 use helicon_sim::navigation::sensor_suite_at;
+use helicon_sitl as sitl;
 
 #[test]
 fn the_ulog_carries_the_eskf_bias_estimates() {

@@ -7,10 +7,10 @@
 mod common;
 
 use common::{Ulog, options, scenario};
-use helicon_sitl;
 use helicon_sim::closed_loop::{Termination, prepare};
 use helicon_sim::log_csv::LogWriter;
 use helicon_sim::log_csv::read_log_csv;
+use helicon_sitl as sitl;
 
 const EXC: [&str; 4] = ["exc_col", "exc_lat", "exc_lon", "exc_tr"];
 

@@ -7,9 +7,9 @@ mod common;
 
 use common::{Ulog, options, scenario};
 use helicon_flight::ports::{stick_command, stick_us};
-use helicon_sitl;
 use helicon_sim::closed_loop::{Prepared, Termination, prepare};
 use helicon_sim::log_csv::read_log_csv;
+use helicon_sitl as sitl;
 
 /// Codes of the log's message set (helicon-ulog): modes and failsafe reasons.
 const AUTOMATIC: u8 = 2;

@@ -8,12 +8,12 @@
 
 mod common;
 
-use helicon_sitl;
 use helicon_gcs::mavlink::dialects::common::*;
 use helicon_gcs::mavlink::{Connectable, Connection, MavConnection, MavHeader, UdpConfig, UdpMode};
 use helicon_sim::closed_loop::{Termination, prepare};
 use helicon_sim::log_csv::read_log_csv;
 use helicon_sim::scenario::Scenario;
+use helicon_sitl as sitl;
 use std::net::UdpSocket;
 use std::time::{Duration, Instant};
 

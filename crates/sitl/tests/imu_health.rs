@@ -8,9 +8,9 @@ mod common;
 
 use common::{Ulog, options, scenario};
 use helicon_core::sensor::ImuSample;
-use helicon_sitl;
 use helicon_sim::closed_loop::{fly, imu_health_at, prepare};
 use helicon_sim::log_csv::{LogWriter, read_log_csv};
+use helicon_sitl as sitl;
 use nalgebra::Vector3;
 
 /// SITL's plant is driven by servo commands rounded to the avionics

@@ -9,9 +9,9 @@ mod common;
 
 use common::{Ulog, options, scenario};
 use helicon_core::state::Input;
-use helicon_sitl;
 use helicon_sim::closed_loop::{Termination, prepare};
 use helicon_sim::log_csv::read_log_csv;
+use helicon_sitl as sitl;
 
 const STATES: [&str; 9] = ["phi", "theta", "psi", "u", "v", "w", "p", "q", "r"];
 

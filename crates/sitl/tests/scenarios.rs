@@ -8,9 +8,9 @@
 mod common;
 
 use common::options;
-use helicon_sitl;
 use helicon_sim::closed_loop::{fly, prepare};
 use helicon_sim::scenario::{OUTPUTS, Scenario};
+use helicon_sitl as sitl;
 use std::path::Path;
 
 fn check(file: &str) {

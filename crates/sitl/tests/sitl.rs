@@ -7,9 +7,9 @@
 mod common;
 
 use common::{Ulog, options, scenario};
-use helicon_sitl;
 use helicon_sim::closed_loop::{Termination, fly, prepare};
 use helicon_sim::scenario::OUTPUTS;
+use helicon_sitl as sitl;
 
 /// Float32 rounding (round to nearest): relative error at most 2⁻²⁴.
 fn f32_bound(x: f64) -> f64 {

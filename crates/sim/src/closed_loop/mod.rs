@@ -23,8 +23,7 @@ use helicon_core::frames::{EulerTrig, wrap_pi};
 use helicon_core::imu_health::ImuHealthMonitor;
 use helicon_core::navigation::NavigationFilter;
 use helicon_core::{
-    CoreError, FlightComputer, Reference,
-    StateMeasurement, Telemetry, TruthFeed, TruthMeasurement,
+    CoreError, FlightComputer, Reference, StateMeasurement, Telemetry, TruthFeed, TruthMeasurement,
 };
 use helicon_gnc::design::{Gains, design};
 use helicon_model::gyro::YawGyroBlock;
@@ -41,8 +40,8 @@ mod stages;
 mod summary;
 
 pub use hardware::{Hardware, HardwareSample, HardwareStep};
-use stages::{OnBoard, Plant, check_limits};
 pub use helicon_setup::builder::{OnBoardSetup, flight_computer, imu_health_at};
+use stages::{OnBoard, Plant, check_limits};
 use summary::summarize;
 pub use summary::{METRIC_TRACE_CAP, Outcome, Summary, SummaryAccumulator, Termination};
 

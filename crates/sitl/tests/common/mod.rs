@@ -3,8 +3,8 @@
 #![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
 
 use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
-use helicon_sitl::{Faults, Pilot, SitlOptions, Speed};
 use helicon_sim::scenario::Scenario;
+use helicon_sitl::{Faults, Pilot, SitlOptions, Speed};
 use px4_ulog::full_parser::{Completeness, MultiId, SomeVec, read_file};
 use px4_ulog::stream_parser::{Message, SimpleCallbackResult, read_file_with_simple_callback};
 use std::collections::HashMap;
