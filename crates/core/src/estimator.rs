@@ -175,7 +175,9 @@ impl KalmanPredictor {
     }
 }
 
-impl Estimator for KalmanPredictor {
+/// Every predictor is an estimator fed the nine measured states (ideal
+/// navigation): the fixed design, the scheduled one and either of them.
+impl<P: Predictor> Estimator for P {
     type Measurement = StateMeasurement;
 
     fn update(&mut self, m: &StateMeasurement) -> Result<Estimate, CoreError> {
@@ -187,7 +189,7 @@ impl Estimator for KalmanPredictor {
     }
 
     fn predict(&mut self, applied: &Input) -> Result<(), CoreError> {
-        self.advance(applied)
+        Predictor::advance(self, applied)
     }
 }
 

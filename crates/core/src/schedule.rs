@@ -26,7 +26,7 @@
 //! points and [`MAX_AXIS_POINTS`] per axis.
 
 use crate::error::CoreError;
-use crate::estimator::{Estimate, Estimator, KalmanPredictor, Predictor, StateMeasurement};
+use crate::estimator::{KalmanPredictor, Predictor};
 use crate::frames::{EulerTrig, wrap_pi};
 use crate::gains::{GainSet, ServoLimits};
 use crate::lqi::{Command, Lqi, Reference, StateFeedback};
@@ -405,22 +405,6 @@ impl Predictor for ScheduledPredictor {
     }
 }
 
-impl Estimator for ScheduledPredictor {
-    type Measurement = StateMeasurement;
-
-    fn update(&mut self, m: &StateMeasurement) -> Result<Estimate, CoreError> {
-        Ok(Estimate {
-            state: self.absorb(&m.measured)?,
-            measured: m.measured,
-            navigation: None,
-        })
-    }
-
-    fn predict(&mut self, applied: &Input) -> Result<(), CoreError> {
-        Predictor::advance(self, applied)
-    }
-}
-
 /// A law that is either one fixed design or a schedule: what a flight
 /// computer built from either a `gains.json` or a gain-schedule file flies.
 #[derive(Debug, Clone)]
@@ -485,21 +469,5 @@ impl Predictor for AnyPredictor {
             AnyPredictor::Fixed(p) => p.advance(applied),
             AnyPredictor::Scheduled(p) => Predictor::advance(p, applied),
         }
-    }
-}
-
-impl Estimator for AnyPredictor {
-    type Measurement = StateMeasurement;
-
-    fn update(&mut self, m: &StateMeasurement) -> Result<Estimate, CoreError> {
-        Ok(Estimate {
-            state: self.absorb(&m.measured)?,
-            measured: m.measured,
-            navigation: None,
-        })
-    }
-
-    fn predict(&mut self, applied: &Input) -> Result<(), CoreError> {
-        Predictor::advance(self, applied)
     }
 }

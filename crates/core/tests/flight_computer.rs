@@ -3,7 +3,6 @@
 //! a wrapping global allocator (this test binary only), and the layering
 //! rule that the core depends on nalgebra only.
 #![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
-#![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; we only forward to System
 
 use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
 use helicon_core::{
@@ -12,9 +11,10 @@ use helicon_core::{
 };
 use nalgebra::{SMatrix, SVector, Vector3};
 
-#[path = "common/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::allocations;
+use helicon_test_support::allocations;
+
+#[global_allocator]
+static ALLOC: helicon_test_support::Counting = helicon_test_support::Counting;
 
 const TS: f64 = 0.0025;
 const G: f64 = 9.81;

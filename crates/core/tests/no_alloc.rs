@@ -1,15 +1,15 @@
 //! The hot paths (`q_method`, `FusionFilter::step`) do not allocate: counted
 //! with a wrapping global allocator (this test binary only).
 #![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
-#![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; we only forward to System
 
 use helicon_core::attitude::{VectorObservation, q_method, quaternion_from_euler};
 use helicon_core::fusion::{FusionConfig, FusionFilter, FusionInput, Matrix9, Vector9};
 use nalgebra::Vector3;
 
-#[path = "common/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::allocations;
+use helicon_test_support::allocations;
+
+#[global_allocator]
+static ALLOC: helicon_test_support::Counting = helicon_test_support::Counting;
 
 #[test]
 fn q_method_and_fusion_step_do_not_allocate() {

@@ -3,7 +3,6 @@
 //! scheduled law at a node equal to the fixed law, no allocation per
 //! sample, and the S-curves against their closed forms and limits.
 #![allow(clippy::unwrap_used)] // tests: a failed unwrap is a failed test
-#![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; we only forward to System
 
 use helicon_core::schedule::{GainSchedule, ScheduleAxes, ScheduledLqi, ScheduledPredictor};
 use helicon_core::state::{Input, MeasuredStates, ReducedState};
@@ -14,9 +13,10 @@ use helicon_core::{
 use nalgebra::{SMatrix, Vector3};
 use std::sync::Arc;
 
-#[path = "common/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::allocations;
+use helicon_test_support::allocations;
+
+#[global_allocator]
+static ALLOC: helicon_test_support::Counting = helicon_test_support::Counting;
 
 /// A synthetic, flyable gain set of the operating point (forward `f`,
 /// lateral `l`), level: trim body velocity (f, l, 0), entries depending on

@@ -1,16 +1,16 @@
 //! Decoding and encoding allocate nothing in steady state: counted with the
 //! workspace's wrapping global allocator (this test binary only).
 #![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
-#![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; we only forward to System
 
 use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample};
 use helicon_devices::framing::Protocol;
 use helicon_devices::*;
 use nalgebra::{Vector3, Vector4};
 
-#[path = "../../core/tests/common/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::allocations;
+use helicon_test_support::allocations;
+
+#[global_allocator]
+static ALLOC: helicon_test_support::Counting = helicon_test_support::Counting;
 
 /// Decodes `stream` in 64-byte chunks; returns (messages, allocations).
 fn decode_counting<P: Protocol>(stream: &[u8]) -> (usize, usize) {

@@ -2,7 +2,6 @@
 //! designed on, allocation-free, gains file round trip.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-#![allow(unsafe_code)] // the counting GlobalAlloc below
 
 use helicon_core::{
     Estimator, FlightComputer, KalmanPredictor, Lqi, Reference, ServoLimits, StateMeasurement,
@@ -13,9 +12,10 @@ use helicon_model::trim::{TrimOptions, TrimTarget, trim};
 use helicon_model::{InflowMode, Model, Preset};
 use nalgebra::{DMatrix, DVector, SVector, Vector3};
 
-#[path = "../../core/tests/common/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::allocations;
+use helicon_test_support::allocations;
+
+#[global_allocator]
+static ALLOC: helicon_test_support::Counting = helicon_test_support::Counting;
 
 struct Setup {
     gains: Gains,

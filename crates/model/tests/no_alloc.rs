@@ -1,14 +1,14 @@
 //! The derivative and the RK4 step allocate nothing on the heap (counting
 //! global allocator around the calls).
-#![allow(unsafe_code)]
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use helicon_model::{Input, Model, Preset, State};
 use nalgebra::Vector3;
 
-#[path = "../../core/tests/common/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::allocations;
+use helicon_test_support::allocations;
+
+#[global_allocator]
+static ALLOC: helicon_test_support::Counting = helicon_test_support::Counting;
 
 #[test]
 fn derivative_and_step_do_not_allocate() {

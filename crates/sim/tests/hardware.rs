@@ -24,19 +24,7 @@ fn hardware_steps_reproduce_fly_bit_for_bit() {
     let mut hw = Hardware::new(&scenario, &prepared).unwrap();
     let x0 = *hw.state();
     let p = prepared.model.params();
-    let mut computer = flight_computer(&OnBoardSetup {
-        servo_limits: p.servo_limits(),
-        gravity_m_s2: p.environment.g_m_s2,
-        gains: &prepared.gains.set,
-        schedule: prepared.schedule.as_ref(),
-        trim_x: &prepared.trim.x,
-        sensors: &scenario.sensors,
-        navigation: &scenario.navigation,
-        estimator: &scenario.estimator,
-        feedback: scenario.controller.feedback,
-        x0: &x0,
-    })
-    .unwrap();
+    let mut computer = flight_computer(&prepared.onboard_setup(&scenario, &x0)).unwrap();
     let mut rows = Vec::new();
     while let Some(sample) = hw.sense() {
         let tel = computer.step(&sample.frame, &sample.reference).unwrap();

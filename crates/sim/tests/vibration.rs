@@ -3,15 +3,14 @@
 //! closed form of a clipped sinusoid through a linear filter.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-#![allow(unsafe_code)] // the shared counting allocator forwards to System
 
 use helicon_sim::closed_loop::{fly, prepare};
 use helicon_sim::scenario::Scenario;
 use helicon_sim::sensor_log::SensorLogWriter;
 use std::path::{Path, PathBuf};
 
-#[path = "../../core/tests/common/counting_alloc.rs"]
-mod counting_alloc;
+#[global_allocator]
+static ALLOC: helicon_test_support::Counting = helicon_test_support::Counting;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -218,12 +217,12 @@ fn vibration_chain_does_not_allocate() {
     let truths: Vec<_> = (0..2000)
         .map(|k| traj.truth(f64::from(k) / 400.0))
         .collect();
-    let before = counting_alloc::allocations();
+    let before = helicon_test_support::allocations();
     let mut acc = 0.0;
     for t in &truths {
         acc += suite.sample(t).imu.specific_force_body_m_s2.z;
     }
-    let after = counting_alloc::allocations();
+    let after = helicon_test_support::allocations();
     assert!(acc.is_finite());
     assert_eq!(after - before, 0, "sampling with vibration allocated");
 }

@@ -212,18 +212,7 @@ pub fn run(
     let ts = hw.sample_time_s();
     let x0 = *hw.state();
     let p = prepared.model.params();
-    let computer = flight_computer(&OnBoardSetup {
-        servo_limits: p.servo_limits(),
-        gravity_m_s2: p.environment.g_m_s2,
-        gains: &prepared.gains.set,
-        schedule: prepared.schedule.as_ref(),
-        trim_x: &prepared.trim.x,
-        sensors: &scenario.sensors,
-        navigation: &scenario.navigation,
-        estimator: &scenario.estimator,
-        feedback: scenario.controller.feedback,
-        x0: &x0,
-    })?;
+    let computer = flight_computer(&prepared.onboard_setup(scenario, &x0))?;
     let u_trim = prepared.gains.set.u_trim;
     let mut supervisor = Supervisor::new(options.stale, options.failsafe, 0.0);
     let home_geo = Geodetic::new(HOME.0, HOME.1, HOME.2).map_err(dev("home"))?;

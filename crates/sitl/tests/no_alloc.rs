@@ -3,12 +3,12 @@
 //! to the logger, and the logger's ULog encoding (counted per thread with a
 //! wrapping allocator, over the 4400 samples after the first second).
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
-#![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; the shared counter only forwards to System
 
-#[path = "../../core/tests/common/counting_alloc.rs"]
-mod counting_alloc;
+use helicon_test_support::allocations;
 
-use counting_alloc::allocations;
+#[global_allocator]
+static ALLOC: helicon_test_support::Counting = helicon_test_support::Counting;
+
 use helicon_flight::config::{FailsafeConfig, StaleLimits};
 use helicon_flight::control::{ControlTask, Tick};
 use helicon_flight::records::{FlightRecord, step_records, write_record};
@@ -28,19 +28,7 @@ fn a_control_step_and_its_log_allocate_nothing() {
     let prepared = prepare(&s).unwrap();
     let mut hw = Hardware::new(&s, &prepared).unwrap();
     let x0 = *hw.state();
-    let computer = flight_computer(&OnBoardSetup {
-        servo_limits: prepared.model.params().servo_limits(),
-        gravity_m_s2: prepared.model.params().environment.g_m_s2,
-        gains: &prepared.gains.set,
-        schedule: prepared.schedule.as_ref(),
-        trim_x: &prepared.trim.x,
-        sensors: &s.sensors,
-        navigation: &s.navigation,
-        estimator: &s.estimator,
-        feedback: true,
-        x0: &x0,
-    })
-    .unwrap();
+    let computer = flight_computer(&prepared.onboard_setup(&s, &x0)).unwrap();
     let mut sup = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
     sup.arm();
     let health = imu_health_at(
@@ -120,19 +108,7 @@ fn a_ground_station_step_allocates_nothing() {
     let prepared = prepare(&s).unwrap();
     let mut hw = Hardware::new(&s, &prepared).unwrap();
     let x0 = *hw.state();
-    let computer = flight_computer(&OnBoardSetup {
-        servo_limits: prepared.model.params().servo_limits(),
-        gravity_m_s2: prepared.model.params().environment.g_m_s2,
-        gains: &prepared.gains.set,
-        schedule: prepared.schedule.as_ref(),
-        trim_x: &prepared.trim.x,
-        sensors: &s.sensors,
-        navigation: &s.navigation,
-        estimator: &s.estimator,
-        feedback: true,
-        x0: &x0,
-    })
-    .unwrap();
+    let computer = flight_computer(&prepared.onboard_setup(&s, &x0)).unwrap();
     let sup = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
     let u_trim = prepared.gains.set.u_trim;
     let mut task = ControlTask::new(computer, sup, u_trim);

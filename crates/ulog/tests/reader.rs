@@ -23,12 +23,7 @@ fn sample() -> Vec<u8> {
         .unwrap()
 }
 
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("helicon_ulog_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use helicon_test_support::tmpdir;
 
 /// Message end offsets of a complete file.
 fn message_ends(bytes: &[u8]) -> Vec<u64> {

@@ -2,11 +2,11 @@
 //! policy bounds what a crash can lose, no allocation per record, misuse
 //! and bad times are typed errors.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
-#![allow(unsafe_code)] // the counting allocator: GlobalAlloc is an unsafe trait; it forwards to System
 
-#[path = "../../core/tests/common/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::allocations;
+use helicon_test_support::allocations;
+
+#[global_allocator]
+static ALLOC: helicon_test_support::Counting = helicon_test_support::Counting;
 
 use helicon_core::computer::Telemetry;
 use helicon_core::lqi::Reference;

@@ -91,19 +91,7 @@ impl<'a> Harness<'a> {
     ) -> Self {
         let hw = Hardware::new(scenario, prepared).unwrap();
         let x0 = *hw.state();
-        let computer = flight_computer(&OnBoardSetup {
-            servo_limits: prepared.model.params().servo_limits(),
-            gravity_m_s2: prepared.model.params().environment.g_m_s2,
-            gains: &prepared.gains.set,
-            schedule: prepared.schedule.as_ref(),
-            trim_x: &prepared.trim.x,
-            sensors: &scenario.sensors,
-            navigation: &scenario.navigation,
-            estimator: &scenario.estimator,
-            feedback: scenario.controller.feedback,
-            x0: &x0,
-        })
-        .unwrap();
+        let computer = flight_computer(&prepared.onboard_setup(scenario, &x0)).unwrap();
         let u_trim = prepared.gains.set.u_trim;
         let supervisor = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
         let task = ControlTask::new(computer, supervisor, u_trim);

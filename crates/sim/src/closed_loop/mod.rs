@@ -130,6 +130,27 @@ pub struct Prepared {
     pub schedule: Option<std::sync::Arc<helicon_core::GainSchedule>>,
 }
 
+impl Prepared {
+    /// What the on-board chain of `scenario` is built from, started at the
+    /// aligned state `x0`: this design's gains (or schedule) and trim, the
+    /// scenario's sensors, navigation, estimator and feedback switch.
+    pub fn onboard_setup<'a>(&'a self, scenario: &'a Scenario, x0: &'a State) -> OnBoardSetup<'a> {
+        let p = self.model.params();
+        OnBoardSetup {
+            servo_limits: p.servo_limits(),
+            gravity_m_s2: p.environment.g_m_s2,
+            gains: &self.gains.set,
+            schedule: self.schedule.as_ref(),
+            trim_x: &self.trim.x,
+            sensors: &scenario.sensors,
+            navigation: &scenario.navigation,
+            estimator: &scenario.estimator,
+            feedback: scenario.controller.feedback,
+            x0,
+        }
+    }
+}
+
 /// The design for the helicopter as flown with the yaw-rate gyro: the tail
 /// input is the yaw-rate command, its trim the mid-range (0 rad/s). The
 /// design model is the gyro-augmented model (plant closed by the block) with

@@ -147,18 +147,7 @@ impl OnBoard {
         let ts = set.sample_time_s;
         let g = p.environment.g_m_s2;
         let c = &scenario.controller;
-        let setup = OnBoardSetup {
-            servo_limits: p.servo_limits(),
-            gravity_m_s2: g,
-            gains: set,
-            schedule: prepared.schedule.as_ref(),
-            trim_x: &prepared.trim.x,
-            sensors: &scenario.sensors,
-            navigation: &scenario.navigation,
-            estimator: &scenario.estimator,
-            feedback: c.feedback,
-            x0,
-        };
+        let setup = prepared.onboard_setup(scenario, x0);
         let sensed = || -> Result<_, ClosedLoopError> {
             Ok((
                 Box::new(
