@@ -46,6 +46,9 @@ pub enum IdentError {
     /// A fit failed (no usable point, no convergence, singular information matrix).
     #[error("fit: {0}")]
     Fit(String),
+    /// A flight-test input program out of its range (`helicon_setup::inputs`).
+    #[error(transparent)]
+    Input(#[from] helicon_setup::inputs::InputError),
 }
 
 impl IdentError {
@@ -74,18 +77,6 @@ impl IdentError {
             file: file.to_string(),
             field: field.into(),
             rule: rule.into(),
-        }
-    }
-}
-
-impl From<helicon_setup::inputs::InputError> for IdentError {
-    fn from(e: helicon_setup::inputs::InputError) -> Self {
-        use helicon_setup::inputs::InputError;
-        match e {
-            InputError::Invalid { field, value, rule } => {
-                IdentError::Invalid { field, value, rule }
-            }
-            InputError::Data { what, reason } => IdentError::Data { what, reason },
         }
     }
 }

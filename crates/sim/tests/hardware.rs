@@ -4,7 +4,7 @@
 //! differs from `helicon sim` only by what its transports do to the numbers.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
-use helicon_sim::closed_loop::{Hardware, LogRow, OnBoardSetup, flight_computer, fly, prepare};
+use helicon_sim::closed_loop::{Hardware, LogRow, flight_computer, fly, prepare};
 use helicon_sim::scenario::Scenario;
 use std::path::Path;
 

@@ -39,8 +39,7 @@ use helicon_flight::runtime::{self, Pacing, RunReport, RuntimeOptions};
 use helicon_flight::safety::Supervisor;
 use helicon_gcs::config::GcsSection;
 use helicon_sim::closed_loop::{
-    ClosedLoopError, Hardware, OnBoardSetup, Prepared, Summary, Termination, flight_computer,
-    imu_health_at,
+    ClosedLoopError, Hardware, Prepared, Summary, Termination, flight_computer, imu_health_at,
 };
 use helicon_sim::excitation::Excitations;
 use helicon_sim::log_csv::{LogCsvError, LogWriter};

@@ -13,7 +13,7 @@ use helicon_flight::config::{FailsafeConfig, StaleLimits};
 use helicon_flight::control::{ControlTask, Tick};
 use helicon_flight::records::{FlightRecord, step_records, write_record};
 use helicon_flight::safety::{RcInput, Supervisor};
-use helicon_sim::closed_loop::{Hardware, OnBoardSetup, flight_computer, imu_health_at, prepare};
+use helicon_sim::closed_loop::{Hardware, flight_computer, imu_health_at, prepare};
 use helicon_sim::excitation::Excitations;
 use helicon_sim::scenario::Scenario;
 use helicon_ulog::messages::Timing;

@@ -16,7 +16,7 @@ use helicon_flight::safety::{Mode, Supervisor};
 use helicon_gcs::link::{Vehicle, channel};
 use helicon_gcs::navigator::{Navigator, NavigatorConfig};
 use helicon_gcs::server::{self, ServerConfig, ServerHandle, ServerReport};
-use helicon_sim::closed_loop::{Hardware, OnBoardSetup, Prepared, flight_computer};
+use helicon_sim::closed_loop::{Hardware, Prepared, flight_computer};
 use helicon_sim::scenario::Scenario;
 use nalgebra::Vector3;
 use std::time::Instant;
