@@ -1,0 +1,2 @@
+"""placeholder"""
+from ._helicon import *  # noqa
