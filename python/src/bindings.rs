@@ -77,12 +77,13 @@ fn slice<'a>(what: &str, a: &'a PyReadonlyArrayDyn<'_, f64>) -> Res<&'a [f64]> {
         .map_err(|e| herr(format!("{what}: not contiguous: {e}")))
 }
 
-/// A matrix argument: 2-D, or a scalar as 1 × 1; every entry finite.
+/// A matrix argument: 2-D, or a scalar as 1 × 1 (`ascontiguousarray` makes
+/// a scalar 1-D of one element); every entry finite.
 fn matrix(py: Python<'_>, what: &str, value: &Bound<'_, PyAny>) -> Res<DMatrix<f64>> {
     let a = f64_array(py, what, value)?;
     let shape = a.shape().to_vec();
     let (r, c) = match shape.as_slice() {
-        [] => (1, 1),
+        [] | [1] => (1, 1),
         [r, c] => (*r, *c),
         s => {
             return Err(herr(format!(
