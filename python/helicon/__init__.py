@@ -114,6 +114,11 @@ def _count(name: str, value: Optional[int]) -> Optional[int]:
     return int(value)
 
 
+def _fspath(value: Any) -> Any:
+    """A path-like as str; anything else unchanged (the module names what it expected)."""
+    return os.fspath(value) if isinstance(value, (str, os.PathLike)) else value
+
+
 def _heading(yaw: float, yaw_rate: float) -> float:
     if yaw_rate != 0.0:
         raise HeliconError(
@@ -301,10 +306,10 @@ def sim(
     Ctrl-C stops the call between cases (a case, once started, flies to its end).
     """
     raw = _helicon.sim(
-        scenario if isinstance(scenario, Scenario) else os.fspath(scenario),
+        _fspath(scenario),
         None if duration is None else float(duration),
         _count("seed", seed),
-        params if (params is None or isinstance(params, Params)) else os.fspath(params),
+        _fspath(params),
     )
     return [SimResult(r) for r in raw]
 
@@ -398,12 +403,12 @@ def mc(
     """
     return McResult(
         _helicon.mc(
-            os.fspath(campaign),
+            _fspath(campaign),
             _count("runs", runs),
             _count("threads", threads),
             _count("seed", seed),
             None if duration is None else float(duration),
-            None if params is None else os.fspath(params),
+            _fspath(params),
         )
     )
 

@@ -811,13 +811,23 @@ fn sim<'py>(
 #[pyo3(signature = (campaign, runs, threads, seed, duration, params))]
 fn mc<'py>(
     py: Python<'py>,
-    campaign: PathBuf,
+    campaign: &Bound<'py, PyAny>,
     runs: Option<usize>,
     threads: Option<usize>,
     seed: Option<u64>,
     duration: Option<f64>,
-    params: Option<PathBuf>,
+    params: Option<&Bound<'py, PyAny>>,
 ) -> Res<Bound<'py, PyDict>> {
+    let campaign: PathBuf = campaign
+        .extract()
+        .map_err(|_| herr("campaign: expected a campaign file path"))?;
+    let params: Option<PathBuf> = match params {
+        Some(p) if !p.is_none() => Some(
+            p.extract()
+                .map_err(|_| herr("params: expected a parameter TOML file path or None"))?,
+        ),
+        _ => None,
+    };
     let c = load_campaign(&campaign, seed, duration, params).map_err(err)?;
     let stop = AtomicBool::new(false);
     let done = AtomicUsize::new(0);
