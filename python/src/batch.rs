@@ -96,7 +96,13 @@ pub fn derivative_rows(
                     wind.row(i, 3),
                     o,
                 )
-                .map_err(|e| if n > 1 { e.context(&format!("row {i}")) } else { e })?;
+                .map_err(|e| {
+                    if n > 1 {
+                        e.context(&format!("row {i}"))
+                    } else {
+                        e
+                    }
+                })?;
             }
             Ok(())
         })

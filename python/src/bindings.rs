@@ -21,7 +21,9 @@ use helicon_model::{Model, NX, Params, Preset};
 use helicon_sim::mc::METRIC_NAMES;
 use helicon_sim::scenario::Scenario;
 use nalgebra::DMatrix;
-use numpy::{Complex64, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{
+    Complex64, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods,
+};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyKeyError, PyValueError};
 use pyo3::prelude::*;
@@ -219,13 +221,19 @@ fn edit_value(key: &str, v: &Bound<'_, PyAny>) -> Res<f64> {
         return Err(wrong("boolean"));
     }
     if v.is_instance_of::<PyInt>() || v.is_instance_of::<PyFloat>() {
-        return v.extract::<f64>().map_err(|_| wrong("an integer beyond f64"));
+        return v
+            .extract::<f64>()
+            .map_err(|_| wrong("an integer beyond f64"));
     }
     // NumPy scalars and other numbers
     if let Ok(x) = v.call_method0("__float__").and_then(|f| f.extract::<f64>()) {
         return Ok(x);
     }
-    Err(wrong(&v.get_type().name().map_or_else(|_| "?".to_string(), |n| n.to_string())))
+    Err(wrong(
+        &v.get_type()
+            .name()
+            .map_or_else(|_| "?".to_string(), |n| n.to_string()),
+    ))
 }
 
 #[pymethods]
@@ -341,7 +349,9 @@ impl PyParams {
                 .into_iter()
                 .filter(|k| pk::get(&self.inner, k).ok() != pk::get(&base, k).ok())
                 .map(|k| {
-                    let v = pk::get(&self.inner, &k).map(|v| v.to_string()).unwrap_or_default();
+                    let v = pk::get(&self.inner, &k)
+                        .map(|v| v.to_string())
+                        .unwrap_or_default();
                     format!("{k:?}: {v}")
                 })
                 .collect();
@@ -462,7 +472,11 @@ impl PyModel {
             Some(w) => Some(slice("wind", w)?),
             None => None,
         };
-        let u_rows = if u_each { Rows::Each(us) } else { Rows::One(us) };
+        let u_rows = if u_each {
+            Rows::Each(us)
+        } else {
+            Rows::One(us)
+        };
         let w_rows = match (ws, w_each) {
             (Some(w), Some(true)) => Some(Rows::Each(w)),
             (Some(w), _) => Some(Rows::One(w)),
@@ -565,7 +579,11 @@ fn lti(e: helicon_lti::LtiError) -> PyErr {
     err(e.into())
 }
 
-fn opt_matrix(py: Python<'_>, what: &str, v: Option<&Bound<'_, PyAny>>) -> Res<Option<DMatrix<f64>>> {
+fn opt_matrix(
+    py: Python<'_>,
+    what: &str,
+    v: Option<&Bound<'_, PyAny>>,
+) -> Res<Option<DMatrix<f64>>> {
     match v {
         Some(x) if !x.is_none() => Ok(Some(matrix(py, what, x)?)),
         _ => Ok(None),
@@ -583,7 +601,12 @@ fn dare<'py>(
     r: &Bound<'py, PyAny>,
     n: Option<&Bound<'py, PyAny>>,
 ) -> Res<Bound<'py, PyAny>> {
-    let (a, b, q, r) = (matrix(py, "A", a)?, matrix(py, "B", b)?, matrix(py, "Q", q)?, matrix(py, "R", r)?);
+    let (a, b, q, r) = (
+        matrix(py, "A", a)?,
+        matrix(py, "B", b)?,
+        matrix(py, "Q", q)?,
+        matrix(py, "R", r)?,
+    );
     let n = opt_matrix(py, "N", n)?;
     let s = py
         .detach(|| helicon_lti::dare(&a, &b, &q, &r, n.as_ref()))
@@ -602,12 +625,24 @@ fn dlqr<'py>(
     r: &Bound<'py, PyAny>,
     n: Option<&Bound<'py, PyAny>>,
 ) -> Res<Bound<'py, PyTuple>> {
-    let (a, b, q, r) = (matrix(py, "A", a)?, matrix(py, "B", b)?, matrix(py, "Q", q)?, matrix(py, "R", r)?);
+    let (a, b, q, r) = (
+        matrix(py, "A", a)?,
+        matrix(py, "B", b)?,
+        matrix(py, "Q", q)?,
+        matrix(py, "R", r)?,
+    );
     let n = opt_matrix(py, "N", n)?;
     let l = py
         .detach(|| helicon_lti::dlqr(&a, &b, &q, &r, n.as_ref()))
         .map_err(lti)?;
-    PyTuple::new(py, [to_array(py, &l.k)?, to_array(py, &l.s)?, complex_array(py, &l.poles)])
+    PyTuple::new(
+        py,
+        [
+            to_array(py, &l.k)?,
+            to_array(py, &l.s)?,
+            complex_array(py, &l.poles),
+        ],
+    )
 }
 
 /// (L, P, E) of the steady-state Kalman predictor.
@@ -623,11 +658,22 @@ fn dlqe<'py>(
 ) -> Res<Bound<'py, PyTuple>> {
     let a = matrix(py, "A", a)?;
     let g = opt_matrix(py, "G", g)?;
-    let (c, qn, rn) = (matrix(py, "C", c)?, matrix(py, "Qn", qn)?, matrix(py, "Rn", rn)?);
+    let (c, qn, rn) = (
+        matrix(py, "C", c)?,
+        matrix(py, "Qn", qn)?,
+        matrix(py, "Rn", rn)?,
+    );
     let k = py
         .detach(|| helicon_lti::dlqe(&a, g.as_ref(), &c, &qn, &rn))
         .map_err(lti)?;
-    PyTuple::new(py, [to_array(py, &k.l)?, to_array(py, &k.p)?, complex_array(py, &k.poles)])
+    PyTuple::new(
+        py,
+        [
+            to_array(py, &k.l)?,
+            to_array(py, &k.p)?,
+            complex_array(py, &k.poles),
+        ],
+    )
 }
 
 /// The filter gain M and posterior covariance Z of the steady-state Kalman filter.
@@ -643,7 +689,11 @@ fn kalman_filter<'py>(
 ) -> Res<Bound<'py, PyTuple>> {
     let a = matrix(py, "A", a)?;
     let g = opt_matrix(py, "G", g)?;
-    let (c, qn, rn) = (matrix(py, "C", c)?, matrix(py, "Qn", qn)?, matrix(py, "Rn", rn)?);
+    let (c, qn, rn) = (
+        matrix(py, "C", c)?,
+        matrix(py, "Qn", qn)?,
+        matrix(py, "Rn", rn)?,
+    );
     let k = py
         .detach(|| helicon_lti::dlqe(&a, g.as_ref(), &c, &qn, &rn))
         .map_err(lti)?;
@@ -720,7 +770,10 @@ impl PyScenario {
     /// The case labels (``[[case]]`` names; the scenario's name when none).
     #[getter]
     fn cases(&self) -> Vec<String> {
-        logs::cases(&self.inner).into_iter().map(|(l, _)| l).collect()
+        logs::cases(&self.inner)
+            .into_iter()
+            .map(|(l, _)| l)
+            .collect()
     }
 
     /// The effective scenario as TOML (without its ``[[case]]`` entries).
@@ -729,7 +782,10 @@ impl PyScenario {
     }
 
     fn __repr__(&self) -> String {
-        format!("helicon.Scenario({:?} from {})", self.inner.name, self.source)
+        format!(
+            "helicon.Scenario({:?} from {})",
+            self.inner.name, self.source
+        )
     }
 }
 
@@ -746,7 +802,10 @@ fn scenario_arg(v: &Bound<'_, PyAny>) -> Res<(Scenario, String)> {
     let path: PathBuf = v
         .extract()
         .map_err(|_| herr("scenario: expected a helicon.Scenario or a scenario file path"))?;
-    Ok((logs::load_scenario(&path).map_err(err)?, path.display().to_string()))
+    Ok((
+        logs::load_scenario(&path).map_err(err)?,
+        path.display().to_string(),
+    ))
 }
 
 /// Fly every case of a scenario; a list of dicts (name, label, log, summary, outcome).
@@ -867,15 +926,33 @@ fn mc<'py>(
     };
     cols.set_item(
         "index",
-        PyArray1::from_vec(py, run.runs.iter().map(|o| o.record.index as i64).collect::<Vec<_>>()),
+        PyArray1::from_vec(
+            py,
+            run.runs
+                .iter()
+                .map(|o| o.record.index as i64)
+                .collect::<Vec<_>>(),
+        ),
     )?;
     cols.set_item(
         "wind_seed",
-        PyArray1::from_vec(py, run.runs.iter().map(|o| o.record.wind_seed).collect::<Vec<_>>()),
+        PyArray1::from_vec(
+            py,
+            run.runs
+                .iter()
+                .map(|o| o.record.wind_seed)
+                .collect::<Vec<_>>(),
+        ),
     )?;
     cols.set_item(
         "sensor_seed",
-        PyArray1::from_vec(py, run.runs.iter().map(|o| o.record.sensor_seed).collect::<Vec<_>>()),
+        PyArray1::from_vec(
+            py,
+            run.runs
+                .iter()
+                .map(|o| o.record.sensor_seed)
+                .collect::<Vec<_>>(),
+        ),
     )?;
     for (k, name) in run.dispersed.iter().enumerate() {
         cols.set_item(
@@ -887,13 +964,19 @@ fn mc<'py>(
         run.runs.iter().map(|o| f(&o.record)).collect()
     };
     cols.set_item("outcome", strings(&|r| r.outcome().as_str().to_string()))?;
-    cols.set_item("termination", strings(&|r| r.termination.as_str().to_string()))?;
+    cols.set_item(
+        "termination",
+        strings(&|r| r.termination.as_str().to_string()),
+    )?;
     cols.set_item("reason", strings(&|r| r.reason.clone()))?;
     cols.set_item("t_end_s", PyArray1::from_vec(py, rec(&|r| r.t_end_s)))?;
     for (k, name) in METRIC_NAMES.iter().enumerate() {
         cols.set_item(
             *name,
-            PyArray1::from_vec(py, rec(&|r| r.metrics.get(k).copied().flatten().unwrap_or(f64::NAN))),
+            PyArray1::from_vec(
+                py,
+                rec(&|r| r.metrics.get(k).copied().flatten().unwrap_or(f64::NAN)),
+            ),
         )?;
     }
     let traces = PyList::empty(py);
@@ -1027,7 +1110,10 @@ fn _helicon(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("HeliconError", py.get_type::<HeliconError>())?;
     m.add("STATE_NAMES", PyTuple::new(py, STATE_NAMES)?)?;
     m.add("STATE_UNITS", PyTuple::new(py, STATE_UNITS)?)?;
-    m.add("REDUCED_STATE_NAMES", PyTuple::new(py, REDUCED_STATE_NAMES)?)?;
+    m.add(
+        "REDUCED_STATE_NAMES",
+        PyTuple::new(py, REDUCED_STATE_NAMES)?,
+    )?;
     m.add("INPUT_NAMES", PyTuple::new(py, INPUT_NAMES)?)?;
     m.add("LOG_COLUMNS", PyTuple::new(py, logs::column_names())?)?;
     m.add("LOG_UNITS", PyTuple::new(py, logs::column_units())?)?;

@@ -55,7 +55,10 @@ pub struct Response {
 /// The sample time of `t`; an irregular `t` resamples `cols` in place.
 fn uniform(t: &[f64], cols: &mut [Vec<f64>]) -> Result<f64> {
     if t.len() < 2 {
-        return Err(Error::new(format!("t: {} sample(s); need a record", t.len())));
+        return Err(Error::new(format!(
+            "t: {} sample(s); need a record",
+            t.len()
+        )));
     }
     if let Some(i) = t.iter().position(|v| !v.is_finite()) {
         return Err(Error::new(format!("t[{i}] = {} is not finite", t[i])));
@@ -101,7 +104,9 @@ fn window_lengths(o: &FrfOptions, n: usize, dt: f64, nin: usize) -> Result<Vec<u
     if let Some(m) = o.max_window_s
         && !(m.is_finite() && m > 0.0)
     {
-        return Err(Error::new(format!("max_window_s = {m}: must be finite and > 0")));
+        return Err(Error::new(format!(
+            "max_window_s = {m}: must be finite and > 0"
+        )));
     }
     let mut lens = Vec::new();
     let mut left_out = Vec::new();
@@ -147,10 +152,16 @@ pub fn frf(
     o: &FrfOptions,
 ) -> Result<Vec<Response>> {
     if o.windows == 0 || o.windows > 8 {
-        return Err(Error::new(format!("windows = {}: must be 1 … 8", o.windows)));
+        return Err(Error::new(format!(
+            "windows = {}: must be 1 … 8",
+            o.windows
+        )));
     }
     if o.points < 2 || o.points > 10_000 {
-        return Err(Error::new(format!("points = {}: must be 2 … 10000", o.points)));
+        return Err(Error::new(format!(
+            "points = {}: must be 2 … 10000",
+            o.points
+        )));
     }
     if outputs.is_empty() {
         return Err(Error::new("no output channel"));
@@ -176,9 +187,7 @@ pub fn frf(
     let n = cols[0].len();
     let nin = 1 + conditioned_on.len();
     let lens = window_lengths(o, n, dt, nin)?;
-    let omega_min = o
-        .omega_min
-        .unwrap_or(4.0 * PI / (lens[0] as f64 * dt));
+    let omega_min = o.omega_min.unwrap_or(4.0 * PI / (lens[0] as f64 * dt));
     let omega_max = o.omega_max.unwrap_or(0.4 * PI / dt);
     let nyquist = PI / dt;
     if omega_max > nyquist {
@@ -186,8 +195,9 @@ pub fn frf(
             "omega_max = {omega_max}: above the Nyquist frequency π/dt = {nyquist} rad/s (sample time {dt} s)"
         )));
     }
-    let grid = log_grid(omega_min, omega_max, o.points)
-        .map_err(|e| Error::from(e).context(&format!("omega_min {omega_min} and omega_max {omega_max}")))?;
+    let grid = log_grid(omega_min, omega_max, o.points).map_err(|e| {
+        Error::from(e).context(&format!("omega_min {omega_min} and omega_max {omega_max}"))
+    })?;
     let chans: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
     let inputs: Vec<usize> = (0..nin).collect();
     let mut per_output = vec![Vec::new(); outputs.len()];
@@ -206,7 +216,8 @@ pub fn frf(
     let secs: Vec<f64> = lens.iter().map(|l| *l as f64 * dt).collect();
     let mut out = Vec::with_capacity(outputs.len());
     for (k, parts) in per_output.iter().enumerate() {
-        let f = composite(parts, &secs).map_err(|e| Error::from(e).context(&format!("output {k}")))?;
+        let f =
+            composite(parts, &secs).map_err(|e| Error::from(e).context(&format!("output {k}")))?;
         let r = Response {
             mag_db: f.mag_db(),
             phase_deg: f.phase_deg(),
@@ -215,7 +226,13 @@ pub fn frf(
             random_error: f.random_error,
         };
         for (j, w) in r.omega_rad_s.iter().enumerate() {
-            let row = [w, &r.mag_db[j], &r.phase_deg[j], &r.coherence[j], &r.random_error[j]];
+            let row = [
+                w,
+                &r.mag_db[j],
+                &r.phase_deg[j],
+                &r.coherence[j],
+                &r.random_error[j],
+            ];
             if row.iter().any(|v| !v.is_finite()) {
                 return Err(Error::new(format!(
                     "output {k} at {w} rad/s: a non-finite value (zero response?)"
@@ -240,14 +257,20 @@ mod tests {
         let mut s: u64 = 7;
         let u: Vec<f64> = (0..n)
             .map(|_| {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
             })
             .collect();
         let y: Vec<f64> = u.iter().map(|v| 2.0 * v).collect();
         let r = frf(&t, &u, &[], &[&y], &FrfOptions::default()).unwrap();
         assert_eq!(r[0].omega_rad_s.len(), 200);
-        assert!(r[0].mag_db.iter().all(|m| (m - 20.0 * 2f64.log10()).abs() < 1e-9));
+        assert!(
+            r[0].mag_db
+                .iter()
+                .all(|m| (m - 20.0 * 2f64.log10()).abs() < 1e-9)
+        );
         assert!(r[0].coherence.iter().all(|c| *c > 0.999));
     }
 

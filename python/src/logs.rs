@@ -38,10 +38,17 @@ pub struct SimOptions {
 
 /// The scenario with the overrides applied and validated, and the label
 /// errors name it by (`file (with seed=7)`).
-pub fn with_options(scenario: Scenario, source: &str, o: &SimOptions) -> Result<(Scenario, String)> {
+pub fn with_options(
+    scenario: Scenario,
+    source: &str,
+    o: &SimOptions,
+) -> Result<(Scenario, String)> {
     let params = match &o.params {
         ParamsSource::File(p) => Some(std::path::absolute(p).map_err(|e| {
-            Error::new(format!("params {}: cannot resolve the path: {e}", p.display()))
+            Error::new(format!(
+                "params {}: cannot resolve the path: {e}",
+                p.display()
+            ))
         })?),
         _ => None,
     };
@@ -145,8 +152,9 @@ pub fn fly_case(
         ))
     })?;
     case.check_work(source, prepared.gains.set.sample_time_s)?;
-    let flight: Flight = fly(case, &prepared, None)
-        .map_err(|e| Error::from(e).context(&format!("scenario `{}`: setting up the flight", case.name)))?;
+    let flight: Flight = fly(case, &prepared, None).map_err(|e| {
+        Error::from(e).context(&format!("scenario `{}`: setting up the flight", case.name))
+    })?;
     let summary = serde_json::to_value(&flight.summary)
         .map_err(|e| Error::new(format!("scenario `{}`: the summary: {e}", case.name)))?;
     Ok(CaseResult {

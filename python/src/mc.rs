@@ -31,7 +31,10 @@ pub fn load_campaign(
     }
     let params = match params {
         Some(p) => Some(std::path::absolute(&p).map_err(|e| {
-            Error::new(format!("params {}: cannot resolve the path: {e}", p.display()))
+            Error::new(format!(
+                "params {}: cannot resolve the path: {e}",
+                p.display()
+            ))
         })?),
         None => None,
     };
@@ -71,7 +74,9 @@ pub fn run_campaign(
         return Err(Error::new("runs = 0: must be >= 1"));
     }
     if threads == Some(0) {
-        return Err(Error::new("threads = 0: must be >= 1 (or None for one per core)"));
+        return Err(Error::new(
+            "threads = 0: must be >= 1 (or None for one per core)",
+        ));
     }
     let mem = c.run_memory();
     let (budget, why) = memory_budget();

@@ -117,7 +117,10 @@ mod tests {
         let q = with_edits(&p, &[("body.mass_kg".into(), 12.0)]).unwrap();
         assert_eq!(q.body.mass_kg, 12.0);
         let e = with_edits(&p, &[("body.mass_kg".into(), -1.0)]).unwrap_err();
-        assert!(e.message().contains("body.mass_kg") && e.message().contains("> 0"), "{e}");
+        assert!(
+            e.message().contains("body.mass_kg") && e.message().contains("> 0"),
+            "{e}"
+        );
         let e = with_edits(&p, &[("body.mas_kg".into(), 1.0)]).unwrap_err();
         assert!(e.message().contains("unknown key `body.mas_kg`"), "{e}");
         let e = with_edits(&p, &[("servo.tail.s_min".into(), 0.9)]).unwrap_err();

@@ -109,8 +109,8 @@ fn number(v: &Value) -> Option<f64> {
 /// Read the ULog file at `path`.
 pub fn read(path: &Path) -> Result<Log> {
     let name = path.display().to_string();
-    let file = std::fs::File::open(path)
-        .map_err(|e| Error::new(format!("{name}: cannot read: {e}")))?;
+    let file =
+        std::fs::File::open(path).map_err(|e| Error::new(format!("{name}: cannot read: {e}")))?;
     let reader = UlogReader::new(std::io::BufReader::new(file), &name)?;
     let mut log = Log {
         start_timestamp_us: reader.header().timestamp_us,
@@ -118,53 +118,56 @@ pub fn read(path: &Path) -> Result<Log> {
     };
     // per (topic, multi_id): key into `log.topics`
     let mut keys: BTreeMap<(String, u8), String> = BTreeMap::new();
-    let pass = visit(reader, |ev| -> std::result::Result<(), helicon_ulog::ReadError> {
-        match ev {
-            Event::Info(kv) | Event::InfoMultiple(kv) => {
-                log.info.insert(kv.name.clone(), kv.value.to_string());
-            }
-            Event::Parameter { kv, .. } => {
-                if let Some(v) = number(&kv.value) {
-                    log.parameters.insert(kv.name.clone(), v);
+    let pass = visit(
+        reader,
+        |ev| -> std::result::Result<(), helicon_ulog::ReadError> {
+            match ev {
+                Event::Info(kv) | Event::InfoMultiple(kv) => {
+                    log.info.insert(kv.name.clone(), kv.value.to_string());
                 }
-            }
-            Event::Data { topic, payload, .. } => {
-                let id = (topic.name.clone(), topic.multi_id);
-                let key = keys
-                    .entry(id)
-                    .or_insert_with(|| {
-                        if topic.multi_id == 0 {
-                            topic.name.clone()
-                        } else {
-                            format!("{}_{}", topic.name, topic.multi_id)
-                        }
-                    })
-                    .clone();
-                let cols = &topic.format.columns;
-                let ts = topic.timestamp_column;
-                let order: Vec<usize> = std::iter::once(ts)
-                    .chain((0..cols.len()).filter(|i| *i != ts))
-                    .collect();
-                let t = log.topics.entry(key).or_insert_with(|| Topic {
-                    columns: order
-                        .iter()
-                        .map(|&i| (cols[i].name.clone(), Column::new(cols[i].ty)))
-                        .collect(),
-                });
-                // a topic re-subscribed with another format keeps its first
-                // columns; values are matched by position only when they agree
-                if t.columns.len() == order.len() {
-                    for (slot, &i) in t.columns.iter_mut().zip(&order) {
-                        if let Some(v) = topic.format.value(payload, i) {
-                            slot.1.push(&v);
+                Event::Parameter { kv, .. } => {
+                    if let Some(v) = number(&kv.value) {
+                        log.parameters.insert(kv.name.clone(), v);
+                    }
+                }
+                Event::Data { topic, payload, .. } => {
+                    let id = (topic.name.clone(), topic.multi_id);
+                    let key = keys
+                        .entry(id)
+                        .or_insert_with(|| {
+                            if topic.multi_id == 0 {
+                                topic.name.clone()
+                            } else {
+                                format!("{}_{}", topic.name, topic.multi_id)
+                            }
+                        })
+                        .clone();
+                    let cols = &topic.format.columns;
+                    let ts = topic.timestamp_column;
+                    let order: Vec<usize> = std::iter::once(ts)
+                        .chain((0..cols.len()).filter(|i| *i != ts))
+                        .collect();
+                    let t = log.topics.entry(key).or_insert_with(|| Topic {
+                        columns: order
+                            .iter()
+                            .map(|&i| (cols[i].name.clone(), Column::new(cols[i].ty)))
+                            .collect(),
+                    });
+                    // a topic re-subscribed with another format keeps its first
+                    // columns; values are matched by position only when they agree
+                    if t.columns.len() == order.len() {
+                        for (slot, &i) in t.columns.iter_mut().zip(&order) {
+                            if let Some(v) = topic.format.value(payload, i) {
+                                slot.1.push(&v);
+                            }
                         }
                     }
                 }
+                Event::Subscribed { .. } | Event::Logging { .. } | Event::Dropout { .. } => {}
             }
-            Event::Subscribed { .. } | Event::Logging { .. } | Event::Dropout { .. } => {}
-        }
-        Ok(())
-    })?;
+            Ok(())
+        },
+    )?;
     log.truncated = matches!(pass.end, End::Truncated { .. });
     Ok(log)
 }
