@@ -823,7 +823,7 @@ fn sim<'py>(
         None => ParamsSource::Scenario,
         Some(p) if p.is_none() => ParamsSource::Scenario,
         Some(p) => match p.cast::<PyParams>() {
-            Ok(pp) => ParamsSource::Value(pp.borrow().inner),
+            Ok(pp) => ParamsSource::Value(Box::new(pp.borrow().inner)),
             Err(_) => ParamsSource::File(p.extract().map_err(|_| {
                 herr("params: expected a helicon.Params, a TOML file path or None")
             })?),
@@ -930,7 +930,7 @@ fn mc<'py>(
             py,
             run.runs
                 .iter()
-                .map(|o| o.record.index as i64)
+                .map(|o| i64::try_from(o.record.index).unwrap_or(i64::MAX))
                 .collect::<Vec<_>>(),
         ),
     )?;

@@ -22,7 +22,7 @@ pub enum ParamsSource {
     /// A parameter file (as `helicon sim --params FILE`).
     File(PathBuf),
     /// These parameters.
-    Value(Params),
+    Value(Box<Params>),
 }
 
 /// Overrides of a scenario (the CLI's `--params`, `--seed`, `--duration`).
@@ -142,7 +142,7 @@ pub fn fly_case(
     source: &str,
 ) -> Result<CaseResult> {
     let prepared = match params {
-        ParamsSource::Value(p) => prepare_with_params(case, *p),
+        ParamsSource::Value(p) => prepare_with_params(case, **p),
         _ => prepare(case),
     }
     .map_err(|e| {
