@@ -713,7 +713,7 @@ fn report_excitation(
     }
 }
 
-/// Write magnitude, phase and coherence against log10 ω, with an optional
+/// Write magnitude, phase and coherence against ω on a logarithmic axis, with an optional
 /// fit (magnitude and phase curves) overlaid, to `path`.
 pub(crate) fn write_bode(
     path: &Path,
@@ -742,7 +742,8 @@ pub(crate) fn write_bode(
         color: [127, 127, 127],
     });
     pc.y_include = vec![0.0, 1.0];
-    Figure::new(title, "log10 ω [rad/s]")
+    Figure::new(title, "ω [rad/s]")
+        .log_x()
         .panel(pm)
         .panel(pp)
         .panel(pc)

@@ -5,6 +5,8 @@
 //! (a missing input file, a renamed option, a folder an earlier line no
 //! longer writes) fails here.
 //!
+//! Every PNG the tour writes is checked to be a rendered picture.
+//!
 //! The exceptions are the ones the README states below the block: `mc` runs
 //! `--runs 10` instead of 1000, `onboard` (real serial devices) and `gcs`
 //! (waits for a vehicle until stopped) are not run.
@@ -156,4 +158,32 @@ fn readme_tour_runs_as_written() {
     // the two not run are the two the README names
     assert_eq!(skipped.len(), 2, "{skipped:?}");
     assert!(ran >= 25, "{ran} tour lines ran");
+    // every plot the tour makes was rendered: a PNG with a picture in it
+    let mut pngs = Vec::new();
+    collect_pngs(&dir.join("out"), &mut pngs);
+    collect_pngs(&dir.join("gains"), &mut pngs);
+    assert!(pngs.len() >= 60, "{} plots", pngs.len());
+    for p in &pngs {
+        let bytes = std::fs::read(p).unwrap();
+        assert!(
+            bytes.starts_with(b"\x89PNG\r\n\x1a\n") && bytes.len() > 8_000,
+            "{}: not a rendered PNG ({} bytes)",
+            p.display(),
+            bytes.len()
+        );
+    }
+}
+
+fn collect_pngs(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            collect_pngs(&p, out);
+        } else if p.extension().is_some_and(|x| x == "png") {
+            out.push(p);
+        }
+    }
 }

@@ -318,6 +318,11 @@ pub fn write_figures(
     let mut wind = false;
     while let Some(row) = reader.next_row()? {
         wind |= row[WIND0..WIND0 + 3].iter().any(|v| *v != 0.0);
+        let mut row = row.to_vec();
+        // ψ drawn within ±π of its reference: −π against a +π reference is
+        // the same heading, and would read as a 2π error
+        let (psi, psi_ref) = (OUT0 + 3, REF0 + 3);
+        row[psi] = row[psi_ref] + helicon_core::frames::wrap_pi(row[psi] - row[psi_ref]);
         dec.push(row[0], &row[1..]);
     }
     if dec.rows() == 0 {
