@@ -531,6 +531,23 @@ pub fn report_markdown(
         prepared.trim.u[3],
         prepared.trim.aux.lambda_mr
     );
+    let gyro = &prepared.model.params().yaw_gyro;
+    let _ = writeln!(
+        r,
+        "- parameters: {}; stock yaw gyro {}",
+        scenario.params.as_ref().map_or_else(
+            || "the Bergen Industrial Twin (embedded)".to_string(),
+            |p| format!("`{}` over the Bergen Twin", p.display())
+        ),
+        if gyro.enabled != 0.0 {
+            format!(
+                "on (Kp {} s/rad, Ki {}, {} rad/s at full tail input)",
+                gyro.kp_s, gyro.ki, gyro.max_rate_rad_s
+            )
+        } else {
+            "off".to_string()
+        }
+    );
     let _ = writeln!(
         r,
         "- seeds: wind {}, sensors {}; parameter hash `{}`; helicon {}\n",

@@ -270,29 +270,40 @@ pub fn line_plot(
 }
 
 /// The tick step plotters takes on an axis `[lo, hi]` with at most `n`
-/// labels: the smallest 1, 2 or 5 × 10^k giving at most `n` ticks.
+/// labels: its own search (plotters 0.3's `compute_f64_key_points`),
+/// 10^k, then ÷2, ÷5, ÷10 while the ticks aligned inside the range stay at
+/// most `n`, so the labels' decimals follow the step actually drawn.
 fn tick_step(lo: f64, hi: f64, n: usize) -> f64 {
     let span = hi - lo;
-    if span.is_nan() || span <= 0.0 || span.is_infinite() {
+    if span.is_nan() || span <= 0.0 || span.is_infinite() || n == 0 {
         return 1.0;
     }
-    let mut step = 10f64.powf(span.log10().ceil());
-    for _ in 0..60 {
-        let mut next = None;
-        for f in [0.5, 0.2, 0.1] {
-            let s = step * f;
-            if ((span / s).floor() as usize) < n {
-                next = Some(s);
-            }
-        }
-        match next {
-            // 0.1 fitted: go down a decade; else stop at the finest that fitted
-            Some(s) if (s - step * 0.1).abs() <= 1e-12 * step => step = s,
-            Some(s) => return s,
-            None => return step,
-        }
+    let rem_euclid = |a: f64, b: f64| {
+        let r = a - (a / b).floor() * b;
+        if (r - b).abs() < f64::EPSILON { 0.0 } else { r }
+    };
+    let mut scale = 10f64.powf(span.log10().floor());
+    if 1 + (span / scale).floor() as usize > n {
+        scale *= 10.0;
     }
-    step
+    for _ in 0..60 {
+        let old = scale;
+        for nxt in [2.0, 5.0, 10.0] {
+            let s = old / nxt;
+            let mut left = lo - rem_euclid(lo, s);
+            if left < lo {
+                left += s;
+            }
+            let right = hi - rem_euclid(hi, s);
+            let points = 1.0 + (right - left) / old * nxt;
+            if points.round() as usize > n {
+                return scale;
+            }
+            scale = s;
+        }
+        scale = old / 10.0;
+    }
+    scale
 }
 
 /// Tick label for `v` on an axis `[lo, hi]` with at most `n` labels: the
@@ -632,7 +643,20 @@ impl<'a> Figure<'a> {
                 }
                 flush(&mut run)?;
             }
-            // legend at the right of the panel
+            // legend at the right of the panel; panels repeating the lines of
+            // the one above share its legend (drawn once, down the column)
+            let shared = i > 0
+                && panel.hlines.is_empty()
+                && panel.notes.is_empty()
+                && self.panels[i - 1].series.len() == panel.series.len()
+                && self.panels[i - 1]
+                    .series
+                    .iter()
+                    .zip(&panel.series)
+                    .all(|(a, b)| a.name == b.name);
+            if shared {
+                continue;
+            }
             let font = ("sans-serif", 15).into_font().color(&BLACK);
             let note_font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
             let mut y = 18;
@@ -820,7 +844,7 @@ impl<'a> Histogram<'a> {
         let n = bins.iter().map(|b| b.2).sum::<usize>();
         let mut lines = vec![
             format!("{n} values"),
-            format!("bin width {}", tick_label(first.1, 0.0, first.1 * 10.0, 12)),
+            format!("bin width {}", significant(first.1, 3)),
         ];
         lines.extend(self.notes.iter().cloned());
         for line in &lines {
@@ -849,6 +873,20 @@ impl<'a> Histogram<'a> {
             _ => Err(PlotError::Format { path: name }),
         }
     }
+}
+
+/// `v` with `digits` significant digits (plain decimals, no exponent
+/// between 1e-4 and 1e6).
+fn significant(v: f64, digits: i32) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let mag = v.abs().log10().floor() as i32;
+    if !(-4..6).contains(&mag) {
+        return format!("{:.*e}", usize::try_from(digits - 1).unwrap_or(0), v);
+    }
+    let d = usize::try_from(digits - 1 - mag).unwrap_or(0);
+    format!("{v:.d$}")
 }
 
 /// One legend line: a 28 px sample of the line and its label.
@@ -1069,6 +1107,14 @@ mod tests {
             );
         }
         assert_eq!(tick_label(0.005, -0.012, 0.016, 6), "0.005");
+    }
+
+    #[test]
+    fn significant_digits() {
+        assert_eq!(significant(0.021_63, 3), "0.0216");
+        assert_eq!(significant(12.345, 3), "12.3");
+        assert_eq!(significant(1234.5, 3), "1234");
+        assert_eq!(significant(2.5e-7, 3), "2.50e-7");
     }
 
     #[test]
