@@ -107,7 +107,8 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let mut con = Console::stdout();
     writeln!(
         con,
-        "helicon demo: Bergen Industrial Twin, {} preset, closed loop",
+        "helicon demo: {}, {} preset, closed loop",
+        crate::model_cmd::helicopter_label(args.model.params.as_deref()),
         scenario.preset.name()
     );
 

@@ -126,9 +126,23 @@ pub struct FrfArgs {
     /// The part of the log used.
     #[command(flatten)]
     pub span: TimeSpan,
+    /// The logged excitation added to the input from outside the loop (default: log.csv's `exc_lon`, `exc_lat`, `exc_col`, `exc_tr` for S_lon, S_lat, S_col, S_tr, when the log has it): checked to have excited the input.
+    #[arg(long)]
+    pub excitation: Option<String>,
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// The excitation column log.csv writes for a servo input.
+fn default_excitation(input: &str) -> Option<&'static str> {
+    match input {
+        "S_col" => Some("exc_col"),
+        "S_lat" => Some("exc_lat"),
+        "S_lon" => Some("exc_lon"),
+        "S_tr" => Some("exc_tr"),
+        _ => None,
+    }
 }
 
 /// The part of a log to use, on its time column (`--t-start`, `--t-end`).
@@ -244,13 +258,25 @@ pub(crate) fn read_columns(
     span: TimeSpan,
     flags: &str,
 ) -> Result<Table> {
+    Ok(read_columns_with(path, names, &[], span, flags)?.0)
+}
+
+/// As [`read_columns`], and also the columns `optional` that the log has
+/// (`None` for one it has not), cut to the same span.
+pub(crate) fn read_columns_with(
+    path: &Path,
+    names: &[&str],
+    optional: &[&str],
+    span: TimeSpan,
+    flags: &str,
+) -> Result<(Table, Vec<Option<Vec<f64>>>)> {
     use helicon_paramid::source::{SERVO_SOURCE, describe_spans, servo_spans};
     let file = path.display().to_string();
     span.check(flags)?;
-    let mut table = if helicon_paramid::source::is_ulog(path) {
-        read_ulog(path, names)?
+    let (mut table, extra) = if helicon_paramid::source::is_ulog(path) {
+        read_ulog(path, names, optional)?
     } else {
-        read_csv(path, names)?
+        read_csv(path, names, optional)?
     };
     if span.t_start.is_some() || span.t_end.is_some() {
         let keep: Vec<bool> = table.columns[0].iter().map(|t| span.contains(*t)).collect();
@@ -270,10 +296,15 @@ pub(crate) fn read_columns(
             }
         );
     }
-    if let Some(source) = table.columns.get(names.len()).or_else(|| {
-        let j = names.iter().position(|n| *n == SERVO_SOURCE)?;
-        table.columns.get(j)
-    }) {
+    let column_of = |name: &str| {
+        names.iter().position(|n| *n == name).or_else(|| {
+            extra
+                .iter()
+                .position(|n| n == name)
+                .map(|j| names.len() + j)
+        })
+    };
+    if let Some(source) = column_of(SERVO_SOURCE).and_then(|j| table.columns.get(j)) {
         let spans = servo_spans(&table.columns[0], source);
         if !spans.is_empty() {
             bail!(
@@ -283,13 +314,18 @@ pub(crate) fn read_columns(
             );
         }
     }
+    let found: Vec<Option<Vec<f64>>> = optional
+        .iter()
+        .map(|o| column_of(o).and_then(|j| table.columns.get(j).cloned()))
+        .collect();
     table.columns.truncate(names.len());
-    Ok(table)
+    Ok((table, found))
 }
 
-/// [`read_columns`] of a CSV: the columns `names`, and `servo_source` last
-/// when the header has it and `names` does not.
-fn read_csv(path: &Path, names: &[&str]) -> Result<Table> {
+/// [`read_columns`] of a CSV: the columns `names`, then those of
+/// `optional` the header has and `servo_source` when the header has it and
+/// `names` does not (their names returned, in order).
+fn read_csv(path: &Path, names: &[&str], optional: &[&str]) -> Result<(Table, Vec<String>)> {
     use helicon_paramid::source::SERVO_SOURCE;
     let file = path.display().to_string();
     let mut rdr = csv::ReaderBuilder::new()
@@ -302,9 +338,12 @@ fn read_csv(path: &Path, names: &[&str]) -> Result<Table> {
         .with_context(|| format!("{file}: no header row"))?
         .clone();
     let mut ask = names.to_vec();
-    if header.iter().any(|h| h == SERVO_SOURCE) && !names.contains(&SERVO_SOURCE) {
-        ask.push(SERVO_SOURCE);
+    for o in optional.iter().chain([&SERVO_SOURCE]) {
+        if header.iter().any(|h| h == *o) && !ask.contains(o) {
+            ask.push(o);
+        }
     }
+    let extra: Vec<String> = ask[names.len()..].iter().map(|n| n.to_string()).collect();
     let names = ask.as_slice();
     let mut idx = Vec::with_capacity(names.len());
     for n in names {
@@ -344,14 +383,14 @@ fn read_csv(path: &Path, names: &[&str]) -> Result<Table> {
             columns[c].push(v);
         }
     }
-    Ok(Table { columns })
+    Ok((Table { columns }, extra))
 }
 
 /// [`read_columns`] of a flight log: the first name is the time column,
 /// which must be `t_s` (the control grid), and `servo_source` last when the
 /// log has servo records and `names` does not ask for it (one pass); what
 /// the reading did (samples filled, a cut) is said on stderr.
-fn read_ulog(path: &Path, names: &[&str]) -> Result<Table> {
+fn read_ulog(path: &Path, names: &[&str], optional: &[&str]) -> Result<(Table, Vec<String>)> {
     use helicon_paramid::source::SERVO_SOURCE;
     let file = path.display().to_string();
     if names.first().is_some_and(|t| *t != "t_s") {
@@ -360,12 +399,15 @@ fn read_ulog(path: &Path, names: &[&str]) -> Result<Table> {
             names[0]
         );
     }
-    let optional: &[&str] = if names.contains(&SERVO_SOURCE) {
-        &[]
-    } else {
-        &[SERVO_SOURCE]
-    };
-    let u = helicon_ulog::columns::read_ulog_columns_with(path, names, optional, None)?;
+    let mut optional: Vec<&str> = optional
+        .iter()
+        .copied()
+        .filter(|o| !names.contains(o))
+        .collect();
+    if !names.contains(&SERVO_SOURCE) && !optional.contains(&SERVO_SOURCE) {
+        optional.push(SERVO_SOURCE);
+    }
+    let u = helicon_ulog::columns::read_ulog_columns_with(path, names, &optional, None)?;
     for n in u.notes() {
         eprintln!("{n}");
     }
@@ -379,7 +421,8 @@ fn read_ulog(path: &Path, names: &[&str]) -> Result<Table> {
     if u.names.len() < names.len() || u.names.iter().zip(names).any(|(a, b)| a != b) {
         bail!("{file}: a column is named twice (or `t_s` not first)");
     }
-    Ok(Table { columns: u.columns })
+    let extra = u.names[names.len()..].to_vec();
+    Ok((Table { columns: u.columns }, extra))
 }
 
 /// The sample time of the time column; an irregular column is resampled by
@@ -512,10 +555,39 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
             );
         }
     }
-    let table = read_columns(&a.log, &names, a.span, "--t-start/--t-end")?;
+    // an excitation named with --excitation must be there; the default one may not be
+    let exc_name = a
+        .excitation
+        .as_deref()
+        .or_else(|| default_excitation(&a.input));
+    if let Some(e) = a.excitation.as_deref() {
+        if names.contains(&e) {
+            bail!(
+                "--excitation {e}: also named among --time, --input, --conditioned-on and --output"
+            );
+        }
+        names.push(e);
+    }
+    let optional: Vec<&str> = match (a.excitation.as_deref(), exc_name) {
+        (None, Some(e)) if !names.contains(&e) => vec![e],
+        _ => Vec::new(),
+    };
+    let (table, found) = read_columns_with(&a.log, &names, &optional, a.span, "--t-start/--t-end")?;
     let mut cols = table.columns;
+    let mut exc: Option<Vec<f64>> = match found.into_iter().next() {
+        Some(col) => col,
+        None if a.excitation.is_some() => cols.pop(),
+        None => None,
+    };
     let t = cols.remove(0);
+    if let Some(e) = exc.as_mut() {
+        // resampled with the others (appended last, taken back after)
+        cols.push(std::mem::take(e));
+    }
     let dt = uniform(&file, &a.time, &t, &mut cols)?;
+    if let Some(e) = exc.as_mut() {
+        *e = cols.pop().unwrap_or_default();
+    }
     let n = cols[0].len();
     let record_s = n as f64 * dt;
     let nin = 1 + a.conditioned_on.len();
@@ -533,6 +605,9 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
     }
     let grid = log_grid(omega_min, omega_max, a.points)
         .with_context(|| format!("--omega-min {omega_min} and --omega-max {omega_max}"))?;
+    let check =
+        helicon_ident::excitation::check_excitation(&cols[0], exc.as_deref(), dt, lens[0], &grid)
+            .with_context(|| format!("{file}: checking the excitation of `{}`", a.input))?;
     let chans: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
     let inputs: Vec<usize> = (0..nin).collect();
     let mut per_output: Vec<Vec<Frf>> = vec![Vec::new(); a.output.len()];
@@ -606,10 +681,39 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
     }
     w.flush()?;
     println!("  {}", csv_path.display());
+    report_excitation(&a.input, exc_name.filter(|_| exc.is_some()), &check);
     Ok(())
 }
 
-/// Write magnitude, phase and coherence against log10 ω, with an optional
+/// Say what the excitation check found: one line on stdout, and a warning
+/// on stderr for each problem (the response is written all the same).
+fn report_excitation(
+    input: &str,
+    exc_name: Option<&str>,
+    check: &helicon_ident::excitation::ExcitationCheck,
+) {
+    let share = check
+        .coherent_share
+        .map(|s| format!(", {:.0} % of its band power coherent with it", 100.0 * s))
+        .unwrap_or_default();
+    match (exc_name, check.excitation_rms) {
+        (Some(e), Some(rms)) => println!(
+            "  excitation: `{e}` RMS {rms:.3e}{share}; `{input}` RMS {:.3e}, {:.0} % of the band's points more than 40 dB below its peak",
+            check.input_rms,
+            100.0 * check.weak_share
+        ),
+        _ => println!(
+            "  excitation: no excitation column for `{input}` (--excitation names one): the input's feedback share is not checked; `{input}` RMS {:.3e}, {:.0} % of the band's points more than 40 dB below its peak",
+            check.input_rms,
+            100.0 * check.weak_share
+        ),
+    }
+    for p in &check.problems {
+        eprintln!("warning: `{input}`: {p}");
+    }
+}
+
+/// Write magnitude, phase and coherence against ω on a logarithmic axis, with an optional
 /// fit (magnitude and phase curves) overlaid, to `path`.
 pub(crate) fn write_bode(
     path: &Path,
@@ -638,7 +742,8 @@ pub(crate) fn write_bode(
         color: [127, 127, 127],
     });
     pc.y_include = vec![0.0, 1.0];
-    Figure::new(title, "log10 ω [rad/s]")
+    Figure::new(title, "ω [rad/s]")
+        .log_x()
         .panel(pm)
         .panel(pp)
         .panel(pc)
@@ -754,12 +859,21 @@ pub fn run_tf(a: &TfArgs) -> Result<()> {
     let json_path = a.out.join(format!("tf_{stem}.json"));
     let params: Vec<serde_json::Value> = (0..fit.params.len())
         .map(|i| {
+            // a bound the data do not give is JSON null, never a number
+            let fin = |v: f64| {
+                if v.is_finite() {
+                    serde_json::json!(v)
+                } else {
+                    serde_json::Value::Null
+                }
+            };
             serde_json::json!({
                 "name": fit.names[i],
                 "value": fit.params[i],
-                "cramer_rao": fit.cramer_rao[i],
-                "cramer_rao_pct": fit.cramer_rao_pct[i],
-                "insensitivity_pct": fit.insensitivity_pct[i],
+                "cramer_rao": fin(fit.cramer_rao[i]),
+                "cramer_rao_pct": fin(fit.cramer_rao_pct[i]),
+                "insensitivity_pct": fin(fit.insensitivity_pct[i]),
+                "identifiable": fit.identifiable(i),
             })
         })
         .collect();
@@ -790,14 +904,44 @@ pub fn run_tf(a: &TfArgs) -> Result<()> {
         "{}: J = {:.3} over {} points",
         a.output, fit.cost, fit.n_points
     );
+    let mut unknown = Vec::new();
     for i in 0..fit.params.len() {
         println!(
-            "  {:>6} = {:<14.6e} CR {:6.2} %  I {:6.2} %",
-            fit.names[i], fit.params[i], fit.cramer_rao_pct[i], fit.insensitivity_pct[i]
+            "  {:>6} = {:<14.6e} CR {}  I {}{}",
+            fit.names[i],
+            fit.params[i],
+            percent_cell(fit.cramer_rao_pct[i]),
+            percent_cell(fit.insensitivity_pct[i]),
+            if fit.identifiable(i) {
+                ""
+            } else {
+                unknown.push(fit.names[i].as_str());
+                "  NOT IDENTIFIABLE"
+            }
+        );
+    }
+    if !unknown.is_empty() {
+        eprintln!(
+            "warning: {} not identifiable from these data (Cramér–Rao bound infinite or ≥ {} % of the value): fit a lower order, or fix {}",
+            unknown.join(", "),
+            helicon_ident::cost::NOT_IDENTIFIABLE_PCT,
+            if unknown.len() == 1 { "it" } else { "them" }
         );
     }
     println!("  {}\n  {}", json_path.display(), png.display());
     Ok(())
+}
+
+/// A bound in % for a parameter table, 9 characters: `—` with the reason
+/// when the data give none (infinite), `>1e6 %` past a million.
+pub(crate) fn percent_cell(pct: f64) -> String {
+    if !pct.is_finite() {
+        "     none".to_string()
+    } else if pct >= 1e6 {
+        format!("{:>7.0e} %", pct)
+    } else {
+        format!("{pct:>7.2} %")
+    }
 }
 
 /// A fitted model's magnitude and phase (`eval` gives T(jω)) on the

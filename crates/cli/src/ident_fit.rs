@@ -269,7 +269,8 @@ fn bode_overlays(id: &Identification, out: &Path) -> Result<usize> {
                 file_stem(&pt.name),
                 file_stem(&r.label)
             ));
-            Figure::new(&format!("{}: {}", pt.name, r.label), "log10 ω [rad/s]")
+            Figure::new(&format!("{}: {}", pt.name, r.label), "ω [rad/s]")
+                .log_x()
                 .panel(
                     Panel::new("magnitude [dB]")
                         .series(Series::new("flight data", &mag_d))

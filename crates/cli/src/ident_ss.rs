@@ -51,6 +51,7 @@ fn document(a: &SsArgs, spec: &SsSpec, fit: &SsFit, min_coherence: f64) -> Value
                 "cramer_rao_pct": fin(p.cramer_rao_pct),
                 "insensitivity_pct": fin(p.insensitivity_pct),
                 "meets_guidelines": p.flags.is_empty(),
+                "identifiable": p.identifiable(),
                 "flags": p.flags,
             })
         })
@@ -183,11 +184,11 @@ pub fn run_ss(a: &SsArgs) -> Result<()> {
     }
     for p in &fit.parameters {
         println!(
-            "  {:>10} = {:<14.6e} CR {:>8.2} %  I {:>8.2} %  {}",
+            "  {:>10} = {:<14.6e} CR {}  I {}  {}",
             p.name,
             p.value,
-            p.cramer_rao_pct,
-            p.insensitivity_pct,
+            crate::ident_cmd::percent_cell(p.cramer_rao_pct),
+            crate::ident_cmd::percent_cell(p.insensitivity_pct),
             if p.flags.is_empty() {
                 "ok".to_string()
             } else {

@@ -22,6 +22,18 @@ pub struct ModelFlags {
     pub params: Option<PathBuf>,
 }
 
+/// The helicopter a command flies, for its printout: the Bergen Industrial
+/// Twin, or the parameter file given (its keys over the Twin's).
+pub fn helicopter_label(params: Option<&std::path::Path>) -> String {
+    match params {
+        None => "Bergen Industrial Twin".to_string(),
+        Some(p) => format!(
+            "the helicopter of {} (its keys over the Bergen Twin's)",
+            p.display()
+        ),
+    }
+}
+
 impl ModelFlags {
     /// The parameters these flags select.
     pub fn load_params(&self) -> Result<Params> {

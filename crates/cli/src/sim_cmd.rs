@@ -6,7 +6,7 @@
 //! failure to write the outputs exits non-zero.
 
 use crate::console::Console;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use helicon_model::Params;
 use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly_to, prepare, prepare_with_params};
@@ -37,6 +37,53 @@ pub struct SimArgs {
     /// finite, > 0 and <= 86400).
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub duration: Option<f64>,
+    /// Replace a run of other inputs (another scenario, parameter file, seed
+    /// or duration) already in the output folder.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// The file of a run folder naming the inputs flown into it.
+pub const RUN_STAMP: &str = ".helicon-run";
+
+/// What was flown, as the run stamp says it: the scenario file and the
+/// parameter file by their absolute paths, the overrides.
+fn run_inputs(args: &SimArgs) -> String {
+    let abs = |p: &Path| {
+        std::fs::canonicalize(p)
+            .unwrap_or_else(|_| p.to_path_buf())
+            .display()
+            .to_string()
+    };
+    let mut text = format!("scenario {}", abs(&args.scenario));
+    if let Some(p) = &args.params {
+        text.push_str(&format!(" --params {}", abs(p)));
+    }
+    if let Some(s) = args.seed {
+        text.push_str(&format!(" --seed {s}"));
+    }
+    if let Some(d) = args.duration {
+        text.push_str(&format!(" --duration {}", num(d)));
+    }
+    text
+}
+
+/// Refuse an output folder that holds a run of other inputs (unless
+/// `force`), then stamp it with these.
+fn claim_out_folder(out: &Path, inputs: &str, force: bool) -> Result<()> {
+    let stamp = out.join(RUN_STAMP);
+    if let Ok(prev) = std::fs::read_to_string(&stamp) {
+        let prev = prev.trim();
+        if prev != inputs && !force {
+            bail!(
+                "{} holds a run of other inputs ({prev}; this run: {inputs}): give another --out, or --force to replace it",
+                out.display()
+            );
+        }
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
+    std::fs::write(&stamp, format!("{inputs}\n"))
+        .with_context(|| format!("{}: cannot write", stamp.display()))
 }
 
 /// What a run did and how long each part took.
@@ -281,6 +328,7 @@ pub fn run(args: &SimArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(folder_name(&scenario.name)));
+    claim_out_folder(&out, &run_inputs(args), args.force)?;
     let cases = scenario.cases();
     // stdout may close at any time (`| head -1`): every case is still flown
     // and written, the write error is returned at the end.

@@ -107,8 +107,9 @@ pub(crate) fn select(frf: &Frf, opts: &CostOptions, omega_lo: f64, omega_hi: f64
 #[derive(Debug, Clone)]
 pub struct Accuracy {
     /// Cramér–Rao bounds (one standard deviation); infinite for a parameter
-    /// the cost does not depend on, and for every parameter when the
-    /// information matrix is singular (`separable` false).
+    /// the cost does not depend on, for one in a direction the information
+    /// matrix does not resolve ([`CONDITION_LIMIT`]), and for every
+    /// parameter when the information matrix is singular (`separable` false).
     pub cramer_rao: Vec<f64>,
     /// Insensitivities; infinite for a parameter the cost does not depend on.
     pub insensitivity: Vec<f64>,
@@ -192,6 +193,7 @@ pub fn accuracy_correlated(
         ins[a] = (s2 * gs[(i, i)]).max(0.0).sqrt() / d[a];
     }
     let inv = ms
+        .clone()
         .try_inverse()
         .filter(|inv| inv.iter().all(|v| v.is_finite()));
     let Some(inv) = inv else {
@@ -202,11 +204,37 @@ pub fn accuracy_correlated(
             separable: false,
         });
     };
-    let cov = &inv * gs * &inv;
+    let cov = &inv * &gs * &inv;
+    // Parameters in a direction the information matrix does not determine
+    // to double precision (an eigenvalue of the unit-diagonal M below
+    // CONDITION_LIMIT times the largest): their inverse is round-off, and a
+    // negative variance clipped to 0 would read as a perfect bound.
+    let eig = ms.symmetric_eigen();
+    let lmax = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+    let mut undetermined = vec![false; ns];
+    for (k, l) in eig.eigenvalues.iter().enumerate() {
+        if *l <= CONDITION_LIMIT * lmax {
+            for (i, u) in undetermined.iter_mut().enumerate() {
+                if eig.eigenvectors[(i, k)].abs() > 0.1 {
+                    *u = true;
+                }
+            }
+        }
+    }
     for (i, &a) in seen.iter().enumerate() {
-        cr[a] = (s2 * cov[(i, i)]).max(0.0).sqrt() / d[a];
+        let var = s2 * cov[(i, i)];
+        // without a residual correlation CR ≥ I holds exactly (M⁻¹_ii ≥ 1/M_ii)
+        let below_insensitivity = jrj.is_none() && var.sqrt() / d[a] < ins[a] * (1.0 - 1e-6);
+        if undetermined[i] || !(var.is_finite() && var > 0.0) || below_insensitivity {
+            continue; // infinite bound, NaN correlations
+        }
+        cr[a] = var.sqrt() / d[a];
+    }
+    for (i, &a) in seen.iter().enumerate() {
         for (j, &b) in seen.iter().enumerate() {
-            corr[(a, b)] = cov[(i, j)] / (cov[(i, i)] * cov[(j, j)]).sqrt();
+            if cr[a].is_finite() && cr[b].is_finite() {
+                corr[(a, b)] = cov[(i, j)] / (cov[(i, i)] * cov[(j, j)]).sqrt();
+            }
         }
     }
     Ok(Accuracy {
@@ -229,7 +257,71 @@ pub(crate) fn separable_accuracy(jac: &DMatrix<f64>, cost: f64) -> Result<Accura
     Ok(acc)
 }
 
+/// The smallest eigenvalue, relative to the largest, of the unit-diagonal
+/// information matrix whose directions [`accuracy`] still resolves; the
+/// parameters of a smaller one get infinite Cramér–Rao bounds.
+pub const CONDITION_LIMIT: f64 = 1e-12;
+
+/// A parameter whose Cramér–Rao bound (or insensitivity) is at least this
+/// % of its value is not identifiable from the data: one standard
+/// deviation spans zero, so not even its sign is determined.
+pub const NOT_IDENTIFIABLE_PCT: f64 = 100.0;
+
+/// Whether a parameter with this Cramér–Rao bound and insensitivity (% of
+/// its value) is determined by the data: both finite and below
+/// [`NOT_IDENTIFIABLE_PCT`].
+pub fn identifiable(cramer_rao_pct: f64, insensitivity_pct: f64) -> bool {
+    cramer_rao_pct < NOT_IDENTIFIABLE_PCT && insensitivity_pct < NOT_IDENTIFIABLE_PCT
+}
+
 /// `100 · v / |p|` for each pair: a bound in % of its parameter.
 pub(crate) fn percent(v: &[f64], p: &[f64]) -> Vec<f64> {
     v.iter().zip(p).map(|(c, p)| 100.0 * c / p.abs()).collect()
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// Two parameters whose Jacobian columns agree to round-off (a zero and
+    /// a delay trading against each other): their bounds are infinite, not
+    /// the 0 a negative round-off variance would clip to; a third, separate
+    /// parameter keeps a finite bound.
+    #[test]
+    fn an_undetermined_combination_has_infinite_bounds() {
+        let n = 50;
+        let jac = DMatrix::from_fn(n, 3, |i, j| {
+            let x = i as f64 / n as f64;
+            match j {
+                0 => x,
+                1 => -x * (1.0 + 1e-15 * (i % 3) as f64),
+                _ => (7.0 * x).cos(),
+            }
+        });
+        let acc = accuracy(&jac, 1.0, 1e-12).unwrap();
+        assert!(acc.cramer_rao[0].is_infinite() && acc.cramer_rao[1].is_infinite());
+        assert!(acc.cramer_rao[2].is_finite() && acc.cramer_rao[2] > 0.0);
+        assert!(acc.insensitivity.iter().all(|v| v.is_finite() && *v > 0.0));
+        assert!(acc.correlation[(0, 1)].is_nan());
+        // well separated columns: finite bounds, CR ≥ I
+        let jac = DMatrix::from_fn(n, 2, |i, j| {
+            let x = i as f64 / n as f64;
+            if j == 0 { x } else { x * x }
+        });
+        let acc = accuracy(&jac, 1.0, 1e-12).unwrap();
+        for k in 0..2 {
+            assert!(acc.cramer_rao[k].is_finite());
+            assert!(acc.cramer_rao[k] >= acc.insensitivity[k]);
+        }
+    }
+
+    #[test]
+    fn identifiable_needs_both_bounds_below_the_limit() {
+        assert!(identifiable(5.0, 1.0));
+        assert!(!identifiable(f64::INFINITY, 1.0));
+        assert!(!identifiable(150.0, 1.0));
+        assert!(!identifiable(5.0, 6e7));
+        assert!(!identifiable(f64::NAN, 1.0));
+    }
 }

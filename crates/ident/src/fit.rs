@@ -49,7 +49,8 @@ pub struct TfFit {
     pub names: Vec<String>,
     /// The fitted parameters, in `names` order.
     pub params: Vec<f64>,
-    /// Cramér–Rao bounds (one standard deviation), in `names` order.
+    /// Cramér–Rao bounds (one standard deviation), in `names` order;
+    /// infinite for a parameter the data do not determine.
     pub cramer_rao: Vec<f64>,
     /// Cramér–Rao bounds in % of the parameter.
     pub cramer_rao_pct: Vec<f64>,
@@ -62,6 +63,13 @@ pub struct TfFit {
 }
 
 impl TfFit {
+    /// Whether parameter `i` is determined by the data
+    /// ([`crate::cost::identifiable`]: Cramér–Rao bound and insensitivity
+    /// finite and below [`crate::cost::NOT_IDENTIFIABLE_PCT`] of the value).
+    pub fn identifiable(&self, i: usize) -> bool {
+        crate::cost::identifiable(self.cramer_rao_pct[i], self.insensitivity_pct[i])
+    }
+
     /// T(jω).
     pub fn eval(&self, omega_rad_s: f64) -> Complex64 {
         let s = Complex64::new(0.0, omega_rad_s);
@@ -260,9 +268,9 @@ pub fn fit_tf(
     let cost = r.norm_squared();
     let params: Vec<f64> = problem.theta.iter().copied().collect();
     let acc = separable_accuracy(&jac, cost)?;
-    if acc.cramer_rao.iter().chain(&params).any(|v| !v.is_finite()) {
+    if params.iter().any(|v| !v.is_finite()) {
         return Err(IdentError::Fit(
-            "a parameter does not change the cost (insensitive): remove it".into(),
+            "a non-finite parameter at the optimum".into(),
         ));
     }
     let (num, den, tau) = problem.split();

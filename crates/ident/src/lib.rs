@@ -2,6 +2,7 @@
 //!
 //! Frequency-domain system identification as rotorcraft flight testing
 //! practises it (thesis chapter 11, after CIFER): flight-test [`inputs`],
+//! the check that the input was excited ([`excitation`]),
 //! frequency responses with coherence and random error, conditioned for
 //! correlated inputs and composited over several windows ([`frf`]),
 //! transfer-function fits with the coherence-weighted cost, Cramér–Rao
@@ -12,6 +13,7 @@
 
 pub mod cost;
 pub mod error;
+pub mod excitation;
 pub mod fit;
 pub mod frf;
 /// The flight-test input programs (`helicon-setup`: the on-board program flies them too).

@@ -6,8 +6,9 @@
 //! at t = 0. Then:
 //! * `settling_time_s`: time from the excitation until |e| stays within 1 % of
 //!   the excitation size (band ≥ 1e-3 in SI units, so an output that was
-//!   never excited settles at 0); `None` when |e| is outside the band at the
-//!   end of the run;
+//!   never excited settles at 0); `None` ("not settled before the end") when
+//!   |e| is outside the band at the end of the run or entered it less than
+//!   [`MIN_DWELL_S`] before the end;
 //! * `overshoot_pct`: the largest excursion past the target, in % of the
 //!   excitation size (0 when the response never crosses it);
 //! * `rms_error`, `max_abs_error`: over the whole run.
@@ -33,6 +34,11 @@ pub struct OutputMetrics {
 
 /// Minimum settling band (SI units): 1 mm/s or 1 mrad.
 pub const MIN_BAND: f64 = 1e-3;
+
+/// How long an output must stay in its band before the record ends to count
+/// as settled, s: one that enters it in the last second is "not settled
+/// before the end", not settled at the record's end.
+pub const MIN_DWELL_S: f64 = 1.0;
 
 /// Metrics from time samples `t` and errors `e` (same length), with the
 /// excitation at `t_exc` of size `size` (≥ 0). `band_scale` sets the 1 %
@@ -84,6 +90,9 @@ pub fn output_metrics(
     } else {
         match last_out {
             None => Some(0.0),
+            // inside the band only for the record's last moments: not
+            // known to stay there (a record that ends early)
+            Some(k) if t[n - 1] - t[(k + 1).min(n - 1)] < MIN_DWELL_S => None,
             Some(k) => Some((t[(k + 1).min(n - 1)] - t_exc).max(0.0)),
         }
     };
@@ -153,5 +162,20 @@ mod tests {
         // a run that ends outside the band has no settling time
         let m = output_metrics(&t[..200], &e[..200], 0.0, 1.0, 1.0);
         assert!(m.settling_time_s.is_none());
+        // nor one that enters it less than MIN_DWELL_S before the end
+        let settled = output_metrics(&t, &e, 0.0, 1.0, 1.0)
+            .settling_time_s
+            .unwrap();
+        let k_in = t.iter().position(|&ti| ti >= settled).unwrap();
+        let just = ((settled + 0.5 * MIN_DWELL_S) / 0.0025) as usize;
+        assert!(
+            output_metrics(&t[..just], &e[..just], 0.0, 1.0, 1.0)
+                .settling_time_s
+                .is_none()
+        );
+        let later = ((settled + 1.5 * MIN_DWELL_S) / 0.0025) as usize;
+        assert!(later < t.len() && k_in < later);
+        let m = output_metrics(&t[..later], &e[..later], 0.0, 1.0, 1.0);
+        assert!((m.settling_time_s.unwrap() - settled).abs() < 1e-12);
     }
 }

@@ -318,6 +318,11 @@ pub fn write_figures(
     let mut wind = false;
     while let Some(row) = reader.next_row()? {
         wind |= row[WIND0..WIND0 + 3].iter().any(|v| *v != 0.0);
+        let mut row = row.to_vec();
+        // ψ drawn within ±π of its reference: −π against a +π reference is
+        // the same heading, and would read as a 2π error
+        let (psi, psi_ref) = (OUT0 + 3, REF0 + 3);
+        row[psi] = row[psi_ref] + helicon_core::frames::wrap_pi(row[psi] - row[psi_ref]);
         dec.push(row[0], &row[1..]);
     }
     if dec.rows() == 0 {
@@ -525,6 +530,23 @@ pub fn report_markdown(
         prepared.trim.u[2],
         prepared.trim.u[3],
         prepared.trim.aux.lambda_mr
+    );
+    let gyro = &prepared.model.params().yaw_gyro;
+    let _ = writeln!(
+        r,
+        "- parameters: {}; stock yaw gyro {}",
+        scenario.params.as_ref().map_or_else(
+            || "the Bergen Industrial Twin (embedded)".to_string(),
+            |p| format!("`{}` over the Bergen Twin", p.display())
+        ),
+        if gyro.enabled != 0.0 {
+            format!(
+                "on (Kp {} s/rad, Ki {}, {} rad/s at full tail input)",
+                gyro.kp_s, gyro.ki, gyro.max_rate_rad_s
+            )
+        } else {
+            "off".to_string()
+        }
     );
     let _ = writeln!(
         r,

@@ -1,7 +1,11 @@
-//! Time-series plots to PNG and SVG (plotters, embedded DejaVu Sans):
-//! [`LinePlot`], one panel; [`Figure`], stacked [`Panel`]s sharing the time
-//! axis with legends beside them; [`Decimator`], bounded min/max decimation
-//! of long series.
+//! The one plot style of every command, to PNG and SVG (plotters, embedded
+//! DejaVu Sans): [`Figure`], stacked [`Panel`]s sharing the x-axis (linear,
+//! or logarithmic for frequency responses, [`Figure::log_x`]) with legends
+//! beside the data; [`LinePlot`], one panel drawn as a [`Figure`];
+//! [`Histogram`], outlined bars with integer counts; one theme ([`PALETTE`],
+//! [`style_of`]: ten colours, then the same dashed), tick labels with the
+//! digits their step needs; [`Decimator`], bounded min/max decimation of
+//! long series.
 //!
 //! ```no_run
 //! use helicon_sim::plot::{LinePlot, Series};
@@ -15,6 +19,7 @@
 use plotters::coord::Shift;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 use std::sync::OnceLock;
 
@@ -121,7 +126,9 @@ fn register_font() -> Result<(), PlotError> {
     if ok { Ok(()) } else { Err(PlotError::Font) }
 }
 
-const PALETTE: [RGBColor; 8] = [
+/// The theme's line colours (matplotlib's tab10, distinguishable in print);
+/// past the tenth series a panel repeats them dashed ([`style_of`]).
+pub const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -130,7 +137,18 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(140, 86, 75),
     RGBColor(227, 119, 194),
     RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
 ];
+
+/// The colour and dash of the `k`-th series of a panel: the series' own
+/// colour, else the palette's `k mod 10`-th; dashed when the series asks, or
+/// when the palette has come round an odd number of times (so no two of 20
+/// series look alike).
+pub fn style_of(k: usize, s: &Series<'_>) -> (RGBColor, bool) {
+    let color = s.color.map_or(PALETTE[k % PALETTE.len()], rgb);
+    (color, s.dashed || (k / PALETTE.len()) % 2 == 1)
+}
 
 impl<'a> LinePlot<'a> {
     /// An empty plot, 1000×600 px.
@@ -175,96 +193,34 @@ impl<'a> LinePlot<'a> {
         Some((b.0, b.1, b.2 - pad, b.3 + pad))
     }
 
-    /// Draw on `root`; `raster` for a bitmap backend.
-    fn draw<DB: DrawingBackend>(
-        &self,
-        root: DrawingArea<DB, Shift>,
-        path: &str,
-        raster: bool,
-    ) -> Result<(), PlotError> {
-        let err = |e: &dyn std::fmt::Display| PlotError::Draw {
-            path: path.to_string(),
-            message: e.to_string(),
-        };
-        let (x0, x1, y0, y1) = self.bounds().ok_or_else(|| PlotError::Empty {
-            title: self.title.clone(),
-        })?;
-        root.fill(&WHITE).map_err(|e| err(&e))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(&self.title, ("sans-serif", 24))
-            .margin(15)
-            .x_label_area_size(45)
-            .y_label_area_size(70)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(|e| err(&e))?;
-        chart
-            .configure_mesh()
-            .x_desc(self.x_label.as_str())
-            .y_desc(self.y_label.as_str())
-            .label_style(("sans-serif", 14))
-            .draw()
-            .map_err(|e| err(&e))?;
-        let jump = 0.5 * (y1 - y0);
-        for (i, s) in self.series.iter().enumerate() {
-            let color = s.color.map_or(PALETTE[i % PALETTE.len()], rgb);
-            // Split into runs at jumps larger than half the y-range (angle
-            // wrap-arounds): no vertical connector, and no miter spike where
-            // the wide polyline would reverse direction.
-            let mut runs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
-            for &(x, y) in s
-                .points
-                .iter()
-                .filter(|(x, y)| x.is_finite() && y.is_finite())
-            {
-                if let Some(run) = runs.last_mut()
-                    && let Some(&(_, yl)) = run.last()
-                    && (y - yl).abs() > jump
-                {
-                    runs.push(Vec::new());
-                }
-                if let Some(run) = runs.last_mut() {
-                    run.push((x, y));
-                }
+    /// The plot as a one-panel [`Figure`] (the one style of every plot):
+    /// legend beside the data, tick labels with the digits their step
+    /// needs; a series without its own [`Series::break_jumps_over`] is not
+    /// connected across jumps over half the y-range (angle wrap-arounds).
+    pub fn to_figure(&self) -> Figure<'a> {
+        let jump = self.bounds().map(|(_, _, y0, y1)| 0.5 * (y1 - y0));
+        let mut panel = Panel::new(&self.y_label);
+        for s in &self.series {
+            let mut s = *s;
+            if s.break_jumps_over.is_none() {
+                s.break_jumps_over = jump;
             }
-            for run in runs {
-                draw_run(&mut chart, &root, run, color, s.dashed, raster).map_err(|e| err(&e))?;
-            }
-            chart
-                .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
-                .map_err(|e| err(&e))?
-                .label(s.name)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                });
+            panel.series.push(s);
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()
-            .map_err(|e| err(&e))?;
-        root.present().map_err(|e| err(&e))?;
-        Ok(())
+        let mut fig = Figure::new(&self.title, &self.x_label).panel(panel);
+        fig.width_px = self.size_px.0.max(LEGEND_W + 300);
+        fig.panel_height_px = self.size_px.1.saturating_sub(TITLE_H + X_AXIS_H).max(150);
+        fig
     }
 
     /// Write the plot; the format follows the extension (`.png` or `.svg`).
     pub fn write(&self, path: &Path) -> Result<(), PlotError> {
-        register_font()?;
-        let name = path.display().to_string();
-        match path.extension().and_then(|e| e.to_str()) {
-            Some("png") => self.draw(
-                BitMapBackend::new(path, self.size_px).into_drawing_area(),
-                &name,
-                true,
-            ),
-            Some("svg") => self.draw(
-                SVGBackend::new(path, self.size_px).into_drawing_area(),
-                &name,
-                false,
-            ),
-            _ => Err(PlotError::Format { path: name }),
+        if self.bounds().is_none() {
+            return Err(PlotError::Empty {
+                title: self.title.clone(),
+            });
         }
+        self.to_figure().write(path)
     }
 }
 
@@ -314,29 +270,40 @@ pub fn line_plot(
 }
 
 /// The tick step plotters takes on an axis `[lo, hi]` with at most `n`
-/// labels: the smallest 1, 2 or 5 × 10^k giving at most `n` ticks.
+/// labels: its own search (plotters 0.3's `compute_f64_key_points`),
+/// 10^k, then ÷2, ÷5, ÷10 while the ticks aligned inside the range stay at
+/// most `n`, so the labels' decimals follow the step actually drawn.
 fn tick_step(lo: f64, hi: f64, n: usize) -> f64 {
     let span = hi - lo;
-    if span.is_nan() || span <= 0.0 || span.is_infinite() {
+    if span.is_nan() || span <= 0.0 || span.is_infinite() || n == 0 {
         return 1.0;
     }
-    let mut step = 10f64.powf(span.log10().ceil());
-    for _ in 0..60 {
-        let mut next = None;
-        for f in [0.5, 0.2, 0.1] {
-            let s = step * f;
-            if ((span / s).floor() as usize) < n {
-                next = Some(s);
-            }
-        }
-        match next {
-            // 0.1 fitted: go down a decade; else stop at the finest that fitted
-            Some(s) if (s - step * 0.1).abs() <= 1e-12 * step => step = s,
-            Some(s) => return s,
-            None => return step,
-        }
+    let rem_euclid = |a: f64, b: f64| {
+        let r = a - (a / b).floor() * b;
+        if (r - b).abs() < f64::EPSILON { 0.0 } else { r }
+    };
+    let mut scale = 10f64.powf(span.log10().floor());
+    if 1 + (span / scale).floor() as usize > n {
+        scale *= 10.0;
     }
-    step
+    for _ in 0..60 {
+        let old = scale;
+        for nxt in [2.0, 5.0, 10.0] {
+            let s = old / nxt;
+            let mut left = lo - rem_euclid(lo, s);
+            if left < lo {
+                left += s;
+            }
+            let right = hi - rem_euclid(hi, s);
+            let points = 1.0 + (right - left) / old * nxt;
+            if points.round() as usize > n {
+                return scale;
+            }
+            scale = s;
+        }
+        scale = old / 10.0;
+    }
+    scale
 }
 
 /// Tick label for `v` on an axis `[lo, hi]` with at most `n` labels: the
@@ -348,7 +315,8 @@ fn tick_label(v: f64, lo: f64, hi: f64, n: usize) -> String {
     if v.abs() < 1e-6 * step {
         return "0".to_string();
     }
-    let decimals = |step: f64| (-(step.log10() + 1e-9).floor()).clamp(0.0, 8.0) as usize;
+    // 0.005 needs three decimals, 0.01 two, 0.2 one: ⌈−log10 step⌉
+    let decimals = |step: f64| (-step.log10() - 1e-9).ceil().clamp(0.0, 8.0) as usize;
     let big = lo.abs().max(hi.abs());
     if (1e-3..1e6).contains(&big) {
         let d = decimals(step);
@@ -358,6 +326,42 @@ fn tick_label(v: f64, lo: f64, hi: f64, n: usize) -> String {
     let scale = 10f64.powi(e);
     let d = decimals(step / scale);
     format!("{:.d$}e{e}", v / scale)
+}
+
+/// The marks of a logarithmic axis over `[lo, hi]` (log10 of the
+/// quantity): `(position, major, label)` for 1 … 9 × each decade inside;
+/// decades are major and labelled in plain numbers (0.1, 1, 10, 100); on
+/// less than two decades 2 and 5 are labelled too, and a span without a
+/// decade inside labels every mark.
+pub fn log_ticks(lo: f64, hi: f64) -> Vec<(f64, bool, Option<String>)> {
+    if !(lo.is_finite() && hi.is_finite() && hi > lo) {
+        return Vec::new();
+    }
+    let few = hi - lo < 2.0;
+    let mut marks = Vec::new();
+    let (d0, d1) = (lo.floor() as i32, hi.ceil() as i32);
+    for d in d0..=d1 {
+        for m in 1..=9 {
+            let v = f64::from(d) + f64::from(m).log10();
+            if v < lo - 1e-9 || v > hi + 1e-9 {
+                continue;
+            }
+            marks.push((v, m == 1, d, m));
+        }
+    }
+    let any_decade = marks.iter().any(|m| m.1);
+    marks
+        .into_iter()
+        .map(|(v, major, d, m)| {
+            let show = major || (few && (m == 2 || m == 5)) || !any_decade;
+            let label = show.then(|| {
+                let x = f64::from(m) * 10f64.powi(d);
+                let digits = usize::try_from(-d).unwrap_or(0);
+                format!("{x:.digits$}")
+            });
+            (v, major, label)
+        })
+        .collect()
 }
 
 /// A dashed horizontal line of a [`Panel`] (a limit), labelled in the legend.
@@ -440,6 +444,10 @@ pub struct Figure<'a> {
     pub width_px: u32,
     /// Height of each panel in pixels.
     pub panel_height_px: u32,
+    /// The x values are log10 of the quantity (a frequency response): the
+    /// axis is marked at 1, 10, 100 … (and 2, 5 on less than two decades) in
+    /// the quantity's own units, with a minor grid at 2 … 9 ([`Figure::log_x`]).
+    pub log_x: bool,
 }
 
 const TITLE_H: u32 = 44;
@@ -461,7 +469,15 @@ impl<'a> Figure<'a> {
             panels: Vec::new(),
             width_px: 1200,
             panel_height_px: 210,
+            log_x: false,
         }
+    }
+
+    /// Mark the x-axis logarithmically: the series' x values are log10 of
+    /// the quantity named in the x label (e.g. `ω [rad/s]`).
+    pub fn log_x(mut self) -> Self {
+        self.log_x = true;
+        self
     }
 
     /// Add a panel (below the others).
@@ -551,12 +567,38 @@ impl<'a> Figure<'a> {
                 .x_labels(X_LABELS)
                 .y_labels(Y_LABELS)
                 .y_label_formatter(&yf);
-            if last {
+            if self.log_x {
+                mesh.disable_x_mesh().x_label_formatter(&blank);
+                if last {
+                    mesh.x_desc(self.x_label.as_str());
+                }
+            } else if last {
                 mesh.x_desc(self.x_label.as_str()).x_label_formatter(&xf);
             } else {
                 mesh.x_label_formatter(&blank);
             }
             mesh.draw().map_err(|e| err(&e))?;
+            if self.log_x {
+                let label_font = ("sans-serif", 14)
+                    .into_font()
+                    .color(&BLACK)
+                    .pos(Pos::new(HPos::Center, VPos::Top));
+                for (v, major, label) in log_ticks(x0, x1) {
+                    let c = if major {
+                        RGBColor(212, 212, 212)
+                    } else {
+                        RGBColor(240, 240, 240)
+                    };
+                    chart
+                        .draw_series(LineSeries::new([(v, y0), (v, y1)], c.stroke_width(1)))
+                        .map_err(|e| err(&e))?;
+                    if last && let Some(text) = label {
+                        let (px, py) = chart.backend_coord(&(v, y0));
+                        root.draw(&Text::new(text, (px, py + 6), label_font.clone()))
+                            .map_err(|e| err(&e))?;
+                    }
+                }
+            }
             // the limits inside the view, under the data
             for h in &panel.hlines {
                 if h.y >= y0 && h.y <= y1 {
@@ -570,10 +612,10 @@ impl<'a> Figure<'a> {
                         .map_err(|e| err(&e))?;
                 }
             }
-            let mut colors = Vec::with_capacity(panel.series.len());
+            let mut styles = Vec::with_capacity(panel.series.len());
             for (k, s) in panel.series.iter().enumerate() {
-                let color = s.color.map_or(PALETTE[k % PALETTE.len()], rgb);
-                colors.push(color);
+                let (color, dashed) = style_of(k, s);
+                styles.push((color, dashed));
                 let finite = s
                     .points
                     .iter()
@@ -586,7 +628,7 @@ impl<'a> Figure<'a> {
                         &root,
                         std::mem::take(run),
                         color,
-                        s.dashed,
+                        dashed,
                         raster,
                     )
                     .map_err(|e| err(&e))
@@ -601,12 +643,25 @@ impl<'a> Figure<'a> {
                 }
                 flush(&mut run)?;
             }
-            // legend at the right of the panel
+            // legend at the right of the panel; panels repeating the lines of
+            // the one above share its legend (drawn once, down the column)
+            let shared = i > 0
+                && panel.hlines.is_empty()
+                && panel.notes.is_empty()
+                && self.panels[i - 1].series.len() == panel.series.len()
+                && self.panels[i - 1]
+                    .series
+                    .iter()
+                    .zip(&panel.series)
+                    .all(|(a, b)| a.name == b.name);
+            if shared {
+                continue;
+            }
             let font = ("sans-serif", 15).into_font().color(&BLACK);
             let note_font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
             let mut y = 18;
-            for (s, color) in panel.series.iter().zip(&colors) {
-                legend_entry(&legend, y, s.name, color.stroke_width(2), s.dashed, &font)
+            for (s, (color, dashed)) in panel.series.iter().zip(&styles) {
+                legend_entry(&legend, y, s.name, color.stroke_width(2), *dashed, &font)
                     .map_err(|e| err(&e))?;
                 y += 22;
             }
@@ -652,6 +707,186 @@ impl<'a> Figure<'a> {
             _ => Err(PlotError::Format { path: name }),
         }
     }
+}
+
+/// A histogram in the theme of [`Figure`]: outlined bars, integer counts on
+/// the y-axis, the x label with its unit, and the legend column beside the
+/// plot holding the notes (e.g. how many runs are included, and why some
+/// are not).
+#[derive(Debug, Clone)]
+pub struct Histogram<'a> {
+    /// Title.
+    pub title: String,
+    /// X-axis label (with unit).
+    pub x_label: String,
+    /// The values; non-finite ones are left out (and counted in the notes).
+    pub values: &'a [f64],
+    /// Notes beside the plot, one a line.
+    pub notes: Vec<String>,
+    /// Image size in pixels.
+    pub size_px: (u32, u32),
+}
+
+impl<'a> Histogram<'a> {
+    /// A histogram of `values`, 1000×500 px.
+    pub fn new(title: &str, x_label: &str, values: &'a [f64]) -> Self {
+        Self {
+            title: title.to_string(),
+            x_label: x_label.to_string(),
+            values,
+            notes: Vec::new(),
+            size_px: (1000, 500),
+        }
+    }
+
+    /// The bins: `(left edge, width, count)`; √n of them (5 … 50) over the
+    /// finite values' range, one of width 1 around a single value.
+    pub fn bins(&self) -> Vec<(f64, f64, usize)> {
+        let v: Vec<f64> = self
+            .values
+            .iter()
+            .copied()
+            .filter(|x| x.is_finite())
+            .collect();
+        if v.is_empty() {
+            return Vec::new();
+        }
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        if hi <= lo {
+            return vec![(lo - 0.5, 1.0, v.len())];
+        }
+        let n = ((v.len() as f64).sqrt().ceil() as usize).clamp(5, 50);
+        let w = (hi - lo) / n as f64;
+        let mut counts = vec![0usize; n];
+        for x in &v {
+            counts[(((x - lo) / w) as usize).min(n - 1)] += 1;
+        }
+        counts
+            .into_iter()
+            .enumerate()
+            .map(|(b, c)| (lo + b as f64 * w, w, c))
+            .collect()
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: DrawingArea<DB, Shift>,
+        path: &str,
+    ) -> Result<(), PlotError> {
+        let err = |e: &dyn std::fmt::Display| PlotError::Draw {
+            path: path.to_string(),
+            message: e.to_string(),
+        };
+        let bins = self.bins();
+        let (Some(first), Some(last)) = (bins.first(), bins.last()) else {
+            return Err(PlotError::Empty {
+                title: self.title.clone(),
+            });
+        };
+        let (x0, x1) = (first.0, last.0 + last.1);
+        let cmax = bins.iter().map(|b| b.2).max().unwrap_or(1).max(1);
+        let (y0, y1) = (0.0, (cmax as f64 * 1.08).ceil().max(1.0));
+        root.fill(&WHITE).map_err(|e| err(&e))?;
+        let body = root
+            .titled(&self.title, ("sans-serif", 22))
+            .map_err(|e| err(&e))?;
+        let legend_x = self.size_px.0.saturating_sub(LEGEND_W);
+        let (left, legend) = body.split_horizontally(legend_x);
+        let mut chart = ChartBuilder::on(&left)
+            .margin_top(9)
+            .margin_right(12)
+            .margin_left(6)
+            .x_label_area_size(X_AXIS_H)
+            .y_label_area_size(88)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(|e| err(&e))?;
+        let xf = move |v: &f64| tick_label(*v, x0, x1, X_LABELS);
+        // counts are whole: a tick between two integers is not labelled
+        let yf = |v: &f64| {
+            if (v - v.round()).abs() < 1e-9 {
+                format!("{:.0}", v.round())
+            } else {
+                String::new()
+            }
+        };
+        chart
+            .configure_mesh()
+            .x_desc(self.x_label.as_str())
+            .y_desc("runs [count]")
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
+            .max_light_lines(1)
+            .light_line_style(RGBColor(240, 240, 240))
+            .bold_line_style(RGBColor(212, 212, 212))
+            .x_labels(X_LABELS)
+            .y_labels(Y_LABELS.min(cmax + 1))
+            .x_label_formatter(&xf)
+            .y_label_formatter(&yf)
+            .draw()
+            .map_err(|e| err(&e))?;
+        let fill = PALETTE[0].mix(0.45).filled();
+        let edge = PALETTE[0].stroke_width(1);
+        for &(l, w, c) in &bins {
+            if c == 0 {
+                continue;
+            }
+            let r = [(l, 0.0), (l + w, c as f64)];
+            chart
+                .draw_series([Rectangle::new(r, fill), Rectangle::new(r, edge)])
+                .map_err(|e| err(&e))?;
+        }
+        let font = ("sans-serif", 14).into_font().color(&BLACK);
+        let mut y = 18;
+        let n = bins.iter().map(|b| b.2).sum::<usize>();
+        let mut lines = vec![
+            format!("{n} values"),
+            format!("bin width {}", significant(first.1, 3)),
+        ];
+        lines.extend(self.notes.iter().cloned());
+        for line in &lines {
+            legend
+                .draw(&Text::new(line.as_str(), (6, y - 8), font.clone()))
+                .map_err(|e| err(&e))?;
+            y += 20;
+        }
+        root.present().map_err(|e| err(&e))?;
+        Ok(())
+    }
+
+    /// Write the histogram; the format follows the extension (`.png` or `.svg`).
+    pub fn write(&self, path: &Path) -> Result<(), PlotError> {
+        register_font()?;
+        let name = path.display().to_string();
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("png") => self.draw(
+                BitMapBackend::new(path, self.size_px).into_drawing_area(),
+                &name,
+            ),
+            Some("svg") => self.draw(
+                SVGBackend::new(path, self.size_px).into_drawing_area(),
+                &name,
+            ),
+            _ => Err(PlotError::Format { path: name }),
+        }
+    }
+}
+
+/// `v` with `digits` significant digits (plain decimals, no exponent
+/// between 1e-4 and 1e6).
+fn significant(v: f64, digits: i32) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let mag = v.abs().log10().floor() as i32;
+    if !(-4..6).contains(&mag) {
+        return format!("{:.*e}", usize::try_from(digits - 1).unwrap_or(0), v);
+    }
+    let d = usize::try_from(digits - 1 - mag).unwrap_or(0);
+    format!("{v:.d$}")
 }
 
 /// One legend line: a 28 px sample of the line and its label.
@@ -844,6 +1079,95 @@ mod tests {
         assert_eq!(tick_label(-2e-4, -4.2e-4, 2.4e-4, 6), "-2e-4");
         assert_eq!(tick_label(86400.0, 0.0, 86400.0, 12), "86400");
         assert_eq!(tick_label(2e7, 0.0, 5e7, 6), "2e7");
+    }
+
+    /// A 5 × 10^k step gets the digit it needs: the labels of an axis are
+    /// all different (the envelope map's S_lat axis read `0.01, 0.01, 0`).
+    #[test]
+    fn tick_labels_are_distinct() {
+        for (lo, hi, n) in [
+            (-0.012, 0.016, 6),
+            (0.1, 0.26, 6),
+            (-0.0031, 0.0042, 6),
+            (0.0, 0.9, 12),
+            (-3.3, 3.3, 6),
+        ] {
+            let step = tick_step(lo, hi, n);
+            let first = (lo / step).ceil() as i64;
+            let last = (hi / step).floor() as i64;
+            let labels: Vec<String> = (first..=last)
+                .map(|k| tick_label(k as f64 * step, lo, hi, n))
+                .collect();
+            let mut unique = labels.clone();
+            unique.dedup();
+            assert_eq!(unique.len(), labels.len(), "{lo}..{hi}: {labels:?}");
+            assert!(
+                labels.iter().all(|l| l != "-0.00" && l != "-0"),
+                "{labels:?}"
+            );
+        }
+        assert_eq!(tick_label(0.005, -0.012, 0.016, 6), "0.005");
+    }
+
+    #[test]
+    fn significant_digits() {
+        assert_eq!(significant(0.021_63, 3), "0.0216");
+        assert_eq!(significant(12.345, 3), "12.3");
+        assert_eq!(significant(1234.5, 3), "1234");
+        assert_eq!(significant(2.5e-7, 3), "2.50e-7");
+    }
+
+    #[test]
+    fn log_axis_marks_decades_in_plain_numbers() {
+        let t = log_ticks(0.0, 2.0);
+        let labels: Vec<&str> = t.iter().filter_map(|m| m.2.as_deref()).collect();
+        assert_eq!(labels, ["1", "10", "100"]);
+        assert_eq!(t.len(), 19);
+        // less than two decades: 2 and 5 labelled too
+        let t = log_ticks(0.0, 1.8);
+        let labels: Vec<&str> = t.iter().filter_map(|m| m.2.as_deref()).collect();
+        assert_eq!(labels, ["1", "2", "5", "10", "20", "50"]);
+        assert_eq!(t.iter().filter(|m| m.1).count(), 2);
+        let t = log_ticks(-1.2, 2.5);
+        let labels: Vec<&str> = t.iter().filter_map(|m| m.2.as_deref()).collect();
+        assert_eq!(labels, ["0.1", "1", "10", "100"]);
+        // a span inside one decade labels its marks
+        let t = log_ticks(0.2, 0.8);
+        assert!(t.iter().all(|m| m.2.is_some()) && !t.is_empty(), "{t:?}");
+        assert!(log_ticks(1.0, 1.0).is_empty());
+    }
+
+    #[test]
+    fn histogram_bins_count_every_finite_value() {
+        let v: Vec<f64> = (0..100)
+            .map(|i| f64::from(i) * 0.1)
+            .chain([f64::NAN])
+            .collect();
+        let h = Histogram::new("t", "x [s]", &v);
+        let b = h.bins();
+        assert_eq!(b.len(), 10);
+        assert_eq!(b.iter().map(|x| x.2).sum::<usize>(), 100);
+        assert_eq!(
+            Histogram::new("t", "x", &[2.0, 2.0]).bins(),
+            vec![(1.5, 1.0, 2)]
+        );
+        assert!(Histogram::new("t", "x", &[]).bins().is_empty());
+    }
+
+    #[test]
+    fn the_palette_does_not_repeat_a_style_within_twenty_series() {
+        let pts = [(0.0, 0.0)];
+        let styles: Vec<([u8; 3], bool)> = (0..20)
+            .map(|k| {
+                let (c, d) = style_of(k, &Series::new("s", &pts));
+                ([c.0, c.1, c.2], d)
+            })
+            .collect();
+        for i in 0..20 {
+            for j in 0..i {
+                assert_ne!(styles[i], styles[j], "{i} {j}");
+            }
+        }
     }
 
     #[test]

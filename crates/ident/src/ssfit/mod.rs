@@ -365,7 +365,7 @@ pub struct ParameterEstimate {
     /// Fitted value.
     pub value: f64,
     /// Cramér–Rao bound (one standard deviation); infinite when the responses
-    /// do not depend on the parameter at all.
+    /// do not determine the parameter (alone or in a combination with others).
     pub cramer_rao: f64,
     /// Cramér–Rao bound, % of the value.
     pub cramer_rao_pct: f64,
@@ -374,6 +374,14 @@ pub struct ParameterEstimate {
     /// Ways the parameter misses CIFER's guidelines (CR ≤ 20 %,
     /// insensitivity ≤ 10 %), or rests on a bound; empty when it meets them.
     pub flags: Vec<String>,
+}
+
+impl ParameterEstimate {
+    /// Whether the responses determine the parameter
+    /// ([`crate::cost::identifiable`]).
+    pub fn identifiable(&self) -> bool {
+        crate::cost::identifiable(self.cramer_rao_pct, self.insensitivity_pct)
+    }
 }
 
 /// The cost of one response at the optimum.
@@ -725,7 +733,17 @@ pub fn fit_ss(model: &SsModel, responses: &[Response], opts: &CostOptions) -> Re
         .map(|j| {
             let mut flags = Vec::new();
             if !acc.cramer_rao[j].is_finite() {
-                flags.push("not identifiable: the responses do not depend on it".to_string());
+                flags.push(
+                    "not identifiable: the responses do not determine it (alone or with others)"
+                        .to_string(),
+                );
+            } else if !crate::cost::identifiable(cr_pct[j], ins_pct[j]) {
+                flags.push(format!(
+                    "not identifiable: Cramér–Rao bound {:.3} %, insensitivity {:.3} % (≥ {} %: not even its sign is determined)",
+                    cr_pct[j],
+                    ins_pct[j],
+                    crate::cost::NOT_IDENTIFIABLE_PCT
+                ));
             } else {
                 if cr_pct[j].is_nan() || cr_pct[j] > CRAMER_RAO_GUIDELINE_PCT {
                     flags.push(format!(

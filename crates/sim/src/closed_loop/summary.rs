@@ -278,7 +278,9 @@ pub(super) fn summarize(
         let wrapped: Option<Vec<f64>> = (j == 3).then(|| e.iter().map(|v| wrap_pi(*v)).collect());
         // excitation: the last reference change on this output, else the initial error
         let mut t_exc = 0.0;
-        let mut size = e.first().map_or(0.0, |v| v.abs());
+        // a heading error is its size within ±π (2π − 1 rad is a 1 rad error)
+        let size_of = |d: f64| if j == 3 { wrap_pi(d).abs() } else { d.abs() };
+        let mut size = e.first().map_or(0.0, |v| size_of(*v));
         let mut changes: Vec<_> = scenario
             .reference
             .iter()
@@ -288,7 +290,7 @@ pub(super) fn summarize(
         if let Some(c) = changes.last() {
             let before = scenario.reference_at(c.t_s - 1e-9)[j];
             t_exc = c.t_s + c.ramp_s;
-            size = (c.value - before).abs();
+            size = size_of(c.value - before);
         }
         excitations.push((e, t_exc, size, wrapped));
     }
@@ -299,6 +301,10 @@ pub(super) fn summarize(
             let stats = output_metrics(t, &w, t_exc, size, band_scale);
             m.rms_error = stats.rms_error;
             m.max_abs_error = stats.max_abs_error;
+            // settled within ±π of the reference: the same heading
+            if m.settling_time_s.is_none() {
+                m.settling_time_s = stats.settling_time_s;
+            }
         }
         if reason.is_some() {
             // a run that stopped early never settled

@@ -4,7 +4,7 @@ use super::store::{
     Manifest, RUNS, TRACES, write_file, write_json, write_runs_csv, write_traces_csv,
 };
 use super::{METRIC_NAMES, McError, RunRecord, Stats, TracePoint, percentile};
-use crate::plot::{LinePlot, Series};
+use crate::plot::{Histogram, LinePlot, Series};
 use crate::scenario::OUTPUTS;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -33,7 +33,9 @@ fn plots(
     traces: &BTreeMap<usize, Vec<TracePoint>>,
     out: &Path,
 ) -> Result<(), McError> {
-    // histograms (as step outlines) of the rms and max errors and settling times
+    // histograms of the rms and max errors and settling times, each saying
+    // how many of the runs it holds and why the others are not in it
+    let completed = records.iter().filter(|r| r.completed()).count();
     for (j, m) in METRIC_NAMES.iter().enumerate() {
         if !(m.ends_with("_rms") || m.ends_with("_settling_s") || m.ends_with("_max_abs")) {
             continue;
@@ -47,32 +49,25 @@ fn plots(
         if v.len() < 2 {
             continue;
         }
-        let (lo, hi) = v
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                (a.min(x), b.max(x))
+        let (label, what) = metric_axis(m);
+        let mut h = Histogram::new(
+            &format!("{what}: {} of {} runs", v.len(), records.len()),
+            &label,
+            &v,
+        );
+        h.notes.push(format!("{} runs flown", records.len()));
+        h.notes.push(format!("{completed} completed"));
+        let missing = completed - v.len();
+        if missing > 0 {
+            h.notes
+                .push(format!("{missing} completed without a value:"));
+            h.notes.push(if m.ends_with("_settling_s") {
+                "  not settled before the end".to_string()
+            } else {
+                "  no step on this output".to_string()
             });
-        let bins = ((v.len() as f64).sqrt().ceil() as usize).clamp(5, 50);
-        let w = if hi > lo {
-            (hi - lo) / bins as f64
-        } else {
-            1.0
-        };
-        let mut counts = vec![0usize; bins];
-        for x in &v {
-            let b = (((x - lo) / w) as usize).min(bins - 1);
-            counts[b] += 1;
         }
-        let mut pts = vec![(lo, 0.0)];
-        for (b, c) in counts.iter().enumerate() {
-            let x0 = lo + b as f64 * w;
-            pts.push((x0, *c as f64));
-            pts.push((x0 + w, *c as f64));
-        }
-        pts.push((lo + bins as f64 * w, 0.0));
-        LinePlot::new(&format!("{m} (completed runs)"), m, "runs")
-            .series(Series::new(m, &pts))
-            .write(&out.join(format!("hist_{m}.png")))?;
+        h.write(&out.join(format!("hist_{m}.png")))?;
     }
     // envelopes: p5 / p50 / p95 over the runs at each trace time
     let Some(len) = traces.values().map(Vec::len).max() else {
@@ -112,4 +107,38 @@ fn plots(
         .write(&out.join(format!("envelope_{name}.png")))?;
     }
     Ok(())
+}
+
+/// The x label (with unit) and the title of a metric's histogram.
+fn metric_axis(metric: &str) -> (String, String) {
+    let (output, kind) = metric.split_once('_').unwrap_or((metric, ""));
+    let unit = if output == "psi" { "rad" } else { "m/s" };
+    let symbol = if output == "psi" { "ψ" } else { output };
+    match kind {
+        "settling_s" => (
+            format!("{symbol} settling time [s]"),
+            format!("{symbol} settling time"),
+        ),
+        "rms" => (
+            format!("{symbol} RMS error [{unit}]"),
+            format!("{symbol} RMS tracking error"),
+        ),
+        "max_abs" => (
+            format!("{symbol} largest |error| [{unit}]"),
+            format!("{symbol} largest tracking error"),
+        ),
+        _ => (metric.to_string(), metric.to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::metric_axis;
+
+    #[test]
+    fn histogram_axes_carry_units() {
+        assert_eq!(metric_axis("vd_settling_s").0, "vd settling time [s]");
+        assert_eq!(metric_axis("psi_rms").0, "ψ RMS error [rad]");
+        assert_eq!(metric_axis("vn_max_abs").0, "vn largest |error| [m/s]");
+    }
 }
