@@ -25,9 +25,9 @@ pub struct McArgs {
     /// Campaign file (TOML; see docs/monte-carlo.md and campaigns/).
     #[arg(required = true)]
     pub campaign: Option<PathBuf>,
-    /// Number of runs (overrides the campaign's `runs`; ≥ 1). Bounded by the
-    /// memory of this machine: a campaign keeps each run's record and trace
-    /// until it writes its statistics (use --shard beyond that).
+    /// Number of runs (overrides the campaign's `runs`; ≥ 1). Memory does not
+    /// grow with it (each run goes to the run store on disk); bounded by the
+    /// output folder's free disk space (use --shard beyond that).
     #[arg(long, value_parser = at_least_one, allow_negative_numbers = true)]
     pub runs: Option<usize>,
     /// Campaign seed (overrides the campaign's `seed`; a new campaign hash).
@@ -41,6 +41,10 @@ pub struct McArgs {
     /// Bergen Twin (overrides the scenario's `params`); dispersions apply around it.
     #[arg(long, value_name = "FILE")]
     pub params: Option<PathBuf>,
+    /// Keep traces only for the runs with an index below N (overrides the
+    /// campaign's `trace_runs`; a new campaign hash).
+    #[arg(long, value_name = "N")]
+    pub trace_runs: Option<usize>,
     /// Worker threads (default: one per core; ≥ 1).
     #[arg(long, value_parser = at_least_one)]
     pub threads: Option<usize>,
@@ -104,6 +108,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
             seed: args.seed,
             duration_s: args.duration,
             params: args.params.clone(),
+            trace_runs: args.trace_runs,
         })
         .with_context(|| format!("campaign {}", path.display()))?;
     let out = args.out.clone().unwrap_or_else(|| {
@@ -117,7 +122,7 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
         runs: args.runs,
         threads: args.threads,
         shard: args.shard,
-        memory_budget_bytes: None,
+        disk_budget_bytes: None,
     };
     let bar = ProgressBar::new(0);
     bar.set_style(
