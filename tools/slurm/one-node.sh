@@ -36,7 +36,11 @@ die() { echo "one-node: FAILED: $*" >&2; exit 1; }
 
 [ "$(id -u)" = 0 ] || die "needs root (apt-get, daemons)"
 BIN=${HELICON:-$ROOT/target/release/helicon}
-[ -x "$BIN" ] || die "no helicon binary at $BIN (cargo build --release -p helicon-cli)"
+if [ ! -x "$BIN" ] && [ -z "${HELICON:-}" ]; then
+  say "building helicon"
+  cargo build --release -q -p helicon-cli || die "cargo build --release -p helicon-cli"
+fi
+[ -x "$BIN" ] || die "no helicon binary at $BIN"
 
 # 1. packages
 if ! command -v slurmctld >/dev/null || ! command -v slurmd >/dev/null || ! command -v munged >/dev/null || ! command -v sbatch >/dev/null; then

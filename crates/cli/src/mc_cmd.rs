@@ -15,6 +15,8 @@ use nalgebra::Vector3;
 use std::path::PathBuf;
 use std::time::Instant;
 
+mod slurm;
+
 /// `helicon mc`.
 #[derive(Args, Debug)]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
@@ -56,6 +58,31 @@ pub struct McArgs {
     /// array index `--shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
     #[arg(long)]
     pub shard: Option<Shard>,
+    /// Run on a Slurm cluster: write a job array of --array shard tasks and
+    /// a merge job after them (`afterok`) into OUT/slurm/, submit both with
+    /// `sbatch` and print their ids. Submitting again submits only what is
+    /// missing (see `helicon mc status OUT`).
+    #[arg(long, conflicts_with = "shard")]
+    pub slurm: bool,
+    /// With --slurm: array tasks, one shard each (1 <= K <= runs; default
+    /// 10, or the runs if fewer).
+    #[arg(long, value_name = "K", requires = "slurm", value_parser = at_least_one)]
+    pub array: Option<usize>,
+    /// With --slurm: the partition (`#SBATCH --partition`).
+    #[arg(long, value_name = "P", requires = "slurm")]
+    pub partition: Option<String>,
+    /// With --slurm: the time limit of each task and of the merge
+    /// (`#SBATCH --time`: minutes, HH:MM:SS, D-HH:MM, …).
+    #[arg(long, value_name = "T", requires = "slurm")]
+    pub time: Option<String>,
+    /// With --slurm: CPUs per task (`#SBATCH --cpus-per-task`, the task's
+    /// --threads; default 1).
+    #[arg(long, value_name = "C", requires = "slurm", value_parser = at_least_one)]
+    pub cpus_per_task: Option<usize>,
+    /// With --slurm: write the batch scripts and print the `sbatch` commands,
+    /// submit nothing.
+    #[arg(long, requires = "slurm")]
+    pub dry_run: bool,
 }
 
 /// A whole number ≥ 1.
@@ -72,6 +99,17 @@ fn at_least_one(s: &str) -> Result<usize, String> {
 pub enum McCommand {
     /// Combine shard folders of one campaign (checked by hash) into one.
     Merge(MergeArgs),
+    /// How far a campaign folder is: runs done; for a `--slurm` folder, each
+    /// shard done/running/pending/failed (its folder, `squeue`/`sacct`) and
+    /// the merge.
+    Status(StatusArgs),
+}
+
+/// `helicon mc status`.
+#[derive(Args, Debug)]
+pub struct StatusArgs {
+    /// The campaign folder (the `--out` of `helicon mc`, with or without --slurm).
+    pub dir: PathBuf,
 }
 
 /// `helicon mc merge`.
@@ -100,6 +138,9 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
         );
         return Ok(());
     }
+    if let Some(McCommand::Status(st)) = &args.command {
+        return slurm::status(&st.dir);
+    }
     let Some(path) = &args.campaign else {
         anyhow::bail!("give a campaign file (or `helicon mc merge DIR... --out DIR`)");
     };
@@ -118,6 +159,34 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
         }
         PathBuf::from("out").join("mc").join(n)
     });
+    if args.slurm {
+        let runs = args.runs.unwrap_or(campaign.runs);
+        let mut campaign_args = Vec::new();
+        if let Some(s) = args.seed {
+            campaign_args.extend(["--seed".to_string(), s.to_string()]);
+        }
+        if let Some(d) = args.duration {
+            campaign_args.extend(["--duration".to_string(), d.to_string()]);
+        }
+        if let Some(p) = &args.params {
+            let abs =
+                std::fs::canonicalize(p).with_context(|| format!("--params {}", p.display()))?;
+            campaign_args.extend(["--params".to_string(), abs.display().to_string()]);
+        }
+        if let Some(n) = args.trace_runs {
+            campaign_args.extend(["--trace-runs".to_string(), n.to_string()]);
+        }
+        let req = slurm::SlurmRequest {
+            runs,
+            array: args.array.unwrap_or_else(|| runs.min(10)),
+            partition: args.partition.clone(),
+            time: args.time.clone(),
+            cpus_per_task: args.cpus_per_task.unwrap_or(1),
+            dry_run: args.dry_run,
+            campaign_args,
+        };
+        return slurm::submit(&campaign, path, &out, &req);
+    }
     let options = RunOptions {
         runs: args.runs,
         threads: args.threads,

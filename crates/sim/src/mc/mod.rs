@@ -101,7 +101,7 @@ pub use draws::*;
 pub use record::*;
 pub use runner::*;
 pub use stats::*;
-pub use store::{csv_header, merge};
+pub use store::{FolderProgress, csv_header, folder_progress, merge};
 
 use crate::closed_loop::ClosedLoopError;
 use crate::plot::PlotError;

@@ -173,6 +173,75 @@ pub(super) fn check_manifest(dir: &Path, hash: &str) -> Result<Option<Manifest>,
     Ok(Some(m))
 }
 
+/// How far a campaign (or shard) folder is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FolderProgress {
+    /// Campaign name.
+    pub name: String,
+    /// Campaign hash.
+    pub hash: String,
+    /// The shard (`K/M`), if it is one.
+    pub shard: Option<String>,
+    /// Runs this folder is to hold (its shard's share of the campaign's).
+    pub runs: usize,
+    /// Runs in its store.
+    pub done: usize,
+    /// Every run done and the outputs written (`stats.json` newer than the
+    /// last run stored).
+    pub finished: bool,
+}
+
+/// The progress of the campaign folder `dir` (`None`: not one, no
+/// `manifest.json`), read from its run store.
+pub fn folder_progress(dir: &Path) -> Result<Option<FolderProgress>, McError> {
+    let Some(m) = read_manifest(dir)? else {
+        return Ok(None);
+    };
+    let layout = layout_of(&m, dir)?;
+    let runs = Shard {
+        k: layout.k,
+        m: layout.m,
+    }
+    .count(m.runs);
+    let store = match Store::open(dir, layout, false) {
+        Ok(s) => Some(s),
+        // a folder whose first run is not stored yet
+        Err(McError::Config(crate::scenario::ScenarioError::Io { source, .. }))
+            if source.kind() == std::io::ErrorKind::NotFound =>
+        {
+            None
+        }
+        Err(e) => return Err(e),
+    };
+    let mut done = 0;
+    if let Some(store) = &store {
+        let mut buf = Vec::new();
+        for j in 0..runs.min(store.slots()?) {
+            if matches!(store.get(j, &mut buf)?, Slot::Run(..)) {
+                done += 1;
+            }
+        }
+    }
+    let modified = |f: &str| {
+        std::fs::metadata(dir.join(f))
+            .and_then(|m| m.modified())
+            .ok()
+    };
+    let finished = done == runs
+        && match (modified("stats.json"), modified(super::slots::RUNS_BIN)) {
+            (Some(s), Some(r)) => s >= r,
+            _ => false,
+        };
+    Ok(Some(FolderProgress {
+        name: m.name,
+        hash: m.hash,
+        shard: m.shard,
+        runs,
+        done,
+        finished,
+    }))
+}
+
 /// The store layout of a folder's manifest.
 pub(super) fn layout_of(m: &Manifest, dir: &Path) -> Result<Layout, McError> {
     let (k, mm) = match &m.shard {
