@@ -1135,7 +1135,10 @@ mod format_tests {
             same(w, &mut buf);
             // the magnitudes of a log, 1e-6 .. 1e14, uniformly in log
             let u2 = (next() >> 11) as f64 / 2f64.powi(53);
-            same(10f64.powf(u2 * 20.0 - 6.0) * if u2 > 0.5 { -1.0 } else { 1.0 }, &mut buf);
+            same(
+                10f64.powf(u2 * 20.0 - 6.0) * if u2 > 0.5 { -1.0 } else { 1.0 },
+                &mut buf,
+            );
             // few fraction bits: integers and halves, quarters, ... near 1e13
             let m = (next() >> 20) as f64;
             same(m / f64::from(1u32 << (next() % 12)), &mut buf);
