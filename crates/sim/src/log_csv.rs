@@ -399,29 +399,45 @@ fn io_err(path: &str, e: impl std::fmt::Display) -> LogCsvError {
 /// Write one number: shortest round-trip text, plain notation for ordinary
 /// magnitudes and exponent notation for very small or large ones. The text
 /// is that of `format!("{v}")` (plain) and `format!("{v:e}")` (exponent),
-/// the reference implementation [`put_fmt`] below; the digits come from
-/// `zmij` (the same shortest round-trip digits, ~3× faster than going
-/// through `core::fmt`) and are laid out here. `v` must be finite.
+/// the reference implementation [`put_fmt`]; the digits come from `zmij`
+/// (the same shortest round-trip digits, several times faster than going
+/// through `core::fmt`), whose text is decimal notation in [1e-5, 1e16)
+/// and `d.ddde±x` beyond. `v` must be finite.
 ///
 /// The one difference of the two digit generators is a tie: an exact value
 /// halfway between two shortest candidates, where `core::fmt` takes the
 /// larger magnitude and `zmij` the even last digit (2236729633436452.25 is
-/// one). A tie needs a value that is a multiple of 2^−27 ([`tie_possible`]);
-/// [`upper_tie`] then decides exactly, and the digits are those of
-/// `core::fmt`. Fast path: a plain-range value that cannot tie is `zmij`'s
-/// text (decimal notation there) without its `.0`.
+/// one). Writing |v| = m·2^e with m odd and I = 10·d + 5 the odd midpoint
+/// of the n shortest digits d, a tie is |v| = I·10^q: the powers of two
+/// cancel only if e = q ≥ 0, or e = q = −s < 0 with m·5^s = I < 10^19,
+/// which needs s ≤ 27. So a value that is not a multiple of 2^−27
+/// ([`tie_possible`]) never ties; the others (0.5, 2.0, integers: exact
+/// binary fractions) are written by `core::fmt`.
 fn put(line: &mut String, v: f64, buf: &mut zmij::Buffer) {
     let a = v.abs();
     if a == 0.0 {
         line.push_str(if v.is_sign_negative() { "-0" } else { "0" });
         return;
     }
-    if (1e-4..1e9).contains(&a) && !tie_possible(v) {
-        let s = buf.format_finite(v);
-        line.push_str(s.strip_suffix(".0").unwrap_or(s));
+    if tie_possible(v) {
+        put_fmt(line, v);
         return;
     }
     let s = buf.format_finite(v);
+    if (1e-4..1e9).contains(&a) {
+        // decimal notation, as `{v}` (which has no `.0`)
+        line.push_str(s.strip_suffix(".0").unwrap_or(s));
+    } else if a < 1e-5 {
+        // `d.ddde-x`, as `{v:e}`
+        line.push_str(s);
+    } else {
+        relayout_exp(line, s);
+    }
+}
+
+/// `zmij`'s decimal (or `e+x`) text of a number beyond the plain range, in
+/// `{v:e}` form: the significant digits `d.ddd`, then `e` and the exponent.
+fn relayout_exp(line: &mut String, s: &str) {
     let (neg, body) = match s.strip_prefix('-') {
         Some(b) => (true, b),
         None => (false, s),
@@ -431,103 +447,36 @@ fn put(line: &mut String, v: f64, buf: &mut zmij::Buffer) {
         None => (body, 0),
     };
     let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
-    // the significant digits (no leading or trailing zeros) and the decimal
-    // exponent of the first: value = d.ddd × 10^e10
     let mut digits = [0u8; 40];
     let mut n = 0;
     let mut lead = 0i32;
-    let mut seen = false;
     for &b in int.as_bytes().iter().chain(frac.as_bytes()) {
-        if !seen && b == b'0' {
+        if n == 0 && b == b'0' {
             lead += 1;
-            continue;
-        }
-        seen = true;
-        if n < digits.len() {
+        } else if n < digits.len() {
             digits[n] = b;
             n += 1;
         }
     }
-    while n > 0 && digits[n - 1] == b'0' {
+    while n > 1 && digits[n - 1] == b'0' {
         n -= 1;
     }
-    let mut e10 = int.len() as i32 - 1 - lead + exp;
-    if n > 0 && n < 19 {
-        let d_int = digits[..n]
-            .iter()
-            .fold(0u64, |a, &b| a * 10 + u64::from(b - b'0'));
-        if upper_tie(v, d_int, n, e10) {
-            // the larger candidate: the last digit + 1, carried
-            let mut k = n;
-            loop {
-                if k == 0 {
-                    digits.copy_within(0..n, 1);
-                    digits[0] = b'1';
-                    n += 1;
-                    e10 += 1;
-                    break;
-                }
-                k -= 1;
-                if digits[k] == b'9' {
-                    digits[k] = b'0';
-                } else {
-                    digits[k] += 1;
-                    break;
-                }
-            }
-            while n > 0 && digits[n - 1] == b'0' {
-                n -= 1;
-            }
-        }
-    }
+    let e10 = int.len() as i32 - 1 - lead + exp;
     if neg {
         line.push('-');
     }
-    if n == 0 {
-        line.push('0');
-        return;
-    }
-    let d = &digits[..n];
-    let push = |line: &mut String, bytes: &[u8]| {
-        for &b in bytes {
+    line.push(char::from(digits[0]));
+    if n > 1 {
+        line.push('.');
+        for &b in &digits[1..n] {
             line.push(char::from(b));
         }
-    };
-    let a = v.abs();
-    if (1e-4..1e9).contains(&a) {
-        if e10 >= 0 {
-            let int_digits = (e10 + 1) as usize;
-            if n <= int_digits {
-                push(line, d);
-                for _ in n..int_digits {
-                    line.push('0');
-                }
-            } else {
-                push(line, &d[..int_digits]);
-                line.push('.');
-                push(line, &d[int_digits..]);
-            }
-        } else {
-            line.push_str("0.");
-            for _ in 0..(-e10 - 1) {
-                line.push('0');
-            }
-            push(line, d);
-        }
-    } else {
-        push(line, &d[..1]);
-        if n > 1 {
-            line.push('.');
-            push(line, &d[1..]);
-        }
-        line.push('e');
-        let mut ib = itoa_i32(e10);
-        line.push_str(ib.as_str());
     }
+    line.push('e');
+    line.push_str(itoa_i32(e10).as_str());
 }
 
-/// Can |v| = m·2^e be a tie at all: a multiple of 2^−27 (see [`upper_tie`]:
-/// the powers of two cancel only if `tz + e ≥ −27`)?
+/// Can |v| = m·2^e tie (see [`put`]): is it a multiple of 2^−27?
 fn tie_possible(v: f64) -> bool {
     let bits = v.to_bits() & !(1u64 << 63);
     let (be, frac) = ((bits >> 52) as i32, bits & ((1u64 << 52) - 1));
@@ -539,39 +488,6 @@ fn tie_possible(v: f64) -> bool {
     m != 0 && m.trailing_zeros() as i32 + e >= -27
 }
 
-/// Is |v| exactly the decimal halfway above the `n`-digit `d_int` whose
-/// first digit is at 10^`e10`, i.e. `(10 d_int + 5) · 10^(e10 − n)`? With
-/// |v| = m·2^e (m odd after shifting out its `tz` trailing zeros) and
-/// I = 10 d_int + 5 odd, equality needs the powers of two to cancel and
-/// m = I·5^q (q ≥ 0) or m·5^s = I (q = −s < 0), checked in `u128`.
-fn upper_tie(v: f64, d_int: u64, n: usize, e10: i32) -> bool {
-    let bits = v.abs().to_bits();
-    let (be, frac) = ((bits >> 52) as i32, bits & ((1u64 << 52) - 1));
-    let (m, e) = if be == 0 {
-        (frac, -1074)
-    } else {
-        (frac | (1u64 << 52), be - 1075)
-    };
-    if m == 0 {
-        return false;
-    }
-    let tz = m.trailing_zeros() as i32;
-    let m_odd = u128::from(m >> tz);
-    let i = u128::from(d_int) * 10 + 5;
-    let q = e10 - n as i32;
-    let pow5 = |k: i32| -> Option<u128> {
-        if !(0..=27).contains(&k) {
-            return None;
-        }
-        Some(5u128.pow(k as u32))
-    };
-    if q < 0 {
-        tz + e - q == 0 && pow5(-q).is_some_and(|p| m_odd * p == i)
-    } else {
-        tz + e == q && pow5(q).is_some_and(|p| i * p == m_odd)
-    }
-}
-
 /// A small integer as text, without allocating.
 struct SmallInt {
     b: [u8; 12],
@@ -579,7 +495,7 @@ struct SmallInt {
 }
 
 impl SmallInt {
-    fn as_str(&mut self) -> &str {
+    fn as_str(&self) -> &str {
         std::str::from_utf8(&self.b[self.start..]).unwrap_or("0")
     }
 }
@@ -605,7 +521,6 @@ fn itoa_i32(v: i32) -> SmallInt {
 }
 
 /// The reference text of one number (what [`put`] must write).
-#[cfg(test)]
 fn put_fmt(line: &mut String, v: f64) {
     use std::fmt::Write as _;
     let a = v.abs();
@@ -669,7 +584,11 @@ impl LogWriter {
     /// is an error (nothing of the row is written).
     pub fn write(&mut self, r: &LogRow) -> Result<(), LogCsvError> {
         let line = self.rows + 2;
-        for c in &LOG_SCHEMA {
+        // each value computed once: checked, then formatted (the line is
+        // written only whole, after the time check)
+        self.line.clear();
+        let mut digits = zmij::Buffer::new();
+        for (j, c) in LOG_SCHEMA.iter().enumerate() {
             let v = c.value(r);
             if !v.is_finite() {
                 return Err(LogCsvError::NonFiniteValue {
@@ -680,6 +599,10 @@ impl LogWriter {
                     t_s: r.t_s,
                 });
             }
+            if j > 0 {
+                self.line.push(',');
+            }
+            put(&mut self.line, v, &mut digits);
         }
         if r.t_s <= self.last_t {
             return Err(LogCsvError::TimeNotIncreasing {
@@ -688,14 +611,6 @@ impl LogWriter {
                 t_s: r.t_s,
                 previous_s: self.last_t,
             });
-        }
-        self.line.clear();
-        let mut digits = zmij::Buffer::new();
-        for (j, c) in LOG_SCHEMA.iter().enumerate() {
-            if j > 0 {
-                self.line.push(',');
-            }
-            put(&mut self.line, c.value(r), &mut digits);
         }
         self.line.push('\n');
         self.out
