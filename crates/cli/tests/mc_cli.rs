@@ -180,3 +180,129 @@ fn mc_a_billion_runs_is_refused_at_once() {
     // refused before anything grows: well under the seconds a run would take
     assert!(dt < Duration::from_secs(10), "{dt:?}");
 }
+
+#[test]
+fn mc_slurm_dry_run_writes_the_array_and_merge_scripts_and_status_follows_the_shards() {
+    let d = setup("slurm");
+    let o = helicon_in(
+        &d,
+        &[
+            "mc",
+            "c.toml",
+            "--runs",
+            "6",
+            "--slurm",
+            "--array",
+            "3",
+            "--partition",
+            "short",
+            "--time",
+            "0:30:00",
+            "--out",
+            "sl",
+            "--dry-run",
+        ],
+    );
+    no_panic(&o);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    assert!(
+        out.contains("would run: sbatch --parsable --array=0-2"),
+        "{out}"
+    );
+    assert!(out.contains("--dependency=afterok:"), "{out}");
+    let array = std::fs::read_to_string(d.join("sl/slurm/array.sbatch")).unwrap();
+    for part in [
+        "#SBATCH --array=0-2",
+        "#SBATCH --partition=short",
+        "#SBATCH --time=0:30:00",
+        "--runs 6 --shard \"$K/3\"",
+        "SLURM_ARRAY_TASK_ID",
+    ] {
+        assert!(array.contains(part), "{part}: {array}");
+    }
+    let merge = std::fs::read_to_string(d.join("sl/slurm/merge.sbatch")).unwrap();
+    assert!(
+        merge.contains(" mc merge ") && merge.contains("shard-2-of-3"),
+        "{merge}"
+    );
+    // nothing run yet
+    let st = helicon_in(&d, &["mc", "status", "sl"]);
+    assert!(st.status.success(), "{}", text(&st.stderr));
+    let s = text(&st.stdout);
+    assert!(
+        s.contains("shards: 0 done") && s.contains("3 missing"),
+        "{s}"
+    );
+    assert!(s.contains("merged: not yet"), "{s}");
+    // the tasks' command run by hand: shard 1 done, the others missing
+    let o = helicon_in(
+        &d,
+        &[
+            "mc",
+            "c.toml",
+            "--runs",
+            "6",
+            "--shard",
+            "1/3",
+            "--out",
+            "sl/shards/shard-1-of-3",
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let s = text(&helicon_in(&d, &["mc", "status", "sl"]).stdout);
+    assert!(
+        s.contains("shards: 1 done") && s.contains("2 missing"),
+        "{s}"
+    );
+    assert!(s.contains("runs: 2/6 done"), "{s}");
+    // a plan of another size in the same folder is refused
+    let o = helicon_in(
+        &d,
+        &[
+            "mc",
+            "c.toml",
+            "--runs",
+            "6",
+            "--slurm",
+            "--array",
+            "2",
+            "--out",
+            "sl",
+            "--dry-run",
+        ],
+    );
+    assert!(!o.status.success());
+    assert!(
+        text(&o.stderr).contains("use another --out"),
+        "{}",
+        text(&o.stderr)
+    );
+    // bad values name the option
+    for (args, want) in [
+        (vec!["--array", "7"], "--array 7"),
+        (vec!["--time", "soon"], "--time `soon`"),
+        (vec!["--partition", "a b"], "--partition `a b`"),
+    ] {
+        let mut a = vec![
+            "mc",
+            "c.toml",
+            "--runs",
+            "6",
+            "--slurm",
+            "--out",
+            "sl2",
+            "--dry-run",
+        ];
+        a.extend(args);
+        let o = helicon_in(&d, &a);
+        no_panic(&o);
+        assert!(!o.status.success());
+        assert!(
+            text(&o.stderr).contains(want),
+            "{want}: {}",
+            text(&o.stderr)
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}

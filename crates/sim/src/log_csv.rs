@@ -397,8 +397,131 @@ fn io_err(path: &str, e: impl std::fmt::Display) -> LogCsvError {
 }
 
 /// Write one number: shortest round-trip text, plain notation for ordinary
-/// magnitudes and exponent notation for very small or large ones.
-fn put(line: &mut String, v: f64) {
+/// magnitudes and exponent notation for very small or large ones. The text
+/// is that of `format!("{v}")` (plain) and `format!("{v:e}")` (exponent),
+/// the reference implementation [`put_fmt`]; the digits come from `zmij`
+/// (the same shortest round-trip digits, several times faster than going
+/// through `core::fmt`), whose text is decimal notation in [1e-5, 1e16)
+/// and `d.ddde±x` beyond. `v` must be finite.
+///
+/// The one difference of the two digit generators is a tie: an exact value
+/// halfway between two shortest candidates, where `core::fmt` takes the
+/// larger magnitude and `zmij` the even last digit (2236729633436452.25 is
+/// one). Writing |v| = m·2^e with m odd and I = 10·d + 5 the odd midpoint
+/// of the n shortest digits d, a tie is |v| = I·10^q: the powers of two
+/// cancel only if e = q ≥ 0, or e = q = −s < 0 with m·5^s = I < 10^19,
+/// which needs s ≤ 27. So a value that is not a multiple of 2^−27
+/// ([`tie_possible`]) never ties; the others (0.5, 2.0, integers: exact
+/// binary fractions) are written by `core::fmt`.
+fn put(line: &mut String, v: f64, buf: &mut zmij::Buffer) {
+    let a = v.abs();
+    if a == 0.0 {
+        line.push_str(if v.is_sign_negative() { "-0" } else { "0" });
+        return;
+    }
+    if tie_possible(v) {
+        put_fmt(line, v);
+        return;
+    }
+    let s = buf.format_finite(v);
+    if (1e-4..1e9).contains(&a) {
+        // decimal notation, as `{v}` (which has no `.0`)
+        line.push_str(s.strip_suffix(".0").unwrap_or(s));
+    } else if a < 1e-5 {
+        // `d.ddde-x`, as `{v:e}`
+        line.push_str(s);
+    } else {
+        relayout_exp(line, s);
+    }
+}
+
+/// `zmij`'s decimal (or `e+x`) text of a number beyond the plain range, in
+/// `{v:e}` form: the significant digits `d.ddd`, then `e` and the exponent.
+fn relayout_exp(line: &mut String, s: &str) {
+    let (neg, body) = match s.strip_prefix('-') {
+        Some(b) => (true, b),
+        None => (false, s),
+    };
+    let (mant, exp) = match body.split_once('e') {
+        Some((m, e)) => (m, e.trim_start_matches('+').parse::<i32>().unwrap_or(0)),
+        None => (body, 0),
+    };
+    let (int, frac) = mant.split_once('.').unwrap_or((mant, ""));
+    let mut digits = [0u8; 40];
+    let mut n = 0;
+    let mut lead = 0i32;
+    for &b in int.as_bytes().iter().chain(frac.as_bytes()) {
+        if n == 0 && b == b'0' {
+            lead += 1;
+        } else if n < digits.len() {
+            digits[n] = b;
+            n += 1;
+        }
+    }
+    while n > 1 && digits[n - 1] == b'0' {
+        n -= 1;
+    }
+    let e10 = int.len() as i32 - 1 - lead + exp;
+    if neg {
+        line.push('-');
+    }
+    line.push(char::from(digits[0]));
+    if n > 1 {
+        line.push('.');
+        for &b in &digits[1..n] {
+            line.push(char::from(b));
+        }
+    }
+    line.push('e');
+    line.push_str(itoa_i32(e10).as_str());
+}
+
+/// Can |v| = m·2^e tie (see [`put`]): is it a multiple of 2^−27?
+fn tie_possible(v: f64) -> bool {
+    let bits = v.to_bits() & !(1u64 << 63);
+    let (be, frac) = ((bits >> 52) as i32, bits & ((1u64 << 52) - 1));
+    let (m, e) = if be == 0 {
+        (frac, -1074)
+    } else {
+        (frac | (1u64 << 52), be - 1075)
+    };
+    m != 0 && m.trailing_zeros() as i32 + e >= -27
+}
+
+/// A small integer as text, without allocating.
+struct SmallInt {
+    b: [u8; 12],
+    start: usize,
+}
+
+impl SmallInt {
+    fn as_str(&self) -> &str {
+        std::str::from_utf8(&self.b[self.start..]).unwrap_or("0")
+    }
+}
+
+fn itoa_i32(v: i32) -> SmallInt {
+    let mut b = [0u8; 12];
+    let mut i = b.len();
+    let neg = v < 0;
+    let mut u = v.unsigned_abs();
+    loop {
+        i -= 1;
+        b[i] = b'0' + (u % 10) as u8;
+        u /= 10;
+        if u == 0 {
+            break;
+        }
+    }
+    if neg {
+        i -= 1;
+        b[i] = b'-';
+    }
+    SmallInt { b, start: i }
+}
+
+/// The reference text of one number (what [`put`] must write).
+fn put_fmt(line: &mut String, v: f64) {
     use std::fmt::Write as _;
     let a = v.abs();
     // writing into a String cannot fail
@@ -461,7 +584,11 @@ impl LogWriter {
     /// is an error (nothing of the row is written).
     pub fn write(&mut self, r: &LogRow) -> Result<(), LogCsvError> {
         let line = self.rows + 2;
-        for c in &LOG_SCHEMA {
+        // each value computed once: checked, then formatted (the line is
+        // written only whole, after the time check)
+        self.line.clear();
+        let mut digits = zmij::Buffer::new();
+        for (j, c) in LOG_SCHEMA.iter().enumerate() {
             let v = c.value(r);
             if !v.is_finite() {
                 return Err(LogCsvError::NonFiniteValue {
@@ -472,6 +599,10 @@ impl LogWriter {
                     t_s: r.t_s,
                 });
             }
+            if j > 0 {
+                self.line.push(',');
+            }
+            put(&mut self.line, v, &mut digits);
         }
         if r.t_s <= self.last_t {
             return Err(LogCsvError::TimeNotIncreasing {
@@ -480,13 +611,6 @@ impl LogWriter {
                 t_s: r.t_s,
                 previous_s: self.last_t,
             });
-        }
-        self.line.clear();
-        for (j, c) in LOG_SCHEMA.iter().enumerate() {
-            if j > 0 {
-                self.line.push(',');
-            }
-            put(&mut self.line, c.value(r));
         }
         self.line.push('\n');
         self.out
@@ -853,4 +977,86 @@ pub fn read_log_csv_with(path: &Path, required: &[&str]) -> Result<LogTable, Log
         names,
         columns,
     })
+}
+
+#[cfg(test)]
+mod format_tests {
+    use super::{put, put_fmt};
+
+    fn same(v: f64, buf: &mut zmij::Buffer) {
+        let (mut a, mut b) = (String::new(), String::new());
+        put(&mut a, v, buf);
+        put_fmt(&mut b, v);
+        assert_eq!(a, b, "{v:?} (bits {:#x})", v.to_bits());
+        assert_eq!(a.parse::<f64>().map(f64::to_bits), Ok(v.to_bits()), "{a}");
+    }
+
+    #[test]
+    fn the_fast_formatter_writes_the_text_of_core_fmt() {
+        let mut buf = zmij::Buffer::new();
+        let mut special = vec![
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.1,
+            1e-4,
+            1e-4 * (1.0 - f64::EPSILON),
+            1e9,
+            1e9 * (1.0 - f64::EPSILON / 2.0),
+            999_999_999.999_999_9,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            5e-324,
+            -5e-324,
+            123_456_789.0,
+            0.000_123_4,
+            1e16,
+            1e15,
+            1e21,
+            1e22,
+            1e-5,
+            2.5e-7,
+            0.3,
+            2.0f64.powi(60),
+            std::f64::consts::PI,
+        ];
+        for e in -324..=308 {
+            let p: f64 = format!("1e{e}").parse().unwrap_or(1.0);
+            special.extend([p, -p, p * 3.0, p / 7.0]);
+        }
+        for v in special {
+            if v.is_finite() {
+                same(v, &mut buf);
+            }
+        }
+        // random bit patterns (every magnitude) and random values of log
+        // magnitudes (-10..10): splitmix64
+        let mut s: u64 = 0x1234_5678;
+        let mut next = || {
+            s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = s;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^ (z >> 31)
+        };
+        for _ in 0..300_000 {
+            let v = f64::from_bits(next());
+            if v.is_finite() {
+                same(v, &mut buf);
+            }
+            let u = (next() >> 11) as f64 / 2f64.powi(53);
+            let w = (u - 0.5) * 10f64.powf((u * 20.0 - 10.0).round());
+            same(w, &mut buf);
+            // the magnitudes of a log, 1e-6 .. 1e14, uniformly in log
+            let u2 = (next() >> 11) as f64 / 2f64.powi(53);
+            same(
+                10f64.powf(u2 * 20.0 - 6.0) * if u2 > 0.5 { -1.0 } else { 1.0 },
+                &mut buf,
+            );
+            // few fraction bits: integers and halves, quarters, ... near 1e13
+            let m = (next() >> 20) as f64;
+            same(m / f64::from(1u32 << (next() % 12)), &mut buf);
+        }
+    }
 }

@@ -125,7 +125,7 @@ fn one_and_two_threads_give_identical_runs_csv() {
     for f in ["stats.json", "stats.md", "campaign.toml", "manifest.json"] {
         assert!(a.join(f).exists(), "{f}");
     }
-    assert!(!a.join("runs.partial.csv").exists());
+    assert!(a.join("runs.bin").exists());
 }
 
 #[test]
@@ -189,6 +189,54 @@ fn two_shards_merged_equal_the_unsharded_campaign() {
 }
 
 #[test]
+fn traces_only_for_the_runs_asked_for() {
+    let c = small();
+    let few = c
+        .clone()
+        .with_overrides(&CampaignOverrides {
+            trace_runs: Some(3),
+            ..Default::default()
+        })
+        .unwrap();
+    assert_ne!(few.hash, c.hash);
+    assert_eq!(few.overrides, ["--trace-runs 3"]);
+    assert!(few.traced(2) && !few.traced(3) && c.traced(7));
+    let (all, part, s0, s1, merged) = (
+        tmp("tr-all"),
+        tmp("tr-3"),
+        tmp("tr-s0"),
+        tmp("tr-s1"),
+        tmp("tr-m"),
+    );
+    let ra = run(&c, &RunOptions::default(), &all, None).unwrap();
+    let rp = run(&few, &RunOptions::default(), &part, None).unwrap();
+    // the same runs and statistics (another hash); traces of runs 0..3 only,
+    // those of the full campaign
+    assert_eq!(read(&all.join("runs.csv")), read(&part.join("runs.csv")));
+    assert_eq!(ra.stats.metrics, rp.stats.metrics);
+    let t_all = read(&all.join("traces.csv"));
+    let t_part = read(&part.join("traces.csv"));
+    let first3: Vec<&str> = t_all
+        .lines()
+        .filter(|l| l.starts_with("index") || ["0,", "1,", "2,"].iter().any(|p| l.starts_with(p)))
+        .collect();
+    assert_eq!(t_part.lines().collect::<Vec<_>>(), first3);
+    assert!(t_part.lines().count() > 3);
+    // sharded and merged: the same folder
+    for (k, d) in [(0, &s0), (1, &s1)] {
+        let o = RunOptions {
+            shard: Some(Shard { k, m: 2 }),
+            ..Default::default()
+        };
+        run(&few, &o, d, None).unwrap();
+    }
+    merge(&[s1.to_path_buf(), s0.to_path_buf()], &merged).unwrap();
+    for f in ["runs.csv", "traces.csv", "stats.json", "stats.md"] {
+        assert_eq!(read(&part.join(f)), read(&merged.join(f)), "{f}");
+    }
+}
+
+#[test]
 fn rerun_skips_finished_runs() {
     let c = small();
     let (d, full) = (tmp("resume"), tmp("resume-full"));
@@ -203,17 +251,25 @@ fn rerun_skips_finished_runs() {
     )
     .unwrap();
     assert_eq!((first.flown, first.skipped), (3, 0));
-    // an interrupted run leaves a partial file: rows of finished runs,
-    // maybe a torn last line; simulate one finished run 5 and a torn row
-    let row5 = {
-        run(&c, &RunOptions::default(), &full, None).unwrap();
-        read(&full.join("runs.csv"))
-            .lines()
-            .find(|l| l.starts_with("5,"))
-            .unwrap()
-            .to_string()
+    // an interrupted campaign leaves the slots of the runs that finished,
+    // in any order, maybe a torn one: copy run 5's slot (and its trace) from
+    // the full campaign, and half of run 6's
+    run(&c, &RunOptions::default(), &full, None).unwrap();
+    let runs_bin = std::fs::read(full.join("runs.bin")).unwrap();
+    let traces_bin = std::fs::read(full.join("traces.bin")).unwrap();
+    let (rs, ts) = (runs_bin.len() / 8, 40 * c.footprint().trace_points as usize);
+    assert_eq!(rs * 8, runs_bin.len());
+    let patch = |file: &str, at: usize, bytes: &[u8]| {
+        use std::os::unix::fs::FileExt;
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(d.join(file))
+            .unwrap();
+        f.write_all_at(bytes, at as u64).unwrap();
     };
-    std::fs::write(d.join("runs.partial.csv"), format!("{row5}\n6,123,45")).unwrap();
+    patch("traces.bin", 5 * ts, &traces_bin[5 * ts..6 * ts]);
+    patch("runs.bin", 5 * rs, &runs_bin[5 * rs..6 * rs]);
+    patch("runs.bin", 6 * rs, &runs_bin[6 * rs..6 * rs + rs / 2]);
     let second = run(&c, &RunOptions::default(), &d, None).unwrap();
     assert_eq!((second.flown, second.skipped), (4, 4));
     assert_eq!(read(&d.join("runs.csv")), read(&full.join("runs.csv")));
@@ -424,54 +480,104 @@ fn typed_outcomes_parse_and_refuse_inconsistent_words() {
 }
 
 #[test]
-fn a_runs_csv_with_bad_typed_columns_or_header_is_refused() {
+fn a_torn_or_corrupted_slot_is_flown_again_and_a_misplaced_one_is_refused() {
     let c = small();
-    let d = tmp("badcsv");
-    run(
+    let d = tmp("badslot");
+    let first = run(
         &c,
         &RunOptions {
-            runs: Some(2),
+            runs: Some(3),
             ..Default::default()
         },
         &d,
         None,
     )
     .unwrap();
+    assert_eq!(first.flown, 3);
     let csv = read(&d.join("runs.csv"));
-    let row1 = csv
-        .lines()
-        .find(|l| l.contains(",completed,completed,"))
-        .unwrap()
-        .to_string();
-    // a completed row rewritten as diverged with termination `completed`
-    let bad = row1.replacen(",completed,completed,", ",diverged,completed,", 1);
-    assert_ne!(bad, row1);
-    std::fs::write(d.join("runs.partial.csv"), format!("{bad}\n")).unwrap();
-    let e = run(&c, &RunOptions::default(), &d, None).unwrap_err();
+    let bin = std::fs::read(d.join("runs.bin")).unwrap();
+    let rs = bin.len() / 3;
+    use std::os::unix::fs::FileExt;
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .open(d.join("runs.bin"))
+        .unwrap();
+    // one bit of run 1's metrics flipped: its checksum fails, it is flown again
+    f.write_all_at(&[bin[rs + rs - 3] ^ 4], (2 * rs - 3) as u64)
+        .unwrap();
+    let again = run(
+        &c,
+        &RunOptions {
+            runs: Some(3),
+            ..Default::default()
+        },
+        &d,
+        None,
+    )
+    .unwrap();
+    assert_eq!((again.flown, again.skipped), (1, 2));
+    assert_eq!(read(&d.join("runs.csv")), csv);
+    // one bit of run 2's trace flipped: the same
+    let t = std::fs::read(d.join("traces.bin")).unwrap();
+    let tf = std::fs::OpenOptions::new()
+        .write(true)
+        .open(d.join("traces.bin"))
+        .unwrap();
+    let ts = 40 * c.footprint().trace_points as usize;
+    tf.write_all_at(&[t[2 * ts + 9] ^ 1], (2 * ts + 9) as u64)
+        .unwrap();
+    let again = run(
+        &c,
+        &RunOptions {
+            runs: Some(3),
+            ..Default::default()
+        },
+        &d,
+        None,
+    )
+    .unwrap();
+    assert_eq!((again.flown, again.skipped), (1, 2));
+    assert_eq!(read(&d.join("runs.csv")), csv);
+    // a valid slot in the place of another run (untraced runs: a slot's
+    // checksum covers its own trace slot): an error naming file and slot
+    let c = Campaign::from_toml_str(
+        &SMALL.replace("trace_rate_hz = 20.0", "trace_rate_hz = 0.0"),
+        "n.toml",
+        None,
+    )
+    .unwrap();
+    let d = tmp("badslot-untraced");
+    run(
+        &c,
+        &RunOptions {
+            runs: Some(3),
+            ..Default::default()
+        },
+        &d,
+        None,
+    )
+    .unwrap();
+    let bin = std::fs::read(d.join("runs.bin")).unwrap();
+    let rs = bin.len() / 3;
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .open(d.join("runs.bin"))
+        .unwrap();
+    f.write_all_at(&bin[..rs], rs as u64).unwrap();
+    let e = run(
+        &c,
+        &RunOptions {
+            runs: Some(3),
+            ..Default::default()
+        },
+        &d,
+        None,
+    )
+    .unwrap_err();
     let msg = e.to_string();
-    assert!(matches!(e, McError::Csv { line: 1, .. }), "{msg}");
+    assert!(matches!(e, McError::Store { slot: 1, .. }), "{msg}");
     assert!(
-        msg.contains("runs.partial.csv") && msg.contains("termination"),
-        "{msg}"
-    );
-    // a non-finite metric is never read back as a number
-    let nan = format!("{},NaN", row1.rsplit_once(',').unwrap().0);
-    std::fs::write(d.join("runs.partial.csv"), format!("{nan}\n")).unwrap();
-    let msg = run(&c, &RunOptions::default(), &d, None)
-        .unwrap_err()
-        .to_string();
-    assert!(
-        msg.contains("effort_rms_S_tr") && msg.contains("not a finite number"),
-        "{msg}"
-    );
-    // a header with a column twice names it and both positions
-    let header = csv.lines().next().unwrap().replace("wind_seed", "index");
-    std::fs::write(d.join("runs.partial.csv"), format!("{header}\n")).unwrap();
-    let msg = run(&c, &RunOptions::default(), &d, None)
-        .unwrap_err()
-        .to_string();
-    assert!(
-        msg.contains("column `index` appears twice") && msg.contains("columns 1 and 2"),
+        msg.contains("runs.bin") && msg.contains("holds run 0"),
         "{msg}"
     );
 }
@@ -498,10 +604,10 @@ fn a_key_dispersed_twice_is_an_error_naming_the_file_key_and_both_entries() {
 }
 
 #[test]
-fn runs_beyond_the_memory_budget_are_refused_before_anything_is_written() {
+fn runs_beyond_the_disk_budget_are_refused_before_anything_is_written() {
     let c = small();
     let d = tmp("toomany");
-    // a billion runs: refused at once, from the machine's own figure
+    // a billion runs: refused at once, from the file system's own figure
     let e = run(
         &c,
         &RunOptions {
@@ -525,14 +631,14 @@ fn runs_beyond_the_memory_budget_are_refused_before_anything_is_written() {
     );
     assert!(msg.contains("at most") && msg.contains("--shard"), "{msg}");
     assert!(!d.exists(), "nothing written");
-    // a budget for exactly three runs with one thread: 3 fly, 4 do not
-    let mem = c.run_memory();
-    assert!(mem.trace_points >= 20, "1 s at 20 Hz: {mem:?}");
-    let budget = mem.bytes_per_flight + 3 * mem.bytes_per_run;
+    // a budget for exactly three runs: 3 fly, 4 do not
+    let f = c.footprint();
+    assert!(f.trace_points >= 20, "1 s at 20 Hz: {f:?}");
+    assert!(f.disk_bytes_per_traced_run > f.disk_bytes_per_run);
+    let budget = 3 * f.disk_bytes_per_traced_run;
     let opts = |runs| RunOptions {
         runs: Some(runs),
-        threads: Some(1),
-        memory_budget_bytes: Some(budget),
+        disk_budget_bytes: Some(budget),
         ..Default::default()
     };
     let e = run(&c, &opts(4), &d, None).unwrap_err();
@@ -549,6 +655,24 @@ fn runs_beyond_the_memory_budget_are_refused_before_anything_is_written() {
     );
     assert!(!d.exists());
     assert_eq!(run(&c, &opts(3), &d, None).unwrap().flown, 3);
+    // the estimate bounds what is written
+    let written: u64 = std::fs::read_dir(&*d)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            [
+                "runs.bin",
+                "traces.bin",
+                "reasons.bin",
+                "runs.csv",
+                "traces.csv",
+            ]
+            .iter()
+            .any(|n| p.ends_with(n))
+        })
+        .map(|p| std::fs::metadata(p).unwrap().len())
+        .sum();
+    assert!(written <= budget, "{written} > {budget}");
     // a shard counts only its own runs: 7 runs in shards of 2 → 4 and 3
     let s1 = tmp("toomany-s1");
     let o = RunOptions {
@@ -556,6 +680,16 @@ fn runs_beyond_the_memory_budget_are_refused_before_anything_is_written() {
         ..opts(7)
     };
     assert_eq!(run(&c, &o, &s1, None).unwrap().flown, 3);
+    // untraced runs cost less: with trace_runs = 1, four fit
+    let few = c
+        .clone()
+        .with_overrides(&CampaignOverrides {
+            trace_runs: Some(1),
+            ..Default::default()
+        })
+        .unwrap();
+    let s2 = tmp("toomany-untraced");
+    assert_eq!(run(&few, &opts(4), &s2, None).unwrap().flown, 4);
 }
 
 #[test]
@@ -583,9 +717,9 @@ fn an_unwritable_output_folder_is_an_error_before_any_run_is_flown() {
     assert!(e.to_string().contains("a-file/out"), "{e}");
     // a file in the folder that cannot be written (a directory in its place)
     let d2 = d.join("out2");
-    std::fs::create_dir_all(d2.join("runs.partial.csv")).unwrap();
+    std::fs::create_dir_all(d2.join("runs.bin")).unwrap();
     let e = run(&c, &RunOptions::default(), &d2, Some(&progress)).unwrap_err();
-    assert!(e.to_string().contains("runs.partial.csv"), "{e}");
+    assert!(e.to_string().contains("runs.bin"), "{e}");
     assert_eq!(flown.load(std::sync::atomic::Ordering::Relaxed), 0);
 }
 
@@ -622,6 +756,7 @@ fn overrides_are_validated_and_make_another_campaign() {
         seed,
         duration_s,
         params,
+        trace_runs: None,
     };
     let s = c.clone().with_overrides(&o(Some(12), None, None)).unwrap();
     assert_eq!(s.seed, 12);

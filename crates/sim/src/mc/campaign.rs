@@ -97,6 +97,8 @@ struct CampaignFile {
     #[serde(default = "default_trace_rate")]
     trace_rate_hz: f64,
     #[serde(default)]
+    trace_runs: Option<usize>,
+    #[serde(default)]
     dispersion: Vec<Dispersion>,
 }
 
@@ -121,6 +123,8 @@ pub struct Campaign {
     pub disperse_sensor_seed: bool,
     /// Rate of the kept output traces (Hz, 0 = none).
     pub trace_rate_hz: f64,
+    /// Keep traces only for the runs with an index below this (`None`: all).
+    pub trace_runs: Option<usize>,
     /// Dispersions, in file order.
     pub dispersions: Vec<Dispersion>,
     /// The campaign file's text (copied into the output folder).
@@ -143,6 +147,8 @@ pub struct CampaignOverrides {
     /// Nominal plant parameters (a `helicon params` TOML file) instead of
     /// the scenario's `params` file or the Bergen Twin.
     pub params: Option<PathBuf>,
+    /// Keep traces only for the runs with an index below this.
+    pub trace_runs: Option<usize>,
 }
 
 /// Find a parameter by its `section.key`.
@@ -281,6 +287,7 @@ impl Campaign {
             disperse_wind_seed: raw.disperse_wind_seed,
             disperse_sensor_seed: raw.disperse_sensor_seed,
             trace_rate_hz: raw.trace_rate_hz,
+            trace_runs: raw.trace_runs,
             dispersions: raw.dispersion,
             source: text.to_string(),
             hash: String::new(),
@@ -309,6 +316,10 @@ impl Campaign {
             self.nominal = Params::from_file(p)?;
             self.overrides.push(format!("--params {}", p.display()));
         }
+        if let Some(n) = o.trace_runs {
+            self.trace_runs = Some(n);
+            self.overrides.push(format!("--trace-runs {n}"));
+        }
         if !self.overrides.is_empty() {
             self.hash = self.compute_hash("<overrides>")?;
         }
@@ -328,6 +339,10 @@ impl Campaign {
             self.disperse_wind_seed, self.disperse_sensor_seed
         );
         let _ = writeln!(s, "trace={}", self.trace_rate_hz);
+        if let Some(n) = self.trace_runs {
+            // only when given: the hashes of campaigns without it are unchanged
+            let _ = writeln!(s, "trace_runs={n}");
+        }
         for d in &self.dispersions {
             let _ = writeln!(s, "{d:?}");
         }

@@ -12,6 +12,7 @@
 //! disperse_wind_seed = true       # default true
 //! disperse_sensor_seed = true     # default true
 //! trace_rate_hz = 10.0            # outputs kept for the envelopes (0: none)
+//! trace_runs = 1000               # traces only for runs 0..1000 (default: all)
 //!
 //! [[dispersion]]
 //! param = "body.mass_kg"          # any `helicon params` key, `section.key`
@@ -60,19 +61,23 @@
 //! (the effective base scenario and nominal parameters), `manifest.json`
 //! (format version, name, hash, runs, command-line overrides),
 //! `runs.csv` (one row per run, by index), `traces.csv` (vn, ve, vd, ψ of
-//! every run at `trace_rate_hz`), `stats.json` / `stats.md` (p5/p50/p95 of
-//! each metric over completed runs, failures by typed class),
+//! every traced run at `trace_rate_hz`), `stats.json` / `stats.md`
+//! (p5/p50/p95 of each metric over completed runs, failures by typed class),
 //! `hist_*.png` (metric histograms) and `envelope_*.png` (p5/p50/p95 of each
-//! output over time). While running, finished runs are appended to
-//! `runs.partial.csv` / `traces.partial.csv`; a rerun into the same folder
-//! skips every run already recorded there (resume). The formats are those of
-//! [`FORMAT_VERSION`].
+//! output over time), and the run store `runs.bin` / `traces.bin` /
+//! `reasons.bin` (one binary slot per run, written as each run finishes); a
+//! rerun into the same folder skips every run already in the store
+//! (resume). The formats are those of [`FORMAT_VERSION`].
 //!
-//! # Memory
+//! # Memory and disk
 //!
-//! The records and traces of all runs stay in memory until the statistics
-//! are written; nothing else grows with the number of runs. [`run`] refuses
-//! more runs than [`memory_budget`] holds at [`Campaign::run_memory`] each.
+//! Memory does not grow with the number of runs: each run goes to the
+//! store on disk when it finishes, and the outputs are written from the
+//! store in passes in index order, with the statistics' percentiles exact
+//! (radix selection over the store, not an estimate). What grows is the
+//! disk: [`run`] refuses more runs than the output folder's file system
+//! holds at [`Campaign::footprint`] each ([`disk_budget`]). `trace_runs`
+//! keeps traces only for the runs with a lower index.
 //!
 //! # Sharding
 //!
@@ -86,6 +91,8 @@ mod draws;
 mod record;
 mod report;
 mod runner;
+mod select;
+mod slots;
 mod stats;
 mod store;
 
@@ -94,7 +101,7 @@ pub use draws::*;
 pub use record::*;
 pub use runner::*;
 pub use stats::*;
-pub use store::{csv_header, merge};
+pub use store::{FolderProgress, csv_header, folder_progress, merge};
 
 use crate::closed_loop::ClosedLoopError;
 use crate::plot::PlotError;
@@ -111,7 +118,14 @@ use helicon_model::ParamError;
 ///   failing stage); `stats.json` has `format_version` and `failures` (a list
 ///   of `{outcome, termination, runs}`) instead of `reasons`; `manifest.json`
 ///   has `format_version` and `overrides`; `params.toml` is written.
-pub const FORMAT_VERSION: u32 = 2;
+/// * 3: the run store (`runs.bin`, `traces.bin`, `reasons.bin`: one binary
+///   slot per run, written as runs finish and read back in index order)
+///   replaces `runs.partial.csv` / `traces.partial.csv`; `manifest.json` has
+///   `trace_points` and `trace_runs`. `runs.csv`, `traces.csv`, `stats.json`
+///   and `stats.md` keep their columns and fields (means are now
+///   compensated sums in index order: they may differ from version 2's in
+///   the last digit).
+pub const FORMAT_VERSION: u32 = 3;
 
 /// Errors of a campaign (its file, its output folder, merging). A run that
 /// fails is an outcome recorded in `runs.csv`, not an error.
@@ -175,26 +189,33 @@ pub enum McError {
     /// `merge` without a folder.
     #[error("merge: give at least one shard folder")]
     NoFolders,
-    /// More runs than the memory of this machine holds (the records and
-    /// traces of every run are kept until the statistics are written).
+    /// More runs than the disk holds (the run store and the text outputs).
     #[error(
-        "{runs} runs: at most {max_runs} fit in the memory this campaign may use ({budget_mib} MiB: {available}), at {bytes_per_run} bytes per run (its record and {trace_points}-point trace, kept until the statistics are written) after {working_mib} MiB for the flights in progress; use shards (--shard K/M on several machines, then `helicon mc merge`), fewer runs or a lower trace_rate_hz"
+        "{runs} runs: at most {max_runs} fit on the disk this campaign may use ({budget_mib} MiB {available}), at {bytes_per_run} bytes per run (its record and {trace_points}-point trace in the run store, runs.csv and traces.csv); use shards (--shard K/M on several machines, then `helicon mc merge`), fewer runs, `trace_runs` or a lower trace_rate_hz"
     )]
     TooManyRuns {
         /// Runs asked for (in this shard).
         runs: usize,
         /// Runs that fit.
         max_runs: usize,
-        /// Memory kept per run (bytes).
+        /// Disk bytes per run (traced or not, on average).
         bytes_per_run: u64,
-        /// Trace samples kept per run.
+        /// Trace samples kept per traced run.
         trace_points: u64,
-        /// Memory of the flights in progress (MiB).
-        working_mib: u64,
-        /// Memory budget (MiB).
+        /// Disk budget (MiB).
         budget_mib: u64,
         /// Where the budget comes from.
         available: String,
+    },
+    /// A slot of the run store that cannot be what it claims.
+    #[error("{file}: slot {slot}: {message}")]
+    Store {
+        /// File.
+        file: String,
+        /// Slot (0-based).
+        slot: usize,
+        /// Message.
+        message: String,
     },
     /// A statistic that is not a finite number (never written as `null`).
     #[error("{file}: `{field}` = {value} is not finite; nothing written")]

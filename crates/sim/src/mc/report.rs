@@ -1,98 +1,189 @@
-//! Writing the campaign outputs: runs.csv, traces.csv, statistics, plots.
+//! Writing the campaign outputs from the run store: runs.csv, traces.csv,
+//! statistics, plots. Streamed in index order: memory independent of the
+//! number of runs (a few slots, the statistics' counters, one histogram and
+//! one envelope grid).
 
+use super::select::percentiles;
+use super::slots::{Slot, Store};
+use super::stats::{PERCENTILES, SELECT_BITS, StatsAcc, feed_metrics};
 use super::store::{
-    Manifest, RUNS, TRACES, write_file, write_json, write_runs_csv, write_traces_csv,
+    Manifest, RUNS, TRACE_HEADER, TRACES, create, csv_line, finish_file, io_err, record_fields,
+    trace_lines, write_file, write_json,
 };
-use super::{METRIC_NAMES, McError, RunRecord, Stats, TracePoint, percentile};
-use crate::plot::{Histogram, LinePlot, Series};
+use super::{METRIC_NAMES, McError, Stats, TracePoint, csv_header};
+use crate::plot::{LinePlot, Series};
 use crate::scenario::OUTPUTS;
-use std::collections::BTreeMap;
+use std::io::Write as _;
 use std::path::Path;
 
-/// Write `runs.csv`, `traces.csv`, statistics and plots from all records.
-pub(super) fn finish(
-    manifest: &Manifest,
-    records: &BTreeMap<usize, RunRecord>,
-    traces: &BTreeMap<usize, Vec<TracePoint>>,
-    out: &Path,
-) -> Result<Stats, McError> {
-    write_runs_csv(&out.join(RUNS), &manifest.dispersed, records.values())?;
-    write_traces_csv(&out.join(TRACES), traces)?;
-    let recs: Vec<&RunRecord> = records.values().collect();
-    let stats = Stats::from_records(&manifest.name, &manifest.hash, &recs);
+/// Bits per pass of the envelopes' exact percentile selection (8 passes;
+/// 4 outputs × trace points × 6 ranks × 256 counters).
+const ENVELOPE_BITS: u32 = 8;
+
+/// Every valid run of `store`, in index order, with its slot and trace length.
+fn each_run(
+    store: &Store,
+    mut f: impl FnMut(usize, &super::RunRecord, usize) -> Result<(), McError>,
+) -> Result<(), McError> {
+    let mut buf = Vec::new();
+    for j in 0..store.slots()? {
+        if let Slot::Run(r, tlen) = store.get(j, &mut buf)? {
+            f(j, &r, tlen)?;
+        }
+    }
+    Ok(())
+}
+
+/// Write `runs.csv`, `traces.csv`, statistics and plots from the store.
+pub(super) fn finish(manifest: &Manifest, store: &Store, out: &Path) -> Result<Stats, McError> {
+    let runs_path = out.join(RUNS);
+    let traces_path = out.join(TRACES);
+    let mut wr = create(&runs_path)?;
+    let mut wt = create(&traces_path)?;
+    wr.write_all(csv_line(&csv_header(&manifest.dispersed))?.as_bytes())
+        .map_err(|e| io_err(&runs_path, "write", e))?;
+    writeln!(wt, "{TRACE_HEADER}").map_err(|e| io_err(&traces_path, "write", e))?;
+    let mut acc = StatsAcc::new();
+    // envelope grid: the time of sample k (from the lowest run having it)
+    let mut env_t: Vec<Option<f64>> = vec![None; store.layout().trace_points];
+    let mut env_len = 0usize;
+    let mut tr: Vec<TracePoint> = Vec::new();
+    each_run(store, |j, r, tlen| {
+        wr.write_all(csv_line(&record_fields(r))?.as_bytes())
+            .map_err(|e| io_err(&runs_path, "write", e))?;
+        acc.add(r);
+        if tlen > 0 {
+            store.trace(j, tlen, &mut tr)?;
+            wt.write_all(trace_lines(r.index, &tr).as_bytes())
+                .map_err(|e| io_err(&traces_path, "write", e))?;
+            env_len = env_len.max(tlen);
+            for (k, p) in tr.iter().enumerate() {
+                env_t[k].get_or_insert(p.t_s);
+            }
+        }
+        Ok(())
+    })?;
+    finish_file(&runs_path, wr)?;
+    finish_file(&traces_path, wt)?;
+    let (pct, _) = percentiles(METRIC_NAMES.len(), &PERCENTILES, SELECT_BITS, &mut |feed| {
+        each_run(store, |_, r, _| {
+            feed_metrics(r, feed);
+            Ok(())
+        })
+    })?;
+    let hist = histograms(store, &acc)?;
+    let stats = acc.finish(&manifest.name, &manifest.hash, &pct);
     let json = out.join("stats.json");
     stats.check_finite(&json.display().to_string())?;
     write_json(&json, &stats)?;
     write_file(&out.join("stats.md"), &stats.to_markdown())?;
-    plots(&recs, traces, out)?;
+    for h in &hist {
+        plot_histogram(h, out)?;
+    }
+    envelopes(store, &env_t[..env_len], out)?;
     Ok(stats)
 }
 
-fn plots(
-    records: &[&RunRecord],
-    traces: &BTreeMap<usize, Vec<TracePoint>>,
-    out: &Path,
-) -> Result<(), McError> {
-    // histograms of the rms and max errors and settling times, each saying
-    // how many of the runs it holds and why the others are not in it
-    let completed = records.iter().filter(|r| r.completed()).count();
+/// A histogram of one metric over the completed runs.
+struct Histogram {
+    metric: &'static str,
+    lo: f64,
+    width: f64,
+    counts: Vec<usize>,
+}
+
+/// The histograms (one pass over the store) of the rms, max and settling
+/// metrics with at least two values: √n bins (5 to 50) over [min, max].
+fn histograms(store: &Store, acc: &StatsAcc) -> Result<Vec<Histogram>, McError> {
+    let mut hs: Vec<(usize, Histogram)> = Vec::new();
     for (j, m) in METRIC_NAMES.iter().enumerate() {
         if !(m.ends_with("_rms") || m.ends_with("_settling_s") || m.ends_with("_max_abs")) {
             continue;
         }
-        let v: Vec<f64> = records
-            .iter()
-            .filter(|r| r.completed())
-            .filter_map(|r| r.metrics.get(j).copied().flatten())
-            .filter(|v| v.is_finite())
-            .collect();
-        if v.len() < 2 {
+        let a = &acc.metrics[j];
+        if a.n < 2 {
             continue;
         }
-        let (label, what) = metric_axis(m);
-        let mut h = Histogram::new(
-            &format!("{what}: {} of {} runs", v.len(), records.len()),
-            &label,
-            &v,
-        );
-        h.notes.push(format!("{} runs flown", records.len()));
-        h.notes.push(format!("{completed} completed"));
-        let missing = completed - v.len();
-        if missing > 0 {
-            h.notes
-                .push(format!("{missing} completed without a value:"));
-            h.notes.push(if m.ends_with("_settling_s") {
-                "  not settled before the end".to_string()
-            } else {
-                "  no step on this output".to_string()
-            });
-        }
-        h.write(&out.join(format!("hist_{m}.png")))?;
+        let bins = ((a.n as f64).sqrt().ceil() as usize).clamp(5, 50);
+        let width = if a.hi > a.lo {
+            (a.hi - a.lo) / bins as f64
+        } else {
+            1.0
+        };
+        hs.push((
+            j,
+            Histogram {
+                metric: m,
+                lo: a.lo,
+                width,
+                counts: vec![0; bins],
+            },
+        ));
     }
-    // envelopes: p5 / p50 / p95 over the runs at each trace time
-    let Some(len) = traces.values().map(Vec::len).max() else {
-        return Ok(());
-    };
+    if hs.is_empty() {
+        return Ok(Vec::new());
+    }
+    each_run(store, |_, r, _| {
+        if r.completed() {
+            for (j, h) in &mut hs {
+                if let Some(x) = r.metrics.get(*j).copied().flatten()
+                    && x.is_finite()
+                {
+                    let b = (((x - h.lo) / h.width) as usize).min(h.counts.len() - 1);
+                    h.counts[b] += 1;
+                }
+            }
+        }
+        Ok(())
+    })?;
+    Ok(hs.into_iter().map(|(_, h)| h).collect())
+}
+
+/// `hist_<metric>.png`: the histogram as a step outline.
+fn plot_histogram(h: &Histogram, out: &Path) -> Result<(), McError> {
+    let (lo, w, m) = (h.lo, h.width, h.metric);
+    let mut pts = vec![(lo, 0.0)];
+    for (b, c) in h.counts.iter().enumerate() {
+        let x0 = lo + b as f64 * w;
+        pts.push((x0, *c as f64));
+        pts.push((x0 + w, *c as f64));
+    }
+    pts.push((lo + h.counts.len() as f64 * w, 0.0));
+    LinePlot::new(&format!("{m} (completed runs)"), m, "runs")
+        .series(Series::new(m, &pts))
+        .write(&out.join(format!("hist_{m}.png")))?;
+    Ok(())
+}
+
+/// `envelope_<output>.png`: p5 / p50 / p95 over the runs still flying at
+/// each trace sample `k` (times `grid`), exact.
+fn envelopes(store: &Store, grid: &[Option<f64>], out: &Path) -> Result<(), McError> {
+    let len = grid.len();
     if len < 2 {
         return Ok(());
     }
+    let mut tr: Vec<TracePoint> = Vec::new();
+    let (pct, _) = percentiles(len * 4, &PERCENTILES, ENVELOPE_BITS, &mut |feed| {
+        each_run(store, |j, _, tlen| {
+            if tlen > 0 {
+                store.trace(j, tlen, &mut tr)?;
+                for (k, p) in tr.iter().enumerate().take(len) {
+                    for (o, v) in p.output.iter().enumerate() {
+                        feed(k * 4 + o, *v);
+                    }
+                }
+            }
+            Ok(())
+        })
+    })?;
     let units = ["m/s", "m/s", "m/s", "rad"];
     for (o, name) in OUTPUTS.iter().enumerate() {
         let mut bands = [Vec::new(), Vec::new(), Vec::new()];
-        for k in 0..len {
-            let mut v: Vec<f64> = traces
-                .values()
-                .filter_map(|t| t.get(k).map(|p| p.output[o]))
-                .filter(|v| v.is_finite())
-                .collect();
-            let t = traces
-                .values()
-                .find_map(|t| t.get(k).map(|p| p.t_s))
-                .unwrap_or(0.0);
-            v.sort_by(f64::total_cmp);
-            for (b, p) in [0.05, 0.5, 0.95].iter().enumerate() {
-                if let Some(x) = percentile(&v, *p) {
-                    bands[b].push((t, x));
+        for (k, t) in grid.iter().enumerate() {
+            let t = t.unwrap_or(0.0);
+            for (b, band) in bands.iter_mut().enumerate() {
+                if let Some(x) = pct[k * 4 + o][b] {
+                    band.push((t, x));
                 }
             }
         }
@@ -107,38 +198,4 @@ fn plots(
         .write(&out.join(format!("envelope_{name}.png")))?;
     }
     Ok(())
-}
-
-/// The x label (with unit) and the title of a metric's histogram.
-fn metric_axis(metric: &str) -> (String, String) {
-    let (output, kind) = metric.split_once('_').unwrap_or((metric, ""));
-    let unit = if output == "psi" { "rad" } else { "m/s" };
-    let symbol = if output == "psi" { "ψ" } else { output };
-    match kind {
-        "settling_s" => (
-            format!("{symbol} settling time [s]"),
-            format!("{symbol} settling time"),
-        ),
-        "rms" => (
-            format!("{symbol} RMS error [{unit}]"),
-            format!("{symbol} RMS tracking error"),
-        ),
-        "max_abs" => (
-            format!("{symbol} largest |error| [{unit}]"),
-            format!("{symbol} largest tracking error"),
-        ),
-        _ => (metric.to_string(), metric.to_string()),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::metric_axis;
-
-    #[test]
-    fn histogram_axes_carry_units() {
-        assert_eq!(metric_axis("vd_settling_s").0, "vd settling time [s]");
-        assert_eq!(metric_axis("psi_rms").0, "ψ RMS error [rad]");
-        assert_eq!(metric_axis("vn_max_abs").0, "vn largest |error| [m/s]");
-    }
 }

@@ -1,11 +1,10 @@
 //! Flying runs: one run, a whole campaign (threads, shards, resume), and the
-//! memory bound on the number of runs.
+//! disk bound on the number of runs.
 
 use super::report::finish;
+use super::slots::{Layout, Slot, Store};
 use super::store::{
-    CAMPAIGN, MANIFEST, Manifest, PARAMS, RUNS, RUNS_PARTIAL, SCENARIO, TRACES, TRACES_PARTIAL,
-    check_manifest, csv_line, io_err, read_records, read_traces_into, record_fields, trace_lines,
-    write_file, write_json, write_runs_csv, write_traces_csv,
+    CAMPAIGN, MANIFEST, Manifest, PARAMS, SCENARIO, check_manifest, io_err, write_file, write_json,
 };
 use super::{
     Campaign, DesignMode, ErrorStage, FORMAT_VERSION, METRIC_NAMES, McError, RunOutput, RunRecord,
@@ -14,28 +13,30 @@ use super::{
 use crate::closed_loop::{
     ClosedLoopError, LogRow, Prepared, Termination, fly, prepare_with_params,
 };
-pub use crate::resources::memory_budget;
 use crate::scenario::{OUTPUTS, ScenarioError};
 use helicon_model::Model;
 use helicon_model::ParamError;
 use helicon_model::trim::{TrimOptions, TrimTarget, trim};
 use nalgebra::Vector3;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
-use std::io::Write as _;
 use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-/// Memory a campaign needs, from its scenario and trace rate.
+/// What a campaign needs per run and per flight, from its scenario, trace
+/// rate and `trace_runs`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct RunMemory {
-    /// Trace samples kept per run.
+pub struct RunFootprint {
+    /// Trace samples a traced run keeps (an upper bound).
     pub trace_points: u64,
-    /// Bytes kept per run until the statistics are written: its record, its
-    /// trace, their map entries and its share of the statistics' buffers.
-    pub bytes_per_run: u64,
-    /// Bytes of one flight in progress (its full log).
+    /// Bytes on disk per traced run: its slot and trace slot in the run
+    /// store and its rows of `runs.csv` and `traces.csv` (an estimate of
+    /// the text, at 26 bytes a number).
+    pub disk_bytes_per_traced_run: u64,
+    /// Bytes on disk per run without a trace.
+    pub disk_bytes_per_run: u64,
+    /// Bytes of memory of one flight in progress (its full log); a campaign
+    /// holds one per thread, whatever its number of runs.
     pub bytes_per_flight: u64,
 }
 
@@ -58,9 +59,15 @@ impl Campaign {
         (every as usize).max(1)
     }
 
-    /// The memory of one run kept until the end, and of one flight in
-    /// progress (upper bounds, from the sizes of the types).
-    pub fn run_memory(&self) -> RunMemory {
+    /// Does run `index` keep a trace (`trace_rate_hz > 0` and, with
+    /// `trace_runs`, an index below it)?
+    pub fn traced(&self, index: usize) -> bool {
+        self.trace_every_rows() > 0 && self.trace_runs.is_none_or(|n| index < n)
+    }
+
+    /// The disk and memory a campaign needs (upper bounds, from the sizes
+    /// of the slots and types).
+    pub fn footprint(&self) -> RunFootprint {
         let ts = self.nominal.control.sample_time_s;
         let samples = (self.scenario.duration_s / ts).round() + 1.0;
         let d = self.scenario.log.decimation.max(1) as f64;
@@ -71,22 +78,38 @@ impl Campaign {
         } else {
             (rows / every as f64).ceil() as u64
         };
-        let map_node = 64; // a BTreeMap entry's share of its node, with slack
-        let record = std::mem::size_of::<RunRecord>()
-            + self.dispersions.len() * std::mem::size_of::<f64>()
-            + METRIC_NAMES.len() * std::mem::size_of::<Option<f64>>()
-            + 160 // the reason sentence of a failed run
-            + map_node;
-        let trace = std::mem::size_of::<Vec<TracePoint>>() + map_node;
-        // the statistics: a reference per run, one value per metric
-        let stats = std::mem::size_of::<usize>() + METRIC_NAMES.len() * std::mem::size_of::<f64>();
-        let bytes_per_run = (record + trace + stats) as u64
-            + trace_points * std::mem::size_of::<TracePoint>() as u64;
+        let layout = self.layout(Shard { k: 0, m: 1 });
+        let numbers = (4 + self.dispersions.len() + METRIC_NAMES.len()) as u64;
+        let run_slot = layout.bytes_per_run() - 40 * trace_points;
+        let disk_bytes_per_run = run_slot + 26 * numbers + 60;
+        let disk_bytes_per_traced_run = disk_bytes_per_run + trace_points * (40 + 6 * 26);
         let bytes_per_flight = (rows as u64).saturating_mul(std::mem::size_of::<LogRow>() as u64);
-        RunMemory {
+        RunFootprint {
             trace_points,
-            bytes_per_run,
+            disk_bytes_per_traced_run,
+            disk_bytes_per_run,
             bytes_per_flight,
+        }
+    }
+
+    /// The run store layout of a shard of this campaign.
+    pub(super) fn layout(&self, shard: Shard) -> Layout {
+        let ts = self.nominal.control.sample_time_s;
+        let samples = (self.scenario.duration_s / ts).round() + 1.0;
+        let d = self.scenario.log.decimation.max(1) as f64;
+        let rows = (samples / d).ceil() + 1.0;
+        let every = self.trace_every_rows();
+        let trace_points = if every == 0 {
+            0
+        } else {
+            (rows / every as f64).ceil() as usize
+        };
+        Layout {
+            dispersions: self.dispersions.len(),
+            trace_points,
+            k: shard.k,
+            m: shard.m,
+            trace_runs: self.trace_runs.unwrap_or(usize::MAX),
         }
     }
 
@@ -202,10 +225,10 @@ impl Campaign {
             }
         }
         let every = self.trace_every_rows();
-        let trace = if every == 0 {
+        let trace = if every == 0 || !self.traced(index) {
             Vec::new()
         } else {
-            let mut t: Vec<TracePoint> = flight
+            let t: Vec<TracePoint> = flight
                 .log
                 .iter()
                 .step_by(every)
@@ -215,8 +238,6 @@ impl Campaign {
                 })
                 .take_while(|p| p.t_s.is_finite() && p.output.iter().all(|v| v.is_finite()))
                 .collect();
-            // kept until the end of the campaign: no spare capacity
-            t.shrink_to_fit();
             t
         };
         RunOutput {
@@ -290,8 +311,9 @@ pub struct RunOptions {
     pub threads: Option<usize>,
     /// Only this shard.
     pub shard: Option<Shard>,
-    /// Memory the campaign may use (bytes); None: [`memory_budget`].
-    pub memory_budget_bytes: Option<u64>,
+    /// Disk space the campaign may use (bytes); None: the free space of the
+    /// output folder's file system ([`disk_budget`]).
+    pub disk_budget_bytes: Option<u64>,
 }
 
 /// Progress callback: (runs done in this invocation, runs to do).
@@ -308,30 +330,64 @@ pub struct McReport {
     pub stats: Stats,
 }
 
-/// The runs of `shard` (or all) among `0..runs` must fit in the budget.
-fn check_memory(
+/// The free space (bytes) of the file system that will hold `out` (its
+/// nearest existing folder), and where the figure comes from.
+pub fn disk_budget(out: &Path) -> (u64, String) {
+    let mut p = if out.is_absolute() {
+        out.to_path_buf()
+    } else {
+        std::env::current_dir()
+            .map(|d| d.join(out))
+            .unwrap_or_else(|_| out.to_path_buf())
+    };
+    loop {
+        if p.is_dir() {
+            break;
+        }
+        if !p.pop() {
+            break;
+        }
+    }
+    match rustix::fs::statvfs(&p) {
+        Ok(s) => {
+            let b = s.f_bavail.saturating_mul(s.f_frsize);
+            (b, format!("free on the file system of {}", p.display()))
+        }
+        Err(_) => (
+            u64::MAX,
+            "unbounded: the free space could not be read".into(),
+        ),
+    }
+}
+
+/// The runs of `shard` (or all) among `0..runs` must fit on the disk.
+fn check_disk(
     campaign: &Campaign,
     options: &RunOptions,
-    runs_here: usize,
+    runs: usize,
+    shard: Shard,
+    out: &Path,
 ) -> Result<(), McError> {
-    let (budget, available) = match options.memory_budget_bytes {
+    let (budget, available) = match options.disk_budget_bytes {
         Some(b) => (b, "the budget given".to_string()),
-        None => memory_budget(),
+        None => disk_budget(out),
     };
-    let mem = campaign.run_memory();
-    let threads = options
-        .threads
-        .unwrap_or_else(rayon::current_num_threads)
-        .max(1) as u64;
-    let working = mem.bytes_per_flight.saturating_mul(threads);
-    let max_runs = budget.saturating_sub(working) / mem.bytes_per_run.max(1);
-    if runs_here as u64 > max_runs {
+    let f = campaign.footprint();
+    let runs_here = shard.count(runs) as u64;
+    let traced = campaign
+        .trace_runs
+        .map_or(runs_here, |n| shard.count(n.min(runs)) as u64);
+    let traced = if f.trace_points == 0 { 0 } else { traced };
+    let need = traced
+        .saturating_mul(f.disk_bytes_per_traced_run)
+        .saturating_add((runs_here - traced).saturating_mul(f.disk_bytes_per_run));
+    if need > budget {
+        let per = need / runs_here.max(1);
         return Err(McError::TooManyRuns {
-            runs: runs_here,
-            max_runs: usize::try_from(max_runs).unwrap_or(usize::MAX),
-            bytes_per_run: mem.bytes_per_run,
-            trace_points: mem.trace_points,
-            working_mib: working >> 20,
+            runs: shard.count(runs),
+            max_runs: usize::try_from(budget / per.max(1)).unwrap_or(usize::MAX),
+            bytes_per_run: per,
+            trace_points: f.trace_points,
             budget_mib: budget >> 20,
             available,
         });
@@ -339,24 +395,16 @@ fn check_memory(
     Ok(())
 }
 
-/// The output of runs flown in this call, collected under one lock with
-/// the appenders of the partial files.
-struct Sink {
-    runs: std::io::BufWriter<std::fs::File>,
-    traces: std::io::BufWriter<std::fs::File>,
-    records: BTreeMap<usize, RunRecord>,
-    trace_map: BTreeMap<usize, Vec<TracePoint>>,
-}
-
 /// Run a campaign (or one shard of it) into `out`, skipping runs already
 /// recorded there; writes every output and returns the statistics.
 ///
-/// Checked before anything is flown: the number of runs against the memory
+/// Checked before anything is flown: the number of runs against the disk
 /// budget, the output folder (created, writable, of this campaign and
-/// format) and the nominal design. A write that fails during the campaign
-/// stops it: no further run is started, and the error is returned (the
-/// runs recorded so far stay in the partial files for a resume).
-#[allow(clippy::too_many_lines)] // one budget computation with its explanation; splitting scatters the arithmetic
+/// format) and the nominal design. Each finished run goes to the run store
+/// at once (any thread, any order); memory does not grow with the number of
+/// runs. A write that fails during the campaign stops it: no further run is
+/// started, and the error is returned (the runs stored so far stay for a
+/// resume).
 pub fn run(
     campaign: &Campaign,
     options: &RunOptions,
@@ -375,9 +423,10 @@ pub fn run(
     }
     let shard = options.shard.unwrap_or(Shard { k: 0, m: 1 });
     let runs_here = shard.count(runs);
-    check_memory(campaign, options, runs_here)?;
+    check_disk(campaign, options, runs, shard, out)?;
     std::fs::create_dir_all(out).map_err(|e| io_err(out, "create the folder", e))?;
     check_manifest(out, &campaign.hash)?;
+    let layout = campaign.layout(shard);
     let manifest = Manifest {
         format_version: FORMAT_VERSION,
         name: campaign.name.clone(),
@@ -391,6 +440,8 @@ pub fn run(
             .map(|d| d.param.clone())
             .collect(),
         overrides: campaign.overrides.clone(),
+        trace_points: layout.trace_points,
+        trace_runs: campaign.trace_runs,
     };
     write_json(&out.join(MANIFEST), &manifest)?;
     write_file(&out.join(CAMPAIGN), &campaign.source)?;
@@ -400,84 +451,48 @@ pub fn run(
     })?;
     write_file(&out.join(SCENARIO), &scenario_toml)?;
     write_file(&out.join(PARAMS), &campaign.nominal.to_toml())?;
-    // resume: what is already there
-    let mut done: BTreeMap<usize, RunRecord> = BTreeMap::new();
-    for f in [RUNS, RUNS_PARTIAL] {
-        for r in read_records(&out.join(f), &manifest.dispersed)? {
-            done.insert(r.index, r);
+    let store = Store::open(out, layout, true)?;
+    // resume: the runs already in the store (read again, never collected)
+    let mut buf = Vec::new();
+    let mut skipped = 0;
+    for j in 0..runs_here.min(store.slots()?) {
+        if matches!(store.get(j, &mut buf)?, Slot::Run(..)) {
+            skipped += 1;
         }
     }
-    let mut traces = BTreeMap::new();
-    read_traces_into(&out.join(TRACES), &mut traces, true)?;
-    read_traces_into(&out.join(TRACES_PARTIAL), &mut traces, true)?;
-    let skipped = done.len();
-    // rewrite the partial files with everything known so far (drops torn lines)
-    let rp = out.join(RUNS_PARTIAL);
-    let tp = out.join(TRACES_PARTIAL);
-    write_runs_csv(&rp, &manifest.dispersed, done.values())?;
-    write_traces_csv(&tp, &traces)?;
-    let open = |p: &Path| {
-        std::fs::OpenOptions::new()
-            .append(true)
-            .open(p)
-            .map(std::io::BufWriter::new)
-            .map_err(|e| io_err(p, "write", e))
-    };
-    let sink = Mutex::new(Sink {
-        runs: open(&rp)?,
-        traces: open(&tp)?,
-        records: BTreeMap::new(),
-        trace_map: BTreeMap::new(),
-    });
     let nominal = campaign.prepare_nominal()?;
     // each run's work is bounded as `helicon sim` bounds a flight's
     campaign.scenario.check_work(
         &format!("campaign `{}` scenario", campaign.name),
         nominal.gains.set.sample_time_s,
     )?;
-    let total = runs_here
-        - (0..runs_here)
-            .filter(|&j| done.contains_key(&shard.index(j)))
-            .count();
+    let total = runs_here - skipped;
     let count = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
-    let write_err: Mutex<Option<McError>> = Mutex::new(None);
+    let first_err: Mutex<Option<McError>> = Mutex::new(None);
+    let fail = |e: McError| {
+        stop.store(true, Ordering::Relaxed);
+        if let Ok(mut slot) = first_err.lock()
+            && slot.is_none()
+        {
+            *slot = Some(e);
+        }
+    };
     let work = || {
         (0..runs_here)
             .into_par_iter()
-            .map(|j| shard.index(j))
-            .filter(|i| !done.contains_key(i))
-            .for_each(|i| {
+            .for_each_init(Vec::new, |buf, j| {
                 if stop.load(Ordering::Relaxed) {
                     return;
                 }
-                let o = campaign.run_one(&nominal, i);
-                let lines =
-                    csv_line(&record_fields(&o.record)).map(|l| (l, trace_lines(i, &o.trace)));
-                let res = match sink.lock() {
-                    Ok(mut s) => lines.and_then(|(l, t)| {
-                        s.runs
-                            .write_all(l.as_bytes())
-                            .and_then(|()| s.runs.flush())
-                            .map_err(|e| io_err(&rp, "write", e))?;
-                        s.traces
-                            .write_all(t.as_bytes())
-                            .and_then(|()| s.traces.flush())
-                            .map_err(|e| io_err(&tp, "write", e))?;
-                        s.records.insert(i, o.record);
-                        s.trace_map.insert(i, o.trace);
-                        Ok(())
-                    }),
-                    Err(_) => Err(McError::Threads("a worker panicked".into())),
-                };
-                if let Err(e) = res {
-                    stop.store(true, Ordering::Relaxed);
-                    if let Ok(mut slot) = write_err.lock()
-                        && slot.is_none()
-                    {
-                        *slot = Some(e);
-                    }
-                    return;
+                match store.get(j, buf) {
+                    Ok(Slot::Run(..)) => return,
+                    Ok(Slot::Empty) => {}
+                    Err(e) => return fail(e),
+                }
+                let o = campaign.run_one(&nominal, shard.index(j));
+                if let Err(e) = store.put(j, &o.record, &o.trace) {
+                    return fail(e);
                 }
                 let c = count.fetch_add(1, Ordering::Relaxed) + 1;
                 if let Some(p) = progress {
@@ -493,21 +508,13 @@ pub fn run(
             .install(work),
         None => work(),
     }
-    if let Some(e) = write_err.into_inner().ok().flatten() {
+    if let Some(e) = first_err.into_inner().ok().flatten() {
         return Err(e);
     }
-    let sink = sink
-        .into_inner()
-        .map_err(|_| McError::Threads("a worker panicked".into()))?;
-    let flown = sink.records.len();
-    done.extend(sink.records);
-    traces.extend(sink.trace_map);
-    drop((sink.runs, sink.traces));
-    let stats = finish(&manifest, &done, &traces, out)?;
-    let _ = std::fs::remove_file(&rp);
-    let _ = std::fs::remove_file(&tp);
+    store.sync()?;
+    let stats = finish(&manifest, &store, out)?;
     Ok(McReport {
-        flown,
+        flown: count.into_inner(),
         skipped,
         stats,
     })

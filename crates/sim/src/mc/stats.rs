@@ -1,11 +1,17 @@
 //! Statistics over the runs: percentiles, failures by typed class, Markdown.
 //!
+//! Computed in memory independent of the number of runs: counts, extremes,
+//! compensated sums and failure classes in one pass over the runs in index
+//! order, and the percentiles exact (not estimated), by radix selection in
+//! a few more passes over the run store (see `select.rs`).
+//!
 //! Every number written is finite: percentiles and means are taken over the
 //! finite values only (a record never holds a non-finite metric), in forms
 //! that cannot overflow, and [`Stats::check_finite`] refuses to write one
 //! that is not. A statistic without data (`n = 0`) is `null` in
 //! `stats.json` and `–` in `stats.md`.
 
+use super::select::{interpolate, percentiles};
 use super::{FORMAT_VERSION, METRIC_NAMES, McError, RunOutcome, RunRecord, RunTermination};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -74,98 +80,208 @@ pub fn percentile(sorted: &[f64], p: f64) -> Option<f64> {
     let h = (sorted.len() - 1) as f64 * p.clamp(0.0, 1.0);
     let lo = h.floor() as usize;
     let hi = h.ceil() as usize;
-    let (a, b, f) = (sorted[lo], sorted[hi], h - lo as f64);
-    let v = a + f * (b - a);
-    // b − a overflows for values near ±f64::MAX: the convex form cannot; the
-    // clamp undoes rounding past the two order statistics
-    let v = if v.is_finite() {
-        v
+    Some(interpolate(sorted[lo], sorted[hi], h - lo as f64))
+}
+
+/// The percentiles of `stats.json`.
+pub(super) const PERCENTILES: [f64; 3] = [0.05, 0.5, 0.95];
+
+/// Bits per pass of the exact percentile selection over the runs
+/// (6 passes; 20 metrics × 6 ranks × 2048 counters: 2 MB).
+pub(super) const SELECT_BITS: u32 = 11;
+
+/// Neumaier-compensated sum, plus the same sum scaled by 2⁻⁶⁴ for when the
+/// plain one overflows (finite data near ±f64::MAX).
+#[derive(Debug, Clone, Copy, Default)]
+struct Sum {
+    s: f64,
+    c: f64,
+    scaled: f64,
+    scaled_c: f64,
+}
+
+fn neumaier(s: &mut f64, c: &mut f64, x: f64) {
+    let t = *s + x;
+    if s.abs() >= x.abs() {
+        *c += (*s - t) + x;
     } else {
-        (1.0 - f) * a + f * b
-    };
-    Some(v.max(a.min(b)).min(a.max(b)))
+        *c += (x - t) + *s;
+    }
+    *s = t;
 }
 
-/// Mean of finite data; finite whenever the data are (`None` when empty).
-fn mean(v: &[f64]) -> Option<f64> {
-    let (lo, hi) = v
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        });
-    if v.is_empty() {
-        return None;
+impl Sum {
+    fn add(&mut self, x: f64) {
+        neumaier(&mut self.s, &mut self.c, x);
+        neumaier(&mut self.scaled, &mut self.scaled_c, x * 2f64.powi(-64));
     }
-    let n = v.len() as f64;
-    let mut m = v.iter().sum::<f64>() / n;
-    if !m.is_finite() {
-        // the sum overflowed: scale by the largest magnitude first
-        let s = lo.abs().max(hi.abs());
-        m = s * (v.iter().map(|x| x / s).sum::<f64>() / n);
-    }
-    // the mean lies between the extremes; the clamp undoes rounding past them
-    Some(m.max(lo).min(hi))
-}
 
-impl Stats {
-    /// Statistics of records.
-    pub fn from_records(name: &str, hash: &str, records: &[&RunRecord]) -> Stats {
-        let runs = records.len();
-        let completed: Vec<&&RunRecord> = records.iter().filter(|r| r.completed()).collect();
-        let mut classes: BTreeMap<&RunTermination, FailureCount> = BTreeMap::new();
-        for r in records.iter().filter(|r| !r.completed()) {
-            classes
-                .entry(&r.termination)
-                .and_modify(|c| {
-                    c.runs += 1;
-                    if r.index < c.first_run {
-                        c.first_run = r.index;
-                        c.example.clone_from(&r.reason);
-                    }
-                })
-                .or_insert_with(|| FailureCount {
-                    outcome: r.outcome(),
-                    termination: r.termination.clone(),
-                    runs: 1,
-                    first_run: r.index,
-                    example: r.reason.clone(),
-                });
+    /// The mean of `n` values in `[lo, hi]`, finite whenever they are.
+    fn mean(&self, n: u64, lo: f64, hi: f64) -> Option<f64> {
+        if n == 0 {
+            return None;
         }
+        let nf = n as f64;
+        let total = self.s + self.c;
+        let m = if total.is_finite() {
+            total / nf
+        } else {
+            (self.scaled + self.scaled_c) / nf * 2f64.powi(64)
+        };
+        // the mean lies between the extremes; the clamp undoes rounding past them
+        Some(m.max(lo).min(hi))
+    }
+}
+
+/// One metric over the completed runs, accumulated in one pass.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct MetricAcc {
+    /// Finite values seen.
+    pub(super) n: u64,
+    /// Smallest.
+    pub(super) lo: f64,
+    /// Largest.
+    pub(super) hi: f64,
+    sum: Sum,
+}
+
+impl Default for MetricAcc {
+    fn default() -> Self {
+        MetricAcc {
+            n: 0,
+            lo: f64::INFINITY,
+            hi: f64::NEG_INFINITY,
+            sum: Sum::default(),
+        }
+    }
+}
+
+/// Everything of [`Stats`] but the percentiles, accumulated run by run in
+/// index order, in memory independent of the number of runs (the failure
+/// classes are bounded by the kinds of termination and parameter keys).
+#[derive(Debug, Clone, Default)]
+pub(super) struct StatsAcc {
+    runs: usize,
+    completed: usize,
+    classes: BTreeMap<RunTermination, FailureCount>,
+    /// Per metric, in [`METRIC_NAMES`] order.
+    pub(super) metrics: Vec<MetricAcc>,
+}
+
+impl StatsAcc {
+    pub(super) fn new() -> StatsAcc {
+        StatsAcc {
+            metrics: vec![MetricAcc::default(); METRIC_NAMES.len()],
+            ..StatsAcc::default()
+        }
+    }
+
+    /// Count one run.
+    pub(super) fn add(&mut self, r: &RunRecord) {
+        self.runs += 1;
+        if r.completed() {
+            self.completed += 1;
+            for (acc, v) in self.metrics.iter_mut().zip(&r.metrics) {
+                if let Some(x) = *v
+                    && x.is_finite()
+                {
+                    acc.n += 1;
+                    acc.lo = acc.lo.min(x);
+                    acc.hi = acc.hi.max(x);
+                    acc.sum.add(x);
+                }
+            }
+            return;
+        }
+        match self.classes.get_mut(&r.termination) {
+            Some(c) => {
+                c.runs += 1;
+                if r.index < c.first_run {
+                    c.first_run = r.index;
+                    c.example.clone_from(&r.reason);
+                }
+            }
+            None => {
+                self.classes.insert(
+                    r.termination.clone(),
+                    FailureCount {
+                        outcome: r.outcome(),
+                        termination: r.termination.clone(),
+                        runs: 1,
+                        first_run: r.index,
+                        example: r.reason.clone(),
+                    },
+                );
+            }
+        }
+    }
+
+    /// The statistics, given the percentiles ([`PERCENTILES`]) of each metric.
+    pub(super) fn finish(self, name: &str, hash: &str, pct: &[Vec<Option<f64>>]) -> Stats {
         let mut metrics = BTreeMap::new();
         for (j, m) in METRIC_NAMES.iter().enumerate() {
-            let mut v: Vec<f64> = completed
-                .iter()
-                .filter_map(|r| r.metrics.get(j).copied().flatten())
-                .filter(|v| v.is_finite())
-                .collect();
-            v.sort_by(f64::total_cmp);
+            let a = self.metrics[j];
+            let p = |i: usize| pct.get(j).and_then(|v| v.get(i)).copied().flatten();
             metrics.insert(
                 (*m).to_string(),
                 MetricStats {
-                    n: v.len(),
-                    p5: percentile(&v, 0.05),
-                    p50: percentile(&v, 0.5),
-                    p95: percentile(&v, 0.95),
-                    mean: mean(&v),
+                    n: usize::try_from(a.n).unwrap_or(usize::MAX),
+                    p5: p(0),
+                    p50: p(1),
+                    p95: p(2),
+                    mean: a.sum.mean(a.n, a.lo, a.hi),
                 },
             );
         }
-        let failed = runs - completed.len();
+        let failed = self.runs - self.completed;
         Stats {
             format_version: FORMAT_VERSION,
             campaign: name.to_string(),
             hash: hash.to_string(),
-            runs,
-            completed: completed.len(),
+            runs: self.runs,
+            completed: self.completed,
             failed,
-            failure_fraction: if runs == 0 {
+            failure_fraction: if self.runs == 0 {
                 0.0
             } else {
-                failed as f64 / runs as f64
+                failed as f64 / self.runs as f64
             },
-            failures: classes.into_values().collect(),
+            failures: self.classes.into_values().collect(),
             metrics,
         }
+    }
+}
+
+/// Feed the finite metrics of completed runs to a percentile selection
+/// (stream = metric index).
+pub(super) fn feed_metrics(r: &RunRecord, feed: &mut dyn FnMut(usize, f64)) {
+    if r.completed() {
+        for (j, v) in r.metrics.iter().enumerate() {
+            if let Some(x) = *v {
+                feed(j, x);
+            }
+        }
+    }
+}
+
+impl Stats {
+    /// Statistics of records (in memory; a campaign streams its store
+    /// through the same accumulator and selection, with the same result).
+    /// Means are compensated sums in the order given.
+    pub fn from_records(name: &str, hash: &str, records: &[&RunRecord]) -> Stats {
+        let mut acc = StatsAcc::new();
+        for r in records {
+            acc.add(r);
+        }
+        let pct = percentiles(METRIC_NAMES.len(), &PERCENTILES, SELECT_BITS, &mut |feed| {
+            for r in records {
+                feed_metrics(r, feed);
+            }
+            Ok(())
+        })
+        .map(|(p, _)| p)
+        .unwrap_or_default();
+        acc.finish(name, hash, &pct)
     }
 
     /// Refuse a statistic that is not finite (JSON would write it as `null`,

@@ -1,28 +1,22 @@
-//! The output folder: manifest, `runs.csv` / `traces.csv` (and their partial
-//! files), written and read back line by line (nothing holds a whole file in
-//! memory), and [`merge`].
+//! The output folder: manifest, `runs.csv` / `traces.csv` (written line by
+//! line from the run store, see `slots.rs`), and [`merge`].
 
 use super::report::finish;
-use super::{
-    FORMAT_VERSION, METRIC_NAMES, McError, McReport, RunOutcome, RunRecord, RunTermination,
-    TracePoint,
-};
+use super::slots::{Layout, Slot, Store};
+use super::{FORMAT_VERSION, METRIC_NAMES, McError, McReport, RunRecord, Shard, TracePoint};
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::fs::File;
-use std::io::{BufRead, BufReader, BufWriter, Read, Seek, SeekFrom, Write as _};
+use std::io::{BufWriter, Write as _};
 use std::path::{Path, PathBuf};
 
 pub(super) const MANIFEST: &str = "manifest.json";
 pub(super) const RUNS: &str = "runs.csv";
-pub(super) const RUNS_PARTIAL: &str = "runs.partial.csv";
 pub(super) const TRACES: &str = "traces.csv";
-pub(super) const TRACES_PARTIAL: &str = "traces.partial.csv";
 pub(super) const CAMPAIGN: &str = "campaign.toml";
 pub(super) const SCENARIO: &str = "scenario.toml";
 pub(super) const PARAMS: &str = "params.toml";
-const TRACE_HEADER: &str = "index,t_s,vn,ve,vd,psi";
+pub(super) const TRACE_HEADER: &str = "index,t_s,vn,ve,vd,psi";
 
 /// Folders written before the version was recorded.
 fn version_1() -> u32 {
@@ -42,6 +36,12 @@ pub(super) struct Manifest {
     pub(super) dispersed: Vec<String>,
     #[serde(default)]
     pub(super) overrides: Vec<String>,
+    /// Trace points a run's trace slot holds (format 3).
+    #[serde(default)]
+    pub(super) trace_points: usize,
+    /// Runs with an index below this keep a trace (`None`: all).
+    #[serde(default)]
+    pub(super) trace_runs: Option<usize>,
 }
 
 /// An I/O error on `path` while doing `action`.
@@ -121,248 +121,18 @@ pub(super) fn trace_lines(index: usize, trace: &[TracePoint]) -> String {
     s
 }
 
-fn create(path: &Path) -> Result<BufWriter<File>, McError> {
+pub(super) fn create(path: &Path) -> Result<BufWriter<File>, McError> {
     File::create(path)
         .map(BufWriter::new)
         .map_err(|e| io_err(path, "write", e))
 }
 
-fn finish_file(path: &Path, mut w: BufWriter<File>) -> Result<(), McError> {
+pub(super) fn finish_file(path: &Path, mut w: BufWriter<File>) -> Result<(), McError> {
     w.flush().map_err(|e| io_err(path, "write", e))?;
     let f = w
         .into_inner()
         .map_err(|e| io_err(path, "write", e.into_error()))?;
     f.sync_data().map_err(|e| io_err(path, "write", e))
-}
-
-/// Write a `runs.csv` (header and one row per record, by index), streamed.
-pub(super) fn write_runs_csv<'a>(
-    path: &Path,
-    dispersed: &[String],
-    records: impl IntoIterator<Item = &'a RunRecord>,
-) -> Result<(), McError> {
-    let mut w = create(path)?;
-    w.write_all(csv_line(&csv_header(dispersed))?.as_bytes())
-        .map_err(|e| io_err(path, "write", e))?;
-    for r in records {
-        w.write_all(csv_line(&record_fields(r))?.as_bytes())
-            .map_err(|e| io_err(path, "write", e))?;
-    }
-    finish_file(path, w)
-}
-
-/// Write a `traces.csv`, streamed.
-pub(super) fn write_traces_csv(
-    path: &Path,
-    traces: &BTreeMap<usize, Vec<TracePoint>>,
-) -> Result<(), McError> {
-    let mut w = create(path)?;
-    writeln!(w, "{TRACE_HEADER}").map_err(|e| io_err(path, "write", e))?;
-    for (k, v) in traces {
-        w.write_all(trace_lines(*k, v).as_bytes())
-            .map_err(|e| io_err(path, "write", e))?;
-    }
-    finish_file(path, w)
-}
-
-/// Open a results file for reading: `None` when it does not exist; with it,
-/// whether it ends with a newline (every line is written whole, so a last
-/// line without one was torn by an interrupted write and is ignored).
-fn open_results(path: &Path) -> Result<Option<(BufReader<File>, bool)>, McError> {
-    let mut f = match File::open(path) {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(io_err(path, "read", e)),
-    };
-    let rd = |e| io_err(path, "read", e);
-    let len = f.metadata().map_err(rd)?.len();
-    let complete = if len == 0 {
-        true
-    } else {
-        f.seek(SeekFrom::End(-1)).map_err(rd)?;
-        let mut last = [0u8; 1];
-        f.read_exact(&mut last).map_err(rd)?;
-        f.seek(SeekFrom::Start(0)).map_err(rd)?;
-        last[0] == b'\n'
-    };
-    Ok(Some((BufReader::new(f), complete)))
-}
-
-/// Check a `runs.csv` header against the campaign's columns.
-fn check_header(row: &csv::StringRecord, expected: &[String]) -> Result<(), String> {
-    let mut seen: BTreeMap<&str, usize> = BTreeMap::new();
-    for (j, name) in row.iter().enumerate() {
-        if let Some(first) = seen.insert(name, j) {
-            return Err(format!(
-                "column `{name}` appears twice in the header (columns {} and {})",
-                first + 1,
-                j + 1
-            ));
-        }
-    }
-    if row.iter().ne(expected.iter().map(String::as_str)) {
-        return Err(format!(
-            "the header differs from this campaign's columns (expected `{}`)",
-            expected.join(",")
-        ));
-    }
-    Ok(())
-}
-
-/// Read the records of a `runs.csv` (or partial) file; a missing file is
-/// empty, a torn last line (interrupted write) is ignored. The header must be
-/// the campaign's; outcome and termination are read back typed, and every
-/// number must be finite except a dispersed value (an invalid draw may be
-/// ±inf).
-pub(super) fn read_records(path: &Path, dispersed: &[String]) -> Result<Vec<RunRecord>, McError> {
-    let Some((reader, complete)) = open_results(path)? else {
-        return Ok(Vec::new());
-    };
-    let header = csv_header(dispersed);
-    let ndisp = dispersed.len();
-    let ncol = header.len();
-    let rdr = csv::ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .from_reader(reader);
-    let mut rows = rdr.into_records().enumerate().peekable();
-    let mut out = Vec::new();
-    while let Some((i, row)) = rows.next() {
-        if !complete && rows.peek().is_none() {
-            break;
-        }
-        let cerr = |line: usize, message: String| McError::Csv {
-            file: path.display().to_string(),
-            line,
-            message,
-        };
-        let row = row.map_err(|e| {
-            let line = e.position().map_or(i + 1, |p| p.line() as usize);
-            cerr(line, e.to_string())
-        })?;
-        let line = row.position().map_or(i + 1, |p| p.line() as usize);
-        let cerr = |message: String| cerr(line, message);
-        if row.get(0) == Some("index") {
-            check_header(&row, &header).map_err(cerr)?;
-            continue;
-        }
-        if row.len() != ncol {
-            return Err(cerr(format!("{} columns, expected {ncol}", row.len())));
-        }
-        let num = |j: usize| -> Result<f64, McError> {
-            row[j]
-                .parse::<f64>()
-                .map_err(|_| cerr(format!("column {}: `{}` is not a number", j + 1, &row[j])))
-        };
-        let finite = |j: usize| -> Result<f64, McError> {
-            let v = num(j)?;
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(cerr(format!(
-                    "column {} ({}): `{}` is not a finite number",
-                    j + 1,
-                    header[j],
-                    &row[j]
-                )))
-            }
-        };
-        let int = |j: usize| -> Result<u64, McError> {
-            row[j].parse::<u64>().map_err(|_| {
-                cerr(format!(
-                    "column {}: `{}` is not a whole number",
-                    j + 1,
-                    &row[j]
-                ))
-            })
-        };
-        let mut values = Vec::with_capacity(ndisp);
-        for j in 0..ndisp {
-            values.push(num(3 + j)?);
-        }
-        let o = 3 + ndisp;
-        let outcome: RunOutcome = row[o]
-            .parse()
-            .map_err(|e: String| cerr(format!("column {} (outcome): {e}", o + 1)))?;
-        let termination = RunTermination::parse(outcome, &row[o + 1])
-            .map_err(|e| cerr(format!("column {} (termination): {e}", o + 2)))?;
-        let mut metrics = Vec::with_capacity(METRIC_NAMES.len());
-        for j in 0..METRIC_NAMES.len() {
-            let c = o + 4 + j;
-            metrics.push(if row[c].is_empty() {
-                None
-            } else {
-                Some(finite(c)?)
-            });
-        }
-        out.push(RunRecord {
-            index: usize::try_from(int(0)?)
-                .map_err(|_| cerr("column 1: index too large for this machine".into()))?,
-            wind_seed: int(1)?,
-            sensor_seed: int(2)?,
-            values,
-            termination,
-            reason: row[o + 2].to_string(),
-            t_end_s: finite(o + 3)?,
-            metrics,
-        });
-    }
-    Ok(out)
-}
-
-/// Read a `traces.csv` (or partial) file into `out` (a run's points replace
-/// any it already had); a missing file adds nothing, a torn last line is
-/// ignored.
-pub(super) fn read_traces_into(
-    path: &Path,
-    out: &mut BTreeMap<usize, Vec<TracePoint>>,
-    replace: bool,
-) -> Result<(), McError> {
-    let Some((reader, complete)) = open_results(path)? else {
-        return Ok(());
-    };
-    let mut file: BTreeMap<usize, Vec<TracePoint>> = BTreeMap::new();
-    let mut lines = reader.lines().enumerate().peekable();
-    while let Some((i, line)) = lines.next() {
-        let line = line.map_err(|e| io_err(path, "read", e))?;
-        if !complete && lines.peek().is_none() {
-            break;
-        }
-        if i == 0 && line.starts_with("index") {
-            continue;
-        }
-        let f: Vec<&str> = line.split(',').collect();
-        let parsed: Option<(usize, [f64; 5])> = (|| {
-            if f.len() != 6 {
-                return None;
-            }
-            let idx = f[0].parse().ok()?;
-            let mut v = [0.0; 5];
-            for j in 0..5 {
-                v[j] = f[j + 1].parse().ok().filter(|x: &f64| x.is_finite())?;
-            }
-            Some((idx, v))
-        })();
-        let Some((idx, v)) = parsed else {
-            return Err(McError::Csv {
-                file: path.display().to_string(),
-                line: i + 1,
-                message: format!("expected {TRACE_HEADER} (finite numbers)"),
-            });
-        };
-        file.entry(idx).or_default().push(TracePoint {
-            t_s: v[0],
-            output: [v[1], v[2], v[3], v[4]],
-        });
-    }
-    for (k, v) in file {
-        if replace {
-            out.insert(k, v);
-        } else {
-            out.entry(k).or_insert(v);
-        }
-    }
-    Ok(())
 }
 
 /// The manifest of `dir`, if it has one, checked to be of this format version.
@@ -403,16 +173,133 @@ pub(super) fn check_manifest(dir: &Path, hash: &str) -> Result<Option<Manifest>,
     Ok(Some(m))
 }
 
+/// How far a campaign (or shard) folder is.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FolderProgress {
+    /// Campaign name.
+    pub name: String,
+    /// Campaign hash.
+    pub hash: String,
+    /// The shard (`K/M`), if it is one.
+    pub shard: Option<String>,
+    /// Runs this folder is to hold (its shard's share of the campaign's).
+    pub runs: usize,
+    /// Runs in its store.
+    pub done: usize,
+    /// Every run done and the outputs written (`stats.json` newer than the
+    /// last run stored).
+    pub finished: bool,
+}
+
+/// The progress of the campaign folder `dir` (`None`: not one, no
+/// `manifest.json`), read from its run store.
+pub fn folder_progress(dir: &Path) -> Result<Option<FolderProgress>, McError> {
+    let Some(m) = read_manifest(dir)? else {
+        return Ok(None);
+    };
+    let layout = layout_of(&m, dir)?;
+    let runs = Shard {
+        k: layout.k,
+        m: layout.m,
+    }
+    .count(m.runs);
+    let store = match Store::open(dir, layout, false) {
+        Ok(s) => Some(s),
+        // a folder whose first run is not stored yet
+        Err(McError::Config(crate::scenario::ScenarioError::Io { source, .. }))
+            if source.kind() == std::io::ErrorKind::NotFound =>
+        {
+            None
+        }
+        Err(e) => return Err(e),
+    };
+    let mut done = 0;
+    if let Some(store) = &store {
+        let mut buf = Vec::new();
+        for j in 0..runs.min(store.slots()?) {
+            if matches!(store.get(j, &mut buf)?, Slot::Run(..)) {
+                done += 1;
+            }
+        }
+    }
+    let modified = |f: &str| {
+        std::fs::metadata(dir.join(f))
+            .and_then(|m| m.modified())
+            .ok()
+    };
+    let finished = done == runs
+        && match (modified("stats.json"), modified(super::slots::RUNS_BIN)) {
+            (Some(s), Some(r)) => s >= r,
+            _ => false,
+        };
+    Ok(Some(FolderProgress {
+        name: m.name,
+        hash: m.hash,
+        shard: m.shard,
+        runs,
+        done,
+        finished,
+    }))
+}
+
+/// The store layout of a folder's manifest.
+pub(super) fn layout_of(m: &Manifest, dir: &Path) -> Result<Layout, McError> {
+    let (k, mm) = match &m.shard {
+        None => (0, 1),
+        Some(s) => {
+            let sh: Shard = s.parse().map_err(|e: String| McError::Csv {
+                file: dir.join(MANIFEST).display().to_string(),
+                line: 0,
+                message: e,
+            })?;
+            (sh.k, sh.m)
+        }
+    };
+    Ok(Layout {
+        dispersions: m.dispersed.len(),
+        trace_points: m.trace_points,
+        k,
+        m: mm,
+        trace_runs: m.trace_runs.unwrap_or(usize::MAX),
+    })
+}
+
+/// One input folder of a merge: its store and its next run.
+struct Cursor {
+    store: Store,
+    slots: usize,
+    next: usize,
+    /// The next run: its record, slot and trace length.
+    head: Option<(RunRecord, usize, usize)>,
+}
+
+impl Cursor {
+    fn advance(&mut self, buf: &mut Vec<u8>) -> Result<(), McError> {
+        self.head = None;
+        while self.next < self.slots {
+            let j = self.next;
+            self.next += 1;
+            if let Slot::Run(r, tlen) = self.store.get(j, buf)? {
+                self.head = Some((r, j, tlen));
+                return Ok(());
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Merge shard folders of one campaign into `out` (checks the format
 /// version and the hashes; a run present in several folders must be
-/// identical).
+/// identical). Streamed: the folders' stores are read in index order side
+/// by side (one run of each in memory) into `out`'s store, whose outputs
+/// are then written as a campaign's are, so the merged folder equals the
+/// unsharded campaign's.
 pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<McReport, McError> {
     let first = dirs.first().ok_or(McError::NoFolders)?;
-    // each run with the folder (index into `dirs`, or `dirs.len()` for `out`) it came from
-    let mut records: BTreeMap<usize, (RunRecord, usize)> = BTreeMap::new();
-    let mut traces: BTreeMap<usize, Vec<TracePoint>> = BTreeMap::new();
     let mut manifest0: Option<Manifest> = None;
-    for (n, d) in dirs.iter().enumerate() {
+    let mut cursors = Vec::with_capacity(dirs.len());
+    let mut buf = Vec::new();
+    for d in dirs {
         let m = read_manifest(d)?.ok_or_else(|| {
             io_err(
                 &d.join(MANIFEST),
@@ -429,26 +316,16 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<McReport, McError> {
                 found: m.hash,
             });
         }
-        for f in [RUNS, RUNS_PARTIAL] {
-            for r in read_records(&d.join(f), &m.dispersed)? {
-                match records.get(&r.index) {
-                    Some((prev, pn)) if *prev != r => {
-                        return Err(McError::Conflict {
-                            index: r.index,
-                            a: dirs[*pn].display().to_string(),
-                            b: d.display().to_string(),
-                        });
-                    }
-                    Some(_) => {}
-                    None => {
-                        records.insert(r.index, (r, n));
-                    }
-                }
-            }
-        }
-        for f in [TRACES, TRACES_PARTIAL] {
-            read_traces_into(&d.join(f), &mut traces, true)?;
-        }
+        let store = Store::open(d, layout_of(&m, d)?, false)?;
+        let slots = store.slots()?;
+        let mut c = Cursor {
+            store,
+            slots,
+            next: 0,
+            head: None,
+        };
+        c.advance(&mut buf)?;
+        cursors.push(c);
         if manifest0.is_none() {
             manifest0 = Some(m);
         }
@@ -457,16 +334,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<McReport, McError> {
         return Err(McError::NoFolders);
     };
     std::fs::create_dir_all(out).map_err(|e| io_err(out, "create the folder", e))?;
-    if let Some(m) = check_manifest(out, &m0.hash)? {
-        // merging into a folder of the same campaign keeps its runs too
-        for r in read_records(&out.join(RUNS), &m.dispersed)? {
-            records.entry(r.index).or_insert((r, dirs.len()));
-        }
-        read_traces_into(&out.join(TRACES), &mut traces, false)?;
-    }
-    let manifest = Manifest {
+    // merging into a folder of the same campaign keeps its runs too
+    let previous = check_manifest(out, &m0.hash)?;
+    let mut manifest = Manifest {
         shard: None,
-        runs: m0.runs.max(records.keys().next_back().map_or(0, |k| k + 1)),
+        runs: m0.runs.max(previous.as_ref().map_or(0, |p| p.runs)),
         ..m0
     };
     write_json(&out.join(MANIFEST), &manifest)?;
@@ -475,12 +347,42 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<McReport, McError> {
         let text = std::fs::read_to_string(&src).map_err(|e| io_err(&src, "read", e))?;
         write_file(&out.join(f), &text)?;
     }
-    let recs: BTreeMap<usize, RunRecord> = records.into_iter().map(|(k, (r, _))| (k, r)).collect();
-    let n = recs.len();
-    let stats = finish(&manifest, &recs, &traces, out)?;
+    let layout = layout_of(&manifest, out)?;
+    let dest = Store::open(out, layout, true)?;
+    let mut trace = Vec::new();
+    let mut merged = 0usize;
+    let index_of = |c: &Cursor| c.head.as_ref().map(|h| h.0.index);
+    while let Some(i) = cursors.iter().filter_map(index_of).min() {
+        let holders: Vec<usize> = (0..cursors.len())
+            .filter(|&n| index_of(&cursors[n]) == Some(i))
+            .collect();
+        if let Some(&f) = holders.first()
+            && let Some((r, j, tlen)) = &cursors[f].head
+        {
+            for &n in &holders[1..] {
+                if cursors[n].head.as_ref().map(|h| &h.0) != Some(r) {
+                    return Err(McError::Conflict {
+                        index: i,
+                        a: dirs[f].display().to_string(),
+                        b: dirs[n].display().to_string(),
+                    });
+                }
+            }
+            cursors[f].store.trace(*j, *tlen, &mut trace)?;
+            dest.put(i, r, &trace)?;
+        }
+        for n in holders {
+            cursors[n].advance(&mut buf)?;
+        }
+        merged += 1;
+        manifest.runs = manifest.runs.max(i + 1);
+    }
+    dest.sync()?;
+    write_json(&out.join(MANIFEST), &manifest)?;
+    let stats = finish(&manifest, &dest, out)?;
     Ok(McReport {
         flown: 0,
-        skipped: n,
+        skipped: merged.max(stats.runs),
         stats,
     })
 }
