@@ -8,7 +8,8 @@
 //! campaign returns [`Error`] `interrupted`.
 
 use crate::error::{Error, Result};
-use helicon_sim::mc::{Campaign, CampaignOverrides, RunOutput, Stats, memory_budget};
+use helicon_sim::mc::{Campaign, CampaignOverrides, RunOutput, Stats};
+use helicon_sim::resources::memory_budget;
 use rayon::prelude::*;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -42,6 +43,7 @@ pub fn load_campaign(
         seed,
         duration_s,
         params,
+        trace_runs: None,
     })?)
 }
 
@@ -78,16 +80,19 @@ pub fn run_campaign(
             "threads = 0: must be >= 1 (or None for one per core)",
         ));
     }
-    let mem = c.run_memory();
+    // every run is kept in memory here: its record and trace cost about what
+    // the run store gives a traced run on disk
+    let fp = c.footprint();
+    let bytes_per_run = fp.disk_bytes_per_traced_run.max(1);
     let (budget, why) = memory_budget();
     let workers = threads.unwrap_or_else(rayon::current_num_threads).max(1) as u64;
-    let working = mem.bytes_per_flight.saturating_mul(workers);
-    let max_runs = budget.saturating_sub(working) / mem.bytes_per_run.max(1);
+    let working = fp.bytes_per_flight.saturating_mul(workers);
+    let max_runs = budget.saturating_sub(working) / bytes_per_run;
     if runs as u64 > max_runs {
         return Err(Error::new(format!(
             "{runs} runs need {} MiB (at {} bytes a run, plus {} MiB of flights in progress), beyond the {} MiB budget ({why}): fly fewer runs, or lower trace_rate_hz",
-            (mem.bytes_per_run.saturating_mul(runs as u64) + working) >> 20,
-            mem.bytes_per_run,
+            (bytes_per_run.saturating_mul(runs as u64) + working) >> 20,
+            bytes_per_run,
             working >> 20,
             budget >> 20
         )));

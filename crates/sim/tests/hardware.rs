@@ -23,7 +23,6 @@ fn hardware_steps_reproduce_fly_bit_for_bit() {
     let flown = fly(&scenario, &prepared, None).unwrap();
     let mut hw = Hardware::new(&scenario, &prepared).unwrap();
     let x0 = *hw.state();
-    let p = prepared.model.params();
     let mut computer = flight_computer(&prepared.onboard_setup(&scenario, &x0)).unwrap();
     let mut rows = Vec::new();
     while let Some(sample) = hw.sense() {

@@ -386,6 +386,7 @@ pub fn submit(
     con.finish().context("writing to stdout")
 }
 
+#[allow(clippy::too_many_lines)] // one submission in order: scripts, sbatch of the array, of the merge job, the record
 fn submit_to(
     con: &mut crate::console::Console,
     campaign: &Campaign,

@@ -57,6 +57,10 @@ struct Target {
 /// value of every stream, the same values in every pass.
 pub(super) type Replay<'a> = dyn FnMut(&mut dyn FnMut(usize, f64)) -> Result<(), McError> + 'a;
 
+/// Per stream, the value at each rank asked for (`None` for an empty
+/// stream), and each stream's count.
+pub(super) type StreamPercentiles = (Vec<Vec<Option<f64>>>, Vec<u64>);
+
 /// Exact type-7 percentiles `ps` of each of `streams` streams (finite
 /// values only; others are ignored), `None` for an empty stream, with
 /// counters of `bits` bits (1 ≤ bits ≤ 16) per pass. Also returns each
@@ -67,7 +71,7 @@ pub(super) fn percentiles(
     ps: &[f64],
     bits: u32,
     replay: &mut Replay<'_>,
-) -> Result<(Vec<Vec<Option<f64>>>, Vec<u64>), McError> {
+) -> Result<StreamPercentiles, McError> {
     let bits = bits.clamp(1, 16);
     let width = 1usize << bits;
     // pass 1: the top bits of every key
