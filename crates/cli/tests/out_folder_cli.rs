@@ -14,7 +14,7 @@ fn root() -> std::path::PathBuf {
 #[test]
 fn a_run_of_other_inputs_is_refused_without_force() {
     let d = tmpdir("refuse");
-    let scenario = root().join("scenarios/thesis-fig14-3.toml");
+    let scenario = root().join("scenarios/demo.toml");
     let gyro = root().join("params/yaw-gyro.toml");
     let out = d.join("run");
     let (s, o) = (scenario.to_str().unwrap(), out.to_str().unwrap());
