@@ -69,7 +69,8 @@ fn run_inputs(args: &SimArgs) -> String {
 }
 
 /// Refuse an output folder that holds a run of other inputs (unless
-/// `force`), then stamp it with these.
+/// `force`); [`stamp_out_folder`] marks it once a run was written there (a
+/// run refused before flying leaves the folder as it was).
 fn claim_out_folder(out: &Path, inputs: &str, force: bool) -> Result<()> {
     let stamp = out.join(RUN_STAMP);
     if let Ok(prev) = std::fs::read_to_string(&stamp) {
@@ -81,6 +82,12 @@ fn claim_out_folder(out: &Path, inputs: &str, force: bool) -> Result<()> {
             );
         }
     }
+    Ok(())
+}
+
+/// Mark `out` as holding the run of `inputs`.
+fn stamp_out_folder(out: &Path, inputs: &str) -> Result<()> {
+    let stamp = out.join(RUN_STAMP);
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;
     std::fs::write(&stamp, format!("{inputs}\n"))
         .with_context(|| format!("{}: cannot write", stamp.display()))
@@ -348,6 +355,7 @@ pub fn run(args: &SimArgs) -> Result<()> {
     );
     if scenario.variants.is_empty() {
         let report = run_scenario(&scenario, &out, &source)?;
+        stamp_out_folder(&out, &run_inputs(args))?;
         print_run(&mut con, &report);
         return con.finish().context("writing to stdout");
     }
@@ -374,6 +382,7 @@ pub fn run(args: &SimArgs) -> Result<()> {
         .collect();
     let (summary, report) = write_cases_index(&out, &scenario.name, &index)
         .with_context(|| format!("writing the case index to {}", out.display()))?;
+    stamp_out_folder(&out, &run_inputs(args))?;
     let diverged = flown.iter().filter(|(_, s)| s.reason.is_some()).count();
     writeln!(
         con,

@@ -49,14 +49,17 @@ fn check(what: &str, got: &[(String, String)], golden: &[(&str, &str)]) {
     );
 }
 
+// summary.json regenerated once: the metrics now say "not settled before the
+// end" and wrap ψ against its reference (the first-hour change); the time
+// series and the flight log kept their digests.
 const SIM: &[(&str, &str)] = &[
     ("log.csv", "df5fa193df12f1d5"),
-    ("summary.json", "b09011308aa25c3b"),
+    ("summary.json", "3ea74fdd5a38c864"),
 ];
 
 const SITL: &[(&str, &str)] = &[
     ("log.csv", "50a0f38e002c7de4"),
-    ("summary.json", "0c60558eb08e2cbc"),
+    ("summary.json", "aa645b8b13d03cbf"),
 ];
 
 const SITL_ULOG: &[(&str, &str)] = &[

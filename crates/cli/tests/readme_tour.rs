@@ -68,6 +68,11 @@ fn plan(line: &str) -> Plan {
     if line.starts_with("helicon onboard") {
         return Plan::NotRun("needs the helicopter's serial devices");
     }
+    if line.starts_with("helicon mc ") && line.contains("--slurm") {
+        // no cluster here: the scripts are written and nothing is submitted
+        // (tools/slurm/one-node.sh submits to a real one-node Slurm)
+        return Plan::Shortened(format!("{line} --dry-run"));
+    }
     if line.starts_with("helicon mc ") && line.contains("--runs 1000") {
         return Plan::Shortened(line.replace("--runs 1000", "--runs 10"));
     }
