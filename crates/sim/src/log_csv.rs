@@ -461,7 +461,7 @@ fn relayout_exp(line: &mut String, s: &str) {
     while n > 1 && digits[n - 1] == b'0' {
         n -= 1;
     }
-    let e10 = int.len() as i32 - 1 - lead + exp;
+    let e10 = i32::try_from(int.len()).unwrap_or(i32::MAX) - 1 - lead + exp;
     if neg {
         line.push('-');
     }
@@ -485,7 +485,7 @@ fn tie_possible(v: f64) -> bool {
     } else {
         (frac | (1u64 << 52), be - 1075)
     };
-    m != 0 && m.trailing_zeros() as i32 + e >= -27
+    m != 0 && i64::from(m.trailing_zeros()) + i64::from(e) >= -27
 }
 
 /// A small integer as text, without allocating.

@@ -53,6 +53,9 @@ struct Target {
     rest: u64,
 }
 
+/// Per stream, its percentiles (`None` when empty); and each stream's count.
+pub(super) type Percentiles = (Vec<Vec<Option<f64>>>, Vec<u64>);
+
 /// Values fed to [`percentiles`]: call `feed(stream, value)` for every
 /// value of every stream, the same values in every pass.
 pub(super) type Replay<'a> = dyn FnMut(&mut dyn FnMut(usize, f64)) -> Result<(), McError> + 'a;
@@ -67,7 +70,7 @@ pub(super) fn percentiles(
     ps: &[f64],
     bits: u32,
     replay: &mut Replay<'_>,
-) -> Result<(Vec<Vec<Option<f64>>>, Vec<u64>), McError> {
+) -> Result<Percentiles, McError> {
     let bits = bits.clamp(1, 16);
     let width = 1usize << bits;
     // pass 1: the top bits of every key
