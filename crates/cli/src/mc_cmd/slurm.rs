@@ -374,25 +374,8 @@ fn ranges(tasks: &[usize]) -> String {
     out.join(",")
 }
 
-/// `helicon mc CAMPAIGN --slurm`.
-pub fn submit(
-    campaign: &Campaign,
-    campaign_path: &Path,
-    out: &Path,
-    req: &SlurmRequest,
-) -> Result<()> {
-    let mut con = crate::console::Console::stdout();
-    submit_to(&mut con, campaign, campaign_path, out, req)?;
-    con.finish().context("writing to stdout")
-}
-
-fn submit_to(
-    con: &mut crate::console::Console,
-    campaign: &Campaign,
-    campaign_path: &Path,
-    out: &Path,
-    req: &SlurmRequest,
-) -> Result<()> {
+/// The options of `--slurm` that can be checked alone.
+fn check_request(req: &SlurmRequest) -> Result<()> {
     if req.array == 0 || req.array > req.runs {
         bail!("--array {}: need 1 <= K <= runs ({})", req.array, req.runs);
     }
@@ -405,14 +388,13 @@ fn submit_to(
     if let Some(p) = &req.partition {
         check_partition(p)?;
     }
-    std::fs::create_dir_all(out.join("slurm").join("logs"))
-        .and_then(|()| std::fs::create_dir_all(out.join("shards")))
-        .with_context(|| format!("creating {}", out.display()))?;
-    let out = std::fs::canonicalize(out).with_context(|| format!("{}", out.display()))?;
-    let campaign_path = std::fs::canonicalize(campaign_path)
-        .with_context(|| format!("{}", campaign_path.display()))?;
-    let helicon = std::env::current_exe().context("the path of this helicon")?;
-    let mut plan = match read_plan(&out)? {
+    Ok(())
+}
+
+/// The plan of `out`: the one recorded there (which must be this campaign,
+/// `--runs` and `--array`), or a new one.
+fn open_plan(out: &Path, campaign: &Campaign, req: &SlurmRequest) -> Result<Plan> {
+    let plan = match read_plan(out)? {
         Some(p) => {
             if p.hash != campaign.hash || p.runs != req.runs || p.array != req.array {
                 bail!(
@@ -436,6 +418,37 @@ fn submit_to(
             submissions: Vec::new(),
         },
     };
+    Ok(plan)
+}
+
+/// `helicon mc CAMPAIGN --slurm`.
+pub fn submit(
+    campaign: &Campaign,
+    campaign_path: &Path,
+    out: &Path,
+    req: &SlurmRequest,
+) -> Result<()> {
+    let mut con = crate::console::Console::stdout();
+    submit_to(&mut con, campaign, campaign_path, out, req)?;
+    con.finish().context("writing to stdout")
+}
+
+fn submit_to(
+    con: &mut crate::console::Console,
+    campaign: &Campaign,
+    campaign_path: &Path,
+    out: &Path,
+    req: &SlurmRequest,
+) -> Result<()> {
+    check_request(req)?;
+    std::fs::create_dir_all(out.join("slurm").join("logs"))
+        .and_then(|()| std::fs::create_dir_all(out.join("shards")))
+        .with_context(|| format!("creating {}", out.display()))?;
+    let out = std::fs::canonicalize(out).with_context(|| format!("{}", out.display()))?;
+    let campaign_path = std::fs::canonicalize(campaign_path)
+        .with_context(|| format!("{}", campaign_path.display()))?;
+    let helicon = std::env::current_exe().context("the path of this helicon")?;
+    let mut plan = open_plan(&out, campaign, req)?;
     let (array_sh, merge_sh) = scripts(campaign, &campaign_path, &out, req, &helicon);
     let array_path = out.join("slurm").join("array.sbatch");
     let merge_path = out.join("slurm").join("merge.sbatch");
