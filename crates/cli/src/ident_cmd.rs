@@ -537,6 +537,7 @@ fn window_lengths(a: &FrfArgs, file: &str, n: usize, dt: f64, nin: usize) -> Res
 }
 
 /// `helicon ident frf`.
+#[allow(clippy::too_many_lines)] // one command: read, check the excitation, estimate, write
 pub fn run_frf(a: &FrfArgs) -> Result<()> {
     let file = a.log.display().to_string();
     if a.windows == 0 || a.windows > 8 {

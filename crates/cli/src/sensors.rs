@@ -252,6 +252,17 @@ pub fn run_simulate(args: &SimulateArgs) -> Result<()> {
         })?;
     }
     w.finish()?;
+    // a one-line summary (none when the log itself is on stdout)
+    if let Some(path) = &args.out {
+        println!(
+            "wrote {} ({} rows, {} s at {} Hz, seed {})",
+            path.display(),
+            n + 1,
+            helicon_sim::scenario::num(args.duration_s),
+            cfg.imu.rate_hz,
+            cfg.seed
+        );
+    }
     Ok(())
 }
 

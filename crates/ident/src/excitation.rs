@@ -235,7 +235,7 @@ mod tests {
     fn a_constant_input_and_band_gaps_are_flagged() {
         let dt = 0.01;
         let grid = log_grid(1.0, 40.0, 40).unwrap();
-        let c = check_excitation(&[0.3; 4000], None, dt, 1000, &grid).unwrap();
+        let c = check_excitation(&vec![0.3; 4000], None, dt, 1000, &grid).unwrap();
         assert_eq!(c.problems, vec![ExcitationProblem::InputConstant]);
         // a pure 2 rad/s sine excites one point of the band
         let s: Vec<f64> = (0..8000).map(|i| (2.0 * i as f64 * dt).sin()).collect();
