@@ -69,12 +69,19 @@ fn run_inputs(args: &SimArgs) -> String {
 }
 
 /// Refuse an output folder that holds a run of other inputs (unless
-/// `force`), then stamp it with these.
-fn claim_out_folder(out: &Path, inputs: &str, force: bool) -> Result<()> {
+/// `force`), then stamp it with these. Before refusing, `validate` checks the
+/// inputs themselves, so an error in them is said first.
+fn claim_out_folder(
+    out: &Path,
+    inputs: &str,
+    force: bool,
+    validate: impl FnOnce() -> Result<()>,
+) -> Result<()> {
     let stamp = out.join(RUN_STAMP);
     if let Ok(prev) = std::fs::read_to_string(&stamp) {
         let prev = prev.trim();
         if prev != inputs && !force {
+            validate()?;
             bail!(
                 "{} holds a run of other inputs ({prev}; this run: {inputs}): give another --out, or --force to replace it",
                 out.display()
@@ -328,7 +335,9 @@ pub fn run(args: &SimArgs) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("out").join(folder_name(&scenario.name)));
-    claim_out_folder(&out, &run_inputs(args), args.force)?;
+    claim_out_folder(&out, &run_inputs(args), args.force, || {
+        prepare_step(&scenario).map(|_| ())
+    })?;
     let cases = scenario.cases();
     // stdout may close at any time (`| head -1`): every case is still flown
     // and written, the write error is returned at the end.
