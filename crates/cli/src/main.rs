@@ -1,6 +1,6 @@
 //! `helicon`: model, trim, linearize, estimate and control miniature helicopters.
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 mod console;
 mod control;
@@ -68,6 +68,13 @@ enum Command {
     Ident(ident_cmd::IdentArgs),
     /// A terminal ground station: a vehicle's MAVLink state once a second, its messages as they come.
     Gcs(gcs_cmd::GcsArgs),
+    /// Print a shell completion script for SHELL (bash, zsh, fish, elvish, powershell), made from this command line's definition.
+    Completions {
+        /// The shell.
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff) of helicon, made from this command line's definition: `helicon man > helicon.1; man ./helicon.1`.
+    Man,
 }
 
 /// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
@@ -138,6 +145,19 @@ fn run() -> anyhow::Result<()> {
         Command::Onboard(a) => onboard_cmd::run(&a),
         Command::Ident(a) => ident_cmd::run(&a),
         Command::Gcs(a) => gcs_cmd::run(&a),
+        Command::Completions { shell } => {
+            let mut cmd = Cli::command();
+            let mut out = std::io::stdout().lock();
+            clap_complete::generate(shell, &mut cmd, "helicon", &mut out);
+            std::io::Write::flush(&mut out)?;
+            Ok(())
+        }
+        Command::Man => {
+            let mut out = std::io::stdout().lock();
+            clap_mangen::Man::new(Cli::command()).render(&mut out)?;
+            std::io::Write::flush(&mut out)?;
+            Ok(())
+        }
     }
 }
 

@@ -186,8 +186,14 @@ pub struct SimulateArgs {
     /// (default: the Bergen Twin's).
     #[arg(long)]
     pub params: Option<PathBuf>,
-    /// Duration (s).
-    #[arg(long, default_value_t = 60.0)]
+    /// Duration (s); `--duration-s` is the old spelling.
+    #[arg(
+        long = "duration",
+        alias = "duration-s",
+        value_name = "S",
+        default_value_t = 60.0,
+        allow_negative_numbers = true
+    )]
     pub duration_s: f64,
     /// Seed (overrides the config's).
     #[arg(long)]
@@ -215,7 +221,7 @@ pub fn run_simulate(args: &SimulateArgs) -> Result<()> {
     }
     if !(args.duration_s.is_finite() && args.duration_s > 0.0 && args.duration_s <= 86_400.0) {
         bail!(
-            "--duration-s {} is invalid (allowed: 0 < d <= 86400)",
+            "--duration {} is invalid (allowed: 0 < d <= 86400)",
             helicon_sim::scenario::num(args.duration_s)
         );
     }
@@ -246,6 +252,17 @@ pub fn run_simulate(args: &SimulateArgs) -> Result<()> {
         })?;
     }
     w.finish()?;
+    // a one-line summary (none when the log itself is on stdout)
+    if let Some(path) = &args.out {
+        println!(
+            "wrote {} ({} rows, {} s at {} Hz, seed {})",
+            path.display(),
+            n + 1,
+            helicon_sim::scenario::num(args.duration_s),
+            cfg.imu.rate_hz,
+            cfg.seed
+        );
+    }
     Ok(())
 }
 

@@ -206,3 +206,86 @@ fn appendix_f_comment_states_the_divergence_time() {
         );
     }
 }
+
+/// The thesis hover-trim table of docs/trim-linearize.md: the printed
+/// values the trim does not match to 3 significant digits (rounded or
+/// truncated) are exactly the ones the text lists, computed from
+/// `helicon trim --preset thesis --json`; and the README says the same.
+#[test]
+fn trim_doc_lists_the_values_that_miss_the_printed_digits() {
+    let doc = read("docs/trim-linearize.md");
+    let d = tmpdir("trimdoc");
+    let out = helicon(&d, &["trim", "--preset", "thesis", "--json"]).stdout;
+    let v: serde_json::Value = serde_json::from_slice(&out).unwrap();
+    let value = |name: &str| -> f64 {
+        let key = match name {
+            "φ" => "phi",
+            "θ" => "theta",
+            "θ0" => "theta0",
+            "θtr" => "theta_tr",
+            "λmr" => "lambda_mr",
+            "λtr" => "lambda_tr",
+            n => n,
+        };
+        v["input"][key]
+            .as_f64()
+            .or_else(|| v["state"][key].as_f64())
+            .or_else(|| v[key].as_f64())
+            .unwrap_or_else(|| panic!("no `{key}` in the trim JSON"))
+    };
+    // `x` shown with 3 significant digits, rounded or truncated, reads `printed`
+    let matches = |x: f64, printed: f64| {
+        let e = printed.abs().log10().floor() - 2.0;
+        let unit = 10f64.powf(e);
+        let (r, t) = ((x / unit).round(), (x / unit).trunc());
+        let p = (printed / unit).round();
+        r == p || t == p
+    };
+    let start = doc
+        .find("| quantity | (12.10)/(12.11) |")
+        .expect("the trim table");
+    let mut missed = Vec::new();
+    let mut rows = 0;
+    for line in doc[start..].lines().skip(2) {
+        if !line.starts_with('|') {
+            break;
+        }
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        let names: Vec<&str> = cells[1].split(", ").collect();
+        let printed: Vec<f64> = cells[2]
+            .split(", ")
+            .map(|p| p.replace('−', "-").parse().unwrap())
+            .collect();
+        assert_eq!(names.len(), printed.len(), "{line}");
+        for (n, p) in names.iter().zip(printed) {
+            rows += 1;
+            if !matches(value(n), p) {
+                missed.push(n.to_string());
+            }
+        }
+    }
+    assert!(rows >= 17, "{rows} values in the table");
+    let said = doc
+        .split("Every printed value but ")
+        .nth(1)
+        .and_then(|t| t.split(" is matched").next())
+        .expect("the sentence naming the exceptions");
+    let mut said: Vec<String> = said
+        .replace(" and ", ", ")
+        .split(", ")
+        .map(str::to_string)
+        .collect();
+    said.sort();
+    missed.sort();
+    assert_eq!(
+        said, missed,
+        "docs/trim-linearize.md names the wrong exceptions"
+    );
+    let readme = read("README.md");
+    for n in &missed {
+        assert!(
+            readme.contains("all but b1") && readme.contains(n.as_str()),
+            "README does not name {n}"
+        );
+    }
+}

@@ -600,13 +600,13 @@ const CORPUS: &[Case] = &[
         "sensors",
         "simulate duration 0",
         "sensors simulate --duration-s 0",
-        &["--duration-s"],
+        &["--duration 0 "],
     ),
     fail(
         "sensors",
         "simulate duration 1e300 (printed short)",
         "sensors simulate --duration-s 1e300",
-        &["--duration-s 1e300 ", "86400"],
+        &["--duration 1e300 ", "86400"],
     ),
     fail(
         "sensors",

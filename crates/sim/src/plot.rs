@@ -541,12 +541,15 @@ impl<'a> Figure<'a> {
             .map(|i| i32::try_from(i as u64 * u64::from(self.panel_height_px)).unwrap_or(i32::MAX))
             .collect();
         let rows = body.split_by_breakpoints::<i32, i32, _, _>([], breaks);
+        // the legend column beside all panels: a panel's legend starts level
+        // with it, and a shared one runs on beside the panels that share it
+        let (_, legend) = body.split_horizontally(self.width_px.saturating_sub(LEGEND_W));
         let xf = move |v: &f64| tick_label(*v, x0, x1, X_LABELS);
         let blank = |_: &f64| String::new();
         for (i, ((panel, row), (y0, y1))) in self.panels.iter().zip(&rows).zip(ranges).enumerate() {
             let last = i + 1 == n;
             let legend_x = self.width_px.saturating_sub(LEGEND_W);
-            let (left, legend) = row.split_horizontally(legend_x);
+            let (left, _) = row.split_horizontally(legend_x);
             let yf = move |v: &f64| tick_label(*v, y0, y1, Y_LABELS);
             let mut chart = ChartBuilder::on(&left)
                 .margin_top(9)
@@ -659,7 +662,7 @@ impl<'a> Figure<'a> {
             }
             let font = ("sans-serif", 15).into_font().color(&BLACK);
             let note_font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
-            let mut y = 18;
+            let mut y = 18 + i32::try_from(i as u64 * u64::from(self.panel_height_px)).unwrap_or(0);
             for (s, (color, dashed)) in panel.series.iter().zip(&styles) {
                 legend_entry(&legend, y, s.name, color.stroke_width(2), *dashed, &font)
                     .map_err(|e| err(&e))?;
