@@ -184,6 +184,46 @@ pub struct FusionFilter {
     q: Matrix9,
     x: Vector9,
     p: Matrix9,
+    gate: GpsGate,
+    /// Consecutive rejections of the GPS position and velocity updates.
+    streak: [u32; 2],
+    last: GateReport,
+    rejected: u64,
+}
+
+/// The innovation gate of the GPS updates ([`FusionFilter::with_gps_gate`]):
+/// a position or velocity fix whose normalised innovation squared
+/// `NIS = yᵀ S⁻¹ y` (χ² with 3 degrees of freedom for a consistent filter)
+/// exceeds `nis` is not fused — a receiver's glitch cannot drag the
+/// estimate — unless `reset_after` consecutive fixes were refused (then the
+/// filter, not the receiver, is presumed wrong and the next fix is fused).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GpsGate {
+    /// Largest accepted NIS of a 3-vector GPS update (`f64::INFINITY`: no gate).
+    pub nis: f64,
+    /// Refusals in a row after which the next fix is fused ungated (0: never).
+    pub reset_after: u32,
+}
+
+impl GpsGate {
+    /// No gate: every fix fused (the thesis's filter).
+    pub const OFF: GpsGate = GpsGate {
+        nis: f64::INFINITY,
+        reset_after: 0,
+    };
+}
+
+/// What the gate did with the last step's GPS fix.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GateReport {
+    /// The position fix was refused by the gate.
+    pub position_rejected: bool,
+    /// The velocity fix was refused by the gate.
+    pub velocity_rejected: bool,
+    /// NIS of the last position update (gated or not; 0 without one).
+    pub position_nis: f64,
+    /// NIS of the last velocity update (gated or not; 0 without one).
+    pub velocity_nis: f64,
 }
 
 impl FusionFilter {
@@ -221,7 +261,35 @@ impl FusionFilter {
             q,
             x: x0,
             p: p0,
+            gate: GpsGate::OFF,
+            streak: [0; 2],
+            last: GateReport::default(),
+            rejected: 0,
         })
+    }
+
+    /// The same filter with the GPS updates gated by `gate` (a NaN or
+    /// non-positive bound is refused).
+    pub fn with_gps_gate(mut self, gate: GpsGate) -> Result<Self, FusionError> {
+        if gate.nis.is_nan() || gate.nis <= 0.0 {
+            return Err(FusionError::InvalidConfig {
+                field: "gps_gate_nis",
+                value: gate.nis,
+                allowed: "> 0 (infinite: no gate)",
+            });
+        }
+        self.gate = gate;
+        Ok(self)
+    }
+
+    /// What the gate did with the last step's GPS fix.
+    pub fn last_gate(&self) -> &GateReport {
+        &self.last
+    }
+
+    /// GPS updates refused by the gate since the start.
+    pub fn rejected_updates(&self) -> u64 {
+        self.rejected
     }
 
     /// Current state estimate `[Ξ_ned, Ξ̇_ned, Θ]`.
@@ -314,7 +382,8 @@ impl FusionFilter {
         z: &Vector3<f64>,
         sigma: &Vector3<f64>,
         wrap_last: bool,
-    ) -> Result<(), FusionError> {
+        gated: Option<usize>,
+    ) -> Result<bool, FusionError> {
         let mut innov = z - self.x.fixed_rows::<3>(offset);
         if wrap_last {
             innov.z = wrap_pi(innov.z);
@@ -325,6 +394,22 @@ impl FusionFilter {
             s[(i, i)] += sigma[i] * sigma[i];
         }
         let s_inv = s.try_inverse().ok_or(FusionError::SingularInnovation)?;
+        if let Some(g) = gated {
+            let nis = (innov.transpose() * s_inv * innov)[(0, 0)];
+            if g == 0 {
+                self.last.position_nis = nis;
+            } else {
+                self.last.velocity_nis = nis;
+            }
+            let forced = self.gate.reset_after > 0 && self.streak[g] >= self.gate.reset_after;
+            // a NaN NIS (an overflowing innovation) is refused too
+            if !(nis <= self.gate.nis) && !forced {
+                self.streak[g] = self.streak[g].saturating_add(1);
+                self.rejected += 1;
+                return Ok(false);
+            }
+            self.streak[g] = 0;
+        }
         let k = p_xh * s_inv; // (13.21)
         self.x += k * innov; // (13.23)
         // (13.22): P = (I − K H) P⁻ with H selecting rows offset..offset+3.
@@ -343,7 +428,7 @@ impl FusionFilter {
             }
         }
         self.x[8] = wrap_pi(self.x[8]);
-        Ok(())
+        Ok(true)
     }
 
     /// One filter step: predict with the IMU samples of k−1 ((13.16), (13.19),
@@ -379,17 +464,18 @@ impl FusionFilter {
         }
         let u = self.input_from_imu(&input.specific_force_body_m_s2, &input.gyro_body_rad_s)?;
         self.predict(&u);
+        self.last = GateReport::default();
         if let Some(g) = &input.gps_ned_m {
             let sigma = self.config.gps_sigma_m;
-            self.update_block(0, g, &sigma, false)?;
+            self.last.position_rejected = !self.update_block(0, g, &sigma, false, Some(0))?;
         }
         if let Some(v) = &input.gps_vel_ned_m_s {
             let sigma = self.config.gps_vel_sigma_m_s;
-            self.update_block(3, v, &sigma, false)?;
+            self.last.velocity_rejected = !self.update_block(3, v, &sigma, false, Some(1))?;
         }
         if let Some(a) = &input.attitude_rad {
             let sigma = self.config.attitude_sigma_rad;
-            self.update_block(6, a, &sigma, true)?;
+            self.update_block(6, a, &sigma, true, None)?;
         }
         Ok(())
     }
@@ -455,5 +541,76 @@ mod tests {
             f.step(&input),
             Err(FusionError::GimbalLock { .. })
         ));
+    }
+
+    /// The GPS gate: fixes at the estimate are fused; a fix 10 km away at
+    /// 300 m/s (a receiver's glitch) is refused and leaves the estimate
+    /// where prediction alone puts it; after `reset_after` refusals in a
+    /// row the next fix is fused (the filter presumed wrong).
+    #[test]
+    fn the_gps_gate_refuses_a_glitch_and_resets_after_a_streak() {
+        let cfg = FusionConfig::default();
+        let gate = GpsGate {
+            nis: 50.0,
+            reset_after: 5,
+        };
+        let new = || {
+            FusionFilter::new(cfg, Vector9::zeros(), Matrix9::identity())
+                .unwrap()
+                .with_gps_gate(gate)
+                .unwrap()
+        };
+        let level = Vector3::new(0.0, 0.0, -cfg.gravity_m_s2);
+        let at = |p: Vector3<f64>, v: Vector3<f64>| FusionInput {
+            specific_force_body_m_s2: level,
+            gyro_body_rad_s: Vector3::zeros(),
+            gps_ned_m: Some(p),
+            gps_vel_ned_m_s: Some(v),
+            attitude_rad: None,
+        };
+        let mut f = new();
+        for _ in 0..20 {
+            f.step(&at(Vector3::new(0.5, -0.3, 0.2), Vector3::zeros()))
+                .unwrap();
+            assert!(!f.last_gate().position_rejected && !f.last_gate().velocity_rejected);
+        }
+        let mut predicted = f.clone();
+        let glitch = at(
+            Vector3::new(10_000.0, 0.0, -5_000.0),
+            Vector3::new(300.0, 0.0, 0.0),
+        );
+        f.step(&glitch).unwrap();
+        predicted
+            .step(&FusionInput {
+                gps_ned_m: None,
+                gps_vel_ned_m_s: None,
+                ..glitch
+            })
+            .unwrap();
+        assert!(f.last_gate().position_rejected && f.last_gate().velocity_rejected);
+        assert!(f.last_gate().position_nis > 1e6, "{:?}", f.last_gate());
+        assert_eq!(f.state(), predicted.state());
+        assert_eq!(f.rejected_updates(), 2);
+        // four more refusals make a streak of five: the sixth is fused
+        for _ in 0..4 {
+            f.step(&glitch).unwrap();
+            assert!(f.last_gate().position_rejected);
+        }
+        f.step(&glitch).unwrap();
+        assert!(!f.last_gate().position_rejected);
+        assert!(f.state()[0] > 100.0);
+        // no gate: the thesis's filter fuses the glitch at once
+        let mut off = FusionFilter::new(cfg, Vector9::zeros(), Matrix9::identity()).unwrap();
+        off.step(&glitch).unwrap();
+        assert!(!off.last_gate().position_rejected && off.state()[0] > 100.0);
+        assert!(
+            FusionFilter::new(cfg, Vector9::zeros(), Matrix9::identity())
+                .unwrap()
+                .with_gps_gate(GpsGate {
+                    nis: f64::NAN,
+                    reset_after: 0
+                })
+                .is_err()
+        );
     }
 }

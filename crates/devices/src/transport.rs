@@ -55,6 +55,7 @@ pub struct SerialLink {
     /// description: the reads keep waiting up to their timeout).
     writer: OwnedFd,
     path: PathBuf,
+    baud: u32,
 }
 
 impl core::fmt::Debug for SerialLink {
@@ -96,6 +97,7 @@ impl SerialLink {
             port,
             writer,
             path: path.to_path_buf(),
+            baud,
         })
     }
 
@@ -119,7 +121,13 @@ impl SerialLink {
             port,
             writer,
             path: self.path.clone(),
+            baud: self.baud,
         })
+    }
+
+    /// The baud rate the port was opened at.
+    pub fn baud(&self) -> u32 {
+        self.baud
     }
 
     /// The device path.

@@ -130,6 +130,80 @@ impl Default for FailsafeConfig {
     }
 }
 
+/// The pilot's receiver: arming, the kill channel, the channels' range.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RcConfig {
+    /// The arm switch (channel 5) acts once held in its new position this
+    /// long (s): one glitching frame, or a toggling channel, does nothing.
+    pub arm_hold_s: f64,
+    /// A kill channel (1-based, 6..=8), high above 1500 µs: held for
+    /// `kill_hold_s` it disarms at any time. With one configured the arm
+    /// switch disarms only on the ground; without, the arm switch is the
+    /// only disarm of the receiver (held `arm_hold_s`).
+    pub kill_channel: Option<u8>,
+    /// The kill channel acts once held this long (s; 0.1 s is five frames).
+    pub kill_hold_s: f64,
+    /// Least pulse width of the receiver's range (µs): a frame with a
+    /// channel below it is refused (counted, logged).
+    pub min_us: u16,
+    /// Largest pulse width of the receiver's range (µs).
+    pub max_us: u16,
+}
+
+impl Default for RcConfig {
+    fn default() -> Self {
+        RcConfig {
+            arm_hold_s: 0.5,
+            kill_channel: None,
+            kill_hold_s: 0.1,
+            min_us: 800,
+            max_us: 2200,
+        }
+    }
+}
+
+impl RcConfig {
+    /// Check every field (`file` names the configuration in errors).
+    pub fn validate(&self, file: &str) -> Result<(), ConfigError> {
+        for (field, v) in [
+            ("rc.arm_hold_s", self.arm_hold_s),
+            ("rc.kill_hold_s", self.kill_hold_s),
+        ] {
+            if !(v.is_finite() && (0.0..=5.0).contains(&v)) {
+                return Err(ConfigError::invalid(
+                    file,
+                    field,
+                    v,
+                    "must be within 0..=5 s",
+                ));
+            }
+        }
+        if let Some(k) = self.kill_channel
+            && !(6..=8).contains(&k)
+        {
+            return Err(ConfigError::invalid(
+                file,
+                "rc.kill_channel",
+                f64::from(k),
+                "must be 6..=8 (1-4 are the sticks, 5 the arm switch)",
+            ));
+        }
+        if !(500..1500).contains(&self.min_us) || !(1501..=2500).contains(&self.max_us) {
+            return Err(ConfigError::invalid(
+                file,
+                "rc.min_us",
+                f64::from(self.min_us),
+                format!(
+                    "rc.min_us must be 500..1500 and rc.max_us 1501..=2500 µs (got {}..{})",
+                    self.min_us, self.max_us
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Where the flight log goes.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -220,6 +294,12 @@ pub struct OnboardConfig {
     /// Failsafe settings.
     #[serde(default)]
     pub failsafe: FailsafeConfig,
+    /// The pilot's receiver (arm hold time, kill channel, range).
+    #[serde(default)]
+    pub rc: RcConfig,
+    /// The sensors' plausibility limits.
+    #[serde(default)]
+    pub plausibility: crate::plausibility::PlausibilityConfig,
     /// Log folder.
     #[serde(default)]
     pub log: LogConfig,
@@ -351,6 +431,8 @@ impl OnboardConfig {
                 "must be 1..=10000 samples",
             ));
         }
+        self.rc.validate(file)?;
+        self.plausibility.validate(file)?;
         if !(1..=99).contains(&self.realtime.priority) {
             return Err(ConfigError::invalid(
                 file,

@@ -4,7 +4,9 @@
 //! `SensorComputer` `helicon sim` flies) computes the law, the mode
 //! picks what goes to the servos. Allocation-free.
 
+use crate::plausibility::{GpsQuality, Rejection, SensorGate};
 use crate::safety::{Health, Mode, RcInput, RcLink, SafetyEvent, Supervisor};
+use helicon_core::ServoLimits;
 use helicon_core::imu_health::{ImuHealth, ImuHealthMonitor};
 use helicon_core::state::Input;
 use helicon_core::{Reference, SensorComputer, SensorFrame, Telemetry};
@@ -24,6 +26,9 @@ pub struct Tick {
     pub rc: Option<RcInput>,
     /// The mission's reference now.
     pub reference: Reference,
+    /// The GPS receiver's own report of the frame's fix (satellites,
+    /// accuracies), when it gives one.
+    pub gps_quality: Option<GpsQuality>,
 }
 
 /// What the control task decided.
@@ -50,6 +55,10 @@ pub struct ControlOutput {
     /// ([`RcLink::Failsafe`] or [`RcLink::Silent`]: lost, and how;
     /// [`RcLink::Ok`]: back).
     pub rc_link_change: Option<RcLink>,
+    /// A sample refused this step, with the count of its kind so far, when
+    /// that count is 1 or a power of two (the log's and the operator's
+    /// text: the first and each doubling, never one per sample).
+    pub rejection: Option<(Rejection, u64)>,
 }
 
 /// A change of the IMU health monitor's flags (the settling flag aside):
@@ -141,6 +150,9 @@ pub struct ControlTask {
     health: Option<ImuHealthMonitor>,
     health_flags: u8,
     rc_lost: bool,
+    gate: Option<SensorGate>,
+    servo_limits: Option<ServoLimits>,
+    rc_refused: u64,
 }
 
 impl ControlTask {
@@ -159,7 +171,43 @@ impl ControlTask {
             health: None,
             health_flags: 0,
             rc_lost: false,
+            gate: None,
+            servo_limits: None,
+            rc_refused: 0,
         }
+    }
+
+    /// The same task refusing implausible sensor samples by `gate` before
+    /// the navigation sees them (`helicon onboard` and `helicon sitl` fly
+    /// with it).
+    #[must_use]
+    pub fn with_gate(mut self, gate: SensorGate) -> Self {
+        self.gate = Some(gate);
+        self
+    }
+
+    /// The same task clamping every servo command it sends — the law's,
+    /// the pilot's sticks, the trim — to `limits` (the servos' range), and
+    /// sending the trim for a command that is not finite.
+    #[must_use]
+    pub fn with_servo_limits(mut self, limits: ServoLimits) -> Self {
+        self.servo_limits = Some(limits);
+        self
+    }
+
+    /// The plausibility gate, when the task has one (its counts).
+    pub fn gate(&self) -> Option<&SensorGate> {
+        self.gate.as_ref()
+    }
+
+    /// Receiver frames refused so far (a channel outside the receiver's range).
+    pub fn rc_refused(&self) -> u64 {
+        self.rc_refused
+    }
+
+    /// Tell the supervisor whether the helicopter is on the ground.
+    pub fn set_landed(&mut self, landed: bool) {
+        self.supervisor.set_landed(landed);
     }
 
     /// The same task running the IMU health monitor on each IMU sample
@@ -201,20 +249,48 @@ impl ControlTask {
     /// law's command only in auto, and leaving auto (the pilot's switch, a
     /// failsafe, disarming) ends it for the rest of the flight. No
     /// allocation.
+    #[allow(clippy::too_many_lines)] // one sample in order: gate, supervise, compute, pick
     pub fn step_with(&mut self, tick: &Tick, excitation: &Excitations) -> ControlOutput {
+        let mut rejection = None;
+        let mut note = |kind: Rejection, count: u64| {
+            if count.is_power_of_two() && rejection.is_none() {
+                rejection = Some((kind, count));
+            }
+        };
+        if let Some(rc) = tick.rc
+            && rc.out_of_range
+        {
+            self.rc_refused += 1;
+        }
         if let Some(rc) = tick.rc
             && !rc.failsafe
+            && !rc.out_of_range
         {
             // a receiver in failsafe does not give the pilot's sticks
             self.rc = Some(rc);
         }
+        // plausibility before fusion: refused parts of the frame are missing
+        let gated = match (&tick.frame, self.gate.as_mut()) {
+            (Some(f), Some(g)) => {
+                let out = g.check(f, tick.gps_quality.as_ref());
+                for r in [out.imu, out.mag, out.gps].into_iter().flatten() {
+                    note(r, g.count(r));
+                }
+                Some(out)
+            }
+            _ => None,
+        };
+        let frame = gated.map_or(tick.frame, |g| g.frame);
         let health = Health {
             now_s: tick.now_s,
-            imu_fresh: tick.frame.is_some(),
-            gps_fresh: tick.frame.is_some_and(|f| f.gps.is_some()),
-            mag_fresh: tick.frame.is_some_and(|f| f.mag_body.is_some()),
+            imu_fresh: frame.is_some(),
+            gps_fresh: frame.is_some_and(|f| f.gps.is_some_and(|g| g.is_valid())),
+            mag_fresh: frame.is_some_and(|f| f.mag_body.is_some()),
             deadline_missed: tick.deadline_missed,
             navigation_failed: self.nav_failed,
+            imu_rejected: gated.is_some_and(|g| g.imu.is_some()),
+            gps_rejected: gated.is_some_and(|g| g.gps.is_some()),
+            mag_rejected: gated.is_some_and(|g| g.mag.is_some()),
         };
         let event = self
             .supervisor
@@ -245,7 +321,7 @@ impl ControlTask {
         };
         let mut imu_health = None;
         let mut imu_health_change = None;
-        if let (Some(frame), Some(m)) = (&tick.frame, self.health.as_mut()) {
+        if let (Some(frame), Some(m)) = (&frame, self.health.as_mut()) {
             let h = m.update(&frame.imu);
             let flags = h.flags & !ImuHealth::SETTLING;
             if flags != self.health_flags {
@@ -258,7 +334,7 @@ impl ControlTask {
             imu_health = Some(h);
         }
         let mut telemetry = None;
-        if let Some(frame) = &tick.frame {
+        if let Some(frame) = &frame {
             let reference = self.supervisor.reference(&tick.reference);
             let u_exc = offset.map_or_else(Input::zeros, |o| o.0);
             // outside the law's modes the predictor is told what the
@@ -278,15 +354,35 @@ impl ControlTask {
                 Ok(t) => {
                     self.law = t.command;
                     self.heading_rad = t.estimate[2];
+                    // a valid fix the navigation's innovation gate refused
+                    // (a jump) counts as missing, as a refused one
+                    if frame.gps.is_some_and(|g| g.is_valid())
+                        && t.navigation.is_some_and(|n| !n.gps_fused)
+                    {
+                        self.supervisor.gps_refused();
+                        if let Some(g) = self.gate.as_mut() {
+                            let n = g.count_rejection(Rejection::GpsJump);
+                            note(Rejection::GpsJump, n);
+                        }
+                    }
                     telemetry = Some(t);
                 }
                 Err(_) => self.nav_failed = true,
             }
         }
+        let mut servo = self
+            .supervisor
+            .servo(&self.law, &self.u_trim, self.rc.as_ref());
+        if !servo.iter().all(|v| v.is_finite()) {
+            servo = self.u_trim;
+        }
+        if let Some(l) = &self.servo_limits {
+            for i in 0..servo.len() {
+                servo[i] = servo[i].clamp(l.min[i], l.max[i]);
+            }
+        }
         ControlOutput {
-            servo: self
-                .supervisor
-                .servo(&self.law, &self.u_trim, self.rc.as_ref()),
+            servo,
             mode: self.supervisor.mode(),
             telemetry,
             event,
@@ -294,6 +390,7 @@ impl ControlTask {
             imu_health,
             imu_health_change,
             rc_link_change,
+            rejection,
         }
     }
 }

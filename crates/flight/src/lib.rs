@@ -28,6 +28,7 @@ pub mod control;
 pub mod ground;
 pub mod mission;
 pub mod onboard;
+pub mod plausibility;
 pub mod ports;
 pub mod realtime;
 pub mod records;

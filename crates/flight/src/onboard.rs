@@ -7,7 +7,8 @@ use crate::config::OnboardConfig;
 use crate::control::ControlTask;
 use crate::ground;
 use crate::mission::{Mission, References};
-use crate::ports::{DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port};
+use crate::plausibility::SensorGate;
+use crate::ports::{DeviceSensors, avionics_ports, open_port};
 use crate::runtime::{self, Next, Pacing, RunReport, RuntimeOptions, SensorPort};
 use crate::safety::Supervisor;
 use helicon_config::ConfigError;
@@ -166,7 +167,7 @@ pub fn run(
     let imu = open_port(&d.imu.path, d.imu.baud)?;
     let gps = open_port(&d.gps.path, d.gps.baud)?;
     let avionics = open_port(&d.avionics.path, d.avionics.baud)?;
-    let rc = clone_port(&avionics)?;
+    let (rc, servos) = avionics_ports(avionics, cfg.rc)?;
     let h = &cfg.home;
     let home = Geodetic::new(h.latitude_deg, h.longitude_deg, h.height_m)
         .map_err(|e| OnboardError::Alignment(format!("home: {e}")))?;
@@ -221,7 +222,7 @@ pub fn run(
     let u_trim = gains.set.u_trim;
     let task = ControlTask::new(
         computer,
-        Supervisor::new(cfg.stale, cfg.failsafe, 0.0),
+        Supervisor::new(cfg.stale, cfg.failsafe, 0.0).with_rc(cfg.rc),
         u_trim,
     )
     .with_imu_health(imu_health_at(
@@ -229,7 +230,9 @@ pub fn run(
         ts,
         &cfg.sensors,
         &cfg.file,
-    )?);
+    )?)
+    .with_gate(SensorGate::new(&cfg.plausibility, &cfg.sensors, &cfg.file)?)
+    .with_servo_limits(params.servo_limits());
     let dir = cfg.resolve(&cfg.log.dir);
     std::fs::create_dir_all(&dir).map_err(|e| OnboardError::Log {
         path: dir.display().to_string(),
@@ -272,8 +275,8 @@ pub fn run(
         task,
         mission,
         sensors,
-        Some(DeviceRc::new(rc)),
-        DeviceServos::new(avionics),
+        Some(rc),
+        servos,
         log,
         None,
         RuntimeOptions {

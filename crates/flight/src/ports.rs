@@ -20,6 +20,8 @@
 //! rate); the avionics port's link is cloned for the receiver and the
 //! servos (a reader and a writer thread).
 
+use crate::config::RcConfig;
+use crate::plausibility::GpsQuality;
 use crate::runtime::{Arrival, Next, PortError, RcPort, SensorPort, ServoPort};
 use crate::safety::RcInput;
 use helicon_core::SensorFrame;
@@ -27,8 +29,185 @@ use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, ServoCommand};
 use helicon_devices::{AvionicsDecoder, LocalNed, UbxDecoder, VnBinaryDecoder};
 use helicon_devices::{SerialLink, TransportError, Written};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
+
+/// A device of the on-board computer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Device {
+    /// The IMU with its magnetometer.
+    Imu,
+    /// The GPS receiver.
+    Gps,
+    /// The avionics board (servos out, receiver in).
+    Avionics,
+}
+
+/// A device's port failed (a read error, its end, a hang-up: the device is
+/// lost and its port is reopened with back-off) or was reopened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct DeviceEvent {
+    /// Which device.
+    pub device: Device,
+    /// Lost (true) or back (false).
+    pub lost: bool,
+}
+
+impl DeviceEvent {
+    /// The log's and the operator's text (at most 50 bytes: one MAVLink
+    /// STATUSTEXT).
+    pub fn text(&self) -> &'static str {
+        match (self.device, self.lost) {
+            (Device::Imu, true) => "IMU port lost, reopening",
+            (Device::Imu, false) => "IMU port reopened",
+            (Device::Gps, true) => "GPS port lost, reopening",
+            (Device::Gps, false) => "GPS port reopened",
+            (Device::Avionics, true) => "avionics port lost, reopening",
+            (Device::Avionics, false) => "avionics port reopened",
+        }
+    }
+}
+
+/// The first wait before reopening a lost port.
+pub const REOPEN_FIRST: Duration = Duration::from_millis(50);
+/// The longest wait between two attempts to reopen a lost port (the wait
+/// doubles from [`REOPEN_FIRST`] up to it).
+pub const REOPEN_MAX: Duration = Duration::from_secs(2);
+
+/// A device's port that survives the device: an error (a read or write
+/// error, a hang-up) drops the port and marks the device lost; it is then
+/// reopened by its path, first after [`REOPEN_FIRST`], then at doubling
+/// intervals up to [`REOPEN_MAX`] (a USB adapter re-plugged, a
+/// `/dev/serial/by-id` link pointing at the new device).
+pub struct Reopening {
+    device: Device,
+    path: PathBuf,
+    baud: u32,
+    link: Option<SerialLink>,
+    retry_at_ns: u64,
+    backoff: Duration,
+    /// Times the port was lost.
+    pub losses: u64,
+}
+
+/// What one read of a [`Reopening`] port gave.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinkRead {
+    /// Bytes read (0: nothing within the timeout).
+    Bytes(usize),
+    /// The port failed on this read: the device is lost.
+    Lost,
+    /// The port was reopened on this call.
+    Reopened,
+    /// The port is down (waiting to reopen).
+    Down,
+}
+
+impl Reopening {
+    /// `link`, opened at `baud`, as the port of `device`.
+    pub fn new(device: Device, link: SerialLink, baud: u32) -> Self {
+        Reopening {
+            device,
+            path: link.path().to_path_buf(),
+            baud,
+            link: Some(link),
+            retry_at_ns: 0,
+            backoff: REOPEN_FIRST,
+            losses: 0,
+        }
+    }
+
+    /// The port's link, when it is up.
+    pub fn link_mut(&mut self) -> Option<&mut SerialLink> {
+        self.link.as_mut()
+    }
+
+    /// Take `link` (a handle another thread reopened) as the port, when
+    /// the port is down: true when taken.
+    fn adopt(&mut self, link: SerialLink) -> bool {
+        if self.link.is_some() {
+            return false;
+        }
+        self.link = Some(link);
+        self.backoff = REOPEN_FIRST;
+        true
+    }
+
+    /// The port failed: drop it, retry after the back-off.
+    pub fn lose(&mut self) {
+        self.link = None;
+        self.losses += 1;
+        self.backoff = REOPEN_FIRST;
+        self.retry_at_ns = crate::realtime::monotonic_ns() + duration_ns(self.backoff);
+    }
+
+    /// Reopen the port when it is down and its back-off has passed: true
+    /// when it was reopened by this call.
+    pub fn try_reopen(&mut self) -> bool {
+        if self.link.is_some() {
+            return false;
+        }
+        let now = crate::realtime::monotonic_ns();
+        if now < self.retry_at_ns {
+            return false;
+        }
+        match SerialLink::open(&self.path, self.baud, Duration::ZERO) {
+            Ok(l) => {
+                self.link = Some(l);
+                self.backoff = REOPEN_FIRST;
+                true
+            }
+            Err(_) => {
+                self.backoff = (self.backoff * 2).min(REOPEN_MAX);
+                self.retry_at_ns = now + duration_ns(self.backoff);
+                false
+            }
+        }
+    }
+
+    /// Read what the port has, waiting at most `timeout` (a port that is
+    /// down waits the timeout out, so a reader does not spin).
+    pub fn read(&mut self, buf: &mut [u8], timeout: Duration) -> LinkRead {
+        if self.link.is_none() {
+            if self.try_reopen() {
+                return LinkRead::Reopened;
+            }
+            if !timeout.is_zero() {
+                std::thread::sleep(timeout);
+            }
+            return LinkRead::Down;
+        }
+        let Some(link) = self.link.as_mut() else {
+            return LinkRead::Down;
+        };
+        match link.read_timeout(buf, timeout) {
+            Ok(n) => LinkRead::Bytes(n),
+            Err(_) => {
+                self.lose();
+                LinkRead::Lost
+            }
+        }
+    }
+
+    /// The event of a read's outcome, if it was one.
+    fn event(&self, r: LinkRead) -> Option<DeviceEvent> {
+        match r {
+            LinkRead::Lost => Some(DeviceEvent {
+                device: self.device,
+                lost: true,
+            }),
+            LinkRead::Reopened => Some(DeviceEvent {
+                device: self.device,
+                lost: false,
+            }),
+            _ => None,
+        }
+    }
+}
+
+fn duration_ns(d: Duration) -> u64 {
+    u64::try_from(d.as_nanos()).unwrap_or(u64::MAX)
+}
 
 /// The baud rates a device can be opened at.
 pub const BAUDS: [u32; 9] = [
@@ -63,17 +242,16 @@ fn port_error(link: &SerialLink, what: &str, e: &TransportError) -> PortError {
     }
 }
 
-/// Read what `link` has, waiting at most `timeout`: `Ok(0)` on timeout; an
-/// error once the device is gone (hung up, EIO).
-fn read_port(link: &mut SerialLink, buf: &mut [u8], timeout: Duration) -> Result<usize, PortError> {
-    link.read_timeout(buf, timeout)
-        .map_err(|e| port_error(link, "read", &e))
-}
-
 /// The IMU (with magnetometer) and GPS read by one sensor-server thread.
+/// A port that fails (a read error, a hang-up) is the device lost: its
+/// samples stop (the supervisor's stale limit acts: the IMU lost, the GPS
+/// or magnetometer failsafe), the loss and the reopening are reported in
+/// the next [`Arrival`], and the port is reopened with back-off
+/// ([`Reopening`]); the sensor server never ends for a device.
 pub struct DeviceSensors {
-    imu: SerialLink,
-    gps: SerialLink,
+    imu: Reopening,
+    gps: Reopening,
+    pending_event: Option<DeviceEvent>,
     vn: VnBinaryDecoder,
     ubx: UbxDecoder,
     home: LocalNed,
@@ -90,9 +268,11 @@ pub struct DeviceSensors {
 impl DeviceSensors {
     /// The sensors on their ports; GPS positions in the NED frame of `home`.
     pub fn new(imu: SerialLink, gps: SerialLink, home: LocalNed, gps_latency_s: f64) -> Self {
+        let (imu_baud, gps_baud) = (imu.baud(), gps.baud());
         DeviceSensors {
-            imu,
-            gps,
+            imu: Reopening::new(Device::Imu, imu, imu_baud),
+            gps: Reopening::new(Device::Gps, gps, gps_baud),
+            pending_event: None,
             vn: VnBinaryDecoder::new(),
             ubx: UbxDecoder::new(),
             home,
@@ -138,18 +318,26 @@ impl DeviceSensors {
     /// Read whatever the GPS port holds now (no waiting): the receiver's
     /// bytes written before the IMU message are decoded before its frame
     /// is assembled.
-    fn drain_gps(&mut self) -> Result<(), PortError> {
+    fn drain_gps(&mut self) {
         loop {
-            let n = read_port(&mut self.gps, &mut self.buf, Duration::ZERO)?;
-            if n == 0 {
-                return Ok(());
+            let r = self.gps.read(&mut self.buf, Duration::ZERO);
+            if let Some(e) = self.gps.event(r) {
+                self.pending_event = Some(e);
             }
+            let LinkRead::Bytes(n @ 1..) = r else {
+                return;
+            };
             let mut last = None;
             self.ubx.push_with(&self.buf[..n], |m| last = Some(m));
             if last.is_some() {
                 self.pending_gps = last;
             }
         }
+    }
+
+    /// Times each port was lost so far (IMU, GPS).
+    pub fn losses(&self) -> (u64, u64) {
+        (self.imu.losses, self.gps.losses)
     }
 
     fn assemble(&mut self, m: &helicon_devices::VnCommon) -> Option<Arrival> {
@@ -166,11 +354,15 @@ impl DeviceSensors {
                 frame: None,
                 arrived_ns,
                 rc: self.pending_rc.take(),
+                gps_quality: None,
+                device: self.pending_event.take(),
             });
         }
         self.last_imu_ns = Some(ns);
         let t_s = ns as f64 * 1e-9;
+        let mut quality = None;
         let gps = self.pending_gps.take().map(|pvt| {
+            quality = Some(GpsQuality::from_nav_pvt(&pvt));
             let tow_s = f64::from(pvt.itow_ms) * 1e-3;
             let offset = *self.tow_offset_s.get_or_insert(tow_s - t_s);
             pvt.to_gps_fix(&self.home, tow_s - offset - self.gps_latency_s)
@@ -184,17 +376,37 @@ impl DeviceSensors {
             }),
             arrived_ns,
             rc: self.pending_rc.take(),
+            gps_quality: quality,
+            device: self.pending_event.take(),
         })
     }
 }
 
 impl SensorPort for DeviceSensors {
     fn next(&mut self, timeout: Duration) -> Result<Next<Arrival>, PortError> {
-        let n = read_port(&mut self.imu, &mut self.buf, timeout)?;
+        let r = self.imu.read(&mut self.buf, timeout);
+        if let Some(e) = self.imu.event(r) {
+            self.pending_event = Some(e);
+        }
+        let n = match r {
+            LinkRead::Bytes(n) => n,
+            _ => 0,
+        };
         if n == 0 {
             // the GPS keeps being read while the IMU is silent
-            self.drain_gps()?;
-            return Ok(Next::Timeout);
+            self.drain_gps();
+            self.drain_rc()?;
+            // a device's loss or return is told at once (not a sample)
+            return Ok(match self.pending_event.take() {
+                Some(e) => Next::Item(Arrival {
+                    frame: None,
+                    arrived_ns: crate::realtime::monotonic_ns(),
+                    rc: self.pending_rc.take(),
+                    gps_quality: None,
+                    device: Some(e),
+                }),
+                None => Next::Timeout,
+            });
         }
         // the newest complete IMU message of the read (a reader that fell
         // behind keeps the newest sample)
@@ -204,7 +416,7 @@ impl SensorPort for DeviceSensors {
         let Some(m) = newest else {
             return Ok(Next::Timeout);
         };
-        self.drain_gps()?;
+        self.drain_gps();
         self.drain_rc()?;
         Ok(self.assemble(&m).map_or(Next::Timeout, Next::Item))
     }
@@ -220,27 +432,100 @@ pub fn stick_command(us: u16) -> f64 {
     (f64::from(us) - 1500.0) / 1000.0
 }
 
-/// The receiver side of the avionics port.
+/// The receiver side of the avionics port. A port that fails is reopened
+/// with back-off ([`Reopening`]); meanwhile the receiver is silent (the
+/// supervisor's `stale.rc_s` takes it as the pilot's link lost).
 pub struct DeviceRc {
-    port: SerialLink,
+    port: Reopening,
     decoder: AvionicsDecoder,
+    config: RcConfig,
     buf: [u8; 256],
+    slot: Option<ReopenSlot>,
+}
+
+/// The avionics port reopened by the servo side, handed to the receiver
+/// side (the port is opened exclusively: the receiver cannot open it a
+/// second time). The lock is only tried, never waited for.
+type ReopenSlot = std::sync::Arc<std::sync::Mutex<Option<SerialLink>>>;
+
+/// The receiver and the servo sides of one avionics port (`link`), the
+/// receiver read with `config`: when the line fails, the servo side
+/// reopens the port with back-off and hands the receiver side its handle.
+pub fn avionics_ports(
+    link: SerialLink,
+    config: RcConfig,
+) -> Result<(DeviceRc, DeviceServos), PortError> {
+    let rc_link = clone_port(&link)?;
+    let slot = ReopenSlot::default();
+    let mut rc = DeviceRc::new(rc_link).with_config(config);
+    rc.slot = Some(slot.clone());
+    let mut servos = DeviceServos::new(link);
+    servos.slot = Some(slot);
+    Ok((rc, servos))
 }
 
 impl DeviceRc {
-    /// The receiver on (a handle of) the avionics port.
+    /// The receiver on (a handle of) the avionics port, with the default
+    /// receiver settings.
     pub fn new(port: SerialLink) -> Self {
+        let baud = port.baud();
         DeviceRc {
-            port,
+            port: Reopening::new(Device::Avionics, port, baud),
             decoder: AvionicsDecoder::new(),
+            config: RcConfig::default(),
             buf: [0; 256],
+            slot: None,
         }
+    }
+
+    /// The same receiver with the settings `config` (range, kill channel).
+    #[must_use]
+    pub fn with_config(mut self, config: RcConfig) -> Self {
+        self.config = config;
+        self
+    }
+}
+
+/// The supervisor's view of a receiver frame under `config`: the sticks
+/// (channels 1–4), the arm switch (channel 5 above 1500 µs), the kill
+/// channel; a frame with any of these channels outside the receiver's
+/// range is marked out of range (refused by the supervisor).
+pub fn rc_input(rc: &helicon_devices::RcInput, config: &RcConfig) -> RcInput {
+    let kill = config.kill_channel.map(|k| usize::from(k) - 1);
+    let used = |i: usize| i < 5 || Some(i) == kill;
+    let out_of_range = rc
+        .channels_us
+        .iter()
+        .enumerate()
+        .any(|(i, us)| used(i) && !(config.min_us..=config.max_us).contains(us));
+    RcInput {
+        servo: Input::from_fn(|i, _| stick_command(rc.channels_us[i])),
+        manual: !rc.autonomous,
+        armed: rc.channels_us[4] > 1500,
+        failsafe: rc.failsafe,
+        kill: kill.is_some_and(|k| rc.channels_us.get(k).is_some_and(|us| *us > 1500)),
+        out_of_range,
     }
 }
 
 impl RcPort for DeviceRc {
     fn next(&mut self, timeout: Duration) -> Result<Next<RcInput>, PortError> {
-        let n = read_port(&mut self.port, &mut self.buf, timeout)?;
+        if self.port.link.is_none()
+            && let Some(slot) = &self.slot
+        {
+            // the servo side reopens the (exclusive) port and hands it over
+            if let Some(l) = slot.try_lock().ok().and_then(|mut g| g.take()) {
+                self.port.adopt(l);
+            } else {
+                if !timeout.is_zero() {
+                    std::thread::sleep(timeout);
+                }
+                return Ok(Next::Timeout);
+            }
+        }
+        let LinkRead::Bytes(n) = self.port.read(&mut self.buf, timeout) else {
+            return Ok(Next::Timeout);
+        };
         let mut last = None;
         self.decoder.push_with(&self.buf[..n], |m| {
             if let AvionicsMessage::Rc(rc) = m {
@@ -248,12 +533,7 @@ impl RcPort for DeviceRc {
             }
         });
         Ok(match last {
-            Some(rc) => Next::Item(RcInput {
-                servo: Input::from_fn(|i, _| stick_command(rc.channels_us[i])),
-                manual: !rc.autonomous,
-                armed: rc.channels_us[4] > 1500,
-                failsafe: rc.failsafe,
-            }),
+            Some(rc) => Next::Item(rc_input(&rc, &self.config)),
             None => Next::Timeout,
         })
     }
@@ -262,20 +542,25 @@ impl RcPort for DeviceRc {
 /// The servo side of the avionics port. A frame the port's output buffer
 /// cannot take (the line slower than the frames, the board not reading) is
 /// dropped and counted, never waited for: the control task is not held up
-/// by the line ([`SerialLink::write_all`]).
+/// by the line ([`SerialLink::write_all`]). A port that fails is reopened
+/// with back-off ([`Reopening`]); the frames meanwhile are dropped and
+/// counted.
 pub struct DeviceServos {
-    port: SerialLink,
+    port: Reopening,
     seq: u8,
     dropped: u64,
+    slot: Option<ReopenSlot>,
 }
 
 impl DeviceServos {
     /// The servos on (a handle of) the avionics port.
     pub fn new(port: SerialLink) -> Self {
+        let baud = port.baud();
         DeviceServos {
-            port,
+            port: Reopening::new(Device::Avionics, port, baud),
             seq: 0,
             dropped: 0,
+            slot: None,
         }
     }
 }
@@ -287,14 +572,31 @@ impl ServoPort for DeviceServos {
             message: e.to_string(),
         })?;
         self.seq = self.seq.wrapping_add(1);
+        if self.port.try_reopen()
+            && let (Some(slot), Some(link)) = (&self.slot, self.port.link.as_ref())
+            && let Ok(clone) = link.try_clone()
+            && let Ok(mut g) = slot.try_lock()
+        {
+            // the receiver side's handle of the reopened port
+            *g = Some(clone);
+        }
+        let Some(link) = self.port.link_mut() else {
+            self.dropped += 1;
+            return Ok(());
+        };
         // try_write: a dropped frame allocates nothing (a hot path)
-        match self.port.try_write(cmd.encode().as_bytes()) {
+        match link.try_write(cmd.encode().as_bytes()) {
             Ok(Written::All) => Ok(()),
             Ok(Written::Dropped { .. }) => {
                 self.dropped += 1;
                 Ok(())
             }
-            Err(e) => Err(port_error(&self.port, "write", &e)),
+            Err(_) => {
+                // the device is gone: reopened with back-off, frames dropped
+                self.port.lose();
+                self.dropped += 1;
+                Ok(())
+            }
         }
     }
 

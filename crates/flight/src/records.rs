@@ -3,6 +3,8 @@
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
 use crate::control::{ControlOutput, ImuHealthChange, Tick};
+use crate::plausibility::Rejection;
+use crate::ports::DeviceEvent;
 use crate::safety::{Mode, RcInput, RcLink, Reason, SafetyEvent};
 use helicon_core::imu_health::ImuHealth;
 use helicon_ulog::messages::{
@@ -47,6 +49,25 @@ pub enum FlightRecord {
         /// Silence (s).
         silent_s: f64,
     },
+    /// Sensor samples refused by the plausibility gate (or the navigation's
+    /// innovation gate): the count of the kind so far, logged at the first
+    /// and at each doubling.
+    SensorRejected {
+        /// On-board time (s).
+        t_s: f64,
+        /// What was refused.
+        kind: Rejection,
+        /// Refusals of the kind so far.
+        count: u64,
+    },
+    /// A device's port failed (read error, end of file, hang-up) or came
+    /// back: `lost` names the error's kind.
+    Device {
+        /// On-board time (s).
+        t_s: f64,
+        /// The device and what happened.
+        event: DeviceEvent,
+    },
     /// The avionics port dropped servo frames, its output buffer full (the
     /// line slower than the frames, the board not reading): the count so
     /// far, logged at the first drop and at each doubling.
@@ -79,7 +100,10 @@ pub fn failsafe_reason(r: Reason) -> Option<FailsafeReason> {
         Reason::NavigationFailure => Some(FailsafeReason::NavigationFailure),
         Reason::PilotManual | Reason::PilotAuto => Some(FailsafeReason::Pilot),
         Reason::RcLost => Some(FailsafeReason::RcLoss),
-        Reason::Armed | Reason::Disarmed | Reason::HoldElapsed => None,
+        Reason::ImuRejected | Reason::GpsRejected | Reason::MagRejected => {
+            Some(FailsafeReason::SensorImplausible)
+        }
+        Reason::Armed | Reason::Disarmed | Reason::HoldElapsed | Reason::Kill => None,
     }
 }
 
@@ -200,6 +224,34 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 "rc_link",
             )
         }
+        FlightRecord::SensorRejected { t_s, kind, count } => {
+            let ts = timestamp_us(*t_s, "sensor rejected")?;
+            log_fmt(
+                log,
+                LogLevel::Warning,
+                ts,
+                format_args!(
+                    "plausibility: {} ({count} so far) at t = {t_s:.4} s",
+                    kind.text()
+                ),
+                "plausibility: sample refused",
+            )
+        }
+        FlightRecord::Device { t_s, event } => {
+            let ts = timestamp_us(*t_s, "device")?;
+            let level = if event.lost {
+                LogLevel::Critical
+            } else {
+                LogLevel::Notice
+            };
+            log_fmt(
+                log,
+                level,
+                ts,
+                format_args!("device: {} at t = {t_s:.4} s", event.text()),
+                "device",
+            )
+        }
         FlightRecord::ServoDropped { t_s, dropped } => {
             let ts = timestamp_us(*t_s, "servo drop")?;
             log_fmt(
@@ -269,6 +321,13 @@ pub fn step_records(
             peak_fraction: h.peak_fraction,
             flags: h.flags,
         })));
+    }
+    if let Some((kind, count)) = out.rejection {
+        push(FlightRecord::SensorRejected {
+            t_s: tick.now_s,
+            kind,
+            count,
+        });
     }
     if let Some(change) = out.imu_health_change {
         push(FlightRecord::ImuHealth {

@@ -70,6 +70,11 @@ pub struct Arrival {
     /// receiver (lock-step: its frames written before the IMU message then
     /// reach the same control step, deterministically).
     pub rc: Option<RcInput>,
+    /// The GPS receiver's own report of the frame's fix (satellites,
+    /// accuracies), when the frame has a fix and the receiver gives one.
+    pub gps_quality: Option<crate::plausibility::GpsQuality>,
+    /// A device lost or reopened since the last arrival.
+    pub device: Option<crate::ports::DeviceEvent>,
 }
 
 /// The sensor devices (IMU with magnetometer, GPS) read together.
@@ -615,6 +620,7 @@ fn control_loop(
     let t0_ns = realtime::monotonic_ns();
     let mut deadline_ns = t0_ns + period_ns;
     let mut missed_last = false;
+    let mut device_events = DeviceEvents::default();
     let mut last = LastStep {
         telemetry: None,
         mode: task.mode(),
@@ -640,8 +646,15 @@ fn control_loop(
                 let now = realtime::monotonic_ns();
                 let late = now.saturating_sub(deadline_ns);
                 // take the newest frame that arrived since the last step
-                let mut newest = None;
+                // (a device's event alone does not supersede a frame)
+                let mut newest: Option<Arrival> = None;
                 while let Ok(a) = ctx.frames.pop() {
+                    if let Some(e) = a.device {
+                        device_events.push_event(e);
+                    }
+                    if a.frame.is_none() && newest.is_some_and(|n| n.frame.is_some()) {
+                        continue;
+                    }
                     if newest.is_some() {
                         superseded += 1;
                     }
@@ -664,6 +677,9 @@ fn control_loop(
                     }
                 };
                 let Some(a) = a else { break };
+                if let Some(e) = a.device {
+                    device_events.push_event(e);
+                }
                 (realtime::monotonic_ns(), 0, Some(a))
             }
         };
@@ -688,8 +704,25 @@ fn control_loop(
             deadline_missed: missed_last,
             rc,
             reference: mission.step(now_s, &last, &mut task),
+            gps_quality: arrival.and_then(|a| a.gps_quality),
         };
         let out = task.step_with(&tick, mission.excitation());
+        for e in device_events.drain() {
+            mission.notify(now_s, VehicleEvent::Warning(e.text()));
+            if ctx
+                .log
+                .push(FlightRecord::Device {
+                    t_s: now_s,
+                    event: e,
+                })
+                .is_err()
+            {
+                log_dropped += 1;
+            }
+        }
+        if let Some((kind, _)) = out.rejection {
+            mission.notify(now_s, VehicleEvent::Warning(kind.text()));
+        }
         if let Some(c) = out.imu_health_change {
             mission.notify(now_s, VehicleEvent::Warning(c.text()));
         }
@@ -809,6 +842,29 @@ fn control_loop(
         jitter,
         compute,
         final_mode: task.mode(),
+    }
+}
+
+/// Device events waiting for the next control step (a fixed array: no
+/// allocation; more than four in one step keep the last four).
+#[derive(Debug, Default)]
+struct DeviceEvents {
+    events: [Option<crate::ports::DeviceEvent>; 4],
+}
+
+impl DeviceEvents {
+    fn push_event(&mut self, e: crate::ports::DeviceEvent) {
+        if let Some(slot) = self.events.iter_mut().find(|s| s.is_none()) {
+            *slot = Some(e);
+        } else {
+            self.events.rotate_left(1);
+            self.events[3] = Some(e);
+        }
+    }
+
+    fn drain(&mut self) -> impl Iterator<Item = crate::ports::DeviceEvent> {
+        let events = std::mem::take(&mut self.events);
+        events.into_iter().flatten()
     }
 }
 

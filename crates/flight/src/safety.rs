@@ -29,10 +29,21 @@
 //! way, until its frames come back ([`RcLink::Silent`]).
 //!
 //! Arming: the receiver's arm switch arms or disarms when it moves (and at
-//! its first frame); the ground station's arm or disarm ([`Supervisor::arm`],
-//! [`Supervisor::disarm`]) holds until the switch moves again.
+//! its first frame) and stays there for `rc.arm_hold_s` (default 0.5 s: a
+//! glitching or toggling channel does nothing); the ground station's arm or
+//! disarm ([`Supervisor::arm`], [`Supervisor::disarm`]) holds until the
+//! switch moves again. With a kill channel configured (`rc.kill_channel`)
+//! the arm switch disarms only on the ground ([`Supervisor::set_landed`]),
+//! and the kill channel held `rc.kill_hold_s` disarms at any time (reason
+//! `kill`). A receiver frame with a channel outside the receiver's range is
+//! refused: not a frame of the pilot's.
+//!
+//! Sensor faults: a sample refused by the plausibility gate
+//! ([`crate::plausibility`]) counts as missing; when a sensor goes stale
+//! while its last samples were refused, the reason is `imu_rejected`,
+//! `gps_rejected` or `mag_rejected` instead of the silence's `*_stale`.
 
-use crate::config::{FailsafeConfig, StaleLimits};
+use crate::config::{FailsafeConfig, RcConfig, StaleLimits};
 use helicon_core::Reference;
 use helicon_core::state::Input;
 use nalgebra::Vector3;
@@ -101,6 +112,16 @@ pub enum Reason {
     /// The receiver reports its failsafe, or went silent for `stale.rc_s`
     /// (the pilot's link lost), while the pilot flew: the law takes over.
     RcLost,
+    /// The IMU's samples were refused as implausible until `stale.imu_s`
+    /// passed (a sensor fault, not a silence).
+    ImuRejected,
+    /// The GPS fixes were refused (no 3-D fix, poor quality, impossible,
+    /// a jump) until `stale.gps_s` passed.
+    GpsRejected,
+    /// The magnetometer's samples were refused until `stale.mag_s` passed.
+    MagRejected,
+    /// The receiver's kill channel was held (`rc.kill_hold_s`): disarmed.
+    Kill,
 }
 
 impl Reason {
@@ -119,10 +140,14 @@ impl Reason {
             Reason::HoldElapsed => "hold_elapsed",
             Reason::ImuRecovered => "imu_recovered",
             Reason::RcLost => "rc_lost",
+            Reason::ImuRejected => "imu_rejected",
+            Reason::GpsRejected => "gps_rejected",
+            Reason::MagRejected => "mag_rejected",
+            Reason::Kill => "kill",
         }
     }
 
-    /// A small code for binary logs (0..=11, in declaration order).
+    /// A small code for binary logs (0..=15, in declaration order).
     pub fn code(self) -> u8 {
         self as u8
     }
@@ -154,6 +179,13 @@ pub struct RcInput {
     /// outputs its failsafe values (its sticks and switches are not the
     /// pilot's and are ignored).
     pub failsafe: bool,
+    /// The kill channel (`rc.kill_channel`) is set: held for
+    /// `rc.kill_hold_s` it disarms, in flight too.
+    pub kill: bool,
+    /// A channel the frame's mapping reads was outside the receiver's range
+    /// (`rc.min_us`..`rc.max_us`): the frame is refused (counted, logged)
+    /// and taken as not received.
+    pub out_of_range: bool,
 }
 
 /// The state of the pilot's link, as the receiver's frames tell it.
@@ -210,6 +242,12 @@ pub struct Health {
     pub deadline_missed: bool,
     /// The navigation or estimator refused this sample.
     pub navigation_failed: bool,
+    /// This sample's IMU sample was refused as implausible.
+    pub imu_rejected: bool,
+    /// This sample's GPS fix was refused.
+    pub gps_rejected: bool,
+    /// This sample's magnetometer sample was refused.
+    pub mag_rejected: bool,
 }
 
 /// The supervisor's state.
@@ -235,6 +273,17 @@ pub struct Supervisor {
     rc_link: RcLink,
     manual: bool,
     nav_failed: bool,
+    rc_config: RcConfig,
+    /// The arm switch's new position and since when it was seen (s).
+    arm_pending: Option<(bool, f64)>,
+    /// Since when the kill channel is seen set (s).
+    kill_since: Option<f64>,
+    /// The last sample of each sensor was refused (IMU, GPS, magnetometer).
+    rejecting: [bool; 3],
+    /// `last_gps_s` before this sample's fix (restored when the navigation
+    /// refuses the fix).
+    prev_gps_s: f64,
+    landed: bool,
 }
 
 impl Supervisor {
@@ -257,7 +306,36 @@ impl Supervisor {
             rc_link: RcLink::Unknown,
             manual: false,
             nav_failed: false,
+            rc_config: RcConfig::default(),
+            arm_pending: None,
+            kill_since: None,
+            rejecting: [false; 3],
+            prev_gps_s: t0_s,
+            landed: false,
         }
+    }
+
+    /// The same supervisor with the receiver's settings `rc` (arm hold time,
+    /// kill channel).
+    #[must_use]
+    pub fn with_rc(mut self, rc: RcConfig) -> Self {
+        self.rc_config = rc;
+        self
+    }
+
+    /// Tell the supervisor whether the helicopter is on the ground (the land
+    /// detector's or the navigator's word; until told, it is taken as
+    /// flying). With a kill channel configured, the arm switch disarms only
+    /// on the ground.
+    pub fn set_landed(&mut self, landed: bool) {
+        self.landed = landed;
+    }
+
+    /// The navigation refused this sample's GPS fix (its innovation gate):
+    /// the fix counts as missing for the stale limit, as a refused one.
+    pub fn gps_refused(&mut self) {
+        self.last_gps_s = self.prev_gps_s;
+        self.rejecting[1] = true;
     }
 
     /// Arm (as the arm switch would): the first update enters auto. SITL
@@ -295,9 +373,24 @@ impl Supervisor {
         rc: Option<&RcInput>,
         heading_rad: f64,
     ) -> Option<SafetyEvent> {
+        for (i, (fresh, rejected)) in [
+            (h.imu_fresh, h.imu_rejected),
+            (h.gps_fresh, h.gps_rejected),
+            (h.mag_fresh, h.mag_rejected),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if fresh {
+                self.rejecting[i] = false;
+            } else if rejected {
+                self.rejecting[i] = true;
+            }
+        }
         if h.imu_fresh {
             self.last_imu_s = h.now_s;
         }
+        self.prev_gps_s = self.last_gps_s;
         if h.gps_fresh {
             self.last_gps_s = h.now_s;
         }
@@ -313,6 +406,8 @@ impl Supervisor {
         // older than the limit by more than 1 ns: k·Ts sums do not flip a
         // sample early by rounding
         let stale = |last: f64, limit: f64| h.now_s - last > limit + 1e-9;
+        // a frame with a channel out of the receiver's range is not a frame
+        let rc = rc.filter(|r| !r.out_of_range);
         if let Some(r) = rc {
             self.last_rc_s = Some(h.now_s);
             self.rc_link = if r.failsafe {
@@ -340,12 +435,7 @@ impl Supervisor {
                 }
             }
         } else if let Some(rc) = rc {
-            // the switch arms or disarms when it moves (and at the first
-            // frame): between, the ground station's arm or disarm holds
-            if self.rc_armed != Some(rc.armed) {
-                self.armed = rc.armed;
-                self.rc_armed = Some(rc.armed);
-            }
+            self.arm_switch(rc, h.now_s);
             let was_manual = self.manual;
             self.manual = rc.manual;
             if was_manual && !rc.manual {
@@ -355,13 +445,22 @@ impl Supervisor {
             }
         }
         let imu_lost = stale(self.last_imu_s, self.stale.imu_s) || self.nav_failed;
+        let [imu_rejecting, gps_rejecting, mag_rejecting] = self.rejecting;
         if !self.armed {
             self.latched = None;
         } else if self.latched.is_none() && !self.manual {
             self.latched = if stale(self.last_gps_s, self.stale.gps_s) {
-                Some(Reason::GpsStale)
+                Some(if gps_rejecting {
+                    Reason::GpsRejected
+                } else {
+                    Reason::GpsStale
+                })
             } else if stale(self.last_mag_s, self.stale.mag_s) {
-                Some(Reason::MagStale)
+                Some(if mag_rejecting {
+                    Reason::MagRejected
+                } else {
+                    Reason::MagStale
+                })
             } else if self.misses >= self.failsafe.overrun_limit {
                 Some(Reason::Overrun)
             } else {
@@ -371,10 +470,17 @@ impl Supervisor {
         let (to, reason) = if self.manual {
             (Mode::Manual, Reason::PilotManual)
         } else if !self.armed {
-            (Mode::Disarmed, Reason::Disarmed)
+            let r = if self.kill_since.is_some() {
+                Reason::Kill
+            } else {
+                Reason::Disarmed
+            };
+            (Mode::Disarmed, r)
         } else if imu_lost {
             let r = if self.nav_failed {
                 Reason::NavigationFailure
+            } else if imu_rejecting {
+                Reason::ImuRejected
             } else {
                 Reason::ImuStale
             };
@@ -410,6 +516,51 @@ impl Supervisor {
         self.mode = to;
         self.since_s = h.now_s;
         Some(ev)
+    }
+
+    /// The receiver's arm switch and kill channel of a frame of the pilot's:
+    /// the switch's new position is taken once held `rc.arm_hold_s` (a
+    /// glitching or toggling channel does nothing); with a kill channel
+    /// configured it disarms only on the ground, the kill channel held
+    /// `rc.kill_hold_s` disarms at any time.
+    fn arm_switch(&mut self, rc: &RcInput, now_s: f64) {
+        let held = |since: f64, hold: f64| now_s - since >= hold - 1e-9;
+        if rc.kill && self.rc_config.kill_channel.is_some() {
+            let since = *self.kill_since.get_or_insert(now_s);
+            if held(since, self.rc_config.kill_hold_s) {
+                self.armed = false;
+            }
+        } else if self.kill_since.is_some() && !self.armed {
+            // released after it disarmed: the arm switch must move to arm
+            self.kill_since = None;
+            self.rc_armed = Some(rc.armed);
+        } else {
+            self.kill_since = None;
+        }
+        if self.rc_armed == Some(rc.armed) {
+            self.arm_pending = None;
+            return;
+        }
+        let since = match self.arm_pending {
+            Some((pos, since)) if pos == rc.armed => since,
+            _ => {
+                self.arm_pending = Some((rc.armed, now_s));
+                now_s
+            }
+        };
+        if !held(since, self.rc_config.arm_hold_s) {
+            return;
+        }
+        // the switch moved (or its first position) and held: it acts
+        self.arm_pending = None;
+        self.rc_armed = Some(rc.armed);
+        if rc.armed {
+            if self.kill_since.is_none() {
+                self.armed = true;
+            }
+        } else if self.rc_config.kill_channel.is_none() || self.landed {
+            self.armed = false;
+        }
     }
 
     /// The reference flown in this mode: the mission's in auto, hover and
@@ -450,6 +601,9 @@ mod tests {
             mag_fresh: true,
             deadline_missed: false,
             navigation_failed: false,
+            imu_rejected: false,
+            gps_rejected: false,
+            mag_rejected: false,
         }
     }
 
@@ -459,13 +613,23 @@ mod tests {
             manual,
             armed,
             failsafe: false,
+            kill: false,
+            out_of_range: false,
+        }
+    }
+
+    /// The arm switch acting at once (the tests of other rules).
+    fn instant() -> RcConfig {
+        RcConfig {
+            arm_hold_s: 0.0,
+            ..RcConfig::default()
         }
     }
 
     #[test]
     fn a_receiver_failsafe_hands_the_pilots_flight_to_the_hold() {
         let fs = FailsafeConfig::default();
-        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
+        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0).with_rc(instant());
         s.update(&health(0.0, true), Some(&rc(false, true)), 0.0);
         // in auto: the mission flies on, the failsafe frame's switches
         // (disarmed, manual) ignored
@@ -581,7 +745,7 @@ mod tests {
             descent_m_s: 0.5,
             overrun_limit: 3,
         };
-        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
+        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0).with_rc(instant());
         let armed = rc(false, true);
         let ev = s.update(&health(0.0, true), Some(&armed), 0.3).unwrap();
         assert_eq!(
@@ -626,7 +790,7 @@ mod tests {
             descent_m_s: 0.5,
             overrun_limit: 3,
         };
-        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
+        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0).with_rc(instant());
         s.update(&health(0.0, true), Some(&rc(false, true)), 0.0);
         let mut h = health(0.01, true);
         h.imu_fresh = false;
@@ -656,7 +820,7 @@ mod tests {
     #[test]
     fn magnetometer_loss_holds_and_disarming_clears_the_latch() {
         let fs = FailsafeConfig::default();
-        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0);
+        let mut s = Supervisor::new(StaleLimits::default(), fs, 0.0).with_rc(instant());
         s.update(&health(0.0, true), Some(&rc(false, true)), 0.2);
         let mut h = health(0.5, true);
         h.mag_fresh = false;
@@ -676,7 +840,8 @@ mod tests {
 
     #[test]
     fn the_ground_station_arms_until_the_switch_moves() {
-        let mut s = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
+        let mut s = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0)
+            .with_rc(instant());
         let off = rc(false, false);
         let on = rc(false, true);
         // the switch off at its first frame: disarmed
@@ -696,5 +861,117 @@ mod tests {
         let ev = s.update(&health(0.06, true), Some(&on), 0.0).unwrap();
         assert_eq!(ev.to, Mode::Disarmed);
         assert!(s.update(&health(0.07, true), Some(&on), 0.0).is_none());
+    }
+
+    /// One 20 ms frame with the arm channel low, or a channel toggling every
+    /// frame, does not disarm; the switch held 0.5 s does.
+    #[test]
+    fn the_arm_switch_acts_only_when_held() {
+        let mut s = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0);
+        let (on, off) = (rc(false, true), rc(false, false));
+        let mut t = 0.0;
+        let mut step = |s: &mut Supervisor, r: &RcInput| {
+            let ev = s.update(&health(t, true), Some(r), 0.0);
+            t += 0.02;
+            ev
+        };
+        // armed only once the switch was on for 0.5 s
+        for _ in 0..25 {
+            assert!(step(&mut s, &on).is_none());
+        }
+        assert_eq!(step(&mut s, &on).map(|e| e.to), Some(Mode::Auto));
+        // one frame low: nothing; toggling every frame for 2 s: nothing
+        assert!(step(&mut s, &off).is_none());
+        for k in 0..100 {
+            assert!(step(&mut s, if k % 2 == 0 { &on } else { &off }).is_none());
+        }
+        assert_eq!(s.mode(), Mode::Auto);
+        // held low 0.5 s: disarmed (no kill channel configured)
+        let mut ev = None;
+        for _ in 0..26 {
+            ev = ev.or(step(&mut s, &off));
+        }
+        assert_eq!(
+            ev.map(|e| (e.to, e.reason)),
+            Some((Mode::Disarmed, Reason::Disarmed))
+        );
+    }
+
+    /// With a kill channel the arm switch does not disarm in flight; the
+    /// kill channel held 0.1 s does, and the arm switch must move to arm
+    /// again. A frame with a channel out of range is not the pilot's.
+    #[test]
+    fn the_kill_channel_disarms_in_flight_and_out_of_range_frames_are_refused() {
+        let cfg = RcConfig {
+            kill_channel: Some(6),
+            ..instant()
+        };
+        let mut s =
+            Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0).with_rc(cfg);
+        let (on, off) = (rc(false, true), rc(false, false));
+        s.update(&health(0.0, true), Some(&on), 0.0).unwrap();
+        assert_eq!(s.mode(), Mode::Auto);
+        for k in 1..50 {
+            assert!(
+                s.update(&health(f64::from(k) * 0.02, true), Some(&off), 0.0)
+                    .is_none()
+            );
+        }
+        assert_eq!(s.mode(), Mode::Auto);
+        // an out-of-range frame in manual does not take the servos
+        let mut wild = rc(true, false);
+        wild.out_of_range = true;
+        assert!(s.update(&health(1.0, true), Some(&wild), 0.0).is_none());
+        // the kill held: one frame does not disarm, 0.1 s does
+        let mut kill = on;
+        kill.kill = true;
+        assert!(s.update(&health(1.02, true), Some(&kill), 0.0).is_none());
+        assert!(s.update(&health(1.06, true), Some(&kill), 0.0).is_none());
+        let ev = s.update(&health(1.12, true), Some(&kill), 0.0).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Disarmed, Reason::Kill));
+        // released with the arm switch on: still disarmed until it moves
+        assert!(s.update(&health(1.14, true), Some(&on), 0.0).is_none());
+        assert!(s.update(&health(1.16, true), Some(&off), 0.0).is_none());
+        let ev = s.update(&health(1.18, true), Some(&on), 0.0).unwrap();
+        assert_eq!(ev.to, Mode::Auto);
+        // on the ground the arm switch disarms
+        s.set_landed(true);
+        let ev = s.update(&health(1.2, true), Some(&off), 0.0).unwrap();
+        assert_eq!(ev.to, Mode::Disarmed);
+    }
+
+    /// A GPS whose fixes are refused goes stale as `gps_rejected`; one the
+    /// navigation refused counts as missing too.
+    #[test]
+    fn refused_samples_go_stale_with_their_own_reason() {
+        let mut s = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0)
+            .with_rc(instant());
+        s.update(&health(0.0, true), Some(&rc(false, true)), 0.0)
+            .unwrap();
+        let mut h = health(0.5, false);
+        h.gps_rejected = true;
+        assert!(s.update(&h, None, 0.0).is_none());
+        // a fix taken fresh, then refused by the navigation's gate
+        s.update(&health(0.6, true), None, 0.0);
+        s.gps_refused();
+        h.now_s = 1.0025;
+        h.gps_rejected = false;
+        let ev = s.update(&h, None, 0.0).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Hold, Reason::GpsRejected));
+        // the IMU refused until stale: imu_rejected
+        let mut s = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0)
+            .with_rc(instant());
+        s.update(&health(0.0, true), Some(&rc(false, true)), 0.0)
+            .unwrap();
+        let mut h = health(0.0, true);
+        h.imu_fresh = false;
+        h.imu_rejected = true;
+        let mut ev = None;
+        for k in 1..=10 {
+            h.now_s = f64::from(k) * 0.0025;
+            ev = ev.or(s.update(&h, None, 0.0));
+        }
+        let ev = ev.unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::ImuLost, Reason::ImuRejected));
     }
 }

@@ -28,13 +28,12 @@ use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, RcInput as RcFrame};
 use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCommon};
-use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
+use helicon_flight::config::{FailsafeConfig, RcConfig, RealtimeConfig, StaleLimits};
 use helicon_flight::control::{ControlTask, StepReport};
 use helicon_flight::ground;
 use helicon_flight::mission::{Mission, References};
-use helicon_flight::ports::{
-    DeviceRc, DeviceSensors, DeviceServos, clone_port, open_port, stick_us,
-};
+use helicon_flight::plausibility::{PlausibilityConfig, SensorGate};
+use helicon_flight::ports::{DeviceSensors, avionics_ports, open_port, stick_us};
 use helicon_flight::runtime::{self, Pacing, RunReport, RuntimeOptions};
 use helicon_flight::safety::Supervisor;
 use helicon_gcs::config::GcsSection;
@@ -226,15 +225,16 @@ pub fn run(
     let imu_port = open_port(wires.imu.slave_path(), 921_600).map_err(dev("IMU"))?;
     let gps_port = open_port(wires.gps.slave_path(), 115_200).map_err(dev("GPS"))?;
     let av_port = open_port(wires.avionics.slave_path(), 115_200).map_err(dev("avionics"))?;
-    let rc_port = clone_port(&av_port).map_err(dev("avionics"))?;
+    let (rc_port, servo_port) =
+        avionics_ports(av_port, RcConfig::default()).map_err(dev("avionics"))?;
     let sensors = DeviceSensors::new(imu_port, gps_port, home, scenario.sensors.gps.latency_s);
     let lockstep = options.speed == Speed::Max;
     // lock-step: the sensor server reads the receiver too (deterministic);
     // real time: the receiver has its own thread, as on board
     let (sensors, receiver) = if lockstep {
-        (sensors.with_receiver(DeviceRc::new(rc_port)), None)
+        (sensors.with_receiver(rc_port), None)
     } else {
-        (sensors, Some(DeviceRc::new(rc_port)))
+        (sensors, Some(rc_port))
     };
     let ulog = options.out_dir.join("flight.ulg");
     let info = LogInfo {
@@ -282,18 +282,25 @@ pub fn run(
     let mission = mission.with_excitation(
         Excitations::new(&scenario.excitation, &scenario.name).map_err(ClosedLoopError::from)?,
     );
-    let task = ControlTask::new(computer, supervisor, u_trim).with_imu_health(imu_health_at(
-        p.environment.g_m_s2,
-        ts,
-        &scenario.sensors,
-        &scenario.name,
-    )?);
+    let task = ControlTask::new(computer, supervisor, u_trim)
+        .with_imu_health(imu_health_at(
+            p.environment.g_m_s2,
+            ts,
+            &scenario.sensors,
+            &scenario.name,
+        )?)
+        .with_gate(SensorGate::new(
+            &PlausibilityConfig::default(),
+            &scenario.sensors,
+            &scenario.name,
+        )?)
+        .with_servo_limits(p.servo_limits());
     let handle = runtime::spawn(
         task,
         mission,
         sensors,
         receiver,
-        DeviceServos::new(av_port),
+        servo_port,
         log,
         Some(downlink_tx),
         RuntimeOptions {

@@ -48,6 +48,8 @@ fn a_control_step_and_its_log_allocate_nothing() {
         manual: false,
         armed: true,
         failsafe: false,
+        kill: false,
+        out_of_range: false,
     };
     // the flight-test excitation of ident-hover-sweep (S_lon sweep from 1 s)
     let sweep = Scenario::from_file(&path.with_file_name("ident-hover-sweep.toml")).unwrap();
@@ -62,6 +64,7 @@ fn a_control_step_and_its_log_allocate_nothing() {
             deadline_missed: false,
             rc: (sample.k % 8 == 0).then_some(rc),
             reference: sample.reference,
+            gps_quality: None,
         };
         let before = allocations();
         let out = task.step_with(&tick, &excitation);
@@ -141,6 +144,7 @@ fn a_ground_station_step_allocates_nothing() {
             deadline_missed: false,
             rc: None,
             reference,
+            gps_quality: None,
         });
         if sample.t_s >= 1.0 {
             counted += allocations() - before;

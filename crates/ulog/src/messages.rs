@@ -274,19 +274,23 @@ pub enum FailsafeReason {
     RcLoss = 5,
     /// The pilot commanded it.
     Pilot = 6,
+    /// A sensor's samples were refused as implausible (out of its range,
+    /// beyond what the airframe can do, no fix) until its stale limit.
+    SensorImplausible = 7,
     /// Anything else.
     Other = 255,
 }
 
 impl FailsafeReason {
     /// Every reason.
-    pub const ALL: [FailsafeReason; 7] = [
+    pub const ALL: [FailsafeReason; 8] = [
         FailsafeReason::NavigationFailure,
         FailsafeReason::NonFinite,
         FailsafeReason::SensorTimeout,
         FailsafeReason::DeadlineMiss,
         FailsafeReason::RcLoss,
         FailsafeReason::Pilot,
+        FailsafeReason::SensorImplausible,
         FailsafeReason::Other,
     ];
 
@@ -299,6 +303,7 @@ impl FailsafeReason {
             FailsafeReason::DeadlineMiss => "deadline miss",
             FailsafeReason::RcLoss => "RC signal lost",
             FailsafeReason::Pilot => "pilot",
+            FailsafeReason::SensorImplausible => "sensor implausible",
             FailsafeReason::Other => "other",
         }
     }

@@ -152,6 +152,7 @@ impl<'a> Harness<'a> {
             deadline_missed: false,
             rc: None,
             reference: out.reference,
+            gps_quality: None,
         });
         let dt = start.elapsed().as_secs_f64();
         self.max_step_s = self.max_step_s.max(dt);
