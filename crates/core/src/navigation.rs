@@ -43,10 +43,13 @@ pub struct NavigationConfig {
     /// Weight of the gravity observation in the q-method (the magnetometer's is 1).
     pub gravity_weight: f64,
     /// Innovation gate of the GPS position and velocity updates: largest
-    /// accepted normalised innovation squared (χ², 3 dof; `inf`: no gate).
-    /// Beyond the thesis, whose filter fused every fix: a receiver's glitch
-    /// (a fix kilometres away, a velocity of hundreds of m/s) is not fused.
-    pub gps_gate_nis: f64,
+    /// accepted normalised innovation squared (χ², 3 dof). Beyond the
+    /// thesis, whose filter fused every fix: a receiver's glitch (a fix
+    /// kilometres away, a velocity of hundreds of m/s) is not fused. `None`:
+    /// no gate, the thesis's filter (the simulator's default, so its
+    /// figures stay the thesis's); the on-board program flies
+    /// [`GPS_GATE_NIS`] unless its configuration says otherwise.
+    pub gps_gate_nis: Option<f64>,
     /// Refusals in a row after which the next GPS fix is fused ungated (the
     /// filter, not the receiver, is then presumed wrong; 0: never).
     pub gps_gate_reset_after: u32,
@@ -65,7 +68,7 @@ impl Default for NavigationConfig {
             euler_rate_sigma_rad_s: 0.02,
             attitude_sigma_rad: 0.03,
             gravity_weight: 1.0,
-            gps_gate_nis: GPS_GATE_NIS,
+            gps_gate_nis: None,
             gps_gate_reset_after: 25,
         }
     }
@@ -91,10 +94,12 @@ impl NavigationConfig {
                 });
             }
         }
-        if self.gps_gate_nis.is_nan() || self.gps_gate_nis <= 0.0 {
+        if let Some(g) = self.gps_gate_nis
+            && (g.is_nan() || g <= 0.0)
+        {
             return Err(FusionError::InvalidConfig {
                 field: "navigation.gps_gate_nis",
-                value: self.gps_gate_nis,
+                value: g,
                 allowed: "> 0 (inf: no gate)",
             });
         }
@@ -174,7 +179,7 @@ impl NavigationFilter {
             1.0, 1.0, 1.0, 0.01, 0.01, 0.01, 1e-4, 1e-4, 1e-4,
         ]));
         let filter = FusionFilter::new(fcfg, *initial, p0)?.with_gps_gate(GpsGate {
-            nis: config.gps_gate_nis,
+            nis: config.gps_gate_nis.unwrap_or(f64::INFINITY),
             reset_after: config.gps_gate_reset_after,
         })?;
         let trig = EulerTrig::new(initial[6], initial[7], initial[8]);
@@ -216,10 +221,9 @@ impl NavigationFilter {
         self.last_w = imu.gyro_body_rad_s;
         self.attitude_fix = attitude.is_some();
         let gate = self.filter.last_gate();
-        // fused: the position or the velocity passed the gate
-        self.gps_fused = gps.is_some_and(|g| {
-            !gate.position_rejected || (g.velocity_ned_m_s.is_some() && !gate.velocity_rejected)
-        });
+        // fused: the position passed the gate (a velocity alone does not
+        // hold the position: a fix whose position jumped counts as refused)
+        self.gps_fused = gps.is_some() && !gate.position_rejected;
         let s = *self.filter.state();
         let vel = Vector3::new(s[3], s[4], s[5]);
         let v_body = EulerTrig::new(s[6], s[7], s[8]).ned_from_body().transpose() * vel;

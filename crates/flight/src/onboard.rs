@@ -173,6 +173,7 @@ pub fn run(
         .map_err(|e| OnboardError::Alignment(format!("home: {e}")))?;
     let mut sensors = DeviceSensors::new(imu, gps, LocalNed::new(home), cfg.sensors.gps.latency_s);
 
+    let mut gate = SensorGate::new(&cfg.plausibility, &cfg.sensors, &cfg.file)?;
     // ground alignment: wait for a frame with the magnetometer and a fix
     let field = Vector3::from(cfg.sensors.mag.field_ned);
     let start = Instant::now();
@@ -181,7 +182,7 @@ pub fn run(
     let x0 = loop {
         if start.elapsed() > limit {
             return Err(OnboardError::Alignment(format!(
-                "no IMU sample with a magnetometer sample and a 3-D GPS fix within {} s \
+                "no IMU sample with a plausible magnetometer sample and 3-D GPS fix within {} s \
                  (check {} and {})",
                 limit.as_secs(),
                 d.imu.path.display(),
@@ -190,7 +191,12 @@ pub fn run(
         }
         match sensors.next(Duration::from_millis(100))? {
             Next::Item(a) => {
-                if let Some(mut f) = a.frame {
+                // only plausible samples align (a fix without 3-D, a field
+                // of the wrong magnitude are refused as in flight)
+                let gated = a
+                    .frame
+                    .and_then(|f| gate.check(&f, a.gps_quality.as_ref()).frame);
+                if let Some(mut f) = gated {
                     mag = f.mag_body.or(mag);
                     f.mag_body = mag;
                     if let Some(x) = align(&f, &field, &gains.set.x_trim) {
@@ -207,6 +213,11 @@ pub fn run(
             }
         }
     };
+    // on board the thesis chain gates its GPS updates (unless configured)
+    let mut navigation = cfg.navigation;
+    navigation
+        .gps_gate_nis
+        .get_or_insert(helicon_core::navigation::GPS_GATE_NIS);
     let computer = flight_computer(&OnBoardSetup {
         servo_limits: params.servo_limits(),
         gravity_m_s2: params.environment.g_m_s2,
@@ -214,7 +225,7 @@ pub fn run(
         schedule: None,
         trim_x: &gains.set.x_trim,
         sensors: &cfg.sensors,
-        navigation: &cfg.navigation,
+        navigation: &navigation,
         estimator: &cfg.estimator,
         feedback: true,
         x0: &x0,
@@ -231,7 +242,7 @@ pub fn run(
         &cfg.sensors,
         &cfg.file,
     )?)
-    .with_gate(SensorGate::new(&cfg.plausibility, &cfg.sensors, &cfg.file)?)
+    .with_gate(gate)
     .with_servo_limits(params.servo_limits());
     let dir = cfg.resolve(&cfg.log.dir);
     std::fs::create_dir_all(&dir).map_err(|e| OnboardError::Log {

@@ -44,6 +44,9 @@ enum Fault {
     GpsNoFix,
     /// One NAV-PVT 10 km north, 5 km up, 300 m/s.
     GpsGlitch,
+    /// Fixes 200 m east at rest for 0.4 s (a multipath jump: a plausible
+    /// fix, but not where the helicopter can be).
+    GpsJump,
     /// IMU samples of 3e38 m/s².
     ImuAbsurd,
     /// A 3e38-gauss field.
@@ -184,6 +187,9 @@ fn fly(tag: &str, fault: Fault, at_s: f64, extra: &str, duration_s: f64) -> Run 
                         fix.position_ned_m = Vector3::new(10_000.0, 0.0, -5_000.0);
                         fix.velocity_ned_m_s = Some(Vector3::new(300.0, 0.0, 0.0));
                     }
+                    if fault == Fault::GpsJump && faulty && t < at + 0.4 {
+                        fix.position_ned_m = Vector3::new(0.0, 200.0, 0.0);
+                    }
                     let itow = 259_200_000 + (t * 1000.0) as u32;
                     let mut pvt = NavPvt::from_gps_fix(&fix, &home, itow, 0.0).unwrap();
                     if faulty && fault == Fault::GpsNoFix {
@@ -225,6 +231,13 @@ fn fly(tag: &str, fault: Fault, at_s: f64, extra: &str, duration_s: f64) -> Run 
         eprintln!("{tag}: {:.4} {text}", *t as f64 * 1e-6);
     }
     Run { report, ulog }
+}
+
+/// The values of a logged field, which must have been logged.
+fn values(run: &Run, topic: &str, field: &str) -> Vec<f64> {
+    let v = run.ulog.f64s(topic, field);
+    assert!(!v.is_empty(), "nothing logged as {topic}.{field}");
+    v
 }
 
 /// The first logged text containing `needle`, its time (s).
@@ -354,14 +367,27 @@ fn a_glitching_fix_is_refused_and_never_flown() {
     first(&run, "GPS: impossible speed, refused");
     assert_eq!(run.report.final_mode, "auto");
     for axis in 0..3 {
-        let v = run
-            .ulog
-            .f64s("navigation", &format!("velocity_ned[{axis}]"));
+        let v = values(&run, "navigation", &format!("velocity_ned_m_s[{axis}]"));
         let max = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         assert!(max < 1.0, "velocity[{axis}] reached {max} m/s");
     }
     let sat = run.ulog.bools("control", "saturated[0]");
+    assert!(!sat.is_empty());
     assert!(!sat.iter().any(|s| *s), "a servo saturated");
+}
+
+/// Fixes 200 m away for 0.4 s (two fixes), plausible in themselves: the
+/// navigation's innovation gate refuses them; the position estimate stays
+/// at home.
+#[test]
+fn a_jumping_fix_is_refused_by_the_innovation_gate() {
+    let run = fly("gps_jump", Fault::GpsJump, 0.5, "", 2.0);
+    assert!(run.report.error.is_none(), "{:?}", run.report.error);
+    first(&run, "GPS: jump refused by the innovation gate (1 so far)");
+    assert_eq!(run.report.final_mode, "auto");
+    let east = values(&run, "navigation", "position_ned_m[1]");
+    let max = east.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!(max < 1.0, "the east position estimate reached {max} m");
 }
 
 /// An IMU reporting 3e38 m/s² (finite, impossible): every such sample is
@@ -374,13 +400,13 @@ fn impossible_imu_samples_are_refused_and_the_imu_is_lost() {
     first(&run, "IMU: acceleration beyond range, refused (1 so far)");
     first(&run, "imu_rejected: auto -> imu_lost");
     assert_eq!(run.report.final_mode, "imu_lost");
-    let att = run.ulog.f64s("control", "estimate[0]");
+    let att = values(&run, "control", "estimate[0]");
     assert!(
         att.iter().all(|a| a.abs() < 0.1),
         "attitude estimate left the level"
     );
     // the servos at the trim once lost, never beyond the servo range
-    let s = run.ulog.f64s("servo_output", "command[0]");
+    let s = values(&run, "servo_output", "command[0]");
     assert!(s.iter().all(|x| x.abs() <= 1.0));
 }
 
@@ -392,7 +418,7 @@ fn an_impossible_field_is_refused_and_the_mag_failsafe_acts() {
     assert!(run.report.error.is_none(), "{:?}", run.report.error);
     first(&run, "mag: field magnitude implausible, refused (1 so far)");
     first(&run, "mag_rejected: auto -> hold");
-    let psi = run.ulog.f64s("control", "estimate[2]");
+    let psi = values(&run, "control", "estimate[2]");
     assert!(psi.iter().all(|p| p.abs() < 0.1));
 }
 

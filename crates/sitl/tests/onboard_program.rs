@@ -145,7 +145,12 @@ fn the_onboard_program_aligns_arms_flies_and_logs() {
 /// `failsafe.rs` check the timing.
 #[test]
 fn a_silent_receiver_on_the_clock_paced_program_is_logged_once() {
-    let (report, log, _) = fly("rc_silent", Some(0.4), "rc_s = 0.3", 1.0);
+    let (report, log, _) = fly(
+        "rc_silent",
+        Some(0.4),
+        "rc_s = 0.3\n[rc]\narm_hold_s = 0.1",
+        1.0,
+    );
     assert!(report.error.is_none(), "{:?}", report.error);
     assert_eq!(report.final_mode, "auto");
     let ulog = Ulog::read(&log);
