@@ -170,7 +170,7 @@ fn heartbeat_params_mission_flown_and_landed_rates_as_requested() {
     let _ = c.wait(
         from,
         T,
-        |m| matches!(m, MavMessage::PARAM_VALUE(p) if p.param_index == 13),
+        |m| matches!(m, MavMessage::PARAM_VALUE(p) if p.param_index == 16),
     );
     let params = c.collect(from, |m| match m {
         MavMessage::PARAM_VALUE(p) => Some((
@@ -181,10 +181,10 @@ fn heartbeat_params_mission_flown_and_landed_rates_as_requested() {
         )),
         _ => None,
     });
-    assert_eq!(params.len(), 14);
+    assert_eq!(params.len(), 17);
     for (i, (idx, name, _, count)) in params.iter().enumerate() {
         assert_eq!(usize::from(*idx), i);
-        assert_eq!(*count, 14);
+        assert_eq!(*count, 17);
         assert_eq!(name, helicon_gcs::params::PARAMS[i].0);
     }
     // a SET answered with the new value; a refused one with the old value
