@@ -82,7 +82,7 @@ pub enum FenceViolation {
     #[error("position is not finite")]
     NotFinite,
     /// Farther from home than `GF_MAX_HOR_DIST`.
-    #[error("{distance_m:.0} m from home, beyond GF_MAX_HOR_DIST {limit_m:.0} m")]
+    #[error("{} m from home, beyond GF_MAX_HOR_DIST {limit_m:.0} m", metres(*distance_m))]
     Horizontal {
         /// Horizontal distance from home (m).
         distance_m: f64,
@@ -90,7 +90,7 @@ pub enum FenceViolation {
         limit_m: f64,
     },
     /// Higher above home than `GF_MAX_VER_DIST`.
-    #[error("{height_m:.0} m above home, beyond GF_MAX_VER_DIST {limit_m:.0} m")]
+    #[error("{} m above home, beyond GF_MAX_VER_DIST {limit_m:.0} m", metres(*height_m))]
     Vertical {
         /// Height above home (m).
         height_m: f64,
@@ -98,11 +98,21 @@ pub enum FenceViolation {
         limit_m: f64,
     },
     /// Below the ground at home.
-    #[error("{depth_m:.1} m below home")]
+    #[error("{} m below home", metres(*depth_m))]
     BelowHome {
         /// Depth below home (m).
         depth_m: f64,
     },
+}
+
+/// A distance as the operator reads it (status texts are 50 characters):
+/// whole metres, or in exponent form beyond 100 km.
+fn metres(m: f64) -> String {
+    if m.abs() < 1e5 {
+        format!("{m:.1}")
+    } else {
+        format!("{m:.1e}")
+    }
 }
 
 impl FenceViolation {
@@ -132,8 +142,10 @@ pub const BELOW_HOME_TOLERANCE_M: f64 = 0.5;
 impl Fence {
     /// The ranges of the numeric fields `(field, low, high)` (m): at least a
     /// hover's room, at most what is flown in sight.
-    pub const RANGES: [(&'static str, f64, f64); 2] =
-        [("max_hor_dist_m", 5.0, 1000.0), ("max_ver_dist_m", 2.0, 120.0)];
+    pub const RANGES: [(&'static str, f64, f64); 2] = [
+        ("max_hor_dist_m", 5.0, 1000.0),
+        ("max_ver_dist_m", 2.0, 120.0),
+    ];
 
     /// Check the limits against [`Fence::RANGES`].
     pub fn validate(&self) -> Result<(), FenceRangeError> {
@@ -153,17 +165,22 @@ impl Fence {
     }
 
     /// Whether a target position (NED about home, m) may be flown to: finite,
-    /// inside the cylinder, not below home.
+    /// inside the cylinder, not below home. The horizontal limit is named
+    /// first: a point far away on the ellipsoid lies below home's local
+    /// level (300 km away, 7 km below), but its fault is the distance.
     pub fn check_target(&self, position_ned_m: &Vector3<f64>) -> Result<(), FenceViolation> {
         if !position_ned_m.iter().all(|v| v.is_finite()) {
             return Err(FenceViolation::NotFinite);
+        }
+        if let Some(v) = self.outside(position_ned_m) {
+            return Err(v);
         }
         if position_ned_m.z > BELOW_HOME_TOLERANCE_M {
             return Err(FenceViolation::BelowHome {
                 depth_m: position_ned_m.z,
             });
         }
-        self.outside(position_ned_m).map_or(Ok(()), Err)
+        Ok(())
     }
 
     /// Whether a height above home (m) may be flown to (a takeoff).

@@ -64,7 +64,10 @@ pub fn global_position_ned_m(
 ) -> Result<Vector3<f64>, (&'static str, MavMissionResult)> {
     let z = f64::from(z);
     if !z.is_finite() {
-        return Err(("z is not finite", MavMissionResult::MAV_MISSION_INVALID_PARAM7));
+        return Err((
+            "z is not finite",
+            MavMissionResult::MAV_MISSION_INVALID_PARAM7,
+        ));
     }
     let h0 = home.home().height_m;
     let global = |height_m: f64| {
@@ -84,11 +87,9 @@ pub fn global_position_ned_m(
             global(h0 + z)
         }
         MavFrame::MAV_FRAME_GLOBAL_INT | MavFrame::MAV_FRAME_GLOBAL => global(z),
-        MavFrame::MAV_FRAME_LOCAL_NED => Ok(Vector3::new(
-            f64::from(x) * 1e-4,
-            f64::from(y) * 1e-4,
-            z,
-        )),
+        MavFrame::MAV_FRAME_LOCAL_NED => {
+            Ok(Vector3::new(f64::from(x) * 1e-4, f64::from(y) * 1e-4, z))
+        }
         _ => Err((
             "unsupported frame",
             MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME,
@@ -159,8 +160,8 @@ pub fn plan_of(
                 seq,
                 rule: match v {
                     FenceViolation::NotFinite => "position not finite",
-                    FenceViolation::Horizontal { .. } => "beyond the fence (GF_MAX_HOR_DIST)",
-                    FenceViolation::Vertical { .. } => "above the fence (GF_MAX_VER_DIST)",
+                    FenceViolation::Horizontal { .. } => "beyond GF_MAX_HOR_DIST",
+                    FenceViolation::Vertical { .. } => "above GF_MAX_VER_DIST",
                     FenceViolation::BelowHome { .. } => "below home",
                 },
                 result: MavMissionResult::MAV_MISSION_DENIED,

@@ -508,7 +508,9 @@ impl Navigator {
     /// (nothing changes) for a height that is not positive or is above the
     /// fence.
     pub fn takeoff(&mut self, at: &NavInput, height_m: f64, events: &mut Events) -> bool {
-        if !height_m.is_finite() || height_m <= 0.0 || self.config.fence.check_height(height_m).is_err()
+        if !height_m.is_finite()
+            || height_m <= 0.0
+            || self.config.fence.check_height(height_m).is_err()
         {
             return false;
         }

@@ -142,6 +142,8 @@ pub struct ServerReport {
     pub refused_unsigned: u64,
     /// Messages for another system or component, ignored.
     pub other_target: u64,
+    /// Datagrams read.
+    pub datagrams: u64,
     /// Datagrams without a single CRC-valid frame of the dialect.
     pub garbage_datagrams: u64,
     /// Peers replaced because the table was full.
@@ -421,8 +423,7 @@ impl Server {
     /// the link-loss timeout (the configured destination always).
     fn live(&self, p: &Peer) -> bool {
         let timeout = self.params.config().link_loss_timeout_s;
-        p.trusted
-            && (p.configured || p.heard_s.is_some_and(|h| self.now_s() - h <= timeout))
+        p.trusted && (p.configured || p.heard_s.is_some_and(|h| self.now_s() - h <= timeout))
     }
 
     fn header(&mut self) -> MavHeader {
@@ -522,6 +523,7 @@ impl Server {
     /// The frames of one datagram (the first `n` bytes of the buffer), all
     /// of them its sender's.
     fn datagram(&mut self, n: usize, from: SocketAddr) {
+        self.report.datagrams += 1;
         let bytes = std::mem::take(&mut self.buffer);
         let mut reader = MavlinkReader::with_capacity(n.min(bytes.len()), &bytes[..n]);
         let mut frames = 0;
@@ -812,7 +814,6 @@ impl Server {
         };
         self.send(&msg);
     }
-
 
     /// Whether a message is a command (a refusal of it is answered).
     fn is_command(id: u32) -> bool {
@@ -1129,7 +1130,6 @@ impl Server {
         }
     }
 
-
     fn set_mode(&mut self, custom: u32) -> MavResult {
         let Some(mode) = NavMode::from_code(custom) else {
             return MavResult::MAV_RESULT_DENIED;
@@ -1212,7 +1212,6 @@ impl Server {
         }
     }
 
-
     fn param_value(&mut self, i: usize) {
         self.param_value_to(i, self.current.map(|p| self.peers[p].addr));
     }
@@ -1286,7 +1285,11 @@ impl Server {
             return;
         }
         let now = self.now_s();
-        if let Upload::Receiving { from: owner, last_s, .. } = &self.upload
+        if let Upload::Receiving {
+            from: owner,
+            last_s,
+            ..
+        } = &self.upload
             && *owner != from
             && now - *last_s < UPLOAD_IDLE_S
         {
@@ -1368,7 +1371,10 @@ impl Server {
     /// (SET_POSITION_TARGET_* has no acknowledgement).
     fn guided_target(&mut self, target: GuidedTarget) {
         if !self.armed() {
-            self.text(MavSeverity::MAV_SEVERITY_WARNING, "guided refused: not armed");
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                "guided refused: not armed",
+            );
             return;
         }
         let refusal = match target {

@@ -1,261 +1,24 @@
 //! The server under attack on real UDP sockets on 127.0.0.1: stray
 //! datagrams, several ground stations at once, messages for another
-//! vehicle, unsigned and replayed frames when signing is configured, targets
-//! outside the geofence, and ten thousand random datagrams. The vehicle's
-//! ring ends are the test's: what reaches the uplink is what would fly.
-#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
+//! vehicle, unsigned and replayed frames when signing is configured, and
+//! targets outside the geofence. The vehicle's ring ends are the test's:
+//! what reaches the uplink is what would fly.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+// test helpers: a failed unwrap is a failed test
+// ground stations still send the superseded SET_MODE and REQUEST_DATA_STREAM
+#![allow(deprecated)]
 
 mod common;
 
 use common::client::{Client, item};
-use helicon_core::Reference;
-use helicon_core::state::Input;
-use helicon_devices::Geodetic;
-use helicon_gcs::link::{Downlink, FlightMode, Uplink, VehicleEnd, VehicleStatus, channel};
+use common::vehicle::*;
+use helicon_gcs::link::Uplink;
 use helicon_gcs::mavlink::dialects::common::*;
-use helicon_gcs::mavlink::{MavHeader, MessageData, SigningConfig, SigningData, write_v2_msg_signed};
-use helicon_gcs::navigator::{GuidedTarget, NavMode, NavigatorConfig};
-use helicon_gcs::server::{
-    self, MAX_PEERS, ServerConfig, ServerHandle, ServerReport, default_rates_hz,
-};
+use helicon_gcs::mavlink::{Message, MessageData};
+use helicon_gcs::navigator::{GuidedTarget, NavMode};
 use nalgebra::Vector3;
-use rand::{Rng, SeedableRng};
 use std::net::UdpSocket;
-use std::time::{Duration, Instant};
-
-const SHORT: Duration = Duration::from_millis(300);
-const T: Duration = Duration::from_secs(3);
-
-fn status(t_s: f64, armed: bool, nav_mode: NavMode) -> VehicleStatus {
-    VehicleStatus {
-        t_s,
-        armed,
-        nav_mode,
-        flight_mode: FlightMode {
-            name: "auto",
-            law_flies: true,
-        },
-        attitude_rad: Vector3::zeros(),
-        rates_rad_s: Vector3::zeros(),
-        position_ned_m: Vector3::new(0.0, 0.0, -10.0),
-        velocity_ned_m_s: Vector3::zeros(),
-        position_sigma_m: Vector3::repeat(0.5),
-        navigation_ok: true,
-        gps_ok: true,
-        servo: Input::zeros(),
-        reference: Reference {
-            velocity_ned_m_s: Vector3::zeros(),
-            yaw_rad: 0.0,
-        },
-        mission_current: (0, 0),
-        link_lost: false,
-        load: 0.1,
-    }
-}
-
-/// A server listening on a free port (`udpin:`), with or without a key.
-struct Vehicle {
-    port: u16,
-    v: VehicleEnd,
-    h: Option<ServerHandle>,
-    pushed: u64,
-    t_s: f64,
-    armed: bool,
-}
-
-impl Vehicle {
-    fn start(key: Option<[u8; 32]>) -> Vehicle {
-        let port = UdpSocket::bind("127.0.0.1:0")
-            .unwrap()
-            .local_addr()
-            .unwrap()
-            .port();
-        let (v, s) = channel(4096);
-        let h = server::spawn(
-            ServerConfig {
-                address: format!("udpin:127.0.0.1:{port}"),
-                system_id: 1,
-                home: Geodetic::new(57.0146, 9.9869, 20.0).unwrap(),
-                navigator: NavigatorConfig::default(),
-                signing_key: key,
-                rates_hz: default_rates_hz(),
-            },
-            s,
-        )
-        .unwrap();
-        let mut me = Vehicle {
-            port,
-            v,
-            h: Some(h),
-            pushed: 0,
-            t_s: 0.0,
-            armed: false,
-        };
-        me.status(0.0);
-        me
-    }
-
-    /// Push `seconds` of statuses at 100 Hz and wait for the server to
-    /// have sent them on (lock-step).
-    fn status(&mut self, seconds: f64) {
-        let n = (seconds * 100.0).round().max(1.0) as u64;
-        let mode = if self.armed {
-            NavMode::Hold
-        } else {
-            NavMode::Idle
-        };
-        for _ in 0..n {
-            self.v
-                .downlink
-                .push(Downlink::Status(status(self.t_s, self.armed, mode)))
-                .unwrap();
-            self.t_s += 0.01;
-            self.pushed += 1;
-        }
-        let h = self.h.as_ref().unwrap();
-        let t = Instant::now();
-        while h.processed() < self.pushed {
-            assert!(t.elapsed() < T, "the server does not keep up");
-            std::thread::sleep(Duration::from_millis(1));
-        }
-    }
-
-    /// What the server put on the uplink (after a pause for the datagrams
-    /// in flight).
-    fn uplinks(&mut self) -> Vec<Uplink> {
-        std::thread::sleep(Duration::from_millis(50));
-        let mut out = Vec::new();
-        while let Ok(u) = self.v.uplink.pop() {
-            out.push(u);
-        }
-        out
-    }
-
-    fn commands(&mut self) -> Vec<Uplink> {
-        self.uplinks()
-            .into_iter()
-            .filter(|u| *u != Uplink::GcsHeartbeat)
-            .collect()
-    }
-
-    fn stop(mut self) -> ServerReport {
-        self.h.take().unwrap().stop()
-    }
-}
-
-fn count(c: &Client, from: usize, id: u32) -> usize {
-    c.collect(from, |m| (m.message_id() == id).then_some(())).len()
-}
-
-fn long(command: MavCmd, target_system: u8, target_component: u8, p: [f32; 7]) -> MavMessage {
-    MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
-        param1: p[0],
-        param2: p[1],
-        param3: p[2],
-        param4: p[3],
-        param5: p[4],
-        param6: p[5],
-        param7: p[6],
-        command,
-        target_system,
-        target_component,
-        confirmation: 0,
-    })
-}
-
-const ARM: [f32; 7] = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
-
-fn param_set(name: &str, value: f32, target_system: u8) -> MavMessage {
-    MavMessage::PARAM_SET(PARAM_SET_DATA {
-        param_value: value,
-        target_system,
-        target_component: 1,
-        param_id: name.into(),
-        param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
-    })
-}
-
-/// The value of a parameter as the server answers a read.
-fn param(c: &mut Client, name: &str) -> f32 {
-    let from = c.log.len();
-    c.send(&MavMessage::PARAM_REQUEST_READ(PARAM_REQUEST_READ_DATA {
-        param_index: -1,
-        target_system: 1,
-        target_component: 1,
-        param_id: name.into(),
-    }));
-    match c.wait(from, T, |m| {
-        matches!(m, MavMessage::PARAM_VALUE(p) if p.param_id.to_str().unwrap_or("").trim_end_matches('\0') == name)
-    }) {
-        Some(MavMessage::PARAM_VALUE(p)) => p.param_value,
-        other => panic!("no PARAM_VALUE {name}: {other:?}"),
-    }
-}
-
-fn ack_within(c: &mut Client, from: usize, command: MavCmd, within: Duration) -> Option<MavResult> {
-    match c.wait(
-        from,
-        within,
-        |m| matches!(m, MavMessage::COMMAND_ACK(a) if a.command == command),
-    ) {
-        Some(MavMessage::COMMAND_ACK(a)) => Some(a.result),
-        _ => None,
-    }
-}
-
-fn position_target(x: f32, y: f32, z: f32, target_system: u8) -> MavMessage {
-    MavMessage::SET_POSITION_TARGET_LOCAL_NED(SET_POSITION_TARGET_LOCAL_NED_DATA {
-        x,
-        y,
-        z,
-        type_mask: PositionTargetTypemask::POSITION_TARGET_TYPEMASK_VX_IGNORE
-            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_VY_IGNORE
-            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_VZ_IGNORE
-            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_AX_IGNORE
-            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_AY_IGNORE
-            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_AZ_IGNORE
-            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_YAW_IGNORE
-            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_YAW_RATE_IGNORE,
-        target_system,
-        target_component: 1,
-        coordinate_frame: MavFrame::MAV_FRAME_LOCAL_NED,
-        ..SET_POSITION_TARGET_LOCAL_NED_DATA::DEFAULT
-    })
-}
-
-/// Upload a mission; the MISSION_ACK's result.
-fn upload(c: &mut Client, items: &[MISSION_ITEM_INT_DATA]) -> Option<MavMissionResult> {
-    let mut cursor = c.log.len();
-    c.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
-        count: items.len() as u16,
-        target_system: 1,
-        target_component: 1,
-        ..MISSION_COUNT_DATA::DEFAULT
-    }));
-    loop {
-        let (i, m) = c.wait_index(cursor, T, |m| {
-            matches!(
-                m,
-                MavMessage::MISSION_REQUEST_INT(_) | MavMessage::MISSION_ACK(_)
-            )
-        })?;
-        cursor = i + 1;
-        match m {
-            MavMessage::MISSION_REQUEST_INT(r) => {
-                c.send(&MavMessage::MISSION_ITEM_INT(items[r.seq as usize].clone()));
-            }
-            MavMessage::MISSION_ACK(a) => return Some(a.mavtype),
-            _ => unreachable!(),
-        }
-    }
-}
-
-/// A raw socket that receives nothing within `within`.
-fn silent(s: &UdpSocket, within: Duration) -> bool {
-    s.set_read_timeout(Some(within)).unwrap();
-    let mut b = [0u8; 512];
-    s.recv_from(&mut b).is_err()
-}
+use std::time::Duration;
 
 #[test]
 fn a_stray_datagram_does_not_steal_the_telemetry() {
@@ -263,20 +26,26 @@ fn a_stray_datagram_does_not_steal_the_telemetry() {
     let mut gcs = Client::to_port(veh.port, None);
     gcs.heartbeat();
     veh.status(1.0);
-    assert!(count(&gcs, 0, HEARTBEAT_DATA::ID) >= 1, "the ground station hears nothing");
+    assert!(
+        count(&mut gcs, 0, HEARTBEAT_DATA::ID) >= 1,
+        "the ground station hears nothing"
+    );
     // a stray 1-byte datagram, and a datagram of noise with the MAVLink 2
     // start byte, from another address
     let stray = UdpSocket::bind("127.0.0.1:0").unwrap();
     stray.send_to(&[0x55], ("127.0.0.1", veh.port)).unwrap();
     stray
-        .send_to(&[0xFD, 9, 0, 0, 1, 255, 190, 0, 0, 0, 1, 2, 3], ("127.0.0.1", veh.port))
+        .send_to(
+            &[0xFD, 9, 0, 0, 1, 255, 190, 0, 0, 0, 1, 2, 3],
+            ("127.0.0.1", veh.port),
+        )
         .unwrap();
     std::thread::sleep(Duration::from_millis(50));
     let from = gcs.log.len();
     veh.status(2.0);
     gcs.drain();
     // the ground station keeps every stream: 2 s of ATTITUDE at 10 Hz
-    let n = count(&gcs, from, ATTITUDE_DATA::ID);
+    let n = count(&mut gcs, from, ATTITUDE_DATA::ID);
     assert!(n >= 19, "{n} ATTITUDE after the stray datagram");
     // the stray sender is sent nothing
     assert!(silent(&stray, SHORT), "the stray address was answered");
@@ -310,14 +79,22 @@ fn two_ground_stations_each_with_their_own_link_and_rates() {
         MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL,
         1,
         1,
-        [RC_CHANNELS_DATA::ID as f32, 50_000.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [
+            RC_CHANNELS_DATA::ID as f32,
+            50_000.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ],
     ));
     assert_eq!(
         ack_within(&mut b, from_b, MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL, T),
         Some(MavResult::MAV_RESULT_ACCEPTED)
     );
     // the acknowledgement went to the one who asked: B got one, not A's
-    assert_eq!(count(&b, 0, COMMAND_ACK_DATA::ID), 1);
+    assert_eq!(count(&mut b, 0, COMMAND_ACK_DATA::ID), 1);
     let (fa, fb) = (a.log.len(), b.log.len());
     for _ in 0..4 {
         a.heartbeat();
@@ -326,15 +103,14 @@ fn two_ground_stations_each_with_their_own_link_and_rates() {
     }
     a.drain();
     b.drain();
-    let per_2s = |c: &Client, f, id| count(c, f, id);
-    assert_eq!(per_2s(&a, fa, ATTITUDE_DATA::ID), 0);
-    assert_eq!(per_2s(&a, fa, RC_CHANNELS_DATA::ID), 0);
-    let att_b = per_2s(&b, fb, ATTITUDE_DATA::ID);
-    let rc_b = per_2s(&b, fb, RC_CHANNELS_DATA::ID);
+    assert_eq!(count(&mut a, fa, ATTITUDE_DATA::ID), 0);
+    assert_eq!(count(&mut a, fa, RC_CHANNELS_DATA::ID), 0);
+    let att_b = count(&mut b, fb, ATTITUDE_DATA::ID);
+    let rc_b = count(&mut b, fb, RC_CHANNELS_DATA::ID);
     assert!((19..=21).contains(&att_b), "B: {att_b} ATTITUDE in 2 s");
     assert!((39..=41).contains(&rc_b), "B: {rc_b} RC_CHANNELS in 2 s");
-    for c in [&a, &b] {
-        let hb = per_2s(c, 0, HEARTBEAT_DATA::ID);
+    for c in [&mut a, &mut b] {
+        let hb = count(c, 0, HEARTBEAT_DATA::ID);
         assert!(hb >= 2, "{hb} heartbeats");
     }
     // both stations' heartbeats keep the link
@@ -393,7 +169,7 @@ fn messages_for_another_vehicle_are_ignored_without_an_answer() {
     c.send(&MavMessage::SET_MODE(SET_MODE_DATA {
         custom_mode: NavMode::Hold.code(),
         target_system: 99,
-        base_mode: MavMode::MAV_MODE_GUIDED_ARMED,
+        base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
     }));
     c.send(&param_set("NAV_CRUISE_SPD", 3.0, 99));
     c.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
@@ -411,7 +187,7 @@ fn messages_for_another_vehicle_are_ignored_without_an_answer() {
         req_message_rate: 0,
         target_system: 99,
         target_component: 1,
-        req_stream_id: MavDataStream::MAV_DATA_STREAM_ALL as u8,
+        req_stream_id: MavDataStream::MAV_DATA_STREAM_ALL,
         start_stop: 0,
     }));
     c.send(&position_target(10.0, 0.0, -10.0, 99));
@@ -427,8 +203,12 @@ fn messages_for_another_vehicle_are_ignored_without_an_answer() {
     });
     assert!(answers.is_empty(), "answered: {answers:?}");
     // the streams go on (REQUEST_DATA_STREAM stop was not for us)
-    assert!(count(&c, from, ATTITUDE_DATA::ID) >= 9);
-    assert_eq!(veh.commands(), vec![], "a foreign message reached the vehicle");
+    assert!(count(&mut c, from, ATTITUDE_DATA::ID) >= 9);
+    assert_eq!(
+        veh.commands(),
+        vec![],
+        "a foreign message reached the vehicle"
+    );
     assert_eq!(param(&mut c, "NAV_CRUISE_SPD"), 2.0);
     // broadcast (0) and this vehicle (1) are obeyed
     let from = c.log.len();
@@ -442,33 +222,6 @@ fn messages_for_another_vehicle_are_ignored_without_an_answer() {
     assert_eq!(r.other_target, 10, "{r:?}");
 }
 
-/// Signed frames as a ground station with `key` on `link_id` sends them.
-struct Signer {
-    data: SigningData,
-    seq: u8,
-}
-
-impl Signer {
-    fn new(key: [u8; 32], link_id: u8) -> Signer {
-        Signer {
-            data: SigningData::from_config(SigningConfig::new(key, link_id, true, false)),
-            seq: 0,
-        }
-    }
-
-    fn frame(&mut self, msg: &MavMessage) -> Vec<u8> {
-        let mut out = Vec::new();
-        let h = MavHeader {
-            system_id: 255,
-            component_id: 190,
-            sequence: self.seq,
-        };
-        self.seq = self.seq.wrapping_add(1);
-        write_v2_msg_signed(&mut out, h, msg, Some(&self.data)).unwrap();
-        out
-    }
-}
-
 #[test]
 fn with_signing_nothing_unsigned_or_replayed_changes_anything() {
     let key = [7u8; 32];
@@ -476,7 +229,10 @@ fn with_signing_nothing_unsigned_or_replayed_changes_anything() {
     let mut good = Client::to_port(veh.port, Some(key));
     good.heartbeat();
     veh.status(1.0);
-    assert!(count(&good, 0, ATTITUDE_DATA::ID) >= 9, "the signed station hears nothing");
+    assert!(
+        count(&mut good, 0, ATTITUDE_DATA::ID) >= 9,
+        "the signed station hears nothing"
+    );
     veh.uplinks();
 
     for (who, k) in [("unsigned", None), ("wrong key", Some([8u8; 32]))] {
@@ -489,7 +245,7 @@ fn with_signing_nothing_unsigned_or_replayed_changes_anything() {
             req_message_rate: 0,
             target_system: 1,
             target_component: 1,
-            req_stream_id: MavDataStream::MAV_DATA_STREAM_ALL as u8,
+            req_stream_id: MavDataStream::MAV_DATA_STREAM_ALL,
             start_stop: 0,
         }));
         bad.send(&long(
@@ -502,7 +258,7 @@ fn with_signing_nothing_unsigned_or_replayed_changes_anything() {
         bad.send(&MavMessage::SET_MODE(SET_MODE_DATA {
             custom_mode: NavMode::Land.code(),
             target_system: 1,
-            base_mode: MavMode::MAV_MODE_GUIDED_ARMED,
+            base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
         }));
         bad.send(&MavMessage::MISSION_CLEAR_ALL(MISSION_CLEAR_ALL_DATA {
             target_system: 1,
@@ -525,7 +281,7 @@ fn with_signing_nothing_unsigned_or_replayed_changes_anything() {
         // failsafe is not held off)
         assert_eq!(veh.uplinks(), vec![], "{who}");
         // the signed station's streams go on
-        let n = count(&good, from, ATTITUDE_DATA::ID);
+        let n = count(&mut good, from, ATTITUDE_DATA::ID);
         assert!(n >= 9, "{who}: {n} ATTITUDE");
         // the unsigned sender is sent no telemetry
         let tele = bad.collect(0, |m| match m {
@@ -553,13 +309,22 @@ fn with_signing_nothing_unsigned_or_replayed_changes_anything() {
     other.send_to(&first, ("127.0.0.1", veh.port)).unwrap();
     other.send_to(&second, ("127.0.0.1", veh.port)).unwrap();
     veh.status(0.1);
-    assert_eq!(param(&mut good, "NAV_CRUISE_SPD"), 4.0, "a replay was obeyed");
-    // the replaying address became no peer: it is sent nothing
+    assert_eq!(
+        param(&mut good, "NAV_CRUISE_SPD"),
+        4.0,
+        "a replay was obeyed"
+    );
+    // the replaying address became no peer: it is sent no telemetry (only
+    // the refusal of the replayed PARAM_SET)
     veh.status(1.0);
-    assert!(silent(&other, SHORT), "the replaying address was answered");
+    let sent = received(&other, SHORT);
+    assert!(
+        sent.iter().all(|m| matches!(m, MavMessage::STATUSTEXT(_))),
+        "the replaying address was sent {sent:?}"
+    );
     let r = veh.stop();
-    // 9 frames of each bad station, 3 replays
-    assert_eq!(r.refused_unsigned, 2 * 9 + 3, "{r:?}");
+    // 8 frames of each bad station, 3 replays
+    assert_eq!(r.refused_unsigned, 2 * 8 + 3, "{r:?}");
     assert_eq!(r.peers_max, 2, "{r:?}");
 }
 
@@ -580,7 +345,11 @@ fn targets_outside_the_fence_are_refused() {
     c.drain();
     let names = c.collect(from, |m| match m {
         MavMessage::PARAM_VALUE(p) => Some((
-            p.param_id.to_str().unwrap_or("").trim_end_matches('\0').to_string(),
+            p.param_id
+                .to_str()
+                .unwrap_or("")
+                .trim_end_matches('\0')
+                .to_string(),
             p.param_value,
         )),
         _ => None,
@@ -743,7 +512,7 @@ fn targets_outside_the_fence_are_refused() {
     assert!(
         c.texts()
             .iter()
-            .any(|t| t == "mission refused: item 1: beyond the fence (GF_MAX_HOR_DIST)"),
+            .any(|t| t == "mission refused: item 1: beyond GF_MAX_HOR_DIST"),
         "{:?}",
         c.texts()
     );
@@ -754,7 +523,8 @@ fn targets_outside_the_fence_are_refused() {
     veh.status(0.1);
     let u = veh.commands();
     assert!(
-        u.iter().any(|x| matches!(x, Uplink::Config(c) if c.fence.max_hor_dist_m == 500.0)),
+        u.iter()
+            .any(|x| matches!(x, Uplink::Config(c) if c.fence.max_hor_dist_m == 500.0)),
         "{u:?}"
     );
     assert!(u.contains(&Uplink::Guided(GuidedTarget::Position(
@@ -762,89 +532,4 @@ fn targets_outside_the_fence_are_refused() {
         None
     ))));
     veh.stop();
-}
-
-/// The resident set of this process (bytes), from /proc.
-fn rss_bytes() -> u64 {
-    let s = std::fs::read_to_string("/proc/self/statm").unwrap();
-    let pages: u64 = s.split_whitespace().nth(1).unwrap().parse().unwrap();
-    pages * 4096
-}
-
-#[test]
-fn ten_thousand_random_datagrams_and_a_flood_of_addresses() {
-    let mut veh = Vehicle::start(None);
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
-    let attacker = UdpSocket::bind("127.0.0.1:0").unwrap();
-    // a valid frame to mutate
-    let mut signer = Signer::new([0u8; 32], 0);
-    signer.data = SigningData::from_config(SigningConfig::new([0u8; 32], 0, false, false));
-    let template = signer.frame(&long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1, 1, ARM));
-    let rss0 = rss_bytes();
-    for i in 0..10_000 {
-        let d: Vec<u8> = match i % 3 {
-            // noise of any length
-            0 => {
-                let n = rng.random_range(0..600);
-                (0..n).map(|_| rng.random()).collect()
-            }
-            // a MAVLink 2 start and a plausible header, random rest
-            1 => {
-                let n = rng.random_range(10..300);
-                let mut d: Vec<u8> = (0..n).map(|_| rng.random()).collect();
-                d[0] = 0xFD;
-                d[1] = (n as u8).wrapping_sub(12);
-                d
-            }
-            // a real frame with bytes flipped (its CRC then fails)
-            _ => {
-                let mut d = template.clone();
-                let k = rng.random_range(1..d.len());
-                d[k] ^= rng.random_range(1..=255u8);
-                d
-            }
-        };
-        let _ = attacker.send_to(&d, ("127.0.0.1", veh.port));
-        if i % 500 == 0 {
-            veh.status(0.01);
-        }
-    }
-    veh.status(0.5);
-    assert_eq!(veh.commands(), vec![], "random bytes commanded the vehicle");
-    // a flood of valid heartbeats from 40 addresses: the table stays bounded
-    let hb = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-        custom_mode: 0,
-        mavtype: MavType::MAV_TYPE_GCS,
-        autopilot: MavAutopilot::MAV_AUTOPILOT_INVALID,
-        base_mode: MavModeFlag::empty(),
-        system_status: MavState::MAV_STATE_ACTIVE,
-        mavlink_version: 3,
-    });
-    let flood: Vec<UdpSocket> = (0..40)
-        .map(|_| UdpSocket::bind("127.0.0.1:0").unwrap())
-        .collect();
-    for s in &flood {
-        s.send_to(&signer.frame(&hb), ("127.0.0.1", veh.port)).unwrap();
-        veh.status(0.01);
-    }
-    // the server still answers a ground station
-    let mut c = Client::to_port(veh.port, None);
-    c.heartbeat();
-    veh.status(0.1);
-    let from = c.log.len();
-    c.send(&long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1, 1, ARM));
-    assert_eq!(
-        ack_within(&mut c, from, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, T),
-        Some(MavResult::MAV_RESULT_ACCEPTED)
-    );
-    let grown = rss_bytes().saturating_sub(rss0);
-    let r = veh.stop();
-    println!("{r:?}; resident set grown by {} kB", grown / 1024);
-    assert_eq!(r.peers_max, MAX_PEERS, "{r:?}");
-    assert_eq!(r.peers_evicted, 41 - MAX_PEERS as u64, "{r:?}");
-    // every random datagram was without a valid frame (a flipped byte
-    // breaks the CRC; random bytes pass a 16-bit CRC 1 in 65 536 times and
-    // then still name no known message with that CRC extra)
-    assert!(r.garbage_datagrams >= 9_990, "{r:?}");
-    assert!(grown < 16 << 20, "resident set grew by {grown} bytes");
 }
