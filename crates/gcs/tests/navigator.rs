@@ -4,6 +4,7 @@
 //! on the vehicle's position.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
+use helicon_gcs::fence::{Fence, FenceAction};
 use helicon_gcs::navigator::{
     Events, GuidedTarget, Item, ItemKind, LinkLossAction, NavEvent, NavInput, NavMode, Navigator,
     NavigatorConfig, Plan,
@@ -68,6 +69,7 @@ impl Sim {
             let mut ev = Events::default();
             let at = self.at();
             self.nav.link(&at, silence(self.t), &mut ev);
+            self.nav.fence(&at, &mut ev);
             let r = self.nav.step(&at, &mut ev);
             self.record(&ev);
             let dv = (r.velocity_ned_m_s - self.prev_ref).norm();
@@ -398,4 +400,113 @@ fn gcs_section_checked_field_by_field() {
             .to_string();
         assert!(e.starts_with("onboard.toml: [gcs]"), "{text}: {e}");
     }
+}
+
+/// A guided velocity out of a small fence (20 m, 15 m up): each GF_ACTION
+/// acts once, at the crossing, and a return lands at home.
+#[test]
+fn fence_breach_acts_as_gf_action_says() {
+    let fenced = |action| NavigatorConfig {
+        guided_timeout_s: 10.0,
+        fence: Fence {
+            max_hor_dist_m: 20.0,
+            max_ver_dist_m: 15.0,
+            action,
+        },
+        ..NavigatorConfig::default()
+    };
+    for action in [
+        FenceAction::Return,
+        FenceAction::Hold,
+        FenceAction::Land,
+        FenceAction::Warn,
+    ] {
+        let mut s = Sim::new(fenced(action));
+        s.p = Vector3::new(0.0, 0.0, -5.0);
+        let mut ev = Events::default();
+        let out = GuidedTarget::Velocity(Vector3::new(3.0, 0.0, 0.0), None);
+        assert!(s.nav.guided(&s.at(), out, &mut ev));
+        s.record(&ev);
+        let mut farthest: f64 = 0.0;
+        for _ in 0..120 {
+            s.run(0.5, no_link);
+            farthest = farthest.max(s.p.xy().norm());
+            if action == FenceAction::Warn && s.p.x > 22.0 {
+                break;
+            }
+        }
+        let breaches: Vec<_> = s
+            .events
+            .iter()
+            .filter(|(_, e, _)| matches!(e, NavEvent::FenceBreach(_)))
+            .collect();
+        assert_eq!(breaches.len(), 1, "{action:?}: {breaches:?}");
+        let (t_b, e, p_b) = breaches[0];
+        assert_eq!(*e, NavEvent::FenceBreach(true));
+        // at the crossing: 20 m within one step's travel
+        assert!((p_b.xy().norm() - 20.0).abs() < 3.0 * DT * 1.01, "{p_b}");
+        let mode_after = s
+            .events
+            .iter()
+            .find(|(t, e, _)| *t >= *t_b && matches!(e, NavEvent::Mode(_)))
+            .map(|(_, e, _)| *e);
+        match action {
+            FenceAction::Return => {
+                assert_eq!(mode_after, Some(NavEvent::Mode(NavMode::Return)));
+                let (_, p) = s.has(NavEvent::Landed).expect("landed");
+                assert!(p.xy().norm() <= 1.1, "landed at {p}");
+                // braking from 3 m/s at 1 m/s² (4.5 m) and the lag
+                assert!(farthest < 26.0, "{farthest}");
+            }
+            FenceAction::Hold => {
+                assert_eq!(mode_after, Some(NavEvent::Mode(NavMode::Hold)));
+                assert_eq!(s.nav.mode(), NavMode::Hold);
+                assert!(farthest < 26.0, "{farthest}");
+            }
+            FenceAction::Land => {
+                assert_eq!(mode_after, Some(NavEvent::Mode(NavMode::Land)));
+                let (_, p) = s.has(NavEvent::Landed).expect("landed");
+                assert!(p.x > 20.0 && p.x < 26.0, "landed at {p}");
+            }
+            FenceAction::Warn => {
+                assert_eq!(mode_after, None);
+                assert_eq!(s.nav.mode(), NavMode::Guided);
+            }
+        }
+    }
+    // the height: a climb at 1 m/s through 15 m returns at 15 m at most
+    let mut s = Sim::new(fenced(FenceAction::Return));
+    s.p = Vector3::new(5.0, 0.0, -8.0);
+    let mut ev = Events::default();
+    let up = GuidedTarget::Velocity(Vector3::new(0.0, 0.0, -1.0), None);
+    assert!(s.nav.guided(&s.at(), up, &mut ev));
+    let mut highest: f64 = 0.0;
+    for _ in 0..750 {
+        s.run(0.1, no_link);
+        highest = highest.max(-s.p.z);
+    }
+    let (t_b, p_b) = s.has(NavEvent::FenceBreach(false)).expect("height breach");
+    assert!((p_b.z + 15.0).abs() < 0.01, "{p_b}");
+    let (t_r, _) = s.has(NavEvent::Mode(NavMode::Return)).expect("return");
+    assert!((t_r - t_b).abs() < 1e-9);
+    // the return flies at the fence's height at most: the overshoot is the
+    // climb's stopping (1 m/s at 1 m/s², 0.5 m, slower here as the one
+    // acceleration limit also starts the leg home), and the lag (0.3 m);
+    // 16.2 m measured
+    assert!(highest < 16.5, "{highest}");
+    let (_, p) = s.has(NavEvent::Landed).expect("landed");
+    assert!(p.xy().norm() <= 1.1, "landed at {p}");
+    // targets outside the fence are not flown, whoever asks
+    let mut s = Sim::new(fenced(FenceAction::Return));
+    let mut ev = Events::default();
+    s.nav.hold(&s.at(), &mut ev);
+    for p in [
+        Vector3::new(21.0, 0.0, -5.0),
+        Vector3::new(0.0, 0.0, -16.0),
+        Vector3::new(0.0, 0.0, -3e38),
+    ] {
+        assert!(!s.nav.guided(&s.at(), GuidedTarget::Position(p, None), &mut ev));
+    }
+    assert!(!s.nav.takeoff(&s.at(), 16.0, &mut ev));
+    assert_eq!(s.nav.mode(), NavMode::Hold);
 }
