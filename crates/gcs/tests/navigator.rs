@@ -360,7 +360,7 @@ fn gcs_section_checked_field_by_field() {
     use helicon_gcs::config::GcsSection;
     let home = helicon_devices::Geodetic::new(57.0, 10.0, 20.0).unwrap();
     let ok = GcsSection::from_toml_str(
-        "address = \"udpin:0.0.0.0:14550\"\nsigning_key_hex = \"000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f\"\n[rates_hz]\nATTITUDE = 50.0\n[navigator]\ncruise_speed_m_s = 3.0\nlink_loss_action = \"land\"\n",
+        "address = \"udpin:0.0.0.0:14550\"\nsigning_key_hex = \"000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f\"\n[rates_hz]\nATTITUDE = 50.0\n[navigator]\ncruise_speed_m_s = 3.0\nlink_loss_action = \"land\"\n[navigator.fence]\nmax_hor_dist_m = 300.0\naction = \"hold\"\n",
         "onboard.toml",
     )
     .unwrap();
@@ -369,6 +369,9 @@ fn gcs_section_checked_field_by_field() {
     assert_eq!(c.rates_hz[2], 50.0);
     assert_eq!(c.navigator.cruise_speed_m_s, 3.0);
     assert_eq!(c.navigator.link_loss_action, LinkLossAction::Land);
+    assert_eq!(c.navigator.fence.max_hor_dist_m, 300.0);
+    assert_eq!(c.navigator.fence.max_ver_dist_m, 60.0);
+    assert_eq!(c.navigator.fence.action, FenceAction::Hold);
     for (text, field) in [
         ("address = \"tcp:1.2.3.4:5\"", "gcs.address"),
         ("system_id = 255", "gcs.system_id"),
@@ -378,6 +381,14 @@ fn gcs_section_checked_field_by_field() {
         (
             "[navigator]\nmax_accel_m_s2 = 0.0",
             "gcs.navigator.max_accel_m_s2",
+        ),
+        (
+            "[navigator.fence]\nmax_hor_dist_m = 1e9",
+            "gcs.navigator.fence.max_hor_dist_m",
+        ),
+        (
+            "[navigator.fence]\nmax_ver_dist_m = nan",
+            "gcs.navigator.fence.max_ver_dist_m",
         ),
     ] {
         let e = GcsSection::from_toml_str(text, "onboard.toml")
@@ -394,6 +405,8 @@ fn gcs_section_checked_field_by_field() {
         "adress = \"x\"",
         "[navigator]\nlink_loss_action = \"fly\"",
         "[navigator]\nspeed = 1.0",
+        "[navigator.fence]\naction = \"terminate\"",
+        "[navigator.fence]\nradius = 1.0",
     ] {
         let e = GcsSection::from_toml_str(text, "onboard.toml")
             .unwrap_err()
@@ -505,7 +518,10 @@ fn fence_breach_acts_as_gf_action_says() {
         Vector3::new(0.0, 0.0, -16.0),
         Vector3::new(0.0, 0.0, -3e38),
     ] {
-        assert!(!s.nav.guided(&s.at(), GuidedTarget::Position(p, None), &mut ev));
+        assert!(
+            !s.nav
+                .guided(&s.at(), GuidedTarget::Position(p, None), &mut ev)
+        );
     }
     assert!(!s.nav.takeoff(&s.at(), 16.0, &mut ev));
     assert_eq!(s.nav.mode(), NavMode::Hold);
