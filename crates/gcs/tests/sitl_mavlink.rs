@@ -567,3 +567,99 @@ fn commands_signed_with_a_wrong_key_or_unsigned_are_refused() {
     let report = h.stop();
     assert_eq!(report.refused_unsigned, 2);
 }
+
+#[test]
+fn a_guided_flight_out_of_the_fence_returns_and_lands() {
+    let s = scenario(90.0);
+    let prepared = prepare(&s).unwrap();
+    let mut c = Client::new(None);
+    let mut h = Harness::new(
+        &s,
+        &prepared,
+        server_config(&c, None),
+        NavigatorConfig::default(),
+        4,
+    );
+    fly(&mut h, &mut c, 0.5, true);
+    // a 12 m fence, set over MAVLink (the parameter reaches the navigator)
+    let from = c.log.len();
+    c.send(&MavMessage::PARAM_SET(PARAM_SET_DATA {
+        param_value: 12.0,
+        target_system: 1,
+        target_component: 1,
+        param_id: "GF_MAX_HOR_DIST".into(),
+        param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
+    }));
+    assert!(
+        c.wait(
+            from,
+            T,
+            |m| matches!(m, MavMessage::PARAM_VALUE(p) if p.param_value == 12.0)
+        )
+        .is_some()
+    );
+    assert_eq!(
+        c.command(
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut c, 0.1, true);
+    assert_eq!(
+        c.command(
+            MavCmd::MAV_CMD_NAV_TAKEOFF,
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut c, 8.0, true);
+    // guided: 1.5 m/s north until the fence acts
+    let from = c.log.len();
+    let mut farthest: f64 = 0.0;
+    let mut breach_at = None;
+    for _ in 0..300 {
+        if breach_at.is_none() {
+            c.send(&position_target_velocity(1.5, 0.0));
+        }
+        fly(&mut h, &mut c, 0.2, true);
+        farthest = farthest.max(h.truth_ned_m.xy().norm());
+        if breach_at.is_none()
+            && c.texts()
+                .iter()
+                .any(|t| t == "fence breached (GF_MAX_HOR_DIST): return")
+        {
+            breach_at = Some(h.truth_ned_m);
+        }
+        if !h.vehicle().armed() {
+            break;
+        }
+    }
+    let texts = c.collect(from, |m| match m {
+        MavMessage::STATUSTEXT(s) => Some(
+            s.text
+                .to_str()
+                .unwrap_or("")
+                .trim_end_matches('\0')
+                .to_string(),
+        ),
+        _ => None,
+    });
+    let breach_at = breach_at.unwrap_or_else(|| panic!("no breach: {texts:?}"));
+    println!(
+        "fence 12 m: breach seen at {:.2} m (truth), farthest {farthest:.2} m; {texts:?}",
+        breach_at.xy().norm()
+    );
+    for want in ["mode RETURN", "mode LAND", "landed"] {
+        assert!(texts.iter().any(|t| t == want), "no {want}: {texts:?}");
+    }
+    assert!(!h.vehicle().armed());
+    // the estimate crossed 12 m; the truth differs by the navigation's
+    // error; the stop from 1.5 m/s at 1 m/s² is 1.1 m
+    assert!(farthest < 15.0, "{farthest}");
+    assert!(
+        h.truth_ned_m.xy().norm() < 2.0,
+        "landed at {}",
+        h.truth_ned_m
+    );
+}
