@@ -328,8 +328,31 @@ fn with_signing_nothing_unsigned_or_replayed_changes_anything() {
     assert_eq!(r.peers_max, 2, "{r:?}");
 }
 
+/// Arm the vehicle (its statuses say armed from then on).
+fn arm(veh: &mut Vehicle, c: &mut Client) {
+    let from = c.log.len();
+    c.send(&long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1, 1, ARM));
+    assert_eq!(
+        ack_within(c, from, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, T),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    veh.armed = true;
+    veh.status(0.1);
+    veh.uplinks();
+}
+
+/// A vehicle armed and holding, a ground station heard.
+fn armed_vehicle() -> (Vehicle, Client) {
+    let mut veh = Vehicle::start(None);
+    let mut c = Client::to_port(veh.port, None);
+    c.heartbeat();
+    veh.status(0.5);
+    arm(&mut veh, &mut c);
+    (veh, c)
+}
+
 #[test]
-fn targets_outside_the_fence_are_refused() {
+fn fence_parameters_and_takeoff_heights() {
     let mut veh = Vehicle::start(None);
     let mut c = Client::to_port(veh.port, None);
     c.heartbeat();
@@ -372,15 +395,8 @@ fn targets_outside_the_fence_are_refused() {
     c.send(&param_set("GF_MAX_VER_DIST", 500.0, 1));
     assert_eq!(param(&mut c, "GF_MAX_VER_DIST"), 60.0);
 
-    let from = c.log.len();
-    c.send(&long(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1, 1, ARM));
-    assert_eq!(
-        ack_within(&mut c, from, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, T),
-        Some(MavResult::MAV_RESULT_ACCEPTED)
-    );
-    veh.armed = true;
-    veh.status(0.1);
-    veh.uplinks();
+    let (mut veh, mut c) = (veh, c);
+    arm(&mut veh, &mut c);
 
     // takeoff heights: above the fence, infinite, below ground refused
     for h in [61.0, f32::INFINITY, -5.0, 3e38] {
@@ -410,6 +426,12 @@ fn targets_outside_the_fence_are_refused() {
     );
     assert_eq!(veh.commands(), vec![Uplink::Takeoff(60.0)]);
 
+    veh.stop();
+}
+
+#[test]
+fn targets_gotos_and_missions_outside_the_fence_are_refused() {
+    let (mut veh, mut c) = armed_vehicle();
     // local position targets: z = −3e38, 3e38 m away, 151 m out, NaN,
     // underground: none reaches the vehicle, each is told
     let from = c.log.len();
