@@ -523,7 +523,7 @@ fn commands_signed_with_a_wrong_key_or_unsigned_are_refused() {
     let s = scenario(10.0);
     let prepared = prepare(&s).unwrap();
     let key = [7u8; 32];
-    // the server listens (udpin) and answers whoever spoke last
+    // the server listens (udpin); every station that speaks is a peer
     let port = std::net::UdpSocket::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
