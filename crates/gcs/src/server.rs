@@ -11,9 +11,10 @@
 //! heard longest ago, so a flood of addresses cannot grow memory. Answers
 //! (COMMAND_ACK, PARAM_VALUE, the mission protocol) go to the peer that
 //! asked; streams to each live peer at its own rates; status texts to every
-//! live peer. A peer is live while it was heard within the link-loss
-//! timeout (`FS_LINK_TO`); the link-loss failsafe acts when no trusted
-//! peer's ground-station heartbeat arrived within it.
+//! live peer. A peer is live (is sent telemetry) while it was heard within
+//! [`PEER_SILENCE_S`], so that a station whose uplink failed still sees the
+//! failsafe; the link-loss failsafe acts when no trusted peer's
+//! ground-station heartbeat arrived within `FS_LINK_TO`.
 //!
 //! **Addressing.** Every message with a target (COMMAND_LONG/INT, SET_MODE,
 //! PARAM_*, MISSION_*, SET_POSITION_TARGET_*, REQUEST_DATA_STREAM, …) is
@@ -68,6 +69,12 @@ pub const DEFAULT_ADDRESS: &str = "udpout:127.0.0.1:14550";
 
 /// The largest number of ground stations (peers) the server keeps.
 pub const MAX_PEERS: usize = 8;
+
+/// A ground station silent this long (on-board s) is sent nothing more.
+/// Longer than the longest link-loss timeout and hold (`FS_LINK_TO` and
+/// `FS_LINK_HOLD`, 120 s each at most): a station whose uplink fails keeps
+/// its telemetry and sees the failsafe act.
+pub const PEER_SILENCE_S: f64 = 300.0;
 
 /// Largest guided velocity accepted (m/s): anything faster is not a
 /// helicopter's target but a corrupted one (the navigator limits the
@@ -420,10 +427,12 @@ impl Server {
     }
 
     /// A peer is sent status texts and streams: trusted, and heard within
-    /// the link-loss timeout (the configured destination always).
+    /// [`PEER_SILENCE_S`] (the configured destination always).
     fn live(&self, p: &Peer) -> bool {
-        let timeout = self.params.config().link_loss_timeout_s;
-        p.trusted && (p.configured || p.heard_s.is_some_and(|h| self.now_s() - h <= timeout))
+        p.trusted
+            && (p.configured
+                || p.heard_s
+                    .is_some_and(|h| self.now_s() - h <= PEER_SILENCE_S))
     }
 
     fn header(&mut self) -> MavHeader {
@@ -560,11 +569,11 @@ impl Server {
             }
             self.last_flight_mode = s.flight_mode.name;
         }
-        let timeout = self.params.config().link_loss_timeout_s;
         for p in 0..self.peers.len() {
             let peer = &self.peers[p];
             let heartbeat_only = !peer.trusted && peer.configured;
-            let silent = !peer.configured && peer.heard_s.is_none_or(|h| s.t_s - h > timeout);
+            let silent =
+                !peer.configured && peer.heard_s.is_none_or(|h| s.t_s - h > PEER_SILENCE_S);
             if (!peer.trusted && !heartbeat_only) || silent {
                 continue;
             }

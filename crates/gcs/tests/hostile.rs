@@ -120,9 +120,19 @@ fn two_ground_stations_each_with_their_own_link_and_rates() {
         .filter(|u| **u == Uplink::GcsHeartbeat)
         .count();
     assert!(hbs >= 10, "{hbs}");
-    // A falls silent: after the link-loss timeout (5 s) it is sent nothing
-    // more while B still is
-    for _ in 0..12 {
+    // A falls silent: it keeps its telemetry through a link loss (its
+    // uplink may be what failed), and after 300 s it is sent nothing more
+    for _ in 0..20 {
+        b.heartbeat();
+        veh.status(0.5);
+    }
+    let fa = a.log.len();
+    veh.status(0.5);
+    assert!(
+        count(&mut a, fa, HEARTBEAT_DATA::ID) >= 1,
+        "dropped after 10 s"
+    );
+    for _ in 0..580 {
         b.heartbeat();
         veh.status(0.5);
     }

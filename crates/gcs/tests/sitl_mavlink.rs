@@ -663,3 +663,106 @@ fn a_guided_flight_out_of_the_fence_returns_and_lands() {
         h.truth_ned_m
     );
 }
+
+#[test]
+fn with_signing_unsigned_heartbeats_do_not_hold_off_the_link_loss_failsafe() {
+    let s = scenario(60.0);
+    let prepared = prepare(&s).unwrap();
+    let key = [9u8; 32];
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let nav = NavigatorConfig {
+        link_loss_timeout_s: 2.0,
+        link_loss_hold_s: 1.0,
+        ..NavigatorConfig::default()
+    };
+    let mut cfg = server_config(&Client::new(None), Some(key));
+    cfg.address = format!("udpin:127.0.0.1:{port}");
+    cfg.navigator = nav;
+    let mut good = Client::to_port(port, Some(key));
+    let mut h = Harness::new(&s, &prepared, cfg, nav, 4);
+    fly(&mut h, &mut good, 0.5, true);
+    assert_eq!(
+        good.command(
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut good, 0.1, true);
+    assert_eq!(
+        good.command(
+            MavCmd::MAV_CMD_NAV_TAKEOFF,
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut good, 8.0, true);
+    // the signed station falls silent; an unsigned one sends a heartbeat
+    // every 50 ms of flight, claiming to be a ground station
+    let mut spoof = Client::to_port(port, None);
+    let from = good.log.len();
+    let t_silent = h.t_s;
+    let mut lost_at = None;
+    while h.vehicle().armed() && h.t_s < t_silent + 40.0 {
+        spoof.heartbeat();
+        assert!(h.run(0.05), "flight ended: {:?}", h.ended);
+        good.drain();
+        if lost_at.is_none()
+            && good
+                .texts()
+                .iter()
+                .any(|t| t.starts_with("failsafe: ground-station link lost"))
+        {
+            lost_at = Some(h.t_s);
+        }
+    }
+    let lost_at = lost_at.unwrap_or_else(|| {
+        panic!(
+            "no link loss: {:?}, armed {}, lost {}, mode {:?}, t {:.1}",
+            good.texts(),
+            h.vehicle().armed(),
+            h.vehicle().navigator().link_lost(),
+            h.vehicle().navigator().mode(),
+            h.t_s - t_silent
+        )
+    });
+    println!(
+        "link loss {:.2} s after the signed station fell silent, unsigned heartbeats throughout",
+        lost_at - t_silent
+    );
+    // the timeout after the last signed heartbeat (sent every 0.5 s)
+    assert!(
+        lost_at - t_silent > 1.4 && lost_at - t_silent < 2.7,
+        "link loss {:.2} s after the silence",
+        lost_at - t_silent
+    );
+    let texts = good.collect(from, |m| match m {
+        MavMessage::STATUSTEXT(s) => Some(
+            s.text
+                .to_str()
+                .unwrap_or("")
+                .trim_end_matches('\0')
+                .to_string(),
+        ),
+        _ => None,
+    });
+    // (already holding after the takeoff: the failsafe's hold is no change)
+    for want in ["mode RETURN", "mode LAND", "landed"] {
+        assert!(texts.iter().any(|t| t == want), "no {want}: {texts:?}");
+    }
+    assert!(!h.vehicle().armed());
+    spoof.drain();
+    assert!(
+        spoof
+            .log
+            .iter()
+            .all(|(_, m)| matches!(m, MavMessage::STATUSTEXT(_))),
+        "the unsigned station was sent telemetry"
+    );
+    let report = h.stop();
+    assert!(report.refused_unsigned > 100, "{report:?}");
+}
