@@ -12,6 +12,11 @@
 //! [gcs.navigator]
 //! cruise_speed_m_s = 2.0
 //! link_loss_action = "return"
+//!
+//! [gcs.navigator.fence]
+//! max_hor_dist_m = 150.0
+//! max_ver_dist_m = 60.0
+//! action = "return"
 //! ```
 
 use crate::navigator::NavigatorConfig;

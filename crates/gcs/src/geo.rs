@@ -18,6 +18,7 @@
 // and the *_INT mission frames: they are understood
 #![allow(deprecated)]
 
+use crate::fence::{Fence, FenceViolation};
 use crate::navigator::{Item, ItemKind, Plan};
 use helicon_devices::{Geodetic, LocalNed};
 use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavCmd, MavFrame, MavMissionResult};
@@ -44,41 +45,52 @@ pub fn item_position_ned_m(
     home: &LocalNed,
     it: &MISSION_ITEM_INT_DATA,
 ) -> Result<Vector3<f64>, MissionError> {
-    let seq = it.seq;
-    let z = f64::from(it.z);
+    global_position_ned_m(home, it.frame, it.x, it.y, it.z).map_err(|(rule, result)| MissionError {
+        seq: it.seq,
+        rule,
+        result,
+    })
+}
+
+/// The NED position (m) about home of `x`, `y` (degrees × 10⁷, or in
+/// `LOCAL_NED` metres × 10⁴) and `z` (m) in `frame`; the error names the
+/// rule and the mission protocol's result for it.
+pub fn global_position_ned_m(
+    home: &LocalNed,
+    frame: MavFrame,
+    x: i32,
+    y: i32,
+    z: f32,
+) -> Result<Vector3<f64>, (&'static str, MavMissionResult)> {
+    let z = f64::from(z);
     if !z.is_finite() {
-        return Err(err(
-            seq,
+        return Err((
             "z is not finite",
             MavMissionResult::MAV_MISSION_INVALID_PARAM7,
         ));
     }
     let h0 = home.home().height_m;
     let global = |height_m: f64| {
-        let lat = f64::from(it.x) * 1e-7;
-        let lon = f64::from(it.y) * 1e-7;
+        let lat = f64::from(x) * 1e-7;
+        let lon = f64::from(y) * 1e-7;
         Geodetic::new(lat, lon, height_m)
             .map(|g| home.to_ned_m(&g))
             .map_err(|_| {
-                err(
-                    seq,
+                (
                     "latitude, longitude or height out of range",
                     MavMissionResult::MAV_MISSION_INVALID_PARAM5_X,
                 )
             })
     };
-    match it.frame {
+    match frame {
         MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT => {
             global(h0 + z)
         }
         MavFrame::MAV_FRAME_GLOBAL_INT | MavFrame::MAV_FRAME_GLOBAL => global(z),
-        MavFrame::MAV_FRAME_LOCAL_NED => Ok(Vector3::new(
-            f64::from(it.x) * 1e-4,
-            f64::from(it.y) * 1e-4,
-            z,
-        )),
-        _ => Err(err(
-            seq,
+        MavFrame::MAV_FRAME_LOCAL_NED => {
+            Ok(Vector3::new(f64::from(x) * 1e-4, f64::from(y) * 1e-4, z))
+        }
+        _ => Err((
             "unsupported frame",
             MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME,
         )),
@@ -86,7 +98,13 @@ pub fn item_position_ned_m(
 }
 
 /// The navigator's plan of a mission as uploaded (items in sequence order).
-pub fn plan_of(home: &LocalNed, items: &[MISSION_ITEM_INT_DATA]) -> Result<Plan, MissionError> {
+/// Every takeoff height, waypoint and landing point must lie inside the
+/// fence (refused `MAV_MISSION_DENIED` otherwise, the limit named).
+pub fn plan_of(
+    home: &LocalNed,
+    fence: &Fence,
+    items: &[MISSION_ITEM_INT_DATA],
+) -> Result<Plan, MissionError> {
     let mut plan = Plan::default();
     let mut speed: Option<f64> = None;
     let mut last_ned = Vector3::zeros();
@@ -124,10 +142,10 @@ pub fn plan_of(home: &LocalNed, items: &[MISSION_ITEM_INT_DATA]) -> Result<Plan,
         let position = match kind {
             ItemKind::Takeoff => {
                 let z = p(it.z);
-                if !(z.is_finite() && z > 0.0 && z <= 100.0) {
+                if !(z.is_finite() && z > 0.0) {
                     return Err(err(
                         seq,
-                        "takeoff height must be in (0, 100] m",
+                        "takeoff height must be positive",
                         MavMissionResult::MAV_MISSION_INVALID_PARAM7,
                     ));
                 }
@@ -137,6 +155,18 @@ pub fn plan_of(home: &LocalNed, items: &[MISSION_ITEM_INT_DATA]) -> Result<Plan,
             ItemKind::Return => Vector3::zeros(),
             _ => item_position_ned_m(home, it)?,
         };
+        if let Err(v) = fence.check_target(&position) {
+            return Err(MissionError {
+                seq,
+                rule: match v {
+                    FenceViolation::NotFinite => "position not finite",
+                    FenceViolation::Horizontal { .. } => "beyond GF_MAX_HOR_DIST",
+                    FenceViolation::Vertical { .. } => "above GF_MAX_VER_DIST",
+                    FenceViolation::BelowHome { .. } => "below home",
+                },
+                result: MavMissionResult::MAV_MISSION_DENIED,
+            });
+        }
         let hold_s = if kind == ItemKind::Waypoint {
             p(it.param1)
         } else {

@@ -7,6 +7,8 @@
 //!   (earth velocities and heading): takeoff, waypoint legs with speed and
 //!   acceleration limits, hold, return, landing, guided targets, the
 //!   link-loss failsafe. Allocation-free.
+//! - [`fence`]: the geofence (radius and height about home, PX4's
+//!   `GF_*` parameters): targets outside it refused, a breach acted on.
 //! - [`geo`]: mission items (MAVLink `MISSION_ITEM_INT`) ↔ the navigator's
 //!   local NED frame about home, through `helicon-devices`' WGS-84 geodesy.
 //! - [`link`]: what crosses between the control task and the server thread
@@ -16,6 +18,7 @@
 //! - [`config`]: the `[gcs]` section of the on-board configuration.
 
 pub mod config;
+pub mod fence;
 pub mod geo;
 pub mod link;
 pub mod navigator;

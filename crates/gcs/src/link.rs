@@ -295,6 +295,7 @@ impl Vehicle {
         let silence = self.last_heartbeat_s.map(|h| t_s - h);
         let at = self.at;
         self.nav.link(&at, silence, &mut events);
+        self.nav.fence(&at, &mut events);
         let reference = self.nav.step(&at, &mut events);
         for e in events.iter() {
             if e == NavEvent::Landed && self.armed {

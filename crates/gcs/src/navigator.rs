@@ -20,6 +20,7 @@
 //! frame is the home position's (the GPS receiver's origin); the ground is
 //! `d = 0`. Allocation-free: a mission is a fixed-capacity [`Plan`].
 
+use crate::fence::{Fence, FenceAction};
 use helicon_core::Reference;
 use helicon_core::frames::wrap_pi;
 use nalgebra::Vector3;
@@ -94,6 +95,9 @@ pub struct NavigatorConfig {
     pub link_loss_hold_s: f64,
     /// What a link loss does.
     pub link_loss_action: LinkLossAction,
+    /// The geofence (`[gcs.navigator.fence]`): targets outside it are
+    /// refused, a breach of the estimate acts.
+    pub fence: Fence,
 }
 
 impl Default for NavigatorConfig {
@@ -113,6 +117,7 @@ impl Default for NavigatorConfig {
             link_loss_timeout_s: 5.0,
             link_loss_hold_s: 5.0,
             link_loss_action: LinkLossAction::Return,
+            fence: Fence::default(),
         }
     }
 }
@@ -179,8 +184,9 @@ impl NavigatorConfig {
     }
 
     /// A tuning from the numeric fields (in the order of
-    /// [`NavigatorConfig::RANGES`]) and the link-loss action; not validated.
-    pub fn from_values(v: [f64; 13], link_loss_action: LinkLossAction) -> Self {
+    /// [`NavigatorConfig::RANGES`]), the link-loss action and the fence;
+    /// not validated.
+    pub fn from_values(v: [f64; 13], link_loss_action: LinkLossAction, fence: Fence) -> Self {
         NavigatorConfig {
             cruise_speed_m_s: v[0],
             max_speed_m_s: v[1],
@@ -196,15 +202,24 @@ impl NavigatorConfig {
             link_loss_timeout_s: v[11],
             link_loss_hold_s: v[12],
             link_loss_action,
+            fence,
         }
     }
 
-    /// Check every field against its range, and the cruise speed against
-    /// the largest speed.
+    /// Check every field against its range (the fence's as `fence.…`), and
+    /// the cruise speed against the largest speed.
     pub fn validate(&self) -> Result<(), ConfigRangeError> {
         for ((field, lo, hi), v) in Self::RANGES.iter().zip(self.values()) {
             in_range(field, v, *lo, *hi)?;
         }
+        self.fence.validate().map_err(|e| ConfigRangeError {
+            field: match e.field {
+                "max_hor_dist_m" => "fence.max_hor_dist_m",
+                _ => "fence.max_ver_dist_m",
+            },
+            value: e.value,
+            rule: e.rule,
+        })?;
         if self.cruise_speed_m_s > self.max_speed_m_s {
             return Err(ConfigRangeError {
                 field: "cruise_speed_m_s",
@@ -367,6 +382,9 @@ pub enum NavEvent {
     LinkLost,
     /// The heartbeat came back.
     LinkRegained,
+    /// The estimate left the fence while flying: the fence's action began
+    /// (`true`: the horizontal limit, `false`: the height).
+    FenceBreach(bool),
 }
 
 /// The estimated state the navigator flies from.
@@ -407,6 +425,8 @@ pub struct Navigator {
     guided: Option<(GuidedTarget, f64)>,
     link_lost_at_s: Option<f64>,
     last_t_s: Option<f64>,
+    /// A breach was acted on and the estimate has not come back inside.
+    fence_breached: bool,
 }
 
 impl Navigator {
@@ -428,6 +448,7 @@ impl Navigator {
             guided: None,
             link_lost_at_s: None,
             last_t_s: None,
+            fence_breached: false,
         })
     }
 
@@ -483,9 +504,14 @@ impl Navigator {
         self.reached_at_s = None;
     }
 
-    /// Climb from `at` to `height_m` above home, then hold.
+    /// Climb from `at` to `height_m` above home, then hold; `false`
+    /// (nothing changes) for a height that is not positive or is above the
+    /// fence.
     pub fn takeoff(&mut self, at: &NavInput, height_m: f64, events: &mut Events) -> bool {
-        if !height_m.is_finite() || height_m <= 0.0 {
+        if !height_m.is_finite()
+            || height_m <= 0.0
+            || self.config.fence.check_height(height_m).is_err()
+        {
             return false;
         }
         self.init(at);
@@ -538,11 +564,17 @@ impl Navigator {
         true
     }
 
-    /// Follow a guided target (enters guided).
+    /// Follow a guided target (enters guided); `false` (nothing changes) for
+    /// a non-finite one or a position outside the fence.
     pub fn guided(&mut self, at: &NavInput, target: GuidedTarget, events: &mut Events) -> bool {
         let ok = match target {
-            GuidedTarget::Velocity(v, y) | GuidedTarget::Position(v, y) => {
+            GuidedTarget::Velocity(v, y) => {
                 v.iter().all(|x| x.is_finite()) && y.is_none_or(f64::is_finite)
+            }
+            // the fence is checked here too: the server refuses such targets,
+            // the navigator never flies one
+            GuidedTarget::Position(p, y) => {
+                self.config.fence.check_target(&p).is_ok() && y.is_none_or(f64::is_finite)
             }
         };
         if !ok {
@@ -632,6 +664,34 @@ impl Navigator {
                 }
             }
             _ => {}
+        }
+    }
+
+    /// The estimate outside the fence while flying starts the fence's
+    /// action once (hold, return at most at the fence's height and land,
+    /// land, or a warning only); it is armed again when the estimate is
+    /// back inside. A landing or a return already under way goes on.
+    pub fn fence(&mut self, at: &NavInput, events: &mut Events) {
+        let Some(v) = self.config.fence.outside(&at.position_ned_m) else {
+            self.fence_breached = false;
+            return;
+        };
+        if self.fence_breached || self.mode == NavMode::Idle {
+            return;
+        }
+        self.fence_breached = true;
+        events.push(NavEvent::FenceBreach(v.is_horizontal()));
+        if matches!(self.mode, NavMode::Land | NavMode::Return) {
+            return;
+        }
+        match self.config.fence.action {
+            FenceAction::Warn => {}
+            FenceAction::Hold => self.hold(at, events),
+            FenceAction::Land => self.land(at, events),
+            FenceAction::Return => {
+                self.return_home(at, events);
+                self.target_ned_m.z = self.target_ned_m.z.max(-self.config.fence.max_ver_dist_m);
+            }
         }
     }
 

@@ -1,14 +1,16 @@
 //! The parameter table the ground station reads and sets (MAVLink parameter
-//! protocol): the navigator's tuning and the link-loss failsafe, every value
+//! protocol): the navigator's tuning, the link-loss failsafe and the
+//! geofence (PX4's `GF_*` names and codes), every value
 //! a `REAL32` with a range. A set is validated as a whole tuning (e.g. the
 //! cruise speed may not exceed the largest speed); a refused value is
 //! answered with the unchanged one.
 
+use crate::fence::{Fence, FenceAction};
 use crate::navigator::{LinkLossAction, NavigatorConfig};
 
 /// The parameters: name (≤ 16 characters, as MAVLink carries them), the
 /// navigator field it sets, unit and meaning.
-pub const PARAMS: [(&str, &str); 14] = [
+pub const PARAMS: [(&str, &str); 17] = [
     (
         "NAV_CRUISE_SPD",
         "cruise_speed_m_s: horizontal speed of legs without their own (m/s)",
@@ -65,7 +67,23 @@ pub const PARAMS: [(&str, &str); 14] = [
         "FS_LINK_ACT",
         "link_loss_action: 0 hold, 1 return and land, 2 land",
     ),
+    (
+        "GF_MAX_HOR_DIST",
+        "fence.max_hor_dist_m: largest horizontal distance from home (m)",
+    ),
+    (
+        "GF_MAX_VER_DIST",
+        "fence.max_ver_dist_m: largest height above home (m)",
+    ),
+    (
+        "GF_ACTION",
+        "fence.action: 1 warning, 2 hold, 3 return and land, 5 land",
+    ),
 ];
+
+const FS_LINK_ACT: usize = 13;
+const GF_MAX_HOR_DIST: usize = 14;
+const GF_ACTION: usize = 16;
 
 /// A refused parameter set.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -112,11 +130,14 @@ impl ParamTable {
         false
     }
 
-    fn values(&self) -> [f64; 14] {
-        let v = self.config.values();
-        let mut all = [0.0; 14];
-        all[..13].copy_from_slice(&v);
-        all[13] = f64::from(self.config.link_loss_action.code());
+    fn values(&self) -> [f64; PARAMS.len()] {
+        let c = &self.config;
+        let mut all = [0.0; PARAMS.len()];
+        all[..FS_LINK_ACT].copy_from_slice(&c.values());
+        all[FS_LINK_ACT] = f64::from(c.link_loss_action.code());
+        all[GF_MAX_HOR_DIST] = c.fence.max_hor_dist_m;
+        all[GF_MAX_HOR_DIST + 1] = c.fence.max_ver_dist_m;
+        all[GF_ACTION] = f64::from(c.fence.action.code());
         all
     }
 
@@ -146,19 +167,28 @@ impl ParamTable {
         let v = f64::from(value);
         let mut all = self.values();
         all[i] = v;
-        let action = if i == 13 {
-            let code = if v.fract() == 0.0 && (0.0..=255.0).contains(&v) {
-                LinkLossAction::from_code(v as u8)
-            } else {
-                None
-            };
-            code.ok_or_else(|| reject("must be 0 (hold), 1 (return) or 2 (land)".into()))?
+        let code = (v.fract() == 0.0 && (0.0..=255.0).contains(&v)).then_some(v as u8);
+        let link_loss_action = if i == FS_LINK_ACT {
+            code.and_then(LinkLossAction::from_code)
+                .ok_or_else(|| reject("must be 0 (hold), 1 (return) or 2 (land)".into()))?
         } else {
             self.config.link_loss_action
         };
+        let fence_action = if i == GF_ACTION {
+            code.and_then(FenceAction::from_code).ok_or_else(|| {
+                reject("must be 1 (warning), 2 (hold), 3 (return) or 5 (land)".into())
+            })?
+        } else {
+            self.config.fence.action
+        };
         let mut numeric = [0.0; 13];
-        numeric.copy_from_slice(&all[..13]);
-        let candidate = NavigatorConfig::from_values(numeric, action);
+        numeric.copy_from_slice(&all[..FS_LINK_ACT]);
+        let fence = Fence {
+            max_hor_dist_m: all[GF_MAX_HOR_DIST],
+            max_ver_dist_m: all[GF_MAX_HOR_DIST + 1],
+            action: fence_action,
+        };
+        let candidate = NavigatorConfig::from_values(numeric, link_loss_action, fence);
         match candidate.validate() {
             Ok(()) => {
                 self.config = candidate;
@@ -167,7 +197,8 @@ impl ParamTable {
             Err(e) => {
                 let (lo, hi) = NavigatorConfig::RANGES
                     .iter()
-                    .find(|(f, _, _)| *f == e.field)
+                    .chain(Fence::RANGES.iter())
+                    .find(|(f, _, _)| *f == e.field.trim_start_matches("fence."))
                     .map_or((f64::NAN, f64::NAN), |(_, l, h)| (*l, *h));
                 Err(reject(format!("{} (range [{lo}, {hi}])", e)))
             }

@@ -3,6 +3,40 @@
 //! and writes commands to the uplink ring; the control task never waits for
 //! it.
 //!
+//! **Peers.** Several ground stations may speak at once. Each is a peer with
+//! its own address, liveness and stream rates; a peer exists only after a
+//! CRC-valid MAVLink frame from its address (signed with the vehicle's key
+//! when signing is configured): a datagram of garbage creates nothing. The
+//! table holds at most [`MAX_PEERS`]; a new peer then replaces the one
+//! heard longest ago, so a flood of addresses cannot grow memory. Answers
+//! (COMMAND_ACK, PARAM_VALUE, the mission protocol) go to the peer that
+//! asked; streams to each live peer at its own rates; status texts to every
+//! live peer. A peer is live (is sent telemetry) while it was heard within
+//! [`PEER_SILENCE_S`], so that a station whose uplink failed still sees the
+//! failsafe; the link-loss failsafe acts when no trusted peer's
+//! ground-station heartbeat arrived within `FS_LINK_TO`.
+//!
+//! **Addressing.** Every message with a target (COMMAND_LONG/INT, SET_MODE,
+//! PARAM_*, MISSION_*, SET_POSITION_TARGET_*, REQUEST_DATA_STREAM, …) is
+//! handled only when its `target_system` is this vehicle's id or 0
+//! (broadcast) and its `target_component` is the autopilot's (1), 0, or
+//! for the mission protocol the mission planner's (190), as PX4 does;
+//! anything else is ignored without an answer (MAVLink's routing rules).
+//!
+//! **Signing.** With a key configured, a frame that is unsigned, signed
+//! with another key, or replayed (its timestamp not newer than the last of
+//! its link id, system and component, the MAVLink 2 signing rules) changes
+//! nothing — no peer, no liveness, no stream rate, parameter, mode or
+//! mission; a command among them is answered `MAV_RESULT_DENIED` to its
+//! sender only. Telemetry goes only to peers that have signed (the
+//! configured `udpout:` destination gets the heartbeat alone until then,
+//! so that it can find the vehicle).
+//!
+//! **Fence.** Position targets, guided gotos (`MAV_CMD_DO_REPOSITION`),
+//! mission waypoints and takeoff heights outside the geofence
+//! ([`crate::fence`]) are refused with the protocol's error result; the
+//! navigator acts on a breach of the estimate.
+//!
 //! Streams are scheduled in on-board time (the status's `t_s`), so a
 //! lock-step SITL flight that runs faster than the wall clock still sends
 //! every stream at its rate per simulated second, and the rates are exact
@@ -12,17 +46,19 @@
 // and the *_INT mission frames: they are understood
 #![allow(deprecated)]
 
-use crate::geo::{MissionError, plan_of};
+use crate::fence::Fence;
+use crate::geo::{MissionError, global_position_ned_m, plan_of};
 use crate::link::{Downlink, ServerEnd, Uplink, VehicleEvent, VehicleStatus};
 use crate::navigator::{GuidedTarget, NavEvent, NavMode, NavigatorConfig};
 use crate::params::{PARAMS, ParamError, ParamTable};
 use helicon_devices::{Geodetic, LocalNed};
 use mavlink::dialects::common::*;
 use mavlink::{
-    ConnectionAddress, MAVLinkMessageRaw, MavConnection, MavHeader, MavlinkVersion, Message,
+    ConnectionAddress, MAVLinkMessageRaw, MavHeader, MavlinkReader, MavlinkVersion, Message,
     MessageData, SigningConfig, SigningData,
 };
 use nalgebra::Vector3;
+use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
@@ -30,6 +66,20 @@ use std::time::Duration;
 
 /// The default address: where ground stations listen.
 pub const DEFAULT_ADDRESS: &str = "udpout:127.0.0.1:14550";
+
+/// The largest number of ground stations (peers) the server keeps.
+pub const MAX_PEERS: usize = 8;
+
+/// A ground station silent this long (on-board s) is sent nothing more.
+/// Longer than the longest link-loss timeout and hold (`FS_LINK_TO` and
+/// `FS_LINK_HOLD`, 120 s each at most): a station whose uplink fails keeps
+/// its telemetry and sees the failsafe act.
+pub const PEER_SILENCE_S: f64 = 300.0;
+
+/// Largest guided velocity accepted (m/s): anything faster is not a
+/// helicopter's target but a corrupted one (the navigator limits the
+/// speeds it flies to its own `NAV_MAX_SPD`, `NAV_CLIMB_SPD`, `NAV_DESC_SPD`).
+pub const MAX_GUIDED_SPEED_M_S: f64 = 50.0;
 
 /// The messages the server streams, with their default rates (Hz; 0: off
 /// until asked for).
@@ -48,20 +98,22 @@ pub const STREAMS: [(u32, &str, f64); 9] = [
 /// The server's settings.
 #[derive(Debug, Clone)]
 pub struct ServerConfig {
-    /// `udpout:HOST:PORT` (send to a ground station) or `udpin:HOST:PORT`
-    /// (listen; answer whoever spoke last).
+    /// `udpout:HOST:PORT` (send to this ground station from the start; others
+    /// may join by speaking) or `udpin:HOST:PORT` (listen; every ground
+    /// station that speaks is a peer).
     pub address: String,
     /// The vehicle's MAVLink system id.
     pub system_id: u8,
     /// The origin of the local NED frame (the GPS receiver's home).
     pub home: Geodetic,
-    /// The navigator's tuning at start (the parameter table's values).
+    /// The navigator's tuning and the fence at start (the parameter table's
+    /// values).
     pub navigator: NavigatorConfig,
-    /// MAVLink 2 signing key: when set, commands (COMMAND_LONG/INT, SET_MODE,
-    /// PARAM_SET, mission upload, guided targets) must be signed with it.
+    /// MAVLink 2 signing key: when set, only frames signed with it (and not
+    /// replayed) are heard.
     pub signing_key: Option<[u8; 32]>,
-    /// Start-up rate of each of [`STREAMS`] (Hz, 0: off, at most 100);
-    /// the ground station changes them.
+    /// Start-up rate of each of [`STREAMS`] (Hz, 0: off, at most 100) of
+    /// every peer; each ground station changes its own.
     pub rates_hz: [f64; STREAMS.len()],
 }
 
@@ -89,13 +141,23 @@ pub enum GcsError {
 /// What the server counted.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ServerReport {
-    /// Messages sent.
+    /// Messages sent (one per destination).
     pub sent: u64,
-    /// Messages received (parsed).
+    /// Messages received (CRC-valid, parsed, and signed when signing is on).
     pub received: u64,
-    /// Commands refused for a missing or wrong signature.
+    /// Frames refused for a missing, wrong or replayed signature.
     pub refused_unsigned: u64,
-    /// Send errors (the ground station not listening is one per message).
+    /// Messages for another system or component, ignored.
+    pub other_target: u64,
+    /// Datagrams read.
+    pub datagrams: u64,
+    /// Datagrams without a single CRC-valid frame of the dialect.
+    pub garbage_datagrams: u64,
+    /// Peers replaced because the table was full.
+    pub peers_evicted: u64,
+    /// The most peers held at once (at most [`MAX_PEERS`]).
+    pub peers_max: usize,
+    /// Send errors (a ground station not listening is one per message).
     pub send_errors: u64,
 }
 
@@ -131,21 +193,43 @@ pub fn parse_address(address: &str) -> Result<ConnectionAddress, GcsError> {
     ConnectionAddress::parse_address(address).map_err(|e| bad(e.to_string()))
 }
 
+/// The socket of an address, and the `udpout:` destination.
+fn bind(address: &str) -> Result<(UdpSocket, Option<SocketAddr>), GcsError> {
+    parse_address(address)?;
+    let bad = |message: String| GcsError::Address {
+        address: address.to_string(),
+        message,
+    };
+    let (listen, host) = match address.split_once(':') {
+        Some(("udpin", h)) => (true, h),
+        Some((_, h)) => (false, h),
+        None => return Err(bad("expected udpin:HOST:PORT or udpout:HOST:PORT".into())),
+    };
+    let addr = host
+        .to_socket_addrs()
+        .map_err(|e| bad(e.to_string()))?
+        .next()
+        .ok_or_else(|| bad("resolves to no address".into()))?;
+    let (socket, dest) = if listen {
+        (UdpSocket::bind(addr), None)
+    } else {
+        let any: SocketAddr = if addr.is_ipv4() {
+            ([0, 0, 0, 0], 0).into()
+        } else {
+            ([0u16; 8], 0).into()
+        };
+        (UdpSocket::bind(any), Some(addr))
+    };
+    let socket = socket.map_err(|e| bad(e.to_string()))?;
+    socket
+        .set_read_timeout(Some(Duration::from_millis(2)))
+        .map_err(|e| bad(e.to_string()))?;
+    Ok((socket, dest))
+}
+
 /// Start the server on its own thread.
 pub fn spawn(config: ServerConfig, end: ServerEnd) -> Result<ServerHandle, GcsError> {
-    let addr = parse_address(&config.address)?;
-    let ConnectionAddress::Udp(udp) = addr else {
-        return Err(GcsError::Address {
-            address: config.address.clone(),
-            message: "only UDP is offered".into(),
-        });
-    };
-    let conn =
-        mavlink::Connectable::connect::<MavMessage>(&udp.read_timeout(Duration::from_millis(2)))
-            .map_err(|e| GcsError::Address {
-                address: config.address.clone(),
-                message: e.to_string(),
-            })?;
+    let (socket, dest) = bind(&config.address)?;
     let stop = Arc::new(AtomicBool::new(false));
     let stop2 = stop.clone();
     let processed = Arc::new(AtomicU64::new(0));
@@ -153,7 +237,7 @@ pub fn spawn(config: ServerConfig, end: ServerEnd) -> Result<ServerHandle, GcsEr
     let thread = std::thread::Builder::new()
         .name("gcs".into())
         .spawn(move || {
-            let mut s = Server::new(config, end, conn);
+            let mut s = Server::new(config, end, socket, dest);
             while !stop2.load(Ordering::Relaxed) {
                 let n = s.poll();
                 processed2.fetch_add(n, Ordering::Release);
@@ -171,20 +255,44 @@ pub fn spawn(config: ServerConfig, end: ServerEnd) -> Result<ServerHandle, GcsEr
 enum Upload {
     Idle,
     Receiving {
+        /// The peer uploading (its address).
+        from: SocketAddr,
+        /// On-board time of its last message (s).
+        last_s: f64,
         count: u16,
         items: Vec<MISSION_ITEM_INT_DATA>,
     },
 }
 
+/// An upload idle this long (on-board s) may be taken over by another peer.
+const UPLOAD_IDLE_S: f64 = 5.0;
+
+/// One ground station.
+struct Peer {
+    addr: SocketAddr,
+    /// The `udpout:` destination: sent to before it speaks, never evicted.
+    configured: bool,
+    /// Has sent a frame that passed signing (every peer when signing is off).
+    trusted: bool,
+    /// On-board time of its last valid frame (s; `None`: never).
+    heard_s: Option<f64>,
+    intervals_s: [Option<f64>; STREAMS.len()],
+    next_due_s: [f64; STREAMS.len()],
+}
+
 struct Server {
     config: ServerConfig,
     end: ServerEnd,
-    conn: mavlink::Connection<MavMessage>,
+    socket: UdpSocket,
+    /// The datagram buffer (allocated once).
+    buffer: Vec<u8>,
     home: LocalNed,
     params: ParamTable,
     signing: Option<SigningData>,
-    intervals_s: [Option<f64>; STREAMS.len()],
-    next_due_s: [f64; STREAMS.len()],
+    peers: Vec<Peer>,
+    /// The peer whose message is being handled: answers go to it alone.
+    current: Option<usize>,
+    sequence: u8,
     status: Option<VehicleStatus>,
     mission: Vec<MISSION_ITEM_INT_DATA>,
     upload: Upload,
@@ -192,6 +300,9 @@ struct Server {
     /// An arm/disarm sent on and not yet seen in a status: the commands
     /// that follow it in the ring find the vehicle in that state.
     arm_requested: Option<bool>,
+    /// The last refusal text to an unsigned sender (address, on-board s):
+    /// at most one a second to the same address.
+    last_refusal: Option<(SocketAddr, f64)>,
     report: ServerReport,
 }
 
@@ -199,66 +310,211 @@ fn interval_of(rate_hz: f64) -> Option<f64> {
     (rate_hz.is_finite() && rate_hz > 0.0).then(|| 1.0 / rate_hz)
 }
 
+/// The target of a message is this vehicle: its system or broadcast (0),
+/// the autopilot component, broadcast, or (mission protocol) the mission
+/// planner. Messages without a target are for everyone.
+fn addressed_to(msg: &MavMessage, system_id: u8) -> bool {
+    let system_ok = msg
+        .target_system_id()
+        .is_none_or(|t| t == 0 || t == system_id);
+    let mission = matches!(
+        msg.message_id(),
+        MISSION_COUNT_DATA::ID
+            | MISSION_ITEM_INT_DATA::ID
+            | MISSION_REQUEST_LIST_DATA::ID
+            | MISSION_REQUEST_INT_DATA::ID
+            | MISSION_CLEAR_ALL_DATA::ID
+            | MISSION_ACK_DATA::ID
+    );
+    let component_ok = msg.target_component_id().is_none_or(|c| {
+        c == 0
+            || c == MavComponent::MAV_COMP_ID_AUTOPILOT1 as u8
+            || (mission && c == MavComponent::MAV_COMP_ID_MISSIONPLANNER as u8)
+    });
+    system_ok && component_ok
+}
+
 impl Server {
-    fn new(config: ServerConfig, end: ServerEnd, conn: mavlink::Connection<MavMessage>) -> Self {
+    fn new(
+        config: ServerConfig,
+        end: ServerEnd,
+        socket: UdpSocket,
+        dest: Option<SocketAddr>,
+    ) -> Self {
         let signing = config
             .signing_key
             .map(|k| SigningData::from_config(SigningConfig::new(k, 0, false, false)));
-        Server {
+        let mut s = Server {
             home: LocalNed::new(config.home),
             params: ParamTable::new(config.navigator),
-            signing,
-            intervals_s: config.rates_hz.map(|r| interval_of(r.min(100.0))),
-            next_due_s: [0.0; STREAMS.len()],
+            peers: Vec::with_capacity(MAX_PEERS),
+            current: None,
+            sequence: 0,
             status: None,
             mission: Vec::new(),
             upload: Upload::Idle,
             last_flight_mode: "",
             arm_requested: None,
+            last_refusal: None,
             report: ServerReport::default(),
+            buffer: vec![0; 65_536],
+            signing,
             config,
             end,
-            conn,
+            socket,
+        };
+        if let Some(addr) = dest {
+            let mut p = s.new_peer(addr);
+            p.configured = true;
+            s.peers.push(p);
+            s.report.peers_max = 1;
+        }
+        s
+    }
+
+    fn now_s(&self) -> f64 {
+        self.status.map_or(0.0, |s| s.t_s)
+    }
+
+    fn fence(&self) -> &Fence {
+        &self.params.config().fence
+    }
+
+    fn new_peer(&self, addr: SocketAddr) -> Peer {
+        Peer {
+            addr,
+            configured: false,
+            trusted: self.signing.is_none(),
+            heard_s: None,
+            intervals_s: self.config.rates_hz.map(|r| interval_of(r.min(100.0))),
+            next_due_s: [0.0; STREAMS.len()],
         }
     }
 
-    fn header(&self) -> MavHeader {
-        MavHeader {
+    /// The peer of an address that has just sent a valid frame: found, or
+    /// added (replacing the one heard longest ago when the table is full).
+    fn peer_of(&mut self, addr: SocketAddr) -> usize {
+        let now = self.now_s();
+        let i = if let Some(i) = self.peers.iter().position(|p| p.addr == addr) {
+            i
+        } else {
+            let mut p = self.new_peer(addr);
+            p.next_due_s = [now; STREAMS.len()];
+            if self.peers.len() < MAX_PEERS {
+                self.peers.push(p);
+                self.report.peers_max = self.report.peers_max.max(self.peers.len());
+                self.peers.len() - 1
+            } else {
+                let i = self
+                    .peers
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| !p.configured)
+                    .min_by(|a, b| {
+                        let t = |p: &Peer| p.heard_s.unwrap_or(f64::NEG_INFINITY);
+                        t(a.1).total_cmp(&t(b.1))
+                    })
+                    .map_or(MAX_PEERS - 1, |(i, _)| i);
+                self.peers[i] = p;
+                self.report.peers_evicted += 1;
+                i
+            }
+        };
+        let p = &mut self.peers[i];
+        p.heard_s = Some(now);
+        p.trusted = true;
+        i
+    }
+
+    /// A peer is sent status texts and streams: trusted, and heard within
+    /// [`PEER_SILENCE_S`] (the configured destination always).
+    fn live(&self, p: &Peer) -> bool {
+        p.trusted
+            && (p.configured
+                || p.heard_s
+                    .is_some_and(|h| self.now_s() - h <= PEER_SILENCE_S))
+    }
+
+    fn header(&mut self) -> MavHeader {
+        let h = MavHeader {
             system_id: self.config.system_id,
             component_id: MavComponent::MAV_COMP_ID_AUTOPILOT1 as u8,
-            sequence: 0,
-        }
+            sequence: self.sequence,
+        };
+        self.sequence = self.sequence.wrapping_add(1);
+        h
     }
 
-    fn send(&mut self, msg: &MavMessage) {
-        match self.conn.send(&self.header(), msg) {
+    fn send_bytes(&mut self, bytes: &[u8], to: SocketAddr) {
+        match self.socket.send_to(bytes, to) {
             Ok(_) => self.report.sent += 1,
             Err(_) => self.report.send_errors += 1,
         }
     }
 
+    /// Send to the peer being answered, or else to every live peer.
+    fn send(&mut self, msg: &MavMessage) {
+        let to = self.current.map(|i| self.peers[i].addr);
+        self.send_to(msg, to);
+    }
+
+    /// Send to `to`, or (`None`) to every live peer.
+    fn send_to(&mut self, msg: &MavMessage, to: Option<SocketAddr>) {
+        let mut frame = [0u8; mavlink::consts::MAX_FRAME_SIZE];
+        let header = self.header();
+        let n = {
+            let mut w: &mut [u8] = &mut frame;
+            match mavlink::write_v2_msg(&mut w, header, msg) {
+                Ok(n) => n,
+                Err(_) => {
+                    self.report.send_errors += 1;
+                    return;
+                }
+            }
+        };
+        match to {
+            Some(addr) => self.send_bytes(&frame[..n], addr),
+            None => {
+                for i in 0..self.peers.len() {
+                    if self.live(&self.peers[i]) {
+                        let addr = self.peers[i].addr;
+                        self.send_bytes(&frame[..n], addr);
+                    }
+                }
+            }
+        }
+    }
+
     fn text(&mut self, severity: MavSeverity, text: &str) {
+        let to = self.current.map(|i| self.peers[i].addr);
+        self.text_to(severity, text, to);
+    }
+
+    fn text_to(&mut self, severity: MavSeverity, text: &str, to: Option<SocketAddr>) {
         let mut bytes = [0u8; 50];
         let n = text.len().min(50);
         bytes[..n].copy_from_slice(&text.as_bytes()[..n]);
-        self.send(&MavMessage::STATUSTEXT(STATUSTEXT_DATA {
-            severity,
-            text: bytes.into(),
-            ..STATUSTEXT_DATA::DEFAULT
-        }));
+        self.send_to(
+            &MavMessage::STATUSTEXT(STATUSTEXT_DATA {
+                severity,
+                text: bytes.into(),
+                ..STATUSTEXT_DATA::DEFAULT
+            }),
+            to,
+        );
     }
 
     fn uplink(&mut self, u: Uplink) -> bool {
         self.end.uplink.push(u).is_ok()
     }
 
-    /// One turn: messages in (up to the read timeout), then the vehicle's
+    /// One turn: datagrams in (up to the read timeout), then the vehicle's
     /// statuses and events out.
     /// Returns the statuses and events handled.
     fn poll(&mut self) -> u64 {
         for _ in 0..32 {
-            match self.conn.recv_raw() {
-                Ok(raw) => self.receive(&raw),
+            match self.socket.recv_from(&mut self.buffer) {
+                Ok((n, from)) => self.datagram(n, from),
                 Err(_) => break,
             }
         }
@@ -271,6 +527,29 @@ impl Server {
             n += 1;
         }
         n
+    }
+
+    /// The frames of one datagram (the first `n` bytes of the buffer), all
+    /// of them its sender's.
+    fn datagram(&mut self, n: usize, from: SocketAddr) {
+        self.report.datagrams += 1;
+        let bytes = std::mem::take(&mut self.buffer);
+        let mut reader = MavlinkReader::with_capacity(n.min(bytes.len()), &bytes[..n]);
+        let mut frames = 0;
+        // a frame is at least 8 bytes: a datagram holds at most n/8 of them
+        for _ in 0..=n / 8 {
+            match reader.read_any_raw_message::<MavMessage>() {
+                Ok(raw) => {
+                    frames += 1;
+                    self.receive(&raw, from);
+                }
+                Err(_) => break,
+            }
+        }
+        if frames == 0 {
+            self.report.garbage_datagrams += 1;
+        }
+        self.buffer = bytes;
     }
 
     fn on_status(&mut self, s: &VehicleStatus) {
@@ -286,26 +565,41 @@ impl Server {
                 } else {
                     MavSeverity::MAV_SEVERITY_WARNING
                 };
-                self.text(sev, &text);
+                self.text_to(sev, &text, None);
             }
             self.last_flight_mode = s.flight_mode.name;
         }
-        for i in 0..STREAMS.len() {
-            let Some(iv) = self.intervals_s[i] else {
+        for p in 0..self.peers.len() {
+            let peer = &self.peers[p];
+            let heartbeat_only = !peer.trusted && peer.configured;
+            let silent =
+                !peer.configured && peer.heard_s.is_none_or(|h| s.t_s - h > PEER_SILENCE_S);
+            if (!peer.trusted && !heartbeat_only) || silent {
                 continue;
-            };
-            if s.t_s + 1e-9 >= self.next_due_s[i] {
-                self.send_stream(STREAMS[i].0, s);
-                // stay on the grid; resynchronise after a gap
-                self.next_due_s[i] = if s.t_s - self.next_due_s[i] > iv {
-                    s.t_s + iv
-                } else {
-                    self.next_due_s[i] + iv
+            }
+            for i in 0..STREAMS.len() {
+                let peer = &self.peers[p];
+                let Some(iv) = peer.intervals_s[i] else {
+                    continue;
                 };
+                if heartbeat_only && STREAMS[i].0 != HEARTBEAT_DATA::ID {
+                    continue;
+                }
+                let due = peer.next_due_s[i];
+                if s.t_s + 1e-9 >= due {
+                    self.current = Some(p);
+                    self.send_stream(STREAMS[i].0, s);
+                    self.current = None;
+                    // stay on the grid; resynchronise after a gap
+                    self.peers[p].next_due_s[i] = if s.t_s - due > iv {
+                        s.t_s + iv
+                    } else {
+                        due + iv
+                    };
+                }
             }
         }
     }
-
     fn on_event(&mut self, t_s: f64, e: VehicleEvent) {
         match e {
             VehicleEvent::Armed(a) => {
@@ -353,6 +647,23 @@ impl Server {
                     self.text(
                         MavSeverity::MAV_SEVERITY_NOTICE,
                         "ground-station link regained",
+                    );
+                }
+                NavEvent::FenceBreach(horizontal) => {
+                    let limit = if horizontal {
+                        "GF_MAX_HOR_DIST"
+                    } else {
+                        "GF_MAX_VER_DIST"
+                    };
+                    let action = match self.fence().action {
+                        crate::fence::FenceAction::Warn => "warning only",
+                        crate::fence::FenceAction::Hold => "hold",
+                        crate::fence::FenceAction::Return => "return",
+                        crate::fence::FenceAction::Land => "land",
+                    };
+                    self.text(
+                        MavSeverity::MAV_SEVERITY_CRITICAL,
+                        &format!("fence breached ({limit}): {action}"),
                     );
                 }
             },
@@ -513,7 +824,7 @@ impl Server {
         self.send(&msg);
     }
 
-    /// Whether a message is a command that needs a signature.
+    /// Whether a message is a command (a refusal of it is answered).
     fn is_command(id: u32) -> bool {
         matches!(
             id,
@@ -525,65 +836,100 @@ impl Server {
                 | MISSION_ITEM_INT_DATA::ID
                 | MISSION_CLEAR_ALL_DATA::ID
                 | SET_POSITION_TARGET_LOCAL_NED_DATA::ID
+                | SET_POSITION_TARGET_GLOBAL_INT_DATA::ID
+                | REQUEST_DATA_STREAM_DATA::ID
         )
     }
 
-    fn receive(&mut self, raw: &MAVLinkMessageRaw) {
+    /// One CRC-valid frame from `from`.
+    fn receive(&mut self, raw: &MAVLinkMessageRaw, from: SocketAddr) {
+        if raw.system_id() == self.config.system_id {
+            return; // our own echo
+        }
         let id = raw.message_id();
         let Ok(msg) = MavMessage::parse(raw.version(), id, raw.payload()) else {
             return;
         };
-        if raw.system_id() == self.config.system_id {
-            return; // our own echo
-        }
-        self.report.received += 1;
-        if Self::is_command(id)
-            && let Some(sig) = &self.signing
-        {
+        if let Some(sig) = &self.signing {
+            // unsigned, another key, or a replay (the crate keeps the last
+            // timestamp of each link id, system and component)
             let ok = match raw {
                 MAVLinkMessageRaw::V2(v2) => sig.verify_signature(v2),
                 MAVLinkMessageRaw::V1(_) => false,
             };
             if !ok {
                 self.report.refused_unsigned += 1;
-                self.refuse_unsigned(&msg);
+                if Self::is_command(id) && addressed_to(&msg, self.config.system_id) {
+                    self.refuse_unsigned(&msg, from);
+                }
                 return;
             }
         }
-        self.dispatch(&msg);
+        self.report.received += 1;
+        let p = self.peer_of(from);
+        if let MavMessage::HEARTBEAT(h) = &msg
+            && h.mavtype == MavType::MAV_TYPE_GCS
+        {
+            self.uplink(Uplink::GcsHeartbeat);
+        }
+        if !addressed_to(&msg, self.config.system_id) {
+            self.report.other_target += 1;
+            return;
+        }
+        self.current = Some(p);
+        self.dispatch(&msg, from, raw.system_id(), raw.component_id());
+        self.current = None;
     }
 
-    fn refuse_unsigned(&mut self, msg: &MavMessage) {
-        self.text(
-            MavSeverity::MAV_SEVERITY_WARNING,
-            "refused: command not signed with the vehicle's key",
-        );
+    /// Answer a command that failed signing (to its sender only; the text at
+    /// most once a second per address).
+    fn refuse_unsigned(&mut self, msg: &MavMessage, from: SocketAddr) {
+        let now = self.now_s();
+        if self
+            .last_refusal
+            .is_none_or(|(a, t)| a != from || now - t >= 1.0)
+        {
+            self.last_refusal = Some((from, now));
+            self.text_to(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                "refused: command not signed with the vehicle's key",
+                Some(from),
+            );
+        }
         let command = match msg {
             MavMessage::COMMAND_LONG(c) => Some(c.command),
             MavMessage::COMMAND_INT(c) => Some(c.command),
             _ => None,
         };
         if let Some(command) = command {
-            self.ack(command, MavResult::MAV_RESULT_DENIED);
+            self.send_to(
+                &MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+                    command,
+                    result: MavResult::MAV_RESULT_DENIED,
+                    ..COMMAND_ACK_DATA::DEFAULT
+                }),
+                Some(from),
+            );
         }
     }
 
-    fn dispatch(&mut self, msg: &MavMessage) {
+    fn dispatch(&mut self, msg: &MavMessage, from: SocketAddr, sys: u8, comp: u8) {
         match msg {
-            MavMessage::HEARTBEAT(h) if h.mavtype == MavType::MAV_TYPE_GCS => {
-                self.uplink(Uplink::GcsHeartbeat);
-            }
             MavMessage::COMMAND_LONG(c) => {
                 let p = [
                     c.param1, c.param2, c.param3, c.param4, c.param5, c.param6, c.param7,
                 ];
                 let r = self.command(c.command, p);
-                self.ack(c.command, r);
+                self.ack(c.command, r, sys, comp);
             }
             MavMessage::COMMAND_INT(c) => {
-                let p = [c.param1, c.param2, c.param3, c.param4, 0.0, 0.0, c.z];
-                let r = self.command(c.command, p);
-                self.ack(c.command, r);
+                let r = if c.command == MavCmd::MAV_CMD_DO_REPOSITION {
+                    self.reposition(c)
+                } else {
+                    let p = [c.param1, c.param2, c.param3, c.param4, 0.0, 0.0, c.z];
+                    self.command(c.command, p)
+                };
+                self.ack(c.command, r, sys, comp);
             }
             MavMessage::SET_MODE(m) => {
                 let _ = self.set_mode(m.custom_mode);
@@ -606,20 +952,24 @@ impl Server {
                 }
             }
             MavMessage::PARAM_SET(p) => self.param_set(p),
-            MavMessage::MISSION_COUNT(c) => self.mission_count(c),
-            MavMessage::MISSION_ITEM_INT(it) => self.mission_item(it),
+            MavMessage::MISSION_COUNT(c) => self.mission_count(c, from),
+            MavMessage::MISSION_ITEM_INT(it) => self.mission_item(it, from),
             MavMessage::MISSION_REQUEST_LIST(_) => {
                 let count = self.mission.len() as u16;
                 self.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
                     count,
-                    target_system: 255,
-                    target_component: 0,
+                    target_system: sys,
+                    target_component: comp,
                     ..MISSION_COUNT_DATA::DEFAULT
                 }));
             }
             MavMessage::MISSION_REQUEST_INT(r) => {
                 if let Some(it) = self.mission.get(r.seq as usize).cloned() {
-                    self.send(&MavMessage::MISSION_ITEM_INT(it));
+                    self.send(&MavMessage::MISSION_ITEM_INT(MISSION_ITEM_INT_DATA {
+                        target_system: sys,
+                        target_component: comp,
+                        ..it
+                    }));
                 } else {
                     self.mission_ack(MavMissionResult::MAV_MISSION_INVALID_SEQUENCE);
                 }
@@ -630,14 +980,17 @@ impl Server {
                 self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED);
             }
             MavMessage::SET_POSITION_TARGET_LOCAL_NED(t) => self.guided(t),
+            MavMessage::SET_POSITION_TARGET_GLOBAL_INT(t) => self.guided_global(t),
             _ => {}
         }
     }
 
-    fn ack(&mut self, command: MavCmd, result: MavResult) {
+    fn ack(&mut self, command: MavCmd, result: MavResult, sys: u8, comp: u8) {
         self.send(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
             command,
             result,
+            target_system: sys,
+            target_component: comp,
             ..COMMAND_ACK_DATA::DEFAULT
         }));
     }
@@ -652,6 +1005,21 @@ impl Server {
             MavResult::MAV_RESULT_ACCEPTED
         } else {
             MavResult::MAV_RESULT_TEMPORARILY_REJECTED
+        }
+    }
+
+    /// A takeoff height (m above home) the fence allows, or the refusal.
+    fn takeoff_height(&mut self, h: f64) -> Result<f64, MavResult> {
+        match self.fence().check_height(h) {
+            Ok(()) if h > 0.0 => Ok(h),
+            Ok(()) => Err(MavResult::MAV_RESULT_DENIED),
+            Err(v) => {
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    &format!("takeoff refused: {v}"),
+                );
+                Err(MavResult::MAV_RESULT_DENIED)
+            }
         }
     }
 
@@ -671,16 +1039,17 @@ impl Server {
         match command {
             MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => self.arm(p[0], p[1]),
             MavCmd::MAV_CMD_NAV_TAKEOFF => {
+                // param7 NaN (or 0): the default height, as MAVLink allows
                 let h = f64::from(p[6]);
-                let h = if h.is_finite() && h > 0.0 {
-                    h
-                } else {
+                let h = if h.is_nan() || h == 0.0 {
                     self.params.config().takeoff_height_m
+                } else {
+                    h
                 };
-                if h > 100.0 {
-                    return MavResult::MAV_RESULT_DENIED;
+                match self.takeoff_height(h) {
+                    Ok(h) => self.accepted(Uplink::Takeoff(h)),
+                    Err(r) => r,
                 }
-                self.accepted(Uplink::Takeoff(h))
             }
             MavCmd::MAV_CMD_NAV_LAND => self.accepted(Uplink::Land),
             MavCmd::MAV_CMD_NAV_RETURN_TO_LAUNCH => self.accepted(Uplink::Return),
@@ -708,6 +1077,31 @@ impl Server {
         }
     }
 
+    /// `MAV_CMD_DO_REPOSITION` (COMMAND_INT, a global frame): a guided goto,
+    /// inside the fence only.
+    fn reposition(&mut self, c: &COMMAND_INT_DATA) -> MavResult {
+        if !self.armed() {
+            self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
+            return MavResult::MAV_RESULT_DENIED;
+        }
+        let yaw = f64::from(c.param4);
+        let yaw = yaw.is_finite().then(|| yaw.to_radians());
+        let Ok(p) = global_position_ned_m(&self.home, c.frame, c.x, c.y, c.z) else {
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                "goto refused: position or frame not valid",
+            );
+            return MavResult::MAV_RESULT_DENIED;
+        };
+        if let Err(v) = self.fence().check_target(&p) {
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                &format!("goto refused: {v}"),
+            );
+            return MavResult::MAV_RESULT_DENIED;
+        }
+        self.accepted(Uplink::Guided(GuidedTarget::Position(p, yaw)))
+    }
     fn arm(&mut self, arm: f32, force: f32) -> MavResult {
         let Some(s) = self.status else {
             return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
@@ -757,19 +1151,26 @@ impl Server {
             NavMode::Hold => Uplink::Hold,
             NavMode::Return => Uplink::Return,
             NavMode::Land => Uplink::Land,
-            NavMode::Takeoff => Uplink::Takeoff(self.params.config().takeoff_height_m),
+            NavMode::Takeoff => match self.takeoff_height(self.params.config().takeoff_height_m) {
+                Ok(h) => Uplink::Takeoff(h),
+                Err(r) => return r,
+            },
             _ => return MavResult::MAV_RESULT_DENIED,
         };
         self.accepted(u)
     }
 
+    /// A stream interval of the peer being answered.
     fn set_interval(&mut self, id: f32, interval_us: f32) -> MavResult {
         let id = id as u32;
         let Some(i) = STREAMS.iter().position(|(m, _, _)| *m == id) else {
             return MavResult::MAV_RESULT_UNSUPPORTED;
         };
+        let Some(p) = self.current else {
+            return MavResult::MAV_RESULT_FAILED;
+        };
         let us = f64::from(interval_us);
-        self.intervals_s[i] = if us == -1.0 {
+        let interval = if us == -1.0 {
             None
         } else if us == 0.0 {
             interval_of(STREAMS[i].2)
@@ -779,7 +1180,10 @@ impl Server {
             // faster than 100 Hz: the status period
             return MavResult::MAV_RESULT_DENIED;
         };
-        self.next_due_s[i] = self.status.map_or(0.0, |s| s.t_s);
+        let now = self.now_s();
+        let peer = &mut self.peers[p];
+        peer.intervals_s[i] = interval;
+        peer.next_due_s[i] = now;
         MavResult::MAV_RESULT_ACCEPTED
     }
 
@@ -818,16 +1222,23 @@ impl Server {
     }
 
     fn param_value(&mut self, i: usize) {
+        self.param_value_to(i, self.current.map(|p| self.peers[p].addr));
+    }
+
+    fn param_value_to(&mut self, i: usize, to: Option<SocketAddr>) {
         let Some((name, value)) = self.params.get(i) else {
             return;
         };
-        self.send(&MavMessage::PARAM_VALUE(PARAM_VALUE_DATA {
-            param_value: value,
-            param_count: PARAMS.len() as u16,
-            param_index: i as u16,
-            param_id: name.into(),
-            param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
-        }));
+        self.send_to(
+            &MavMessage::PARAM_VALUE(PARAM_VALUE_DATA {
+                param_value: value,
+                param_count: PARAMS.len() as u16,
+                param_index: i as u16,
+                param_id: name.into(),
+                param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
+            }),
+            to,
+        );
     }
 
     fn param_set(&mut self, p: &PARAM_SET_DATA) {
@@ -840,7 +1251,8 @@ impl Server {
         match self.params.set(&name, p.param_value) {
             Ok(i) => {
                 self.uplink(Uplink::Config(*self.params.config()));
-                self.param_value(i);
+                // every live ground station sees the new value
+                self.param_value_to(i, None);
             }
             Err(ParamError::Unknown(_)) => {
                 self.text(
@@ -876,9 +1288,26 @@ impl Server {
         }));
     }
 
-    fn mission_count(&mut self, c: &MISSION_COUNT_DATA) {
+    fn mission_count(&mut self, c: &MISSION_COUNT_DATA, from: SocketAddr) {
         if c.mission_type != MavMissionType::MAV_MISSION_TYPE_MISSION {
             self.mission_ack(MavMissionResult::MAV_MISSION_UNSUPPORTED);
+            return;
+        }
+        let now = self.now_s();
+        if let Upload::Receiving {
+            from: owner,
+            last_s,
+            ..
+        } = &self.upload
+            && *owner != from
+            && now - *last_s < UPLOAD_IDLE_S
+        {
+            // another ground station is uploading
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                "mission refused: another upload in progress",
+            );
+            self.mission_ack(MavMissionResult::MAV_MISSION_DENIED);
             return;
         }
         if usize::from(c.count) > crate::navigator::MAX_MISSION_ITEMS * 2 {
@@ -886,22 +1315,36 @@ impl Server {
             return;
         }
         if c.count == 0 {
+            self.upload = Upload::Idle;
             self.mission.clear();
             self.uplink(Uplink::Plan(Box::default()));
             self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED);
             return;
         }
         self.upload = Upload::Receiving {
+            from,
+            last_s: now,
             count: c.count,
             items: Vec::with_capacity(usize::from(c.count)),
         };
         self.request_item(0);
     }
 
-    fn mission_item(&mut self, it: &MISSION_ITEM_INT_DATA) {
-        let Upload::Receiving { count, items } = &mut self.upload else {
+    fn mission_item(&mut self, it: &MISSION_ITEM_INT_DATA, from: SocketAddr) {
+        let now = self.now_s();
+        let Upload::Receiving {
+            from: owner,
+            last_s,
+            count,
+            items,
+        } = &mut self.upload
+        else {
             return;
         };
+        if *owner != from {
+            return; // not the uploading ground station's
+        }
+        *last_s = now;
         let expected = items.len() as u16;
         if it.seq != expected {
             // a repeat or a skip: ask again for the one expected
@@ -915,7 +1358,8 @@ impl Server {
         }
         let items = std::mem::take(items);
         self.upload = Upload::Idle;
-        match plan_of(&self.home, &items) {
+        let fence = *self.fence();
+        match plan_of(&self.home, &fence, &items) {
             Ok(plan) => {
                 self.mission = items;
                 self.uplink(Uplink::Plan(Box::new(plan)));
@@ -931,10 +1375,44 @@ impl Server {
         }
     }
 
-    fn guided(&mut self, t: &SET_POSITION_TARGET_LOCAL_NED_DATA) {
+    /// A guided target as the server takes it: finite, plausible, and a
+    /// position inside the fence; a refusal is told in a status text
+    /// (SET_POSITION_TARGET_* has no acknowledgement).
+    fn guided_target(&mut self, target: GuidedTarget) {
         if !self.armed() {
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                "guided refused: not armed",
+            );
             return;
         }
+        let refusal = match target {
+            GuidedTarget::Position(p, y) => match self.fence().check_target(&p) {
+                Err(v) => Some(v.to_string()),
+                Ok(()) if y.is_some_and(|y| !y.is_finite()) => Some("yaw not finite".into()),
+                Ok(()) => None,
+            },
+            GuidedTarget::Velocity(v, y) => {
+                if !(v.iter().all(|x| x.is_finite()) && y.is_none_or(f64::is_finite)) {
+                    Some("velocity or yaw not finite".into())
+                } else if v.norm() > MAX_GUIDED_SPEED_M_S {
+                    Some(format!("velocity {:.0} m/s", v.norm()))
+                } else {
+                    None
+                }
+            }
+        };
+        if let Some(why) = refusal {
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                &format!("guided refused: {why}"),
+            );
+            return;
+        }
+        self.uplink(Uplink::Guided(target));
+    }
+
+    fn guided(&mut self, t: &SET_POSITION_TARGET_LOCAL_NED_DATA) {
         if t.coordinate_frame != MavFrame::MAV_FRAME_LOCAL_NED {
             self.text(
                 MavSeverity::MAV_SEVERITY_WARNING,
@@ -942,33 +1420,75 @@ impl Server {
             );
             return;
         }
+        let position = Vector3::new(f64::from(t.x), f64::from(t.y), f64::from(t.z));
+        if let Some(target) = target_of(t.type_mask, t.yaw, position, [t.vx, t.vy, t.vz]) {
+            self.guided_target(target);
+        }
+    }
+
+    fn guided_global(&mut self, t: &SET_POSITION_TARGET_GLOBAL_INT_DATA) {
         let m = t.type_mask;
         let pos_ignored = m.contains(
             PositionTargetTypemask::POSITION_TARGET_TYPEMASK_X_IGNORE
                 | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_Y_IGNORE
                 | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_Z_IGNORE,
         );
-        let vel_ignored = m.contains(
-            PositionTargetTypemask::POSITION_TARGET_TYPEMASK_VX_IGNORE
-                | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_VY_IGNORE
-                | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_VZ_IGNORE,
-        );
-        let yaw = (!m.contains(PositionTargetTypemask::POSITION_TARGET_TYPEMASK_YAW_IGNORE))
-            .then_some(f64::from(t.yaw));
-        let target = if !vel_ignored && pos_ignored {
-            GuidedTarget::Velocity(
-                Vector3::new(f64::from(t.vx), f64::from(t.vy), f64::from(t.vz)),
-                yaw,
-            )
-        } else if !pos_ignored {
-            GuidedTarget::Position(
-                Vector3::new(f64::from(t.x), f64::from(t.y), f64::from(t.z)),
-                yaw,
-            )
+        let position = if pos_ignored {
+            Vector3::zeros()
         } else {
-            return;
+            let frame = match t.coordinate_frame {
+                MavFrame::MAV_FRAME_GLOBAL_INT => MavFrame::MAV_FRAME_GLOBAL,
+                MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT => {
+                    MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT
+                }
+                f => f,
+            };
+            match global_position_ned_m(&self.home, frame, t.lat_int, t.lon_int, t.alt) {
+                Ok(p) => p,
+                Err(_) => {
+                    self.text(
+                        MavSeverity::MAV_SEVERITY_WARNING,
+                        "guided refused: position or frame not valid",
+                    );
+                    return;
+                }
+            }
         };
-        self.uplink(Uplink::Guided(target));
+        if let Some(target) = target_of(m, t.yaw, position, [t.vx, t.vy, t.vz]) {
+            self.guided_target(target);
+        }
+    }
+}
+
+/// The guided target of a SET_POSITION_TARGET_* (its type mask: a velocity
+/// when only the velocity is given, else the position; `None`: neither).
+fn target_of(
+    m: PositionTargetTypemask,
+    yaw: f32,
+    position_ned_m: Vector3<f64>,
+    velocity: [f32; 3],
+) -> Option<GuidedTarget> {
+    let pos_ignored = m.contains(
+        PositionTargetTypemask::POSITION_TARGET_TYPEMASK_X_IGNORE
+            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_Y_IGNORE
+            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_Z_IGNORE,
+    );
+    let vel_ignored = m.contains(
+        PositionTargetTypemask::POSITION_TARGET_TYPEMASK_VX_IGNORE
+            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_VY_IGNORE
+            | PositionTargetTypemask::POSITION_TARGET_TYPEMASK_VZ_IGNORE,
+    );
+    let yaw = (!m.contains(PositionTargetTypemask::POSITION_TARGET_TYPEMASK_YAW_IGNORE))
+        .then_some(f64::from(yaw));
+    if !vel_ignored && pos_ignored {
+        Some(GuidedTarget::Velocity(
+            Vector3::from(velocity.map(f64::from)),
+            yaw,
+        ))
+    } else if !pos_ignored {
+        Some(GuidedTarget::Position(position_ned_m, yaw))
+    } else {
+        None
     }
 }
 

@@ -4,6 +4,7 @@
 //! on the vehicle's position.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
+use helicon_gcs::fence::{Fence, FenceAction};
 use helicon_gcs::navigator::{
     Events, GuidedTarget, Item, ItemKind, LinkLossAction, NavEvent, NavInput, NavMode, Navigator,
     NavigatorConfig, Plan,
@@ -68,6 +69,7 @@ impl Sim {
             let mut ev = Events::default();
             let at = self.at();
             self.nav.link(&at, silence(self.t), &mut ev);
+            self.nav.fence(&at, &mut ev);
             let r = self.nav.step(&at, &mut ev);
             self.record(&ev);
             let dv = (r.velocity_ned_m_s - self.prev_ref).norm();
@@ -358,7 +360,7 @@ fn gcs_section_checked_field_by_field() {
     use helicon_gcs::config::GcsSection;
     let home = helicon_devices::Geodetic::new(57.0, 10.0, 20.0).unwrap();
     let ok = GcsSection::from_toml_str(
-        "address = \"udpin:0.0.0.0:14550\"\nsigning_key_hex = \"000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f\"\n[rates_hz]\nATTITUDE = 50.0\n[navigator]\ncruise_speed_m_s = 3.0\nlink_loss_action = \"land\"\n",
+        "address = \"udpin:0.0.0.0:14550\"\nsigning_key_hex = \"000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f\"\n[rates_hz]\nATTITUDE = 50.0\n[navigator]\ncruise_speed_m_s = 3.0\nlink_loss_action = \"land\"\n[navigator.fence]\nmax_hor_dist_m = 300.0\naction = \"hold\"\n",
         "onboard.toml",
     )
     .unwrap();
@@ -367,6 +369,9 @@ fn gcs_section_checked_field_by_field() {
     assert_eq!(c.rates_hz[2], 50.0);
     assert_eq!(c.navigator.cruise_speed_m_s, 3.0);
     assert_eq!(c.navigator.link_loss_action, LinkLossAction::Land);
+    assert_eq!(c.navigator.fence.max_hor_dist_m, 300.0);
+    assert_eq!(c.navigator.fence.max_ver_dist_m, 60.0);
+    assert_eq!(c.navigator.fence.action, FenceAction::Hold);
     for (text, field) in [
         ("address = \"tcp:1.2.3.4:5\"", "gcs.address"),
         ("system_id = 255", "gcs.system_id"),
@@ -376,6 +381,14 @@ fn gcs_section_checked_field_by_field() {
         (
             "[navigator]\nmax_accel_m_s2 = 0.0",
             "gcs.navigator.max_accel_m_s2",
+        ),
+        (
+            "[navigator.fence]\nmax_hor_dist_m = 1e9",
+            "gcs.navigator.fence.max_hor_dist_m",
+        ),
+        (
+            "[navigator.fence]\nmax_ver_dist_m = nan",
+            "gcs.navigator.fence.max_ver_dist_m",
         ),
     ] {
         let e = GcsSection::from_toml_str(text, "onboard.toml")
@@ -392,10 +405,124 @@ fn gcs_section_checked_field_by_field() {
         "adress = \"x\"",
         "[navigator]\nlink_loss_action = \"fly\"",
         "[navigator]\nspeed = 1.0",
+        "[navigator.fence]\naction = \"terminate\"",
+        "[navigator.fence]\nradius = 1.0",
     ] {
         let e = GcsSection::from_toml_str(text, "onboard.toml")
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("onboard.toml: [gcs]"), "{text}: {e}");
     }
+}
+
+/// A guided velocity out of a small fence (20 m, 15 m up): each GF_ACTION
+/// acts once, at the crossing, and a return lands at home.
+#[test]
+fn fence_breach_acts_as_gf_action_says() {
+    let fenced = |action| NavigatorConfig {
+        guided_timeout_s: 10.0,
+        fence: Fence {
+            max_hor_dist_m: 20.0,
+            max_ver_dist_m: 15.0,
+            action,
+        },
+        ..NavigatorConfig::default()
+    };
+    for action in [
+        FenceAction::Return,
+        FenceAction::Hold,
+        FenceAction::Land,
+        FenceAction::Warn,
+    ] {
+        let mut s = Sim::new(fenced(action));
+        s.p = Vector3::new(0.0, 0.0, -5.0);
+        let mut ev = Events::default();
+        let out = GuidedTarget::Velocity(Vector3::new(3.0, 0.0, 0.0), None);
+        assert!(s.nav.guided(&s.at(), out, &mut ev));
+        s.record(&ev);
+        let mut farthest: f64 = 0.0;
+        for _ in 0..120 {
+            s.run(0.5, no_link);
+            farthest = farthest.max(s.p.xy().norm());
+            if action == FenceAction::Warn && s.p.x > 22.0 {
+                break;
+            }
+        }
+        let breaches: Vec<_> = s
+            .events
+            .iter()
+            .filter(|(_, e, _)| matches!(e, NavEvent::FenceBreach(_)))
+            .collect();
+        assert_eq!(breaches.len(), 1, "{action:?}: {breaches:?}");
+        let (t_b, e, p_b) = breaches[0];
+        assert_eq!(*e, NavEvent::FenceBreach(true));
+        // at the crossing: 20 m within one step's travel
+        assert!((p_b.xy().norm() - 20.0).abs() < 3.0 * DT * 1.01, "{p_b}");
+        let mode_after = s
+            .events
+            .iter()
+            .find(|(t, e, _)| *t >= *t_b && matches!(e, NavEvent::Mode(_)))
+            .map(|(_, e, _)| *e);
+        match action {
+            FenceAction::Return => {
+                assert_eq!(mode_after, Some(NavEvent::Mode(NavMode::Return)));
+                let (_, p) = s.has(NavEvent::Landed).expect("landed");
+                assert!(p.xy().norm() <= 1.1, "landed at {p}");
+                // braking from 3 m/s at 1 m/s² (4.5 m) and the lag
+                assert!(farthest < 26.0, "{farthest}");
+            }
+            FenceAction::Hold => {
+                assert_eq!(mode_after, Some(NavEvent::Mode(NavMode::Hold)));
+                assert_eq!(s.nav.mode(), NavMode::Hold);
+                assert!(farthest < 26.0, "{farthest}");
+            }
+            FenceAction::Land => {
+                assert_eq!(mode_after, Some(NavEvent::Mode(NavMode::Land)));
+                let (_, p) = s.has(NavEvent::Landed).expect("landed");
+                assert!(p.x > 20.0 && p.x < 26.0, "landed at {p}");
+            }
+            FenceAction::Warn => {
+                assert_eq!(mode_after, None);
+                assert_eq!(s.nav.mode(), NavMode::Guided);
+            }
+        }
+    }
+    // the height: a climb at 1 m/s through 15 m returns at 15 m at most
+    let mut s = Sim::new(fenced(FenceAction::Return));
+    s.p = Vector3::new(5.0, 0.0, -8.0);
+    let mut ev = Events::default();
+    let up = GuidedTarget::Velocity(Vector3::new(0.0, 0.0, -1.0), None);
+    assert!(s.nav.guided(&s.at(), up, &mut ev));
+    let mut highest: f64 = 0.0;
+    for _ in 0..750 {
+        s.run(0.1, no_link);
+        highest = highest.max(-s.p.z);
+    }
+    let (t_b, p_b) = s.has(NavEvent::FenceBreach(false)).expect("height breach");
+    assert!((p_b.z + 15.0).abs() < 0.01, "{p_b}");
+    let (t_r, _) = s.has(NavEvent::Mode(NavMode::Return)).expect("return");
+    assert!((t_r - t_b).abs() < 1e-9);
+    // the return flies at the fence's height at most: the overshoot is the
+    // climb's stopping (1 m/s at 1 m/s², 0.5 m, slower here as the one
+    // acceleration limit also starts the leg home), and the lag (0.3 m);
+    // 16.2 m measured
+    assert!(highest < 16.5, "{highest}");
+    let (_, p) = s.has(NavEvent::Landed).expect("landed");
+    assert!(p.xy().norm() <= 1.1, "landed at {p}");
+    // targets outside the fence are not flown, whoever asks
+    let mut s = Sim::new(fenced(FenceAction::Return));
+    let mut ev = Events::default();
+    s.nav.hold(&s.at(), &mut ev);
+    for p in [
+        Vector3::new(21.0, 0.0, -5.0),
+        Vector3::new(0.0, 0.0, -16.0),
+        Vector3::new(0.0, 0.0, -3e38),
+    ] {
+        assert!(
+            !s.nav
+                .guided(&s.at(), GuidedTarget::Position(p, None), &mut ev)
+        );
+    }
+    assert!(!s.nav.takeoff(&s.at(), 16.0, &mut ev));
+    assert_eq!(s.nav.mode(), NavMode::Hold);
 }

@@ -170,7 +170,7 @@ fn heartbeat_params_mission_flown_and_landed_rates_as_requested() {
     let _ = c.wait(
         from,
         T,
-        |m| matches!(m, MavMessage::PARAM_VALUE(p) if p.param_index == 13),
+        |m| matches!(m, MavMessage::PARAM_VALUE(p) if p.param_index == 16),
     );
     let params = c.collect(from, |m| match m {
         MavMessage::PARAM_VALUE(p) => Some((
@@ -181,10 +181,10 @@ fn heartbeat_params_mission_flown_and_landed_rates_as_requested() {
         )),
         _ => None,
     });
-    assert_eq!(params.len(), 14);
+    assert_eq!(params.len(), 17);
     for (i, (idx, name, _, count)) in params.iter().enumerate() {
         assert_eq!(usize::from(*idx), i);
-        assert_eq!(*count, 14);
+        assert_eq!(*count, 17);
         assert_eq!(name, helicon_gcs::params::PARAMS[i].0);
     }
     // a SET answered with the new value; a refused one with the old value
@@ -523,7 +523,7 @@ fn commands_signed_with_a_wrong_key_or_unsigned_are_refused() {
     let s = scenario(10.0);
     let prepared = prepare(&s).unwrap();
     let key = [7u8; 32];
-    // the server listens (udpin) and answers whoever spoke last
+    // the server listens (udpin); every station that speaks is a peer
     let port = std::net::UdpSocket::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
@@ -566,4 +566,203 @@ fn commands_signed_with_a_wrong_key_or_unsigned_are_refused() {
     assert!(h.vehicle().armed());
     let report = h.stop();
     assert_eq!(report.refused_unsigned, 2);
+}
+
+#[test]
+fn a_guided_flight_out_of_the_fence_returns_and_lands() {
+    let s = scenario(90.0);
+    let prepared = prepare(&s).unwrap();
+    let mut c = Client::new(None);
+    let mut h = Harness::new(
+        &s,
+        &prepared,
+        server_config(&c, None),
+        NavigatorConfig::default(),
+        4,
+    );
+    fly(&mut h, &mut c, 0.5, true);
+    // a 12 m fence, set over MAVLink (the parameter reaches the navigator)
+    let from = c.log.len();
+    c.send(&MavMessage::PARAM_SET(PARAM_SET_DATA {
+        param_value: 12.0,
+        target_system: 1,
+        target_component: 1,
+        param_id: "GF_MAX_HOR_DIST".into(),
+        param_type: MavParamType::MAV_PARAM_TYPE_REAL32,
+    }));
+    assert!(
+        c.wait(
+            from,
+            T,
+            |m| matches!(m, MavMessage::PARAM_VALUE(p) if p.param_value == 12.0)
+        )
+        .is_some()
+    );
+    assert_eq!(
+        c.command(
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut c, 0.1, true);
+    assert_eq!(
+        c.command(
+            MavCmd::MAV_CMD_NAV_TAKEOFF,
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut c, 8.0, true);
+    // guided: 1.5 m/s north until the fence acts
+    let from = c.log.len();
+    let mut farthest: f64 = 0.0;
+    let mut breach_at = None;
+    for _ in 0..300 {
+        if breach_at.is_none() {
+            c.send(&position_target_velocity(1.5, 0.0));
+        }
+        fly(&mut h, &mut c, 0.2, true);
+        farthest = farthest.max(h.truth_ned_m.xy().norm());
+        if breach_at.is_none()
+            && c.texts()
+                .iter()
+                .any(|t| t == "fence breached (GF_MAX_HOR_DIST): return")
+        {
+            breach_at = Some(h.truth_ned_m);
+        }
+        if !h.vehicle().armed() {
+            break;
+        }
+    }
+    let texts = c.collect(from, |m| match m {
+        MavMessage::STATUSTEXT(s) => Some(
+            s.text
+                .to_str()
+                .unwrap_or("")
+                .trim_end_matches('\0')
+                .to_string(),
+        ),
+        _ => None,
+    });
+    let breach_at = breach_at.unwrap_or_else(|| panic!("no breach: {texts:?}"));
+    println!(
+        "fence 12 m: breach seen at {:.2} m (truth), farthest {farthest:.2} m; {texts:?}",
+        breach_at.xy().norm()
+    );
+    for want in ["mode RETURN", "mode LAND", "landed"] {
+        assert!(texts.iter().any(|t| t == want), "no {want}: {texts:?}");
+    }
+    assert!(!h.vehicle().armed());
+    // the estimate crossed 12 m; the truth differs by the navigation's
+    // error; the stop from 1.5 m/s at 1 m/s² is 1.1 m
+    assert!(farthest < 15.0, "{farthest}");
+    assert!(
+        h.truth_ned_m.xy().norm() < 2.0,
+        "landed at {}",
+        h.truth_ned_m
+    );
+}
+
+#[test]
+fn with_signing_unsigned_heartbeats_do_not_hold_off_the_link_loss_failsafe() {
+    let s = scenario(60.0);
+    let prepared = prepare(&s).unwrap();
+    let key = [9u8; 32];
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let nav = NavigatorConfig {
+        link_loss_timeout_s: 2.0,
+        link_loss_hold_s: 1.0,
+        ..NavigatorConfig::default()
+    };
+    let mut cfg = server_config(&Client::new(None), Some(key));
+    cfg.address = format!("udpin:127.0.0.1:{port}");
+    cfg.navigator = nav;
+    let mut good = Client::to_port(port, Some(key));
+    let mut h = Harness::new(&s, &prepared, cfg, nav, 4);
+    fly(&mut h, &mut good, 0.5, true);
+    assert_eq!(
+        good.command(
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut good, 0.1, true);
+    assert_eq!(
+        good.command(
+            MavCmd::MAV_CMD_NAV_TAKEOFF,
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut good, 8.0, true);
+    // the signed station falls silent; an unsigned one sends a heartbeat
+    // every 50 ms of flight, claiming to be a ground station
+    let mut spoof = Client::to_port(port, None);
+    let from = good.log.len();
+    let t_silent = h.t_s;
+    let mut lost_at = None;
+    while h.vehicle().armed() && h.t_s < t_silent + 40.0 {
+        spoof.heartbeat();
+        assert!(h.run(0.05), "flight ended: {:?}", h.ended);
+        good.drain();
+        if lost_at.is_none()
+            && good
+                .texts()
+                .iter()
+                .any(|t| t.starts_with("failsafe: ground-station link lost"))
+        {
+            lost_at = Some(h.t_s);
+        }
+    }
+    let lost_at = lost_at.unwrap_or_else(|| {
+        panic!(
+            "no link loss: {:?}, armed {}, lost {}, mode {:?}, t {:.1}",
+            good.texts(),
+            h.vehicle().armed(),
+            h.vehicle().navigator().link_lost(),
+            h.vehicle().navigator().mode(),
+            h.t_s - t_silent
+        )
+    });
+    println!(
+        "link loss {:.2} s after the signed station fell silent, unsigned heartbeats throughout",
+        lost_at - t_silent
+    );
+    // the timeout after the last signed heartbeat (sent every 0.5 s)
+    assert!(
+        lost_at - t_silent > 1.4 && lost_at - t_silent < 2.7,
+        "link loss {:.2} s after the silence",
+        lost_at - t_silent
+    );
+    let texts = good.collect(from, |m| match m {
+        MavMessage::STATUSTEXT(s) => Some(
+            s.text
+                .to_str()
+                .unwrap_or("")
+                .trim_end_matches('\0')
+                .to_string(),
+        ),
+        _ => None,
+    });
+    // (already holding after the takeoff: the failsafe's hold is no change)
+    for want in ["mode RETURN", "mode LAND", "landed"] {
+        assert!(texts.iter().any(|t| t == want), "no {want}: {texts:?}");
+    }
+    assert!(!h.vehicle().armed());
+    spoof.drain();
+    assert!(
+        spoof
+            .log
+            .iter()
+            .all(|(_, m)| matches!(m, MavMessage::STATUSTEXT(_))),
+        "the unsigned station was sent telemetry"
+    );
+    let report = h.stop();
+    assert!(report.refused_unsigned > 100, "{report:?}");
 }

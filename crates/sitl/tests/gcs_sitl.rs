@@ -3,13 +3,17 @@
 //! the ground-station server started by the on-board program on a loopback
 //! UDP port, and a MAVLink 2 client (the `mavlink` crate, as a ground
 //! station speaks) in the test: heartbeat, arm and takeoff acknowledged, the
-//! helicopter climbs to the commanded height.
+//! helicopter climbs to the commanded height — and does so unchanged while
+//! a second ground station on another port sends garbage and commands for
+//! other vehicles throughout.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // a failed unwrap is a failed test
 
 mod common;
 
 use helicon_gcs::mavlink::dialects::common::*;
-use helicon_gcs::mavlink::{Connectable, Connection, MavConnection, MavHeader, UdpConfig, UdpMode};
+use helicon_gcs::mavlink::{
+    Connectable, Connection, MavConnection, MavHeader, UdpConfig, UdpMode, write_v2_msg,
+};
 use helicon_sim::closed_loop::{Termination, prepare};
 use helicon_sim::log_csv::read_log_csv;
 use helicon_sim::scenario::Scenario;
@@ -99,11 +103,61 @@ fn command(conn: &Connection<MavMessage>, cmd: MavCmd, param7: f32) -> Option<Ma
     None
 }
 
+/// A second ground station's datagrams: noise, a 1-byte datagram, and
+/// valid MAVLink frames no vehicle 1 may obey — a forced disarm for system
+/// 99, a land for component 50 of system 1, a takeoff to 1 km for system 2.
+fn hostile_datagrams() -> Vec<Vec<u8>> {
+    let h = MavHeader {
+        system_id: 254,
+        component_id: 190,
+        sequence: 0,
+    };
+    let cmd = |command, target_system, target_component, param2, param7| {
+        let mut out = Vec::new();
+        write_v2_msg(
+            &mut out,
+            h,
+            &MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+                param2,
+                param7,
+                command,
+                target_system,
+                target_component,
+                ..COMMAND_LONG_DATA::default()
+            }),
+        )
+        .unwrap();
+        out
+    };
+    vec![
+        vec![0x55],
+        vec![0xFD, 9, 0, 0, 1, 255, 190, 0, 0, 0, 1, 2, 3],
+        (0..=255u8).collect(),
+        cmd(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 99, 1, 21196.0, 0.0),
+        cmd(MavCmd::MAV_CMD_NAV_LAND, 1, 50, 0.0, 0.0),
+        cmd(MavCmd::MAV_CMD_NAV_TAKEOFF, 2, 1, 0.0, 1000.0),
+    ]
+}
+
 #[test]
 fn sitl_with_the_ground_station_arms_takes_off_and_climbs() {
+    climb(false);
+}
+
+#[test]
+fn sitl_a_second_peers_garbage_and_foreign_commands_leave_the_flight_alone() {
+    climb(true);
+}
+
+/// Arm, take off to 5 m and hold; with `attack`, a second ground station
+/// sends [`hostile_datagrams`] to the vehicle every few milliseconds of the
+/// flight, and nothing of the flight may change.
+#[allow(clippy::too_many_lines)] // one flight, its checks in order
+fn climb(attack: bool) {
     // the ground station listens on a free port; the server sends to it
     let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
     let port = socket.local_addr().unwrap().port();
+    let peek = socket.try_clone().unwrap();
     let conn = UdpConfig::from_socket(socket, UdpMode::Udpin)
         .unwrap()
         .connect::<MavMessage>()
@@ -114,8 +168,28 @@ fn sitl_with_the_ground_station_arms_takes_off_and_climbs() {
     let mut opts = common::options("gcs");
     opts.keep_frames = false;
     opts.gcs = Some(format!("udpout:127.0.0.1:{port}"));
+    opts.out_dir = opts
+        .out_dir
+        .with_extension(if attack { "attacked" } else { "plain" });
     let out_dir = opts.out_dir.clone();
     let flight = std::thread::spawn(move || sitl::run(&s, &prepared, &opts));
+    // the vehicle's address, as a second station learns it from a datagram
+    peek.set_read_timeout(Some(Duration::from_secs(20)))
+        .unwrap();
+    let vehicle = peek.peek_from(&mut [0u8; 300]).unwrap().1;
+    let attacker = UdpSocket::bind("127.0.0.1:0").unwrap();
+    attacker.set_nonblocking(true).unwrap();
+    let hostile = hostile_datagrams();
+    let rounds = std::cell::Cell::new(0u32);
+    let attack_now = || {
+        if attack {
+            for d in &hostile {
+                attacker.send_to(d, vehicle).unwrap();
+            }
+            rounds.set(rounds.get() + 1);
+        }
+    };
+    attack_now();
 
     // the vehicle's heartbeat, disarmed
     let start = Instant::now();
@@ -137,6 +211,7 @@ fn sitl_with_the_ground_station_arms_takes_off_and_climbs() {
     // loaded machine the client can be that early): ask again until then
     let start = Instant::now();
     let armed = loop {
+        attack_now();
         let r = command(&conn, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 0.0);
         if r != Some(MavResult::MAV_RESULT_DENIED) || start.elapsed() > Duration::from_secs(10) {
             break r;
@@ -168,16 +243,20 @@ fn sitl_with_the_ground_station_arms_takes_off_and_climbs() {
     // seconds); the last LOCAL_POSITION_NED the vehicle sent
     let mut last_z = None;
     let mut armed_seen = false;
+    let mut disarmed_after_arming = false;
     while !flight.is_finished() {
         gcs_heartbeat(&conn);
+        attack_now();
         let t = Instant::now();
         while t.elapsed() < Duration::from_millis(5) {
             match conn.try_recv() {
                 Ok((_, MavMessage::LOCAL_POSITION_NED(p))) => last_z = Some(f64::from(p.z)),
                 Ok((_, MavMessage::HEARTBEAT(hb))) if hb.mavtype != MavType::MAV_TYPE_GCS => {
-                    armed_seen |= hb
+                    let armed = hb
                         .base_mode
                         .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
+                    disarmed_after_arming |= armed_seen && !armed;
+                    armed_seen |= armed;
                 }
                 Ok(_) => {}
                 Err(_) => std::thread::sleep(Duration::from_millis(1)),
@@ -192,6 +271,19 @@ fn sitl_with_the_ground_station_arms_takes_off_and_climbs() {
         r.summary.reason
     );
     assert!(armed_seen, "no armed heartbeat");
+    assert!(!disarmed_after_arming, "disarmed in flight");
+    // the second station's commands were for others: not one answered
+    let mut acks = 0;
+    let mut b = [0u8; 512];
+    while let Ok(n) = attacker.recv(&mut b) {
+        let mut r = helicon_gcs::mavlink::MavlinkReader::new(&b[..n]);
+        if let Ok((_, MavMessage::COMMAND_ACK(_))) = r.read_any_message::<MavMessage>() {
+            acks += 1;
+        }
+    }
+    assert_eq!(acks, 0, "a foreign command was answered");
+    // the attack lasted the flight (a round every 5 ms of wall time)
+    assert!(!attack || rounds.get() > 50, "{} rounds", rounds.get());
     assert_eq!(r.onboard.final_mode, "auto");
     // the truth (log.csv): on the ground until the takeoff, then up at the
     // navigator's climb speed (1 m/s by default; the crossing of 1 m and
@@ -214,8 +306,10 @@ fn sitl_with_the_ground_station_arms_takes_off_and_climbs() {
     let z_end = *z.last().unwrap();
     assert!((z_end + 5.0).abs() < 1.0, "true height {:.2} m", -z_end);
     eprintln!(
-        "climb {climb_m_s:.3} m/s, reported height {:.3} m, true height {:.3} m",
-        -z_gcs, -z_end
+        "attack {attack} ({} rounds): climb {climb_m_s:.3} m/s, reported height {:.3} m, true height {:.3} m",
+        rounds.get(),
+        -z_gcs,
+        -z_end
     );
     let _ = std::fs::remove_dir_all(out_dir);
 }
