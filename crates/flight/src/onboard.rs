@@ -235,18 +235,19 @@ pub fn run(
         path: dir.display().to_string(),
         message: format!("cannot create: {e}"),
     })?;
-    let stamp = std::time::SystemTime::now()
+    // a new file, numbered after the folder's logs: two flights in one
+    // second, or a board without a real-time clock, never share a name, and
+    // an existing log is never overwritten
+    let unix_s = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())
         .unwrap_or(0);
-    let path = dir.join(format!("flight-{stamp}.ulg"));
-    let log =
-        FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).map_err(|e| {
-            OnboardError::Log {
-                path: path.display().to_string(),
+    let (log, path) =
+        FlightLog::create_numbered(&dir, unix_s, &LogInfo::default(), FlushPolicy::default())
+            .map_err(|e| OnboardError::Log {
+                path: dir.display().to_string(),
                 message: e.to_string(),
-            }
-        })?;
+            })?;
     // the ground station last: its server thread runs from here on
     let (mission, server) = match (&mission_scenario, &cfg.gcs) {
         (_, Some(g)) => {

@@ -242,7 +242,7 @@ pub fn run(
         ..LogInfo::default()
     };
     let log =
-        FlightLog::create(&ulog, &info, FlushPolicy::default()).map_err(|e| SitlError::Log {
+        FlightLog::create_replacing(&ulog, &info, FlushPolicy::default()).map_err(|e| SitlError::Log {
             path: ulog.display().to_string(),
             message: e.to_string(),
         })?;
