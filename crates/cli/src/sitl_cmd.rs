@@ -7,7 +7,9 @@
 //! flies instead of the scenario's references.
 
 use crate::console::Console;
-use crate::sim_cmd::{folder_name, overrides_from, overrides_label, prepare_step};
+use crate::signals::{Stop, signal_name};
+use crate::sim_cmd::{LogArgs, folder_name, overrides_from, overrides_label, plan_log, prepare_step};
+use helicon_sim::closed_loop::Outcome;
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
@@ -81,6 +83,8 @@ pub struct SitlArgs {
     /// `[[reference]]` are ignored; its duration still ends the run.
     #[arg(long, value_name = "ADDRESS", conflicts_with_all = ["manual_at", "rc_failsafe_at", "rc_silent_at"])]
     pub gcs: Option<String>,
+    #[command(flatten)]
+    pub log: LogArgs,
 }
 
 fn check_time(flag: &str, v: Option<f64>) -> Result<()> {
@@ -149,6 +153,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         check_events(a, case.duration_s, &source)?;
     }
     let mut con = Console::stdout();
+    let stop = Stop::install()?;
     for mut case in cases.iter().cloned() {
         case.controller.fusion = true;
         let out = if cases.len() > 1 {
@@ -158,6 +163,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         };
         let (prepared, _) = prepare_step(&case)?;
         case.check_work(&source, prepared.gains.set.sample_time_s)?;
+        let log_stride = plan_log(&case, &prepared, &a.log)?;
         let options = SitlOptions {
             speed: match a.speed {
                 SpeedArg::Max => Speed::Max,
@@ -185,11 +191,18 @@ pub fn run(a: &SitlArgs) -> Result<()> {
             },
             keep_frames: false,
             gcs: a.gcs.clone(),
+            log_stride,
+            stop: Some(stop.flag().clone()),
         };
-        let r = sitl::run(&case, &prepared, &options)
+        let mut r = sitl::run(&case, &prepared, &options)
             .with_context(|| format!("scenario `{}`: software in the loop", case.name))?;
         for w in &r.onboard.realtime.warnings {
             eprintln!("warning: {w}");
+        }
+        if let (Some(sig), Some(reason)) = (stop.received(), r.summary.reason.as_mut())
+            && r.summary.outcome == Outcome::Stopped
+        {
+            *reason = format!("stopped by {} at t = {:.3} s", signal_name(sig), r.summary.t_end_s);
         }
         let timing = sitl::timing_json(&r, options.speed);
         sitl::write_timing(&out, &timing)?;
@@ -241,6 +254,13 @@ pub fn run(a: &SitlArgs) -> Result<()> {
             "  wrote flight.ulg, log.csv, timing.json, summary.json, plots to {}",
             out.display()
         );
+        if let Some(e) = stop.stopped(format!(
+            "flight.ulg, log.csv, timing.json and summary.json of {} are complete",
+            out.display()
+        )) {
+            let _ = con.finish();
+            return Err(e.into());
+        }
     }
     con.finish()?;
     Ok(())

@@ -111,6 +111,13 @@ pub struct SitlOptions {
     /// station is the only link) and the navigator gives the references:
     /// the scenario's `[[reference]]` are not flown.
     pub gcs: Option<String>,
+    /// Write every n-th kept row of `log.csv` (and the last): the truth log
+    /// at a lower rate (1: every row; the summary uses every row).
+    pub log_stride: usize,
+    /// Checked once per sample: once set, the run ends after the sample
+    /// being flown, its files written as at a normal end and its summary
+    /// [`Termination::Stopped`] (a signal handler's flag).
+    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 /// The home of the local NED frame (the GPS receiver's WGS-84 position of
@@ -236,6 +243,7 @@ pub fn run(
     } else {
         (sensors, Some(DeviceRc::new(rc_port)))
     };
+    // the run folder's own log: a run flown again into its folder replaces it
     let ulog = options.out_dir.join("flight.ulg");
     let info = LogInfo {
         sys_name: format!("helicon sitl {}", scenario.name),
@@ -320,7 +328,7 @@ pub fn run(
         eprintln!("warning: SCHED_FIFO for the simulated hardware not permitted ({e})");
     }
     let log_csv = options.out_dir.join("log.csv");
-    let mut writer = LogWriter::create(&log_csv)?;
+    let mut writer = LogWriter::create(&log_csv)?.with_stride(options.log_stride);
     let mut servo_in = wires.avionics.try_clone_master().map_err(dev("avionics"))?;
     let mut decoder = AvionicsDecoder::new();
     let mut buf = [0u8; 256];
@@ -477,6 +485,17 @@ pub fn run(
             writer.write(&step.row)?;
         }
         if step.end.is_some() {
+            break;
+        }
+        if options
+            .stop
+            .as_ref()
+            .is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
+        {
+            hw.abort(
+                Termination::Stopped,
+                format!("stopped on request at t = {t:.3} s"),
+            );
             break;
         }
     }
