@@ -149,9 +149,9 @@ pub fn plan_log(scenario: &Scenario, prepared: &Prepared, args: &LogArgs) -> Res
         est2 = estimate_log_csv(scenario, prepared, s)?;
     }
     eprintln!(
-        "warning: {said}: writing every {s}th sample ({} Hz, about {}); the summary's metrics use every sample. \
+        "warning: {said}: writing one sample in {s} ({} Hz, about {}); the summary's metrics use every sample. \
          For another rate give --log-rate HZ, for the full rate --max-log-bytes {} or more",
-        num(full_hz / s as f64),
+        num((full_hz / s as f64 * 1000.0).round() / 1000.0),
         human_bytes(est2.bytes),
         est.bytes + est.bytes / 50
     );
