@@ -39,9 +39,10 @@ pub fn run(a: &OnboardArgs) -> Result<()> {
     let cfg = OnboardConfig::from_file(&a.config)?;
     let stop = Stop::install()?;
     let result = helicon_flight::onboard::run_until(&cfg, duration, !a.no_sched_fifo, stop.flag());
-    if let (Err(helicon_flight::onboard::OnboardError::Stopped), Some(e)) =
-        (&result, stop.stopped("no flight log was written (still aligning)"))
-    {
+    if let (Err(helicon_flight::onboard::OnboardError::Stopped), Some(e)) = (
+        &result,
+        stop.stopped("no flight log was written (still aligning)"),
+    ) {
         return Err(e.into());
     }
     let (report, log) =
@@ -52,10 +53,7 @@ pub fn run(a: &OnboardArgs) -> Result<()> {
     // --duration or until the IMU port closed)
     let mut doc = serde_json::to_value(&report).context("timing.json")?;
     if let Some(map) = doc.as_object_mut() {
-        map.insert(
-            "stopped_by".into(),
-            stop.received().map(signal_name).into(),
-        );
+        map.insert("stopped_by".into(), stop.received().map(signal_name).into());
     }
     let text = serde_json::to_string_pretty(&doc).context("timing.json")?;
     std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))?;

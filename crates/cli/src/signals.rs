@@ -93,3 +93,19 @@ impl Stop {
         })
     }
 }
+
+/// Name the signal in the summary of a flight it stopped: `reason`
+/// `stopped by SIGINT at t = 12.345 s` (the flight loop says only that it
+/// was asked to stop).
+pub fn mark_stopped(stop: &Stop, summary: &mut helicon_sim::closed_loop::Summary) {
+    if summary.outcome != helicon_sim::closed_loop::Outcome::Stopped {
+        return;
+    }
+    if let Some(sig) = stop.received() {
+        summary.reason = Some(format!(
+            "stopped by {} at t = {:.3} s",
+            signal_name(sig),
+            summary.t_end_s
+        ));
+    }
+}

@@ -6,10 +6,10 @@
 //! failure to write the outputs exits non-zero.
 
 use crate::console::Console;
+use crate::signals::{Stop, mark_stopped};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use helicon_model::Params;
-use crate::signals::{Stop, signal_name};
 use helicon_sim::closed_loop::{
     Flight, Outcome, Prepared, estimate_log_csv, fly_to_until, prepare, prepare_with_params,
 };
@@ -342,12 +342,8 @@ pub fn fly_and_write_with(
     bar.finish_and_clear();
     let mut flight =
         flight.with_context(|| format!("scenario `{}`: setting up the flight", scenario.name))?;
-    if let (Some(sig), Some(reason)) = (
-        stop.and_then(Stop::received),
-        flight.summary.reason.as_mut(),
-    ) && flight.summary.outcome == Outcome::Stopped
-    {
-        *reason = format!("stopped by {} at t = {:.3} s", signal_name(sig), flight.summary.t_end_s);
+    if let Some(stop) = stop {
+        mark_stopped(stop, &mut flight.summary);
     }
     let fly_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();

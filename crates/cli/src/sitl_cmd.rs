@@ -7,9 +7,10 @@
 //! flies instead of the scenario's references.
 
 use crate::console::Console;
-use crate::signals::{Stop, signal_name};
-use crate::sim_cmd::{LogArgs, folder_name, overrides_from, overrides_label, plan_log, prepare_step};
-use helicon_sim::closed_loop::Outcome;
+use crate::signals::{Stop, mark_stopped};
+use crate::sim_cmd::{
+    LogArgs, folder_name, human_bytes, overrides_from, overrides_label, plan_log, prepare_step,
+};
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
@@ -133,6 +134,26 @@ fn check_events(a: &SitlArgs, duration_s: f64, source: &str) -> Result<()> {
     Ok(())
 }
 
+/// The stride of `log.csv` ([`plan_log`]), after refusing a run whose
+/// on-board log, never thinned, would alone pass `--max-log-bytes`.
+fn plan_logs(
+    case: &Scenario,
+    prepared: &helicon_sim::closed_loop::Prepared,
+    a: &SitlArgs,
+) -> Result<usize> {
+    // the on-board log is never thinned: refused when it alone is over
+    let ulog_bytes =
+        sitl::estimate_ulog_bytes(case, prepared.gains.set.sample_time_s, a.gcs.is_some());
+    if ulog_bytes > a.log.max_log_bytes {
+        anyhow::bail!(
+            "flight.ulg (the on-board log, written at its full rate) of this flight would be about {}, over --max-log-bytes {}: give a shorter --duration or a larger --max-log-bytes",
+            human_bytes(ulog_bytes),
+            a.log.max_log_bytes
+        );
+    }
+    plan_log(case, prepared, &a.log)
+}
+
 /// Run `helicon sitl`.
 pub fn run(a: &SitlArgs) -> Result<()> {
     check_time("--gps-loss-at", a.gps_loss_at)?;
@@ -163,7 +184,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         };
         let (prepared, _) = prepare_step(&case)?;
         case.check_work(&source, prepared.gains.set.sample_time_s)?;
-        let log_stride = plan_log(&case, &prepared, &a.log)?;
+        let log_stride = plan_logs(&case, &prepared, a)?;
         let options = SitlOptions {
             speed: match a.speed {
                 SpeedArg::Max => Speed::Max,
@@ -199,11 +220,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         for w in &r.onboard.realtime.warnings {
             eprintln!("warning: {w}");
         }
-        if let (Some(sig), Some(reason)) = (stop.received(), r.summary.reason.as_mut())
-            && r.summary.outcome == Outcome::Stopped
-        {
-            *reason = format!("stopped by {} at t = {:.3} s", signal_name(sig), r.summary.t_end_s);
-        }
+        mark_stopped(&stop, &mut r.summary);
         let timing = sitl::timing_json(&r, options.speed);
         sitl::write_timing(&out, &timing)?;
         finish_run(&out, &case, &prepared, &r.summary, r.log_rows)

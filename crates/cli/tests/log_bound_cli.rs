@@ -52,7 +52,10 @@ fn a_day_of_the_demo_is_refused_without_decimation() {
         .unwrap()
         .parse()
         .unwrap();
-    eprintln!("a day of the demo at 100 Hz: about {gb} GB; refused in {:?}", t0.elapsed());
+    eprintln!(
+        "a day of the demo at 100 Hz: about {gb} GB; refused in {:?}",
+        t0.elapsed()
+    );
     assert!((12.0..15.0).contains(&gb), "{gb}");
     assert!(!o.join("log.csv").exists());
     // a --log-rate that does not fit is refused too (the user's rate is not overridden)
@@ -102,11 +105,20 @@ fn over_the_limit_the_log_is_thinned_and_the_summary_kept() {
         thin.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
-    assert!(err.contains("warning: log.csv of this flight would be about"), "{err}");
-    assert!(err.contains("--log-rate HZ") && err.contains("--max-log-bytes"), "{err}");
+    assert!(
+        err.contains("warning: log.csv of this flight would be about"),
+        "{err}"
+    );
+    assert!(
+        err.contains("--log-rate HZ") && err.contains("--max-log-bytes"),
+        "{err}"
+    );
     let thin_bytes = std::fs::metadata(thin.join("log.csv")).unwrap().len();
     eprintln!("full {full_bytes} bytes, thinned to {thin_bytes} (limit {limit})");
-    assert!(thin_bytes <= limit && thin_bytes > limit / 2, "{thin_bytes}");
+    assert!(
+        thin_bytes <= limit && thin_bytes > limit / 2,
+        "{thin_bytes}"
+    );
     let (a, b) = (summary(&full), summary(&thin));
     assert_eq!(a, b, "the summary uses every sample either way");
     // the log still spans the flight, first and last sample
@@ -143,4 +155,52 @@ fn over_the_limit_the_log_is_thinned_and_the_summary_kept() {
         ]);
         assert!(!ok && err.contains("--log-rate"), "{bad}: {err}");
     }
+}
+
+/// `helicon sitl`: the on-board log's size estimated before flying against
+/// the `flight.ulg` written (within 3 %); an on-board log over the limit
+/// is refused (it is never thinned); `--log-rate` thins `log.csv`.
+#[test]
+fn sitl_estimates_its_onboard_log_and_thins_its_truth_log() {
+    let d = common::tmpdir("sitl_bound");
+    let o = out(&d, "sitl");
+    let (ok, _, err) = common::helicon(&[
+        "sitl",
+        &demo(),
+        "--duration",
+        "4",
+        "--log-rate",
+        "10",
+        "--out",
+        o.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let mut s = helicon_sim::scenario::Scenario::from_file(Path::new(&demo())).unwrap();
+    s.duration_s = 4.0;
+    let est = helicon_sitl::estimate_ulog_bytes(&s, 0.0025, false);
+    let bytes = std::fs::metadata(o.join("flight.ulg")).unwrap().len();
+    let e = (est as f64 - bytes as f64) / bytes as f64;
+    eprintln!(
+        "flight.ulg of 4 s: {bytes} bytes written, {est} estimated ({:+.2} %)",
+        100.0 * e
+    );
+    assert!(e.abs() < 0.03, "{e}");
+    let t = helicon_sim::log_csv::read_log_csv(&o.join("log.csv")).unwrap();
+    assert_eq!(t.rows(), 41);
+    let (ok, _, err) = common::helicon(&[
+        "sitl",
+        &demo(),
+        "--duration",
+        "86400",
+        "--max-log-bytes",
+        "1000000000",
+        "--out",
+        out(&d, "day").to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("flight.ulg") && err.contains("--max-log-bytes 1000000000"),
+        "{err}"
+    );
+    assert!(!out(&d, "day").join("flight.ulg").exists());
 }

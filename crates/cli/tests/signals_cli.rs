@@ -6,6 +6,7 @@
 //! have written something, with a bounded wait.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
+#[allow(dead_code)] // only the scratch folder of the helpers is used here
 mod common;
 
 use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample};
@@ -64,7 +65,9 @@ fn stop_with(child: &mut Child, signal: Signal) -> i32 {
     let t0 = Instant::now();
     loop {
         if let Some(status) = child.try_wait().unwrap() {
-            return status.code().expect("an exit code, not a death by the signal");
+            return status
+                .code()
+                .expect("an exit code, not a death by the signal");
         }
         if t0.elapsed() > WAIT {
             let _ = child.kill();
@@ -199,8 +202,8 @@ fn hardware(dir: &Path, done: Arc<AtomicBool>) -> std::thread::JoinHandle<()> {
     );
     std::fs::write(dir.join("onboard.toml"), cfg).unwrap();
     let home = LocalNed::new(Geodetic::new(57.0146, 9.9869, 20.0).unwrap());
-    let onboard = helicon_flight::config::OnboardConfig::from_file(&dir.join("onboard.toml"))
-        .unwrap();
+    let onboard =
+        helicon_flight::config::OnboardConfig::from_file(&dir.join("onboard.toml")).unwrap();
     let field = Vector3::from(onboard.sensors.mag.field_ned);
     let g = prepared.model.params().environment.g_m_s2;
     std::thread::spawn(move || {
@@ -270,7 +273,9 @@ fn sigint_ends_the_onboard_program_with_its_log_closed() {
     let logs = d.join("logs");
     let mut child = spawn(&d, &["onboard", "--config", "onboard.toml"]);
     wait_until(&mut child, &d, "a flight log", || {
-        flight_logs(&logs).first().is_some_and(|p| size(p) > 100_000)
+        flight_logs(&logs)
+            .first()
+            .is_some_and(|p| size(p) > 100_000)
     });
     let code = stop_with(&mut child, Signal::SIGINT);
     let err = std::fs::read_to_string(d.join("stderr.txt")).unwrap();
@@ -279,7 +284,10 @@ fn sigint_ends_the_onboard_program_with_its_log_closed() {
     let first = flight_logs(&logs);
     assert_eq!(first.len(), 1, "{first:?}");
     let name = first[0].file_name().unwrap().to_str().unwrap().to_string();
-    assert!(name.starts_with("flight-0001-") && name.ends_with("Z.ulg"), "{name}");
+    assert!(
+        name.starts_with("flight-0001-") && name.ends_with("Z.ulg"),
+        "{name}"
+    );
     let timing = json(&logs.join("timing.json"));
     assert_eq!(timing["stopped_by"], "SIGINT", "{timing}");
     let steps = timing["steps"].as_u64().unwrap();
@@ -288,7 +296,10 @@ fn sigint_ends_the_onboard_program_with_its_log_closed() {
     let bytes = std::fs::read(&first[0]).unwrap();
 
     // a second, short flight in the same folder (same second or not)
-    let mut child = spawn(&d, &["onboard", "--config", "onboard.toml", "--duration", "0.5"]);
+    let mut child = spawn(
+        &d,
+        &["onboard", "--config", "onboard.toml", "--duration", "0.5"],
+    );
     let t0 = Instant::now();
     let status = loop {
         if let Some(s) = child.try_wait().unwrap() {
@@ -308,7 +319,14 @@ fn sigint_ends_the_onboard_program_with_its_log_closed() {
     assert_eq!(both.len(), 2, "{both:?}");
     let second = both[1].file_name().unwrap().to_str().unwrap();
     assert!(second.starts_with("flight-0002-"), "{second}");
-    assert_eq!(std::fs::read(&first[0]).unwrap(), bytes, "the first log untouched");
+    assert_eq!(
+        std::fs::read(&first[0]).unwrap(),
+        bytes,
+        "the first log untouched"
+    );
     assert!(ulog_data_messages(&both[1]) > 0);
-    assert_eq!(json(&logs.join("timing.json"))["stopped_by"], serde_json::Value::Null);
+    assert_eq!(
+        json(&logs.join("timing.json"))["stopped_by"],
+        serde_json::Value::Null
+    );
 }

@@ -102,5 +102,9 @@ fn a_stop_flag_ends_the_flight_with_its_log_whole() {
     let back = read_log_csv(&path).unwrap();
     assert_eq!(back.rows(), rows);
     let t_last = *back.time_s().last().unwrap();
-    assert!((t_last - sum.t_end_s).abs() < 0.0101, "{t_last} {}", sum.t_end_s);
+    assert!(
+        (t_last - sum.t_end_s).abs() < 0.0101,
+        "{t_last} {}",
+        sum.t_end_s
+    );
 }

@@ -249,11 +249,12 @@ pub fn run(
         sys_name: format!("helicon sitl {}", scenario.name),
         ..LogInfo::default()
     };
-    let log =
-        FlightLog::create_replacing(&ulog, &info, FlushPolicy::default()).map_err(|e| SitlError::Log {
+    let log = FlightLog::create_replacing(&ulog, &info, FlushPolicy::default()).map_err(|e| {
+        SitlError::Log {
             path: ulog.display().to_string(),
             message: e.to_string(),
-        })?;
+        }
+    })?;
     let (downlink_tx, mut downlink) = rtrb::RingBuffer::new(1024);
     let realtime = if lockstep {
         RealtimeConfig {
@@ -539,6 +540,61 @@ impl SitlResult {
     pub fn onboard_sample_time_s(&self) -> f64 {
         self.sample_time_s
     }
+}
+
+/// The estimated size (bytes) of the on-board log `flight.ulg` that a SITL
+/// run of `scenario` writes (the log the on-board program writes at its
+/// full rate, never thinned): its header and definitions (exact: written
+/// into memory), then per control period of `sample_time_s` the records of
+/// one step (`sensor_imu`, `imu_health`, `control`, `navigation`,
+/// `servo_output`, `timing`, and `estimator_bias` with the ESKF,
+/// `excitation` with `[[excitation]]`), the magnetometer's and GPS's
+/// records at their rates, the receiver's at 50 Hz (none with a ground
+/// station, `gcs`), and a SYNC marker per flush. Events and texts are not
+/// counted (a few per flight).
+pub fn estimate_ulog_bytes(scenario: &Scenario, sample_time_s: f64, gcs: bool) -> u64 {
+    use helicon_ulog::Record;
+    use helicon_ulog::messages::{
+        Control, EstimatorBias, Excitation, ImuHealth, Navigation, RcInput, SensorGps, SensorImu,
+        SensorMag, ServoOutput, Timing,
+    };
+    // a data message: 3 bytes of header, 2 of message id, the record
+    let msg = |size: usize| (size + 5) as f64;
+    let mut step = msg(SensorImu::SIZE)
+        + msg(ImuHealth::SIZE)
+        + msg(Control::SIZE)
+        + msg(Navigation::SIZE)
+        + msg(ServoOutput::SIZE)
+        + msg(Timing::SIZE);
+    if scenario.estimator.kind == helicon_setup::estimator::EstimatorKind::Eskf {
+        step += msg(EstimatorBias::SIZE);
+    }
+    if !scenario.excitation.is_empty() {
+        step += msg(Excitation::SIZE);
+    }
+    let ts = sample_time_s.max(1e-6);
+    let mut per_s = step / ts
+        + msg(SensorMag::SIZE) * scenario.sensors.mag.rate_hz
+        + msg(SensorGps::SIZE) * scenario.sensors.gps.rate_hz;
+    if !gcs {
+        per_s += msg(RcInput::SIZE) / (8.0 * ts);
+    }
+    // a SYNC (11 bytes) per flush: every 0.1 s of log time, or 16 KiB
+    let policy = FlushPolicy::default();
+    let flushes_per_s =
+        (1e6 / policy.interval_us.max(1) as f64).max(per_s / policy.max_bytes as f64);
+    per_s += 11.0 * flushes_per_s;
+    let head = FlightLog::new(
+        Vec::new(),
+        &LogInfo {
+            sys_name: format!("helicon sitl {}", scenario.name),
+            ..LogInfo::default()
+        },
+        policy,
+    )
+    .and_then(FlightLog::finish)
+    .map_or(4096, |b| b.len() as u64);
+    head + (per_s * scenario.duration_s.max(0.0)).round() as u64
 }
 
 /// `timing.json` of a SITL run.

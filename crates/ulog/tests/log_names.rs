@@ -3,6 +3,8 @@
 //! second, a folder of earlier logs, a board without a real-time clock at
 //! 1970), and each numbered log is a complete file of its own.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
+
 use helicon_ulog::reader::{Message, UlogReader};
 use helicon_ulog::writer::{EXISTS_ACTION, log_number, utc_stamp};
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, UlogWriter};
@@ -51,7 +53,10 @@ fn create_refuses_an_existing_file_and_leaves_it() {
     std::fs::write(&path, b"an earlier flight").unwrap();
     let e = UlogWriter::create(&path, 0, FlushPolicy::default()).unwrap_err();
     let text = e.to_string();
-    assert!(text.contains("x.ulg") && text.contains("already there"), "{text}");
+    assert!(
+        text.contains("x.ulg") && text.contains("already there"),
+        "{text}"
+    );
     assert!(matches!(e, helicon_ulog::WriteError::Io { action, .. } if action == EXISTS_ACTION));
     assert_eq!(std::fs::read(&path).unwrap(), b"an earlier flight");
     let e = FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).unwrap_err();
@@ -160,7 +165,10 @@ fn racing_loggers_in_one_folder_get_distinct_files() {
 
 #[test]
 fn numbers_and_stamps_of_names() {
-    assert_eq!(log_number("flight-0042-19700101T000000Z.ulg", "flight"), Some(42));
+    assert_eq!(
+        log_number("flight-0042-19700101T000000Z.ulg", "flight"),
+        Some(42)
+    );
     assert_eq!(log_number("flight-12345-x.ulg", "flight"), Some(12345));
     assert_eq!(log_number("flight-1764640000.ulg", "flight"), None);
     assert_eq!(log_number("flight--x.ulg", "flight"), None);
