@@ -128,7 +128,9 @@ pub fn plan_log(scenario: &Scenario, prepared: &Prepared, args: &LogArgs) -> Res
     let rate = full_hz / stride as f64;
     let header = helicon_sim::log_csv::header_bytes();
     // the stride that fits: the rows the limit holds, at the measured width
-    let fits_rows = (max.saturating_sub(header) as f64 / est.bytes_per_row).floor();
+    // aim 2 % under the limit: the estimate's error is smaller
+    let target = max - max / 50;
+    let fits_rows = (target.saturating_sub(header) as f64 / est.bytes_per_row).floor();
     let fits_hz = (fits_rows - 1.0).max(0.0) / scenario.duration_s.max(1e-9);
     let said = format!(
         "log.csv of this flight would be about {} ({} rows at {} Hz), over --max-log-bytes {max}",
@@ -142,9 +144,9 @@ pub fn plan_log(scenario: &Scenario, prepared: &Prepared, args: &LogArgs) -> Res
             num((fits_hz * 1000.0).floor() / 1000.0)
         );
     }
-    let mut s = stride.saturating_mul((est.bytes as f64 / max as f64).ceil() as u64);
+    let mut s = stride.saturating_mul((est.bytes as f64 / target as f64).ceil() as u64);
     let mut est2 = estimate_log_csv(scenario, prepared, s)?;
-    while est2.bytes > max {
+    while est2.bytes > target {
         s = s.saturating_add((s / 16).max(1));
         est2 = estimate_log_csv(scenario, prepared, s)?;
     }
