@@ -18,6 +18,7 @@ mod model_cmd;
 mod onboard_cmd;
 mod sensors;
 mod shaker_cmd;
+mod signals;
 mod sim_cmd;
 mod sitl_cmd;
 mod trim_cmd;
@@ -77,6 +78,9 @@ enum Command {
     Man,
 }
 
+/// Exit status 130 or 143 for a run stopped by SIGINT or SIGTERM (its files
+/// written, see [`signals`]).
+///
 /// Exit status 0 on a closed stdout pipe (`helicon sim … | head -1`): the
 /// reader asked for no more, and the command's files are complete (see
 /// [`console::Console`]). A shell pipeline therefore succeeds, as with
@@ -84,6 +88,16 @@ enum Command {
 fn main() -> std::process::ExitCode {
     match run() {
         Ok(()) => std::process::ExitCode::SUCCESS,
+        // A run ended by SIGINT/SIGTERM: its files are complete; the exit
+        // status is the shell's for a death by that signal (128 + number).
+        Err(e) if e.downcast_ref::<signals::Stopped>().is_some() => {
+            use std::io::Write;
+            let code = e
+                .downcast_ref::<signals::Stopped>()
+                .map_or(1, signals::Stopped::exit_code);
+            let _ = writeln!(std::io::stderr(), "helicon: {}", error_text(&e));
+            std::process::ExitCode::from(code)
+        }
         // A closed pipe (`helicon ... | head`) is not an error.
         Err(e)
             if e.chain().any(|c| {

@@ -2,9 +2,13 @@
 //! program. Opens the devices of the configuration, aligns on the ground
 //! from the sensors, and runs the sensor server, the 400 Hz control task,
 //! the avionics and the logger until the IMU port closes (or `--duration`);
-//! writes the ULog flight log and `timing.json` into the log folder.
+//! writes the ULog flight log (`flight-<NNNN>-<UTC>.ulg`, the next number of
+//! the folder, never an existing file) and `timing.json` into the log
+//! folder. SIGINT or SIGTERM ends the run as its end would (log closed,
+//! `timing.json` with `"stopped_by"`), exit status 130 or 143.
 
 use crate::console::Console;
+use crate::signals::{Stop, signal_name};
 use anyhow::{Context, Result};
 use clap::Args;
 use helicon_flight::config::OnboardConfig;
@@ -33,11 +37,25 @@ pub fn run(a: &OnboardArgs) -> Result<()> {
         None => None,
     };
     let cfg = OnboardConfig::from_file(&a.config)?;
-    let (report, log) = helicon_flight::onboard::run(&cfg, duration, !a.no_sched_fifo)
-        .with_context(|| format!("{}: on-board program", a.config.display()))?;
+    let stop = Stop::install()?;
+    let result = helicon_flight::onboard::run_until(&cfg, duration, !a.no_sched_fifo, stop.flag());
+    if let (Err(helicon_flight::onboard::OnboardError::Stopped), Some(e)) = (
+        &result,
+        stop.stopped("no flight log was written (still aligning)"),
+    ) {
+        return Err(e.into());
+    }
+    let (report, log) =
+        result.with_context(|| format!("{}: on-board program", a.config.display()))?;
     let dir = log.parent().map(PathBuf::from).unwrap_or_default();
     let path = dir.join("timing.json");
-    let text = serde_json::to_string_pretty(&report).context("timing.json")?;
+    // the report, and the signal that ended the run (null: it ran its
+    // --duration or until the IMU port closed)
+    let mut doc = serde_json::to_value(&report).context("timing.json")?;
+    if let Some(map) = doc.as_object_mut() {
+        map.insert("stopped_by".into(), stop.received().map(signal_name).into());
+    }
+    let text = serde_json::to_string_pretty(&doc).context("timing.json")?;
     std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))?;
     let mut con = Console::stdout();
     writeln!(
@@ -55,6 +73,14 @@ pub fn run(a: &OnboardArgs) -> Result<()> {
     writeln!(con, "wrote {} and {}", log.display(), path.display());
     if let Some(e) = &report.error {
         anyhow::bail!("the on-board program stopped: {e}");
+    }
+    if let Some(e) = stop.stopped(format!(
+        "{} and {} are complete",
+        log.display(),
+        path.display()
+    )) {
+        let _ = con.finish();
+        return Err(e.into());
     }
     con.finish()?;
     Ok(())

@@ -6,14 +6,18 @@
 //! failure to write the outputs exits non-zero.
 
 use crate::console::Console;
+use crate::signals::{Stop, mark_stopped};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use helicon_model::Params;
-use helicon_sim::closed_loop::{Flight, Outcome, Prepared, fly_to, prepare, prepare_with_params};
+use helicon_sim::closed_loop::{
+    Flight, Outcome, Prepared, estimate_log_csv, fly_to_until, prepare, prepare_with_params,
+};
 use helicon_sim::output::{CaseRun, RunFiles, finish_run, start_run, write_cases_index};
 use helicon_sim::scenario::{OUTPUTS, Scenario, ScenarioOverrides, num};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// `helicon sim`.
@@ -41,6 +45,119 @@ pub struct SimArgs {
     /// or duration) already in the output folder.
     #[arg(long)]
     pub force: bool,
+    #[command(flatten)]
+    pub log: LogArgs,
+}
+
+/// The default of `--max-log-bytes`: 1 GB.
+pub const DEFAULT_MAX_LOG_BYTES: u64 = 1_000_000_000;
+
+/// How much of the flight `log.csv` keeps (`helicon sim`, `helicon sitl`).
+#[derive(Args, Debug, Clone)]
+pub struct LogArgs {
+    /// Rows per second of `log.csv`: the log at a lower rate (every n-th
+    /// sample, n = the log's full rate / HZ rounded; the full rate is the
+    /// control rate over `[log] decimation`). The summary's metrics still
+    /// use every sample.
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
+    pub log_rate: Option<f64>,
+    /// The largest `log.csv` to write (bytes). Its size is estimated before
+    /// the flight; a larger one is written at the highest rate that fits
+    /// (said on stderr), or refused with --no-log-decimation or --log-rate.
+    #[arg(long, value_name = "BYTES", default_value_t = DEFAULT_MAX_LOG_BYTES)]
+    pub max_log_bytes: u64,
+    /// Refuse a flight whose `log.csv` would be larger than
+    /// --max-log-bytes instead of lowering its rate.
+    #[arg(long)]
+    pub no_log_decimation: bool,
+}
+
+impl Default for LogArgs {
+    fn default() -> Self {
+        LogArgs {
+            log_rate: None,
+            max_log_bytes: DEFAULT_MAX_LOG_BYTES,
+            no_log_decimation: false,
+        }
+    }
+}
+
+/// A byte count for people: `13.3 GB`, `950 kB`.
+pub fn human_bytes(b: u64) -> String {
+    let v = b as f64;
+    if v >= 1e9 {
+        format!("{:.1} GB", v / 1e9)
+    } else if v >= 1e6 {
+        format!("{:.1} MB", v / 1e6)
+    } else if v >= 1e3 {
+        format!("{:.0} kB", v / 1e3)
+    } else {
+        format!("{b} bytes")
+    }
+}
+
+/// The stride of `log.csv` (write every n-th kept sample) for `scenario`
+/// under `args`: from `--log-rate`, else 1; then the size estimated before
+/// flying ([`estimate_log_csv`]) against `--max-log-bytes`: above it the
+/// stride grows to fit (a warning on stderr), or the flight is refused
+/// (`--no-log-decimation`, or a `--log-rate` given). `what` names the log in
+/// messages.
+pub fn plan_log(scenario: &Scenario, prepared: &Prepared, args: &LogArgs) -> Result<usize> {
+    let ts = prepared.gains.set.sample_time_s;
+    let full_hz = 1.0 / (ts * f64::from(scenario.log.decimation.max(1)));
+    let mut stride = 1u64;
+    if let Some(hz) = args.log_rate {
+        if !(hz.is_finite() && hz > 0.0) {
+            bail!("--log-rate {hz}: must be a finite rate > 0 Hz");
+        }
+        if hz > full_hz * (1.0 + 1e-9) {
+            bail!(
+                "--log-rate {hz}: above the log's full rate, {} Hz (the control rate over [log] decimation = {})",
+                num(full_hz),
+                scenario.log.decimation
+            );
+        }
+        stride = (full_hz / hz).round().max(1.0) as u64;
+    }
+    let est = estimate_log_csv(scenario, prepared, stride)
+        .with_context(|| format!("scenario `{}`: estimating the log's size", scenario.name))?;
+    let max = args.max_log_bytes;
+    if est.bytes <= max {
+        return Ok(usize::try_from(stride).unwrap_or(usize::MAX));
+    }
+    let rate = full_hz / stride as f64;
+    let header = helicon_sim::log_csv::header_bytes();
+    // the stride that fits: the rows the limit holds, at the measured width
+    // aim 2 % under the limit: the estimate's error is smaller
+    let target = max - max / 50;
+    let fits_rows = (target.saturating_sub(header) as f64 / est.bytes_per_row).floor();
+    let fits_hz = (fits_rows - 1.0).max(0.0) / scenario.duration_s.max(1e-9);
+    let said = format!(
+        "log.csv of this flight would be about {} ({} rows at {} Hz), over --max-log-bytes {max}",
+        human_bytes(est.bytes),
+        est.rows,
+        num(rate)
+    );
+    if args.no_log_decimation || args.log_rate.is_some() || fits_rows < 2.0 {
+        bail!(
+            "{said}: give --log-rate HZ (about {} Hz fits), a larger --max-log-bytes, or a shorter --duration",
+            num((fits_hz * 1000.0).floor() / 1000.0)
+        );
+    }
+    let mut s = stride.saturating_mul((est.bytes as f64 / target as f64).ceil() as u64);
+    let mut est2 = estimate_log_csv(scenario, prepared, s)?;
+    while est2.bytes > target {
+        s = s.saturating_add((s / 16).max(1));
+        est2 = estimate_log_csv(scenario, prepared, s)?;
+    }
+    eprintln!(
+        "warning: {said}: writing one sample in {s} ({} Hz, about {}); the summary's metrics use every sample. \
+         For another rate give --log-rate HZ, for the full rate --max-log-bytes {} or more",
+        num((full_hz / s as f64 * 1000.0).round() / 1000.0),
+        human_bytes(est2.bytes),
+        est.bytes + est.bytes / 50
+    );
+    Ok(usize::try_from(s).unwrap_or(usize::MAX))
 }
 
 /// The file of a run folder naming the inputs flown into it.
@@ -191,9 +308,25 @@ pub fn fly_and_write_step(
     prepared: &Prepared,
     source: &str,
 ) -> Result<(Flight, RunFiles, f64, f64)> {
+    fly_and_write_with(out, scenario, prepared, source, &LogArgs::default(), None)
+}
+
+/// As [`fly_and_write_step`], the log planned by `log` ([`plan_log`]) and
+/// the flight ended early when `stop`'s flag is set (a signal): the run
+/// folder is then written for what was flown, its summary `stopped`.
+pub fn fly_and_write_with(
+    out: &Path,
+    scenario: &Scenario,
+    prepared: &Prepared,
+    source: &str,
+    log: &LogArgs,
+    stop: Option<&Stop>,
+) -> Result<(Flight, RunFiles, f64, f64)> {
     scenario.check_work(source, prepared.gains.set.sample_time_s)?;
-    let mut log =
-        start_run(out).with_context(|| format!("writing the run outputs to {}", out.display()))?;
+    let stride = plan_log(scenario, prepared, log)?;
+    let mut log = start_run(out)
+        .with_context(|| format!("writing the run outputs to {}", out.display()))?
+        .with_stride(stride);
     let bar = ProgressBar::new(1000);
     bar.set_style(
         ProgressStyle::with_template(
@@ -205,10 +338,15 @@ pub fn fly_and_write_step(
     bar.set_message(format!("flying {} s", num(scenario.duration_s)));
     let t1 = Instant::now();
     let mut cb = |f: f64| bar.set_position((f.clamp(0.0, 1.0) * 1000.0).round() as u64);
-    let flight = fly_to(scenario, prepared, &mut log, Some(&mut cb));
+    let never = AtomicBool::new(false);
+    let flag = stop.map_or(&never, |s| s.flag().as_ref());
+    let flight = fly_to_until(scenario, prepared, &mut log, Some(&mut cb), flag);
     bar.finish_and_clear();
-    let flight =
+    let mut flight =
         flight.with_context(|| format!("scenario `{}`: setting up the flight", scenario.name))?;
+    if let Some(stop) = stop {
+        mark_stopped(stop, &mut flight.summary);
+    }
     let fly_s = t1.elapsed().as_secs_f64();
     let t2 = Instant::now();
     let rows = log
@@ -221,9 +359,16 @@ pub fn fly_and_write_step(
 
 /// Prepare, fly (with a progress bar on stderr) and write a scenario;
 /// `source` names its origin (file) in errors.
-pub fn run_scenario(scenario: &Scenario, out: &Path, source: &str) -> Result<RunReport> {
+pub fn run_scenario(
+    scenario: &Scenario,
+    out: &Path,
+    source: &str,
+    log: &LogArgs,
+    stop: Option<&Stop>,
+) -> Result<RunReport> {
     let (prepared, prepare_s) = prepare_step(scenario)?;
-    let (flight, files, fly_s, write_s) = fly_and_write_step(out, scenario, &prepared, source)?;
+    let (flight, files, fly_s, write_s) =
+        fly_and_write_with(out, scenario, &prepared, source, log, stop)?;
     Ok(RunReport {
         flight,
         files,
@@ -267,6 +412,12 @@ pub fn print_run(con: &mut Console, report: &RunReport) {
             "outcome: DIVERGED at t = {:.3} s: {}",
             s.t_end_s,
             s.reason.as_deref().unwrap_or("unknown reason")
+        ),
+        Outcome::Stopped => writeln!(
+            con,
+            "outcome: STOPPED at t = {:.3} s: {}",
+            s.t_end_s,
+            s.reason.as_deref().unwrap_or("on request")
         ),
     }
     writeln!(
@@ -353,10 +504,15 @@ pub fn run(args: &SimArgs) -> Result<()> {
             format!(", {} cases", cases.len())
         }
     );
+    let stop = Stop::install()?;
     if scenario.variants.is_empty() {
-        let report = run_scenario(&scenario, &out, &source)?;
+        let report = run_scenario(&scenario, &out, &source, &args.log, Some(&stop))?;
         stamp_out_folder(&out, &run_inputs(args))?;
         print_run(&mut con, &report);
+        if let Some(e) = stop.stopped(format!("the run folder {} is complete", out.display())) {
+            let _ = con.finish();
+            return Err(e.into());
+        }
         return con.finish().context("writing to stdout");
     }
     let prefix = format!("{}-", scenario.name);
@@ -369,9 +525,19 @@ pub fn run(args: &SimArgs) -> Result<()> {
             .to_string();
         let dir = out.join(folder_name(&label));
         writeln!(con, "\ncase `{label}` ({})", case.name);
-        let report = run_scenario(case, &dir, &format!("{source}, case `{label}`"))?;
+        let report = run_scenario(
+            case,
+            &dir,
+            &format!("{source}, case `{label}`"),
+            &args.log,
+            Some(&stop),
+        )?;
         print_run(&mut con, &report);
         flown.push((label, report.flight.summary));
+        if stop.received().is_some() {
+            // the cases not flown are left out of the index
+            break;
+        }
     }
     let index: Vec<CaseRun<'_>> = flown
         .iter()
@@ -383,6 +549,15 @@ pub fn run(args: &SimArgs) -> Result<()> {
     let (summary, report) = write_cases_index(&out, &scenario.name, &index)
         .with_context(|| format!("writing the case index to {}", out.display()))?;
     stamp_out_folder(&out, &run_inputs(args))?;
+    if let Some(e) = stop.stopped(format!(
+        "{} of {} cases flown, the index {} lists them",
+        flown.len(),
+        cases.len(),
+        summary.display()
+    )) {
+        let _ = con.finish();
+        return Err(e.into());
+    }
     let diverged = flown.iter().filter(|(_, s)| s.reason.is_some()).count();
     writeln!(
         con,

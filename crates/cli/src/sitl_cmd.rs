@@ -7,7 +7,10 @@
 //! flies instead of the scenario's references.
 
 use crate::console::Console;
-use crate::sim_cmd::{folder_name, overrides_from, overrides_label, prepare_step};
+use crate::signals::{Stop, mark_stopped};
+use crate::sim_cmd::{
+    LogArgs, folder_name, human_bytes, overrides_from, overrides_label, plan_log, prepare_step,
+};
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
@@ -81,6 +84,8 @@ pub struct SitlArgs {
     /// `[[reference]]` are ignored; its duration still ends the run.
     #[arg(long, value_name = "ADDRESS", conflicts_with_all = ["manual_at", "rc_failsafe_at", "rc_silent_at"])]
     pub gcs: Option<String>,
+    #[command(flatten)]
+    pub log: LogArgs,
 }
 
 fn check_time(flag: &str, v: Option<f64>) -> Result<()> {
@@ -129,6 +134,26 @@ fn check_events(a: &SitlArgs, duration_s: f64, source: &str) -> Result<()> {
     Ok(())
 }
 
+/// The stride of `log.csv` ([`plan_log`]), after refusing a run whose
+/// on-board log, never thinned, would alone pass `--max-log-bytes`.
+fn plan_logs(
+    case: &Scenario,
+    prepared: &helicon_sim::closed_loop::Prepared,
+    a: &SitlArgs,
+) -> Result<usize> {
+    // the on-board log is never thinned: refused when it alone is over
+    let ulog_bytes =
+        sitl::estimate_ulog_bytes(case, prepared.gains.set.sample_time_s, a.gcs.is_some());
+    if ulog_bytes > a.log.max_log_bytes {
+        anyhow::bail!(
+            "flight.ulg (the on-board log, written at its full rate) of this flight would be about {}, over --max-log-bytes {}: give a shorter --duration or a larger --max-log-bytes",
+            human_bytes(ulog_bytes),
+            a.log.max_log_bytes
+        );
+    }
+    plan_log(case, prepared, &a.log)
+}
+
 /// Run `helicon sitl`.
 pub fn run(a: &SitlArgs) -> Result<()> {
     check_time("--gps-loss-at", a.gps_loss_at)?;
@@ -149,6 +174,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         check_events(a, case.duration_s, &source)?;
     }
     let mut con = Console::stdout();
+    let stop = Stop::install()?;
     for mut case in cases.iter().cloned() {
         case.controller.fusion = true;
         let out = if cases.len() > 1 {
@@ -158,6 +184,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         };
         let (prepared, _) = prepare_step(&case)?;
         case.check_work(&source, prepared.gains.set.sample_time_s)?;
+        let log_stride = plan_logs(&case, &prepared, a)?;
         let options = SitlOptions {
             speed: match a.speed {
                 SpeedArg::Max => Speed::Max,
@@ -185,12 +212,15 @@ pub fn run(a: &SitlArgs) -> Result<()> {
             },
             keep_frames: false,
             gcs: a.gcs.clone(),
+            log_stride,
+            stop: Some(stop.flag().clone()),
         };
-        let r = sitl::run(&case, &prepared, &options)
+        let mut r = sitl::run(&case, &prepared, &options)
             .with_context(|| format!("scenario `{}`: software in the loop", case.name))?;
         for w in &r.onboard.realtime.warnings {
             eprintln!("warning: {w}");
         }
+        mark_stopped(&stop, &mut r.summary);
         let timing = sitl::timing_json(&r, options.speed);
         sitl::write_timing(&out, &timing)?;
         finish_run(&out, &case, &prepared, &r.summary, r.log_rows)
@@ -241,6 +271,13 @@ pub fn run(a: &SitlArgs) -> Result<()> {
             "  wrote flight.ulg, log.csv, timing.json, summary.json, plots to {}",
             out.display()
         );
+        if let Some(e) = stop.stopped(format!(
+            "flight.ulg, log.csv, timing.json and summary.json of {} are complete",
+            out.display()
+        )) {
+            let _ = con.finish();
+            return Err(e.into());
+        }
     }
     con.finish()?;
     Ok(())

@@ -25,6 +25,7 @@ use helicon_setup::{OnBoardSetup, flight_computer, imu_health_at};
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
 use nalgebra::Vector3;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Errors of the on-board program before it flies.
@@ -64,6 +65,10 @@ pub enum OnboardError {
     /// Building the flight software.
     #[error(transparent)]
     Build(#[from] helicon_setup::BuildError),
+    /// Stopped on request before the flight log was opened (during the
+    /// alignment): nothing was written.
+    #[error("stopped before the alignment ended: no flight log was written")]
+    Stopped,
     /// The flight log.
     #[error("{path}: {message}")]
     Log {
@@ -138,11 +143,28 @@ fn mission_excitation(
 /// Run the on-board program of `cfg` for `duration` (until the IMU port
 /// closes when `None`); the log and `timing.json` go to the configured
 /// folder. Returns the runtime's report and the log's path.
-#[allow(clippy::too_many_lines)] // the program's steps in order
 pub fn run(
     cfg: &OnboardConfig,
     duration: Option<Duration>,
     sched_fifo: bool,
+) -> Result<(RunReport, PathBuf), OnboardError> {
+    run_until(cfg, duration, sched_fifo, &AtomicBool::new(false))
+}
+
+/// How often [`run_until`] looks at its stop flag while the runtime flies.
+const STOP_POLL: Duration = Duration::from_millis(20);
+
+/// As [`run`], ended early once `stop` is set (a signal handler's flag,
+/// looked at every 20 ms): the runtime stops after its current step, the
+/// logger writes what it was sent and closes the log, and the report is
+/// returned as at a normal end. Set before the log exists (during the
+/// alignment), the program ends with [`OnboardError::Stopped`].
+#[allow(clippy::too_many_lines)] // the program's steps in order
+pub fn run_until(
+    cfg: &OnboardConfig,
+    duration: Option<Duration>,
+    sched_fifo: bool,
+    stop: &AtomicBool,
 ) -> Result<(RunReport, PathBuf), OnboardError> {
     let params = match &cfg.params {
         Some(p) => Params::from_file(&cfg.resolve(p))?,
@@ -180,6 +202,9 @@ pub fn run(
     let limit = Duration::from_secs(60);
     let mut mag = None;
     let x0 = loop {
+        if stop.load(Ordering::SeqCst) {
+            return Err(OnboardError::Stopped);
+        }
         if start.elapsed() > limit {
             return Err(OnboardError::Alignment(format!(
                 "no IMU sample with a plausible magnetometer sample and 3-D GPS fix within {} s \
@@ -249,18 +274,19 @@ pub fn run(
         path: dir.display().to_string(),
         message: format!("cannot create: {e}"),
     })?;
-    let stamp = std::time::SystemTime::now()
+    // a new file, numbered after the folder's logs: two flights in one
+    // second, or a board without a real-time clock, never share a name, and
+    // an existing log is never overwritten
+    let unix_s = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())
         .unwrap_or(0);
-    let path = dir.join(format!("flight-{stamp}.ulg"));
-    let log =
-        FlightLog::create(&path, &LogInfo::default(), FlushPolicy::default()).map_err(|e| {
-            OnboardError::Log {
-                path: path.display().to_string(),
+    let (log, path) =
+        FlightLog::create_numbered(&dir, unix_s, &LogInfo::default(), FlushPolicy::default())
+            .map_err(|e| OnboardError::Log {
+                path: dir.display().to_string(),
                 message: e.to_string(),
-            }
-        })?;
+            })?;
     // the ground station last: its server thread runs from here on
     let (mission, server) = match (&mission_scenario, &cfg.gcs) {
         (_, Some(g)) => {
@@ -301,6 +327,13 @@ pub fn run(
     );
     for w in &handle.warnings() {
         eprintln!("warning: {w}");
+    }
+    while !handle.is_finished() {
+        if stop.load(Ordering::SeqCst) {
+            handle.stop();
+            break;
+        }
+        std::thread::sleep(STOP_POLL);
     }
     let report = handle.join();
     if let Some(server) = server {

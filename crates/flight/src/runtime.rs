@@ -450,6 +450,12 @@ impl RuntimeHandle {
         self.control.thread().unpark();
     }
 
+    /// Whether the control task has ended (then [`RuntimeHandle::join`]
+    /// returns once the other threads have drained what it sent).
+    pub fn is_finished(&self) -> bool {
+        self.control.is_finished()
+    }
+
     /// Wait for the control task to end (its step limit, the sensor port
     /// closed, or [`RuntimeHandle::stop`]), stop the others, and report.
     pub fn join(self) -> RunReport {

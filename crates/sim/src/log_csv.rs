@@ -537,7 +537,8 @@ fn put_fmt(line: &mut String, v: f64) {
 /// Streaming `log.csv` writer: the header on [`LogWriter::create`], one line
 /// per [`LogWriter::write`], buffered, memory independent of the number of
 /// rows. Call [`LogWriter::finish`] at the end (dropping the writer flushes
-/// but cannot report an error).
+/// but cannot report an error). With [`LogWriter::with_stride`] it writes
+/// every n-th row given (and the last one, at [`LogWriter::finish`]).
 #[derive(Debug)]
 pub struct LogWriter {
     path: PathBuf,
@@ -547,6 +548,91 @@ pub struct LogWriter {
     line: String,
     rows: usize,
     last_t: f64,
+    /// Write every `stride`-th row given.
+    stride: usize,
+    /// Rows given so far.
+    given: usize,
+    /// The last row given, when it was not written (written by `finish`).
+    pending: Option<LogRow>,
+}
+
+/// The size of a `log.csv` before it is written: [`estimate_log_size`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LogSizeEstimate {
+    /// Data rows.
+    pub rows: u64,
+    /// Bytes of one row, its newline included (mean).
+    pub bytes_per_row: f64,
+    /// Bytes of the file, header included.
+    pub bytes: u64,
+}
+
+/// Bytes of `log.csv`'s header line (its newline included).
+pub fn header_bytes() -> u64 {
+    LOG_SCHEMA.iter().map(|c| c.name.len() as u64 + 1).sum()
+}
+
+/// Bytes of one row as [`LogWriter`] writes it (its newline included).
+pub fn row_bytes(r: &LogRow) -> usize {
+    let mut line = String::with_capacity(2048);
+    let mut digits = zmij::Buffer::new();
+    for (j, c) in LOG_SCHEMA.iter().enumerate() {
+        if j > 0 {
+            line.push(',');
+        }
+        put(&mut line, c.value(r), &mut digits);
+    }
+    line.len() + 1
+}
+
+/// The rows a writer of stride `stride` writes of `given` rows: every
+/// `stride`-th from the first, and the last.
+pub fn strided_rows(given: u64, stride: u64) -> u64 {
+    let stride = stride.max(1);
+    match given {
+        0 => 0,
+        m => (m - 1) / stride + 1 + u64::from((m - 1) % stride != 0),
+    }
+}
+
+/// Estimate the size of a `log.csv` of `rows` data rows whose times are
+/// `times_s` (each row's `t_s`, in order; only up to 2000 of them, evenly
+/// spread, are formatted), from `sample` rows of the same flight (e.g. its
+/// first second flown): each row costs the mean width of the sample's
+/// cells, the time column the mean width of the flight's own times (its
+/// digits grow with the duration). `None` without a sample row.
+pub fn estimate_log_size(
+    sample: &[LogRow],
+    rows: u64,
+    time_at: impl Fn(u64) -> f64,
+) -> Option<LogSizeEstimate> {
+    if sample.is_empty() {
+        return None;
+    }
+    let width = |v: f64| {
+        let mut line = String::with_capacity(32);
+        put(&mut line, v, &mut zmij::Buffer::new());
+        line.len() as f64
+    };
+    let sample_rows = sample.iter().map(|r| row_bytes(r) as f64).sum::<f64>();
+    let sample_t = sample.iter().map(|r| width(r.t_s)).sum::<f64>();
+    let n = sample.len() as f64;
+    let picks = rows.min(2000);
+    let t_width = if picks == 0 {
+        0.0
+    } else {
+        (0..picks)
+            .map(|i| time_at(i * (rows - 1) / (picks - 1).max(1)))
+            .map(width)
+            .sum::<f64>()
+            / picks as f64
+    };
+    let bytes_per_row = (sample_rows - sample_t) / n + t_width;
+    Some(LogSizeEstimate {
+        rows,
+        bytes_per_row,
+        bytes: header_bytes() + (bytes_per_row * rows as f64).round() as u64,
+    })
 }
 
 impl LogWriter {
@@ -569,7 +655,24 @@ impl LogWriter {
             line: String::with_capacity(2048),
             rows: 0,
             last_t: f64::NEG_INFINITY,
+            stride: 1,
+            given: 0,
+            pending: None,
         })
+    }
+
+    /// Write only every `stride`-th row given from the first, and the last
+    /// one given (at [`Self::finish`]): the log at a lower rate. A row not
+    /// written is not checked. `stride` 0 counts as 1.
+    #[must_use]
+    pub fn with_stride(mut self, stride: usize) -> Self {
+        self.stride = stride.max(1);
+        self
+    }
+
+    /// The stride ([`Self::with_stride`]).
+    pub fn stride(&self) -> usize {
+        self.stride
     }
 
     /// The file.
@@ -582,9 +685,21 @@ impl LogWriter {
         self.rows
     }
 
-    /// Append one row. A non-finite value or a time that does not increase
-    /// is an error (nothing of the row is written).
+    /// Append one row (with a stride, every n-th; see
+    /// [`Self::with_stride`]). A non-finite value or a time that does not
+    /// increase is an error (nothing of the row is written).
     pub fn write(&mut self, r: &LogRow) -> Result<(), LogCsvError> {
+        let take = self.given % self.stride == 0;
+        self.given += 1;
+        if !take {
+            self.pending = Some(*r);
+            return Ok(());
+        }
+        self.pending = None;
+        self.write_row(r)
+    }
+
+    fn write_row(&mut self, r: &LogRow) -> Result<(), LogCsvError> {
         let line = self.rows + 2;
         // each value computed once: checked, then formatted (the line is
         // written only whole, after the time check)
@@ -623,8 +738,12 @@ impl LogWriter {
         Ok(())
     }
 
-    /// Flush and close; returns the number of data rows.
+    /// Write the last row given if the stride skipped it, flush and close;
+    /// returns the number of data rows.
     pub fn finish(mut self) -> Result<usize, LogCsvError> {
+        if let Some(r) = self.pending.take() {
+            self.write_row(&r)?;
+        }
         self.out.flush().map_err(|e| io_err(&self.label, e))?;
         Ok(self.rows)
     }

@@ -110,6 +110,13 @@ pub struct SitlOptions {
     /// station is the only link) and the navigator gives the references:
     /// the scenario's `[[reference]]` are not flown.
     pub gcs: Option<String>,
+    /// Write every n-th kept row of `log.csv` (and the last): the truth log
+    /// at a lower rate (1: every row; the summary uses every row).
+    pub log_stride: usize,
+    /// Checked once per sample: once set, the run ends after the sample
+    /// being flown, its files written as at a normal end and its summary
+    /// [`Termination::Stopped`] (a signal handler's flag).
+    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 /// The home of the local NED frame (the GPS receiver's WGS-84 position of
@@ -236,16 +243,18 @@ pub fn run(
     } else {
         (sensors, Some(rc_port))
     };
+    // the run folder's own log: a run flown again into its folder replaces it
     let ulog = options.out_dir.join("flight.ulg");
     let info = LogInfo {
         sys_name: format!("helicon sitl {}", scenario.name),
         ..LogInfo::default()
     };
-    let log =
-        FlightLog::create(&ulog, &info, FlushPolicy::default()).map_err(|e| SitlError::Log {
+    let log = FlightLog::create_replacing(&ulog, &info, FlushPolicy::default()).map_err(|e| {
+        SitlError::Log {
             path: ulog.display().to_string(),
             message: e.to_string(),
-        })?;
+        }
+    })?;
     let (downlink_tx, mut downlink) = rtrb::RingBuffer::new(1024);
     let realtime = if lockstep {
         RealtimeConfig {
@@ -327,7 +336,7 @@ pub fn run(
         eprintln!("warning: SCHED_FIFO for the simulated hardware not permitted ({e})");
     }
     let log_csv = options.out_dir.join("log.csv");
-    let mut writer = LogWriter::create(&log_csv)?;
+    let mut writer = LogWriter::create(&log_csv)?.with_stride(options.log_stride);
     let mut servo_in = wires.avionics.try_clone_master().map_err(dev("avionics"))?;
     let mut decoder = AvionicsDecoder::new();
     let mut buf = [0u8; 256];
@@ -486,6 +495,17 @@ pub fn run(
         if step.end.is_some() {
             break;
         }
+        if options
+            .stop
+            .as_ref()
+            .is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
+        {
+            hw.abort(
+                Termination::Stopped,
+                format!("stopped on request at t = {t:.3} s"),
+            );
+            break;
+        }
     }
     let wall_s = wall0.elapsed().as_secs_f64();
     let cpu_s = helicon_flight::realtime::process_cpu_s() - cpu0;
@@ -527,6 +547,61 @@ impl SitlResult {
     pub fn onboard_sample_time_s(&self) -> f64 {
         self.sample_time_s
     }
+}
+
+/// The estimated size (bytes) of the on-board log `flight.ulg` that a SITL
+/// run of `scenario` writes (the log the on-board program writes at its
+/// full rate, never thinned): its header and definitions (exact: written
+/// into memory), then per control period of `sample_time_s` the records of
+/// one step (`sensor_imu`, `imu_health`, `control`, `navigation`,
+/// `servo_output`, `timing`, and `estimator_bias` with the ESKF,
+/// `excitation` with `[[excitation]]`), the magnetometer's and GPS's
+/// records at their rates, the receiver's at 50 Hz (none with a ground
+/// station, `gcs`), and a SYNC marker per flush. Events and texts are not
+/// counted (a few per flight).
+pub fn estimate_ulog_bytes(scenario: &Scenario, sample_time_s: f64, gcs: bool) -> u64 {
+    use helicon_ulog::Record;
+    use helicon_ulog::messages::{
+        Control, EstimatorBias, Excitation, ImuHealth, Navigation, RcInput, SensorGps, SensorImu,
+        SensorMag, ServoOutput, Timing,
+    };
+    // a data message: 3 bytes of header, 2 of message id, the record
+    let msg = |size: usize| (size + 5) as f64;
+    let mut step = msg(SensorImu::SIZE)
+        + msg(ImuHealth::SIZE)
+        + msg(Control::SIZE)
+        + msg(Navigation::SIZE)
+        + msg(ServoOutput::SIZE)
+        + msg(Timing::SIZE);
+    if scenario.estimator.kind == helicon_setup::estimator::EstimatorKind::Eskf {
+        step += msg(EstimatorBias::SIZE);
+    }
+    if !scenario.excitation.is_empty() {
+        step += msg(Excitation::SIZE);
+    }
+    let ts = sample_time_s.max(1e-6);
+    let mut per_s = step / ts
+        + msg(SensorMag::SIZE) * scenario.sensors.mag.rate_hz
+        + msg(SensorGps::SIZE) * scenario.sensors.gps.rate_hz;
+    if !gcs {
+        per_s += msg(RcInput::SIZE) / (8.0 * ts);
+    }
+    // a SYNC (11 bytes) per flush: every 0.1 s of log time, or 16 KiB
+    let policy = FlushPolicy::default();
+    let flushes_per_s =
+        (1e6 / policy.interval_us.max(1) as f64).max(per_s / policy.max_bytes as f64);
+    per_s += 11.0 * flushes_per_s;
+    let head = FlightLog::new(
+        Vec::new(),
+        &LogInfo {
+            sys_name: format!("helicon sitl {}", scenario.name),
+            ..LogInfo::default()
+        },
+        policy,
+    )
+    .and_then(FlightLog::finish)
+    .map_or(4096, |b| b.len() as u64);
+    head + (per_s * scenario.duration_s.max(0.0)).round() as u64
 }
 
 /// `timing.json` of a SITL run.

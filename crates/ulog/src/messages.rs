@@ -542,10 +542,35 @@ pub struct FlightLog<W: Write> {
 }
 
 impl FlightLog<File> {
-    /// Create the log file, write `info` and the definitions.
+    /// Create the log file (a new one: an existing file is an error, see
+    /// [`UlogWriter::create`]), write `info` and the definitions.
     pub fn create(path: &Path, info: &LogInfo, policy: FlushPolicy) -> Result<Self, WriteError> {
         let w = UlogWriter::create(path, info.start_us, policy)?;
         Self::with_info(w, info)
+    }
+
+    /// As [`Self::create`], replacing a file already at `path`
+    /// ([`UlogWriter::create_replacing`]: a simulation run's own folder).
+    pub fn create_replacing(
+        path: &Path,
+        info: &LogInfo,
+        policy: FlushPolicy,
+    ) -> Result<Self, WriteError> {
+        let w = UlogWriter::create_replacing(path, info.start_us, policy)?;
+        Self::with_info(w, info)
+    }
+
+    /// The next numbered flight log of the folder `dir`,
+    /// `flight-<NNNN>-<UTC>.ulg` ([`UlogWriter::create_numbered`]); returns
+    /// the log and its path.
+    pub fn create_numbered(
+        dir: &Path,
+        unix_s: u64,
+        info: &LogInfo,
+        policy: FlushPolicy,
+    ) -> Result<(Self, std::path::PathBuf), WriteError> {
+        let (w, path) = UlogWriter::create_numbered(dir, "flight", unix_s, info.start_us, policy)?;
+        Ok((Self::with_info(w, info)?, path))
     }
 }
 

@@ -102,16 +102,138 @@ pub struct UlogWriter<W: Write> {
     stats: WriterStats,
 }
 
+/// The `action` of the [`WriteError::Io`] of a create refused because a
+/// file is already at the path.
+pub const EXISTS_ACTION: &str = "create it: a file is already there (a log is never overwritten)";
+
+/// At most this many sequence numbers are tried by
+/// [`UlogWriter::create_numbered`] after the one its scan found free (each
+/// taken meanwhile by another process).
+pub const MAX_NUMBER_TRIES: u32 = 1000;
+
+/// The sequence number of a numbered log's file name
+/// `<stem>-<NNNN>-<anything>.ulg` (see [`UlogWriter::create_numbered`]).
+pub fn log_number(file_name: &str, stem: &str) -> Option<u32> {
+    let rest = file_name.strip_prefix(stem)?.strip_prefix('-')?;
+    let rest = rest.strip_suffix(".ulg")?;
+    let (digits, _) = rest.split_once('-')?;
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    digits.parse().ok()
+}
+
+/// The UTC stamp of a log's file name, `YYYYMMDDTHHMMSSZ`, from seconds
+/// since 1970 (a board without a real-time clock gives 1970: the sequence
+/// number keeps its names apart).
+pub fn utc_stamp(unix_s: u64) -> String {
+    use chrono::{Datelike, Timelike};
+    let t = i64::try_from(unix_s)
+        .ok()
+        .and_then(|s| chrono::DateTime::from_timestamp(s, 0))
+        .unwrap_or_default();
+    format!(
+        "{:04}{:02}{:02}T{:02}{:02}{:02}Z",
+        t.year(),
+        t.month(),
+        t.day(),
+        t.hour(),
+        t.minute(),
+        t.second()
+    )
+}
+
 impl UlogWriter<File> {
-    /// Create (truncate) the file at `path` and write the header and flag
-    /// bits; `start_us` is the header timestamp (µs on the log's clock).
+    /// Create a new file at `path` (never an existing one: a file already
+    /// there is an error, [`EXISTS_ACTION`], and is left as it was) and write
+    /// the header and flag bits; `start_us` is the header timestamp (µs on
+    /// the log's clock).
     pub fn create(path: &Path, start_us: u64, policy: FlushPolicy) -> Result<Self, WriteError> {
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)
+            .map_err(|source| WriteError::Io {
+                file: path.display().to_string(),
+                action: if source.kind() == std::io::ErrorKind::AlreadyExists {
+                    EXISTS_ACTION
+                } else {
+                    "create"
+                },
+                source,
+            })?;
+        Self::with_name(file, path.display().to_string(), start_us, policy)
+    }
+
+    /// As [`Self::create`], replacing (truncating) a file already at
+    /// `path`: for outputs whose folder is a run's own (a simulation run
+    /// flown again into its folder), never for a flight log.
+    pub fn create_replacing(
+        path: &Path,
+        start_us: u64,
+        policy: FlushPolicy,
+    ) -> Result<Self, WriteError> {
         let file = File::create(path).map_err(|source| WriteError::Io {
             file: path.display().to_string(),
             action: "create",
             source,
         })?;
         Self::with_name(file, path.display().to_string(), start_us, policy)
+    }
+
+    /// Create the next numbered log in the folder `dir`:
+    /// `<stem>-<NNNN>-<YYYYMMDDTHHMMSSZ>.ulg`, `NNNN` one more than the
+    /// largest number of the folder's `<stem>-<NNNN>-….ulg` files (1 in an
+    /// empty folder), the stamp [`utc_stamp`]`(unix_s)`. The file is created
+    /// exclusively ([`Self::create`]); a name taken meanwhile (another
+    /// process) moves on to the next number, at most [`MAX_NUMBER_TRIES`]
+    /// times. Names stay distinct whatever the clock says: two logs in one
+    /// second, a board without a real-time clock restarting at 1970. Returns
+    /// the writer and the file's path.
+    pub fn create_numbered(
+        dir: &Path,
+        stem: &str,
+        unix_s: u64,
+        start_us: u64,
+        policy: FlushPolicy,
+    ) -> Result<(Self, std::path::PathBuf), WriteError> {
+        let dir_err = |source, action| WriteError::Io {
+            file: dir.display().to_string(),
+            action,
+            source,
+        };
+        check_name(stem).map_err(|rule| WriteError::Invalid {
+            file: dir.display().to_string(),
+            what: format!("log name stem `{stem}`"),
+            rule,
+        })?;
+        let mut largest = 0u32;
+        for entry in std::fs::read_dir(dir).map_err(|e| dir_err(e, "list the folder"))? {
+            let entry = entry.map_err(|e| dir_err(e, "list the folder"))?;
+            if let Some(n) = entry.file_name().to_str().and_then(|n| log_number(n, stem)) {
+                largest = largest.max(n);
+            }
+        }
+        let stamp = utc_stamp(unix_s);
+        let mut last = None;
+        for i in 1..=MAX_NUMBER_TRIES {
+            let Some(n) = largest.checked_add(i) else {
+                break;
+            };
+            let path = dir.join(format!("{stem}-{n:04}-{stamp}.ulg"));
+            match Self::create(&path, start_us, policy) {
+                Ok(w) => return Ok((w, path)),
+                Err(WriteError::Io { action, source, .. }) if action == EXISTS_ACTION => {
+                    last = Some(source);
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        Err(WriteError::Io {
+            file: dir.display().to_string(),
+            action: "find a free log number (every one tried was taken)",
+            source: last.unwrap_or_else(|| std::io::Error::other("log numbers exhausted")),
+        })
     }
 
     /// Flush, then ask the OS to put the file's data on the storage

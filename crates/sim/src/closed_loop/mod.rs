@@ -418,7 +418,7 @@ pub fn fly(
     prepared: &Prepared,
     progress: Option<Progress<'_>>,
 ) -> Result<Flight, ClosedLoopError> {
-    fly_with(scenario, prepared, None, progress)
+    fly_with(scenario, prepared, None, progress, None)
 }
 
 /// As [`fly`], writing each kept log row to `log` as it is flown (memory
@@ -429,7 +429,59 @@ pub fn fly_to(
     log: &mut LogWriter,
     progress: Option<Progress<'_>>,
 ) -> Result<Flight, ClosedLoopError> {
-    fly_with(scenario, prepared, Some(log), progress)
+    fly_with(scenario, prepared, Some(log), progress, None)
+}
+
+/// As [`fly_to`], checking `stop` once per controller sample: once it is
+/// set the flight ends after the sample being flown (its row logged), as
+/// [`Termination::Stopped`] (the summary covers what was flown). For a
+/// signal handler's flag (`helicon sim` on SIGINT/SIGTERM).
+pub fn fly_to_until(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    log: &mut LogWriter,
+    progress: Option<Progress<'_>>,
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<Flight, ClosedLoopError> {
+    fly_with(scenario, prepared, Some(log), progress, Some(stop))
+}
+
+/// Seconds flown (in memory) by [`estimate_log_csv`] to measure a row.
+pub const PILOT_S: f64 = 2.0;
+
+/// The `log.csv` that [`fly_to`] writes for `scenario` through a writer of
+/// stride `stride` ([`LogWriter::with_stride`]): its rows (the flight
+/// flown to its end) and estimated size, the bytes of a row measured on the
+/// first [`PILOT_S`] seconds flown in memory (see
+/// [`crate::log_csv::estimate_log_size`]). Cheap next to the flight: for a
+/// limit on the log's size before flying.
+pub fn estimate_log_csv(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    stride: u64,
+) -> Result<crate::log_csv::LogSizeEstimate, ClosedLoopError> {
+    let ts = prepared.gains.set.sample_time_s;
+    let n = (scenario.duration_s / ts).round() as u64;
+    let d = u64::from(scenario.log.decimation.max(1));
+    let kept = n / d + 1 + u64::from(n % d != 0);
+    let stride = stride.max(1);
+    let rows = crate::log_csv::strided_rows(kept, stride);
+    let mut pilot = scenario.clone();
+    pilot.duration_s = scenario.duration_s.min(PILOT_S);
+    let flight = fly(&pilot, prepared, None)?;
+    let time_at = |j: u64| (j.saturating_mul(stride).saturating_mul(d)).min(n) as f64 * ts;
+    Ok(
+        crate::log_csv::estimate_log_size(&flight.log, rows, time_at).unwrap_or(
+            crate::log_csv::LogSizeEstimate {
+                rows,
+                // no row flown: every cell at its widest (sign, 17 digits,
+                // point, exponent) and a comma
+                bytes_per_row: 25.0 * crate::log_csv::LOG_SCHEMA.len() as f64,
+                bytes: crate::log_csv::header_bytes()
+                    + rows * 25 * crate::log_csv::LOG_SCHEMA.len() as u64,
+            },
+        ),
+    )
 }
 
 /// The number of controller samples a flight of this scenario takes, and the
@@ -478,6 +530,7 @@ fn fly_with(
     prepared: &Prepared,
     mut stream: Option<&mut LogWriter>,
     progress: Option<Progress<'_>>,
+    stop: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<Flight, ClosedLoopError> {
     let mut progress = progress;
     let ts = prepared.gains.set.sample_time_s;
@@ -553,6 +606,13 @@ fn fly_with(
         }
         if let Some(stop) = check_limits(scenario, &plant.x, t + ts, schedule.at(t + ts)[3]) {
             reason = Some(stop);
+            break;
+        }
+        if stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed)) && k < n {
+            reason = Some((
+                Termination::Stopped,
+                format!("stopped on request at t = {t:.3} s"),
+            ));
             break;
         }
         if let Some(cb) = progress.as_mut()

@@ -13,6 +13,9 @@ pub enum Outcome {
     Completed,
     /// Stopped early (see the termination and the reason).
     Diverged,
+    /// Stopped before the end on request (a signal to `helicon sim` or
+    /// `helicon sitl`): what was flown is kept, whole.
+    Stopped,
 }
 
 impl Outcome {
@@ -21,6 +24,7 @@ impl Outcome {
         match self {
             Outcome::Completed => "completed",
             Outcome::Diverged => "diverged",
+            Outcome::Stopped => "stopped",
         }
     }
 }
@@ -46,11 +50,13 @@ pub enum Termination {
     ModelFailure,
     /// The on-board navigation or estimator failed.
     NavigationFailure,
+    /// Stopped on request before the end (a signal): not a divergence.
+    Stopped,
 }
 
 impl Termination {
     /// Every kind, in declaration order.
-    pub const ALL: [Termination; 7] = [
+    pub const ALL: [Termination; 8] = [
         Termination::Completed,
         Termination::NonFiniteState,
         Termination::AttitudeLimit,
@@ -58,12 +64,14 @@ impl Termination {
         Termination::HeadingLost,
         Termination::ModelFailure,
         Termination::NavigationFailure,
+        Termination::Stopped,
     ];
 
     /// The flight's outcome for this termination.
     pub fn outcome(self) -> Outcome {
         match self {
             Termination::Completed => Outcome::Completed,
+            Termination::Stopped => Outcome::Stopped,
             _ => Outcome::Diverged,
         }
     }
@@ -78,6 +86,7 @@ impl Termination {
             Termination::HeadingLost => "heading_lost",
             Termination::ModelFailure => "model_failure",
             Termination::NavigationFailure => "navigation_failure",
+            Termination::Stopped => "stopped",
         }
     }
 }
@@ -106,7 +115,7 @@ impl std::str::FromStr for Termination {
 pub struct Summary {
     /// Scenario name.
     pub scenario: String,
-    /// "completed" or "diverged".
+    /// "completed", "diverged" or "stopped".
     pub outcome: Outcome,
     /// Why it ended, machine-readable (`completed`, `attitude_limit`, …).
     pub termination: Termination,

@@ -87,7 +87,9 @@ impl From<Outcome> for RunOutcome {
     fn from(o: Outcome) -> Self {
         match o {
             Outcome::Completed => RunOutcome::Completed,
-            Outcome::Diverged => RunOutcome::Diverged,
+            // a campaign's flights are not stopped one by one (an
+            // interrupted campaign resumes); were one, it ended early
+            Outcome::Diverged | Outcome::Stopped => RunOutcome::Diverged,
         }
     }
 }

@@ -34,6 +34,8 @@ pub fn options(tag: &str) -> SitlOptions {
         realtime: RealtimeConfig::default(),
         keep_frames: true,
         gcs: None,
+        log_stride: 1,
+        stop: None,
     }
 }
 
