@@ -594,8 +594,11 @@ fn parse_format(b: &[u8]) -> Result<Format, String> {
     })
 }
 
+/// A key: its type, array length and name, and the value's bytes after it.
+type SplitKey<'a> = (String, Option<usize>, String, &'a [u8]);
+
 /// A key-value payload → (type, array length, name, value bytes).
-fn split_key(b: &[u8]) -> Result<(String, Option<usize>, String, &[u8]), String> {
+fn split_key(b: &[u8]) -> Result<SplitKey<'_>, String> {
     let (&key_len, rest) = b.split_first().ok_or_else(|| "no key length".to_string())?;
     let key_len = usize::from(key_len);
     let key = rest

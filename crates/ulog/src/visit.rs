@@ -58,7 +58,7 @@ impl Limits {
         formats: 4096,
         format_fields: 4096,
         columns: MAX_COLUMNS,
-        flattened_columns: 1 << 21,
+        flattened_columns: 1 << 20,
         info_multiple_bytes: 16 << 20,
     };
 }
