@@ -11,6 +11,10 @@
 //!   [`open_bounded`] gives a streaming reader ([`Bounded`]) that fails with
 //!   the same error at the first byte beyond its limit (a file still being
 //!   written stays bounded too).
+//! - A line-oriented file (a CSV log, readings, rows of numbers) is read
+//!   through [`open_lines_bounded`]: bounded as a whole, and each line
+//!   (the header row included) bounded too ([`FileRefusal::LineTooLong`]),
+//!   so that no reader buffers one endless record.
 //!
 //! Each refusal is a [`ConfigError::Io`] naming the file, its cause an
 //! [`std::io::Error`] carrying a [`FileRefusal`] (found with
@@ -24,6 +28,14 @@ use std::path::Path;
 /// The largest configuration or text file read whole (16 MiB): the
 /// toolkit's TOML and JSON files are a few kilobytes.
 pub const MAX_TEXT_BYTES: u64 = 16 << 20;
+
+/// The largest data file (a CSV log) read (4 GiB: a 400 Hz log of 40
+/// columns is about 0.25 GB an hour).
+pub const MAX_DATA_BYTES: u64 = 4 << 30;
+
+/// The longest line of a line-oriented file (1 MiB: a CSV header of a
+/// thousand columns is some 20 kB).
+pub const MAX_LINE_BYTES: u64 = 1 << 20;
 
 /// Why a file was not read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -40,6 +52,14 @@ pub enum FileRefusal {
         /// The limit (bytes).
         max_bytes: u64,
     },
+    /// A line longer than the reader's limit.
+    #[error("line {line} is longer than {max_bytes} bytes, the most this reader accepts")]
+    LineTooLong {
+        /// The line (1-based).
+        line: u64,
+        /// The limit (bytes, without the line end).
+        max_bytes: u64,
+    },
 }
 
 impl FileRefusal {
@@ -53,7 +73,9 @@ impl FileRefusal {
     pub fn into_io(self) -> std::io::Error {
         let kind = match self {
             FileRefusal::NotRegular { .. } => ErrorKind::InvalidInput,
-            FileRefusal::TooLarge { .. } => ErrorKind::FileTooLarge,
+            FileRefusal::TooLarge { .. } | FileRefusal::LineTooLong { .. } => {
+                ErrorKind::FileTooLarge
+            }
         };
         std::io::Error::new(kind, self)
     }
@@ -156,6 +178,67 @@ impl<R: Read> Read for Bounded<R> {
     }
 }
 
+/// A reader that fails ([`FileRefusal::LineTooLong`]) at the first line
+/// longer than `max_line_bytes` bytes (`\n` ends a line).
+#[derive(Debug)]
+pub struct LineBounded<R> {
+    inner: R,
+    max_line_bytes: u64,
+    /// Bytes since the last line end.
+    run: u64,
+    /// Lines ended so far.
+    lines: u64,
+}
+
+impl<R: Read> LineBounded<R> {
+    /// `inner`, whose lines may be at most `max_line_bytes` long.
+    pub fn new(inner: R, max_line_bytes: u64) -> Self {
+        LineBounded {
+            inner,
+            max_line_bytes,
+            run: 0,
+            lines: 0,
+        }
+    }
+}
+
+impl<R: Read> Read for LineBounded<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        for &b in &buf[..n] {
+            if b == b'\n' {
+                self.lines += 1;
+                self.run = 0;
+            } else {
+                self.run += 1;
+                // a `\r` before the `\n` is part of the line end
+                if self.run > self.max_line_bytes.saturating_add(u64::from(b == b'\r')) {
+                    return Err(FileRefusal::LineTooLong {
+                        line: self.lines + 1,
+                        max_bytes: self.max_line_bytes,
+                    }
+                    .into_io());
+                }
+            }
+        }
+        Ok(n)
+    }
+}
+
+/// Open the regular file `path` for a line-oriented reader (CSV): at most
+/// `max_bytes` bytes in all ([`MAX_DATA_BYTES`] for a log), each line at
+/// most `max_line_bytes` ([`MAX_LINE_BYTES`]).
+pub fn open_lines_bounded(
+    path: &Path,
+    max_bytes: u64,
+    max_line_bytes: u64,
+) -> Result<LineBounded<Bounded<File>>, ConfigError> {
+    Ok(LineBounded::new(
+        open_bounded(path, max_bytes)?,
+        max_line_bytes,
+    ))
+}
+
 /// Open the regular file `path` for a streaming reader that reads at most
 /// `max_bytes` bytes of it (`u64::MAX`: any regular file, as a flight log).
 pub fn open_bounded(path: &Path, max_bytes: u64) -> Result<Bounded<File>, ConfigError> {
@@ -214,6 +297,44 @@ mod tests {
         let mut b = open_bounded(&p, 2).unwrap();
         let e = b.read_to_string(&mut String::new()).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::FileTooLarge);
+        std::fs::remove_dir_all(d).unwrap();
+    }
+
+    #[test]
+    fn a_line_beyond_its_limit_is_refused_naming_it() {
+        let d = scratch("lines");
+        let p = d.join("a.csv");
+        std::fs::write(&p, "t_s,x\r\n0,123\n1,2\n").unwrap();
+        let mut s = String::new();
+        open_lines_bounded(&p, 100, 5)
+            .unwrap()
+            .read_to_string(&mut s)
+            .unwrap();
+        assert_eq!(s, "t_s,x\r\n0,123\n1,2\n");
+        let e = open_lines_bounded(&p, 100, 4)
+            .unwrap()
+            .read_to_string(&mut String::new())
+            .unwrap_err();
+        assert_eq!(
+            FileRefusal::of(&e),
+            Some(FileRefusal::LineTooLong {
+                line: 1,
+                max_bytes: 4
+            })
+        );
+        std::fs::write(&p, "ab\ncd\nefgh").unwrap();
+        let e = open_lines_bounded(&p, 100, 3)
+            .unwrap()
+            .read_to_string(&mut String::new())
+            .unwrap_err();
+        assert_eq!(
+            FileRefusal::of(&e),
+            Some(FileRefusal::LineTooLong {
+                line: 3,
+                max_bytes: 3
+            })
+        );
+        assert!(e.to_string().contains("line 3 is longer than 3 bytes"), "{e}");
         std::fs::remove_dir_all(d).unwrap();
     }
 

@@ -10,14 +10,15 @@
 //!
 //! It also holds what every reader of user files shares: [`files`] (only
 //! regular files, and bounded reads: [`read_text_bounded`],
-//! [`open_bounded`]) and [`text`] (text from files escaped for a terminal,
+//! [`open_bounded`], [`open_lines_bounded`]) and [`text`] (text from files escaped for a terminal,
 //! [`escape_control`], and made safe as a CSV cell, [`csv_cell`]).
 
 pub mod files;
 pub mod text;
 
 pub use files::{
-    Bounded, FileRefusal, MAX_TEXT_BYTES, open_bounded, open_regular, read_text_bounded,
+    Bounded, FileRefusal, LineBounded, MAX_DATA_BYTES, MAX_LINE_BYTES, MAX_TEXT_BYTES,
+    open_bounded, open_lines_bounded, open_regular, read_text_bounded,
 };
 pub use text::{csv_cell, escape_control};
 
