@@ -334,7 +334,10 @@ mod tests {
                 max_bytes: 3
             })
         );
-        assert!(e.to_string().contains("line 3 is longer than 3 bytes"), "{e}");
+        assert!(
+            e.to_string().contains("line 3 is longer than 3 bytes"),
+            "{e}"
+        );
         std::fs::remove_dir_all(d).unwrap();
     }
 

@@ -69,6 +69,16 @@ impl ConfigError {
         Ok((path.display().to_string(), text))
     }
 
+    /// The I/O error of a file that could not be read (the cause of
+    /// [`ConfigError::Io`], a [`FileRefusal`] among them), for a reader with
+    /// its own error type; any other error as an `io::Error` of its text.
+    pub fn into_io(self) -> std::io::Error {
+        match self {
+            ConfigError::Io { source, .. } => source,
+            other => std::io::Error::other(other.to_string()),
+        }
+    }
+
     /// An out-of-range number (`value` printed in its shortest round-trip
     /// form, so 1e-300 stays 1e-300).
     pub fn invalid(

@@ -725,7 +725,8 @@ impl LogReader<BufReader<File>> {
     /// that order; each must be in the header, `t_s` always must).
     pub fn open(path: &Path, select: &[&str]) -> Result<Self, LogCsvError> {
         let label = path.display().to_string();
-        let file = File::open(path).map_err(|e| io_err(&label, e))?;
+        // regular files only: a FIFO or a device would never end
+        let file = helicon_config::open_regular(path).map_err(|e| io_err(&label, e.into_io()))?;
         Self::from_reader(BufReader::with_capacity(1 << 16, file), &label, select)
     }
 }
