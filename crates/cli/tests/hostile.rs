@@ -1622,7 +1622,7 @@ fn readers_a_small_file_could_stall_are_bounded() {
         .map(|i| {
             (
                 b'M',
-                key_value(&[u8::from(i > 0)], "uint8_t[65000] blob", &[i; 65_000]),
+                key_value(&[u8::from(i > 0)], "uint8_t[65000] blob", &vec![i; 65_000]),
             )
         })
         .collect();
