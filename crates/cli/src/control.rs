@@ -214,7 +214,7 @@ pub fn read_matrix(path: &Path) -> Result<Loaded> {
         && let Some((file, key)) = shown.rsplit_once('#')
         && file.to_ascii_lowercase().ends_with(".json")
     {
-        let text = std::fs::read_to_string(file)
+        let text = crate::files::read_text(Path::new(file))
             .with_context(|| format!("cannot read matrix file {file}"))?;
         let m = parse_json_matrix(&text, &shown, Some(key))?;
         return Ok(Loaded {
@@ -223,7 +223,7 @@ pub fn read_matrix(path: &Path) -> Result<Loaded> {
             origin: Origin::Json,
         });
     }
-    let text = std::fs::read_to_string(path)
+    let text = crate::files::read_text(path)
         .with_context(|| format!("cannot read matrix file {shown}"))?;
     if shown.to_ascii_lowercase().ends_with(".json") {
         let m = parse_json_matrix(&text, &shown, None)?;

@@ -9,6 +9,7 @@ use helicon_ident::fit::{CostOptions, TfFit, TfStructure, fit_tf};
 use helicon_ident::frf::{
     Frf, WindowSpec, composite, conditioned, cross_spectra_grid, log_grid, unwrap_deg,
 };
+use helicon_model::config_error::escape_control as esc;
 use helicon_model::config_error::format_seconds;
 use helicon_sim::plot::{Figure, HLine, Panel, Series};
 use std::io::Write;
@@ -61,7 +62,7 @@ pub struct InputArgs {
 /// `helicon ident input`.
 pub fn run_input(a: &InputArgs) -> Result<()> {
     let file = a.input.display().to_string();
-    let text = std::fs::read_to_string(&a.input).with_context(|| format!("{file}: cannot read"))?;
+    let text = crate::files::read_text(&a.input)?;
     let mut input: helicon_ident::inputs::Input =
         toml::from_str(&text).map_err(|e| anyhow!("{file}: {}", e.to_string().trim_end()))?;
     input.prepare().with_context(|| file.clone())?;
@@ -331,8 +332,7 @@ fn read_csv(path: &Path, names: &[&str], optional: &[&str]) -> Result<(Table, Ve
     let mut rdr = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
-        .from_path(path)
-        .with_context(|| format!("{file}: cannot read"))?;
+        .from_reader(crate::files::open_lines(path)?);
     let header = rdr
         .headers()
         .with_context(|| format!("{file}: no header row"))?
@@ -356,8 +356,9 @@ fn read_csv(path: &Path, names: &[&str], optional: &[&str]) -> Result<(Table, Ve
         match found.as_slice() {
             [i] => idx.push(*i),
             [] => bail!(
-                "{file}: no column `{n}` (columns: {})",
-                header.iter().collect::<Vec<_>>().join(", ")
+                "{file}: no column `{}` (columns: {})",
+                esc(n),
+                esc(&header.iter().collect::<Vec<_>>().join(", "))
             ),
             _ => bail!("{file}: column `{n}` appears {} times", found.len()),
         }
@@ -370,14 +371,15 @@ fn read_csv(path: &Path, names: &[&str], optional: &[&str]) -> Result<(Table, Ve
             let text = rec.get(i).unwrap_or("");
             let v: f64 = text.parse().map_err(|_| {
                 anyhow!(
-                    "{file}: line {line}, column `{}`: `{text}` is not a number",
-                    names[c]
+                    "{file}: line {line}, column `{}`: `{}` is not a number",
+                    esc(names[c]),
+                    esc(text)
                 )
             })?;
             if !v.is_finite() {
                 bail!(
                     "{file}: line {line}, column `{}`: {text} is not finite",
-                    names[c]
+                    esc(names[c])
                 );
             }
             columns[c].push(v);
@@ -758,8 +760,7 @@ pub(crate) fn read_frf(path: &Path, output: &str) -> Result<Frf> {
     let mut rdr = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
-        .from_path(path)
-        .with_context(|| format!("{file}: cannot read"))?;
+        .from_reader(crate::files::open_lines(path)?);
     let header: Vec<String> = rdr
         .headers()
         .with_context(|| format!("{file}: no header row"))?
@@ -777,7 +778,7 @@ pub(crate) fn read_frf(path: &Path, output: &str) -> Result<Frf> {
     if header != want {
         bail!(
             "{file}: header `{}` is not a frf.csv header `{}`",
-            header.join(","),
+            esc(&header.join(",")),
             want.join(",")
         );
     }
@@ -802,8 +803,9 @@ pub(crate) fn read_frf(path: &Path, output: &str) -> Result<Frf> {
                 .filter(|x| x.is_finite())
                 .ok_or_else(|| {
                     anyhow!(
-                        "{file}: line {line}, column `{}`: `{text}` is not a finite number",
-                        want[c + 1]
+                        "{file}: line {line}, column `{}`: `{}` is not a finite number",
+                        want[c + 1],
+                        esc(text)
                     )
                 })?;
         }
@@ -831,7 +833,7 @@ pub(crate) fn read_frf(path: &Path, output: &str) -> Result<Frf> {
     if f.is_empty() {
         bail!(
             "{file}: no rows for output `{output}` (outputs: {})",
-            seen.join(", ")
+            esc(&seen.join(", "))
         );
     }
     Ok(f)

@@ -51,7 +51,7 @@ pub fn run(a: &GroundArgs) -> Result<()> {
         None => Params::bergen_twin(),
     };
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).with_context(|| format!("{file}: cannot read"))?;
+    let text = crate::files::read_text(path)?;
     let readings = Readings::parse_csv(&text, &file, kind)?;
     let r = calculate(&readings, &params)?;
     std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create", out.display()))?;

@@ -3,6 +3,8 @@
 
 use anyhow::Result;
 use clap::{Args, Subcommand};
+// keys, values and topic names come from the file: printed escaped
+use helicon_model::config_error::escape_control as esc;
 use helicon_ulog::export::{export_csv, summarize};
 use helicon_ulog::visit::End;
 use std::path::PathBuf;
@@ -66,7 +68,8 @@ fn run_export(a: &ExportArgs) -> Result<()> {
     for ((topic, multi_id), t) in &report.topics {
         writeln!(
             con,
-            "{topic} {multi_id}: {} rows -> {}",
+            "{} {multi_id}: {} rows -> {}",
+            esc(topic),
             t.stats.rows,
             t.file.display()
         );
@@ -90,7 +93,7 @@ fn run_info(a: &InfoArgs) -> Result<()> {
     let mut con = crate::console::Console::stdout();
     writeln!(con, "start: {} us", s.pass.start_us);
     for (k, v) in &s.info {
-        writeln!(con, "info {k}: {v}");
+        writeln!(con, "info {}: {}", esc(k), esc(v));
     }
     writeln!(con, "parameters: {}", s.parameters);
     writeln!(con, "text messages: {}", s.log_messages);
@@ -103,7 +106,12 @@ fn run_info(a: &InfoArgs) -> Result<()> {
                 (f.to_string(), l.to_string())
             });
         let rate = t.rate_hz().map_or(String::new(), |r| format!("{r:.3}"));
-        writeln!(con, "{topic} {multi_id} {} {first} {last} {rate}", t.rows);
+        writeln!(
+            con,
+            "{} {multi_id} {} {first} {last} {rate}",
+            esc(topic),
+            t.rows
+        );
     }
     if s.pass.non_monotonic > 0 {
         crate::console::note!(

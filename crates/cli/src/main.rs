@@ -6,6 +6,7 @@ mod console;
 mod control;
 mod demo;
 mod design_cmd;
+mod files;
 mod gcs_cmd;
 mod ident_cmd;
 mod ident_fit;

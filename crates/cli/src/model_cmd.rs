@@ -188,9 +188,7 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         .as_ref()
         .map_or("<stdin>".to_string(), |p| p.display().to_string());
     let reader: Box<dyn BufRead> = match &args.input {
-        Some(p) => Box::new(std::io::BufReader::new(
-            std::fs::File::open(p).with_context(|| format!("cannot open {}", p.display()))?,
-        )),
+        Some(p) => Box::new(std::io::BufReader::new(crate::files::open_lines(p)?)),
         None => Box::new(std::io::stdin().lock()),
     };
     let mut out = BufWriter::new(std::io::stdout().lock());

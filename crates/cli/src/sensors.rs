@@ -59,8 +59,7 @@ pub fn run_attitude(args: &AttitudeArgs) -> Result<()> {
     let mut rdr = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
-        .from_path(&args.input)
-        .with_context(|| format!("cannot read {file}"))?;
+        .from_reader(crate::files::open_lines(&args.input)?);
     let headers = rdr
         .headers()
         .with_context(|| format!("{file}: no header"))?

@@ -1385,3 +1385,332 @@ fn todays_features_refuse_hostile_inputs() {
     assert!(bad.is_empty(), "{bad:?}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Readers that a small file could stall: every command that takes a file
+/// refuses a character device that never ends (`/dev/zero`) and a FIFO
+/// nobody writes (an open of it blocks) before reading; the ULog bombs are
+/// refused naming the limit; an endless CSV header is refused naming the
+/// line. Each case as in the corpus (killed after [`LIMIT`]); the slowest
+/// is printed.
+const UNBOUNDED: &[Case] = &[
+    fail(
+        "ident",
+        "frf /dev/zero",
+        "ident frf /dev/zero --input S_col --output p --out o/z1",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "ident",
+        "frf fifo",
+        "ident frf fifo --input S_col --output p --out o/z1",
+        &["fifo", "not a regular file (a FIFO)"],
+    ),
+    fail(
+        "ident",
+        "tf /dev/zero",
+        "ident tf /dev/zero --output p --num 1 --den 2 --out o/z2",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "ident",
+        "tf fifo",
+        "ident tf fifo --output p --num 1 --den 2 --out o/z2",
+        &["fifo", "not a regular file"],
+    ),
+    fail(
+        "ident",
+        "servo /dev/zero",
+        "ident servo /dev/zero --command S_col --position p --out o/z3",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "ident",
+        "servo fifo",
+        "ident servo fifo --command S_col --position p --out o/z3",
+        &["fifo", "not a regular file"],
+    ),
+    fail(
+        "ident",
+        "input /dev/zero",
+        "ident input /dev/zero --out o/z4.csv",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "ident",
+        "ground /dev/zero",
+        "ident ground rotor-drag /dev/zero --out o/z5",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "ident",
+        "fit /dev/zero",
+        "ident fit /dev/zero --out o/z6",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "ident",
+        "ss /dev/zero",
+        "ident ss /dev/zero --out o/z7",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "onboard",
+        "config /dev/zero",
+        "onboard --config /dev/zero",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "onboard",
+        "config fifo",
+        "onboard --config fifo",
+        &["fifo", "not a regular file (a FIFO)"],
+    ),
+    fail(
+        "log",
+        "info /dev/zero",
+        "log info /dev/zero",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "log",
+        "info fifo",
+        "log info fifo",
+        &["fifo", "not a regular file"],
+    ),
+    fail(
+        "log",
+        "export /dev/zero",
+        "log export /dev/zero --csv o/z8",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "sim",
+        "scenario /dev/zero",
+        "sim /dev/zero --out o/z9",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "sim",
+        "scenario fifo",
+        "sim fifo --out o/z9",
+        &["fifo", "not a regular file"],
+    ),
+    fail(
+        "sim",
+        "params /dev/zero",
+        "trim --params /dev/zero",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "sitl",
+        "scenario /dev/zero",
+        "sitl /dev/zero --out o/z10",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "mc",
+        "campaign /dev/zero",
+        "mc /dev/zero --out o/z11",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "eval",
+        "input /dev/zero",
+        "eval --input /dev/zero",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "attitude",
+        "input /dev/zero",
+        "attitude --input /dev/zero",
+        &["/dev/zero", "not a regular file"],
+    ),
+    fail(
+        "control",
+        "matrix /dev/zero",
+        "control c2d --a /dev/zero --b /dev/zero --ts 0.01",
+        &["/dev/zero", "not a regular file"],
+    ),
+    // the ULog bombs: refused naming the file and the limit, or read
+    fail(
+        "log",
+        "info 65,500 columns x 50,000 subscriptions",
+        "log info bomb.ulg",
+        &["bomb.ulg", "more than 4096 subscriptions"],
+    ),
+    fail(
+        "log",
+        "export 65,500 columns x 50,000 subscriptions",
+        "log export bomb.ulg --csv o/b1",
+        &["bomb.ulg", "more than 4096 subscriptions"],
+    ),
+    fail(
+        "ident",
+        "frf 65,500 columns x 50,000 subscriptions",
+        "ident frf bomb.ulg --input S_col --output est_p --out o/b2",
+        &["bomb.ulg", "more than 4096 subscriptions"],
+    ),
+    ok(
+        "log",
+        "info 65,500 columns x 1,000 subscriptions",
+        "log info wide.ulg",
+        &[],
+    ),
+    ok(
+        "log",
+        "info of 100 INFO_MULTIPLE parts",
+        "log info multi.ulg",
+        &[],
+    ),
+    // an endless header: refused at its line
+    fail(
+        "ident",
+        "frf CSV header of 2 MiB",
+        "ident frf long.csv --input S_col --output p --out o/l1",
+        &["long.csv", "line 1 is longer than 1048576 bytes"],
+    ),
+    fail(
+        "ident",
+        "tf CSV header of 2 MiB",
+        "ident tf long.csv --output p --num 1 --den 2 --out o/l2",
+        &["long.csv", "line 1 is longer"],
+    ),
+];
+
+/// A ULog file of raw messages (`(type, payload)`).
+fn raw_ulog(messages: &[(u8, Vec<u8>)]) -> Vec<u8> {
+    let mut b = vec![0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35, 1];
+    b.extend_from_slice(&0u64.to_le_bytes());
+    for (kind, p) in messages {
+        b.extend_from_slice(&u16::try_from(p.len()).unwrap().to_le_bytes());
+        b.push(*kind);
+        b.extend_from_slice(p);
+    }
+    b
+}
+
+/// A format of 65,500 columns subscribed `n` times.
+fn wide_ulog(n: usize) -> Vec<u8> {
+    let mut m = vec![(b'F', b"t:uint64_t timestamp;uint8_t[65500] x;".to_vec())];
+    for i in 0..n {
+        let mut p = vec![0u8];
+        p.extend_from_slice(&u16::try_from(i % 65_535).unwrap().to_le_bytes());
+        p.push(b't');
+        m.push((b'A', p));
+    }
+    raw_ulog(&m)
+}
+
+/// An INFO or INFO_MULTIPLE payload.
+fn key_value(prefix: &[u8], key: &str, value: &[u8]) -> Vec<u8> {
+    let mut p = prefix.to_vec();
+    p.push(u8::try_from(key.len()).unwrap());
+    p.extend_from_slice(key.as_bytes());
+    p.extend_from_slice(value);
+    p
+}
+
+#[test]
+fn readers_a_small_file_could_stall_are_bounded() {
+    let d = tmpdir("unbounded");
+    let fifo = d.join("fifo");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    std::fs::write(d.join("bomb.ulg"), wide_ulog(50_000)).unwrap();
+    std::fs::write(d.join("wide.ulg"), wide_ulog(1000)).unwrap();
+    let parts: Vec<(u8, Vec<u8>)> = (0..100u8)
+        .map(|i| {
+            (
+                b'M',
+                key_value(&[u8::from(i > 0)], "uint8_t[65000] blob", &vec![i; 65_000]),
+            )
+        })
+        .collect();
+    std::fs::write(d.join("multi.ulg"), raw_ulog(&parts)).unwrap();
+    std::fs::write(d.join("long.csv"), "x".repeat(2 << 20)).unwrap();
+    let mut failures = Vec::new();
+    let mut slowest = (Duration::ZERO, "");
+    for c in UNBOUNDED {
+        let (failure, r) = check(&d, c);
+        if r.elapsed > slowest.0 {
+            slowest = (r.elapsed, c.name);
+        }
+        failures.extend(failure);
+    }
+    println!(
+        "unbounded readers: {} cases, slowest {:.2} s ({})",
+        UNBOUNDED.len(),
+        slowest.0.as_secs_f64(),
+        slowest.1
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let r = helicon(&d, &expand("log info multi.ulg"), None);
+    assert!(
+        r.stdout
+            .contains("info blob: (6500000 bytes in several parts)"),
+        "{}",
+        r.stdout
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Text from a file reaches the terminal and the exported files with its
+/// control characters escaped, and an exported CSV's header cells cannot
+/// start a formula.
+#[test]
+fn file_text_is_printed_escaped_and_csv_cells_cannot_start_a_formula() {
+    let d = tmpdir("text");
+    let esc_key = "char[6] sys_\u{1b}]0;x";
+    let mut m = vec![
+        (b'I', key_value(&[], esc_key, b"a\nb\x1b[2J")),
+        (b'I', key_value(&[], "char[3] ver_hw", b"\xe2\x80\xae")),
+        (
+            b'F',
+            b"=HYPERLINK:uint64_t timestamp;float =cmd;float -x;float ok;".to_vec(),
+        ),
+        (
+            b'A',
+            vec![
+                0, 0, 0, b'=', b'H', b'Y', b'P', b'E', b'R', b'L', b'I', b'N', b'K',
+            ],
+        ),
+    ];
+    let mut rec = vec![0u8, 0];
+    rec.extend_from_slice(&1000u64.to_le_bytes());
+    for v in [1.5f32, -2.0, 3.0] {
+        rec.extend_from_slice(&v.to_le_bytes());
+    }
+    m.push((b'D', rec));
+    let mut log = vec![6u8]; // level 6: info
+    log.extend_from_slice(&1000u64.to_le_bytes());
+    log.extend_from_slice(b"line\r\nforged\x07");
+    m.push((b'L', log));
+    std::fs::write(d.join("text.ulg"), raw_ulog(&m)).unwrap();
+    let r = helicon(&d, &expand("log info text.ulg"), None);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    for c in ['\u{1b}', '\u{7}', '\r', '\u{202e}'] {
+        assert!(!r.stdout.contains(c), "{c:?} printed raw: {:?}", r.stdout);
+    }
+    assert!(
+        r.stdout.contains("info sys_\\u{1b}]0;x: a\\nb\\u{1b}[2J"),
+        "{}",
+        r.stdout
+    );
+    assert!(r.stdout.contains("info ver_hw: \\u{202e}"), "{}", r.stdout);
+    let r = helicon(&d, &expand("log export text.ulg --csv o"), None);
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    assert!(!r.stdout.contains('\u{1b}'), "{}", r.stdout);
+    let info = std::fs::read_to_string(d.join("o/text_info.txt")).unwrap();
+    assert!(
+        info.contains("sys_\\u{1b}]0;x: a\\nb\\u{1b}[2J\n"),
+        "{info}"
+    );
+    let msgs = std::fs::read_to_string(d.join("o/text_messages.txt")).unwrap();
+    assert_eq!(msgs, "1000 info line\\r\\nforged\\u{7}\n");
+    let csv = std::fs::read_to_string(d.join("o/text__HYPERLINK_0.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("timestamp,'=cmd,'-x,ok"));
+    // numbers are left as they are
+    assert_eq!(lines.next(), Some("1000,1.5,-2,3"));
+    let _ = std::fs::remove_dir_all(&d);
+}

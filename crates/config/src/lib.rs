@@ -7,6 +7,20 @@
 //! and the `io::Error` source kept when a file could not be read. The
 //! lowest crate that reads files: the model, the simulator and the on-board
 //! program all report through it, and it depends on nothing of theirs.
+//!
+//! It also holds what every reader of user files shares: [`files`] (only
+//! regular files, and bounded reads: [`read_text_bounded`],
+//! [`open_bounded`], [`open_lines_bounded`]) and [`text`] (text from files escaped for a terminal,
+//! [`escape_control`], and made safe as a CSV cell, [`csv_cell`]).
+
+pub mod files;
+pub mod text;
+
+pub use files::{
+    Bounded, FileRefusal, LineBounded, MAX_DATA_BYTES, MAX_LINE_BYTES, MAX_TEXT_BYTES,
+    open_bounded, open_lines_bounded, open_regular, read_text_bounded,
+};
+pub use text::{csv_cell, escape_control};
 
 /// An error reading or checking a configuration.
 #[derive(Debug, thiserror::Error)]
@@ -47,16 +61,21 @@ pub enum ConfigError {
 
 impl ConfigError {
     /// Read a configuration file whole: its name as errors print it, and its
-    /// text; a file that cannot be read is [`ConfigError::Io`] naming it.
+    /// text; a file that cannot be read, is not a regular file or is longer
+    /// than [`MAX_TEXT_BYTES`] is [`ConfigError::Io`] naming it
+    /// ([`read_text_bounded`]).
     pub fn read_file(path: &std::path::Path) -> Result<(String, String), Self> {
-        let file = path.display().to_string();
-        match std::fs::read_to_string(path) {
-            Ok(text) => Ok((file, text)),
-            Err(source) => Err(ConfigError::Io {
-                file,
-                action: "read",
-                source,
-            }),
+        let text = read_text_bounded(path, MAX_TEXT_BYTES)?;
+        Ok((path.display().to_string(), text))
+    }
+
+    /// The I/O error of a file that could not be read (the cause of
+    /// [`ConfigError::Io`], a [`FileRefusal`] among them), for a reader with
+    /// its own error type; any other error as an `io::Error` of its text.
+    pub fn into_io(self) -> std::io::Error {
+        match self {
+            ConfigError::Io { source, .. } => source,
+            other => std::io::Error::other(other.to_string()),
         }
     }
 

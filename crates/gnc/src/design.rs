@@ -479,10 +479,14 @@ impl Gains {
     /// time gives at the recorded sample time (an edited file is refused).
     pub fn load(path: &Path) -> Result<Gains, DesignError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| DesignError::File {
+        let text = helicon_model::config_error::read_text_bounded(
+            path,
+            helicon_model::config_error::MAX_TEXT_BYTES,
+        )
+        .map_err(|e| DesignError::File {
             file: file.clone(),
             message: "cannot read".into(),
-            source: Some(e),
+            source: Some(e.into_io()),
         })?;
         Gains::from_json(&text).map_err(|e| match e {
             DesignError::File { message, .. } => DesignError::File {

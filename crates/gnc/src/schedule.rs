@@ -671,10 +671,14 @@ impl Schedule {
     /// Read a schedule file written by [`Schedule::save`].
     pub fn load(path: &Path) -> Result<Schedule, ScheduleError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ScheduleError::File {
+        let text = helicon_model::config_error::read_text_bounded(
+            path,
+            helicon_model::config_error::MAX_TEXT_BYTES,
+        )
+        .map_err(|e| ScheduleError::File {
             file: file.clone(),
             message: "cannot read".into(),
-            source: Some(e),
+            source: Some(e.into_io()),
         })?;
         Schedule::from_json(&text, &file)
     }

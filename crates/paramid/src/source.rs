@@ -22,12 +22,12 @@ use std::path::Path;
 const ULOG_MAGIC: [u8; 7] = [0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35];
 
 /// Whether the file at `path` is a ULog file (its first bytes). A file that
-/// cannot be opened is not: the CSV reader then names the problem.
+/// cannot be opened, or is no regular file (a FIFO, which would block the
+/// open, or a device), is not: the CSV reader then names the problem.
 pub fn is_ulog(path: &Path) -> bool {
     let mut head = [0u8; 7];
-    std::fs::File::open(path)
-        .and_then(|mut f| f.read_exact(&mut head))
-        .is_ok_and(|()| head == ULOG_MAGIC)
+    helicon_model::config_error::open_regular(path)
+        .is_ok_and(|mut f| f.read_exact(&mut head).is_ok() && head == ULOG_MAGIC)
 }
 
 /// The columns of a log, by name.

@@ -57,13 +57,14 @@ pub fn scenario_schedule(
         return Ok(None);
     };
     let path = scenario.resolve(env);
-    let text = std::fs::read_to_string(&path).map_err(|source| {
-        ScheduleError::Config(ScenarioError::Io {
-            file: path.display().to_string(),
-            action: "read",
-            source,
-        })
-    })?;
+    let text =
+        helicon_config::read_text_bounded(&path, helicon_config::MAX_TEXT_BYTES).map_err(|e| {
+            ScheduleError::Config(ScenarioError::Io {
+                file: path.display().to_string(),
+                action: "read",
+                source: e.into_io(),
+            })
+        })?;
     if let Ok(cache) = CACHE.lock()
         && let Some((_, _, s)) = cache.iter().find(|(p, t, _)| *p == path && *t == text)
     {

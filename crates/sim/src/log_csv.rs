@@ -826,7 +826,7 @@ pub fn parse_cell(text: &str) -> Result<f64, CellProblem> {
 /// (memory independent of the file length). Every line's cell count and the
 /// `t_s` column are checked; only the selected cells are parsed.
 #[derive(Debug)]
-pub struct LogReader<R: BufRead = BufReader<File>> {
+pub struct LogReader<R: BufRead = BufReader<LogFile>> {
     label: String,
     input: R,
     names: Vec<String>,
@@ -839,12 +839,21 @@ pub struct LogReader<R: BufRead = BufReader<File>> {
     last_t: f64,
 }
 
-impl LogReader<BufReader<File>> {
+/// The file a [`LogReader`] opens: regular files only (a FIFO or a device
+/// would never end), lines and size bounded (`helicon_config`'s limits).
+pub type LogFile = helicon_config::LineBounded<helicon_config::Bounded<File>>;
+
+impl LogReader<BufReader<LogFile>> {
     /// Open `path`, check its header and select the columns `select` (in
     /// that order; each must be in the header, `t_s` always must).
     pub fn open(path: &Path, select: &[&str]) -> Result<Self, LogCsvError> {
         let label = path.display().to_string();
-        let file = File::open(path).map_err(|e| io_err(&label, e))?;
+        let file = helicon_config::open_lines_bounded(
+            path,
+            helicon_config::MAX_DATA_BYTES,
+            helicon_config::MAX_LINE_BYTES,
+        )
+        .map_err(|e| io_err(&label, e.into_io()))?;
         Self::from_reader(BufReader::with_capacity(1 << 16, file), &label, select)
     }
 }

@@ -412,10 +412,15 @@ pub fn read_sensor_log(path: &Path) -> Result<SensorLog, SensorLogError> {
         line,
         message,
     };
-    let f = std::fs::File::open(path).map_err(|source| SensorLogError::Io {
+    let f = helicon_config::open_lines_bounded(
+        path,
+        helicon_config::MAX_DATA_BYTES,
+        helicon_config::MAX_LINE_BYTES,
+    )
+    .map_err(|e| SensorLogError::Io {
         file: file.clone(),
         what: "cannot open",
-        source,
+        source: e.into_io(),
     })?;
     let mut rdr = csv::ReaderBuilder::new()
         .comment(Some(b'#'))

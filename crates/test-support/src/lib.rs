@@ -15,7 +15,16 @@
 //!   ```
 //!
 //!   Counts are per thread: the test harness's own threads allocate
-//!   concurrently.
+//!   concurrently. It also keeps the bytes this thread holds and their
+//!   peak ([`live_bytes`], [`peak_bytes`], [`reset_peak`]), for the tests
+//!   that bound what reading an input may cost in memory:
+//!
+//!   ```ignore
+//!   helicon_test_support::reset_peak();
+//!   let before = helicon_test_support::live_bytes();
+//!   // ... read the input ...
+//!   assert!(helicon_test_support::peak_bytes() - before < 16 << 20);
+//!   ```
 //! - [`tmpdir`], a fresh scratch folder per test.
 #![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; Counting only forwards to System
 
@@ -24,32 +33,70 @@ use std::cell::Cell;
 use std::path::PathBuf;
 
 /// A global allocator that forwards to the system allocator and counts
-/// each thread's allocations ([`allocations`]). Install it in a test binary
-/// with `#[global_allocator]`.
+/// each thread's allocations ([`allocations`]) and the bytes it holds
+/// ([`live_bytes`], [`peak_bytes`]). Install it in a test binary with
+/// `#[global_allocator]`.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Counting;
 
 thread_local! {
     static ALLOCS: Cell<usize> = const { Cell::new(0) };
+    // bytes allocated minus bytes freed by this thread (memory freed by
+    // another thread than the one that allocated it makes it drift; the
+    // tests that read it allocate and free on one thread)
+    static LIVE: Cell<isize> = const { Cell::new(0) };
+    static PEAK: Cell<isize> = const { Cell::new(0) };
+}
+
+fn add_live(delta: isize) {
+    // `try_with`: the thread's locals may be gone while it exits
+    let _ = LIVE.try_with(|l| {
+        let now = l.get().saturating_add(delta);
+        l.set(now);
+        let _ = PEAK.try_with(|p| p.set(p.get().max(now)));
+    });
+}
+
+fn signed(n: usize) -> isize {
+    isize::try_from(n).unwrap_or(isize::MAX)
 }
 
 // SAFETY: forwards every call unchanged to the system allocator and only counts.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.with(|c| c.set(c.get() + 1));
+        let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+        add_live(signed(layout.size()));
         // SAFETY: same contract as the caller's.
         unsafe { System.alloc(layout) }
     }
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        add_live(-signed(layout.size()));
         // SAFETY: same contract as the caller's.
         unsafe { System.dealloc(ptr, layout) }
     }
 }
 
 /// Heap allocations made by this thread so far (0 unless [`Counting`] is
-/// the binary's global allocator).
+/// the binary's global allocator). A reallocation counts as one.
 pub fn allocations() -> usize {
     ALLOCS.with(Cell::get)
+}
+
+/// Heap bytes this thread has allocated and not freed (0 unless
+/// [`Counting`] is the binary's global allocator).
+pub fn live_bytes() -> isize {
+    LIVE.with(Cell::get)
+}
+
+/// The most [`live_bytes`] has been since the thread started or since
+/// [`reset_peak`].
+pub fn peak_bytes() -> isize {
+    PEAK.with(Cell::get)
+}
+
+/// Start a new peak at the current [`live_bytes`].
+pub fn reset_peak() {
+    PEAK.with(|p| p.set(live_bytes()));
 }
 
 /// A fresh scratch folder for one test: named after the test binary, the

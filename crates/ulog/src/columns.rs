@@ -403,13 +403,8 @@ pub fn available_columns(path: &Path) -> Result<Vec<&'static str>, ColumnsError>
     Ok(out)
 }
 
-fn open(path: &Path) -> Result<UlogReader<std::io::BufReader<std::fs::File>>, ReadError> {
-    let name = path.display().to_string();
-    let src = std::fs::File::open(path).map_err(|source| ReadError::Io {
-        file: name.clone(),
-        source,
-    })?;
-    UlogReader::new(std::io::BufReader::new(src), &name)
+fn open(path: &Path) -> Result<crate::reader::FileReader, ReadError> {
+    UlogReader::open(path)
 }
 
 /// The records of one topic: timestamps (µs) and the fields asked for.
@@ -418,6 +413,9 @@ struct TopicData {
     fields: Vec<&'static str>,
     /// Column index of each field in the subscription's format.
     index: Option<Vec<usize>>,
+    /// The format `index` was found in (a topic subscribed again with the
+    /// same format is not searched again).
+    indexed: Option<std::sync::Arc<crate::flat::FlatFormat>>,
     t_us: Vec<u64>,
     /// The fields of every record, record after record (`fields.len()` a
     /// record): one growing buffer, no allocation per record.
@@ -430,6 +428,7 @@ impl TopicData {
             name,
             fields: Vec::new(),
             index: None,
+            indexed: None,
             t_us: Vec::new(),
             values: Vec::new(),
         }
@@ -624,6 +623,13 @@ fn collect(
                 let Some(td) = topics.iter_mut().find(|t| t.name == topic.name) else {
                     return Ok(());
                 };
+                if td
+                    .indexed
+                    .as_ref()
+                    .is_some_and(|f| std::sync::Arc::ptr_eq(f, &topic.format))
+                {
+                    return Ok(());
+                }
                 let mut index = Vec::with_capacity(td.fields.len());
                 for f in &td.fields {
                     let Some(i) = topic.format.columns.iter().position(|c| c.name == *f) else {
@@ -641,6 +647,7 @@ fn collect(
                     index.push(i);
                 }
                 td.index = Some(index);
+                td.indexed = Some(std::sync::Arc::clone(&topic.format));
             }
             Event::Data {
                 topic,

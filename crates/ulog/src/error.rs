@@ -119,6 +119,21 @@ pub enum ReadError {
         /// What was wrong.
         rule: String,
     },
+    /// The file exceeds one of the reader's limits (subscriptions, fields
+    /// of a format, columns, joined information): refused before it can cost
+    /// more time or memory than its size warrants. See
+    /// [`crate::visit::Limits`].
+    #[error("{file}: byte {offset}: more than {limit} {what} (a limit of this reader)")]
+    Limit {
+        /// The file.
+        file: String,
+        /// Byte offset of the message that went beyond the limit.
+        offset: u64,
+        /// What was counted (`subscriptions`, `fields in format \`x\``).
+        what: String,
+        /// The limit.
+        limit: u64,
+    },
     /// Incompatible flags this reader does not know.
     #[error("{file}: incompatible ULog flags {flags:#x} (this reader knows bit 0: appended data)")]
     Incompatible {

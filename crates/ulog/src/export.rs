@@ -19,6 +19,7 @@
 use crate::error::ReadError;
 use crate::reader::{UlogReader, Value};
 use crate::visit::{End, Event, PassSummary, Subscription, visit};
+use helicon_config::{csv_cell, escape_control};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::fs::File;
@@ -108,18 +109,9 @@ pub struct LogSummary {
     pub pass: PassSummary,
 }
 
-fn open(input: &Path) -> Result<UlogReader<std::io::BufReader<File>>, ReadError> {
-    let name = input.display().to_string();
-    let src = File::open(input).map_err(|source| ReadError::Io {
-        file: name.clone(),
-        source,
-    })?;
-    UlogReader::new(std::io::BufReader::new(src), &name)
-}
-
 /// Read a whole log and count what it holds.
 pub fn summarize(input: &Path) -> Result<LogSummary, ReadError> {
-    let reader = open(input)?;
+    let reader = UlogReader::open(input)?;
     let mut s = LogSummary {
         topics: BTreeMap::new(),
         info: Vec::new(),
@@ -137,7 +129,7 @@ pub fn summarize(input: &Path) -> Result<LogSummary, ReadError> {
         match ev {
             Event::Info(kv) => s.info.push((kv.name.clone(), kv.value.to_string())),
             Event::InfoMultiple(kv) => {
-                let len = kv.value.to_string().len();
+                let len = kv.bytes.len();
                 s.info
                     .push((kv.name.clone(), format!("({len} bytes in several parts)")));
             }
@@ -268,7 +260,8 @@ fn new_csv(
     let cols = &topic.format.columns;
     let ts = topic.timestamp_column;
     let order = std::iter::once(ts).chain((0..cols.len()).filter(|i| *i != ts));
-    w.write_record(order.map(|i| cols[i].name.as_str()))
+    // the names come from the file: no cell may start a formula
+    w.write_record(order.map(|i| csv_cell(&cols[i].name).into_owned()))
         .map_err(err)?;
     let report = TopicReport {
         file: path,
@@ -281,7 +274,7 @@ fn new_csv(
 /// needed). See the module documentation for the files.
 #[allow(clippy::too_many_lines)] // one pass: each event kind to its file
 pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError> {
-    let reader = open(input)?;
+    let reader = UlogReader::open(input)?;
     std::fs::create_dir_all(dir).map_err(|source| ExportError::Io {
         file: dir.display().to_string(),
         action: "create",
@@ -318,18 +311,35 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
 
     let pass = visit(reader, |ev| -> Result<(), ExportError> {
         match ev {
-            Event::Info(kv) | Event::InfoMultiple(kv) => {
-                writeln!(info, "{}: {}", kv.name, kv.value).map_err(io_err(&info_path))?;
+            Event::Info(kv) => {
+                let (k, v) = (escape_control(&kv.name), kv.value.to_string());
+                writeln!(info, "{k}: {}", escape_control(&v)).map_err(io_err(&info_path))?;
+            }
+            Event::InfoMultiple(kv) => {
+                let k = escape_control(&kv.name);
+                match kv.base_type() {
+                    // text: escaped, decoded once (its bytes are bounded)
+                    Some(crate::UlogType::Char) => {
+                        let v = String::from_utf8_lossy(&kv.bytes);
+                        writeln!(info, "{k}: {}", escape_control(&v))
+                    }
+                    // numbers: printed element by element
+                    _ => writeln!(info, "{k}: {kv}"),
+                }
+                .map_err(io_err(&info_path))?;
             }
             Event::Parameter {
                 kv,
                 in_data,
                 timestamp_us,
             } => {
+                let k = escape_control(&kv.name);
+                let v = kv.value.to_string();
+                let v = escape_control(&v);
                 if in_data {
-                    writeln!(params, "{} {} @ {timestamp_us}", kv.name, kv.value)
+                    writeln!(params, "{k} {v} @ {timestamp_us}")
                 } else {
-                    writeln!(params, "{} {}", kv.name, kv.value)
+                    writeln!(params, "{k} {v}")
                 }
                 .map_err(io_err(&params_path))?;
             }
@@ -382,6 +392,7 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
                 ..
             } => {
                 let level = level.map_or("unknown", |l| l.name());
+                let text = escape_control(text);
                 writeln!(msgs, "{timestamp_us} {level} {text}").map_err(io_err(&msgs_path))?;
                 log_messages += 1;
             }

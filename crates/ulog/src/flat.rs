@@ -5,10 +5,32 @@
 use crate::format::UlogType;
 use crate::reader::{Format, Value, decode_value};
 use crate::spec;
+use helicon_config::escape_control;
 use std::collections::HashMap;
 
 /// The deepest nesting of formats accepted (PX4's messages nest 2–3 deep).
 pub const MAX_DEPTH: usize = 8;
+
+/// The most columns one format may flatten to: one per byte of the largest
+/// record a ULog message holds (each base type is at least one byte).
+pub const MAX_COLUMNS: usize = spec::MAX_PAYLOAD;
+
+/// Why a format could not be flattened.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum FlattenError {
+    /// A rule of the format broken (unknown nested type, a cycle, nesting
+    /// deeper than [`MAX_DEPTH`], a record larger than a message holds).
+    #[error("{0}")]
+    Rule(String),
+    /// More columns than the limit asked.
+    #[error("topic `{topic}`: more than {limit} columns")]
+    TooManyColumns {
+        /// The topic (control characters escaped).
+        topic: String,
+        /// The limit.
+        limit: usize,
+    },
+}
 
 /// One column of a flattened format.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -53,9 +75,27 @@ impl FlatFormat {
 /// text) for unknown nested types, cycles, nesting deeper than
 /// [`MAX_DEPTH`] and records larger than a message can hold.
 pub fn flatten(name: &str, formats: &HashMap<String, Format>) -> Result<FlatFormat, String> {
+    flatten_limited(name, formats, MAX_COLUMNS).map_err(|e| e.to_string())
+}
+
+/// [`flatten`], refusing a format of more than `max_columns` columns (the
+/// work and memory of a flattening are proportional to its columns, at
+/// most [`MAX_COLUMNS`] whatever the limit).
+pub fn flatten_limited(
+    name: &str,
+    formats: &HashMap<String, Format>,
+    max_columns: usize,
+) -> Result<FlatFormat, FlattenError> {
     let mut columns = Vec::new();
-    let end = walk(name, "", 0, 0, true, formats, &mut columns)
-        .map_err(|rule| format!("topic `{name}`: {rule}"))?;
+    let topic = || escape_control(name).into_owned();
+    let end =
+        walk(name, "", 0, 0, true, formats, &mut columns, max_columns).map_err(|e| match e {
+            Walk::Rule(rule) => FlattenError::Rule(format!("topic `{}`: {rule}", topic())),
+            Walk::TooMany => FlattenError::TooManyColumns {
+                topic: topic(),
+                limit: max_columns,
+            },
+        })?;
     Ok(FlatFormat {
         name: name.to_string(),
         columns,
@@ -63,6 +103,19 @@ pub fn flatten(name: &str, formats: &HashMap<String, Format>) -> Result<FlatForm
     })
 }
 
+/// Why a walk stopped.
+enum Walk {
+    Rule(String),
+    TooMany,
+}
+
+impl From<String> for Walk {
+    fn from(rule: String) -> Walk {
+        Walk::Rule(rule)
+    }
+}
+
+#[allow(clippy::too_many_arguments)] // one recursive walk: its state, spelt out
 fn walk(
     name: &str,
     prefix: &str,
@@ -71,15 +124,18 @@ fn walk(
     top: bool,
     formats: &HashMap<String, Format>,
     out: &mut Vec<Column>,
-) -> Result<usize, String> {
+    max_columns: usize,
+) -> Result<usize, Walk> {
     if depth > MAX_DEPTH {
         return Err(format!(
-            "types nest deeper than {MAX_DEPTH} levels (or refer to themselves) at `{name}`"
-        ));
+            "types nest deeper than {MAX_DEPTH} levels (or refer to themselves) at `{}`",
+            escape_control(name)
+        )
+        .into());
     }
     let f = formats
         .get(name)
-        .ok_or_else(|| format!("type `{name}` has no format"))?;
+        .ok_or_else(|| format!("type `{}` has no format", escape_control(name)))?;
     let last = f.fields.len().saturating_sub(1);
     for (i, field) in f.fields.iter().enumerate() {
         let padding = field.name.starts_with("_padding");
@@ -96,6 +152,9 @@ fn walk(
             match field.base_type() {
                 Some(ty) => {
                     if !padding {
+                        if out.len() >= max_columns {
+                            return Err(Walk::TooMany);
+                        }
                         out.push(Column {
                             name: col,
                             ty,
@@ -116,14 +175,23 @@ fn walk(
                         false,
                         formats,
                         target,
+                        max_columns,
                     )?;
                     if offset == before {
-                        return Err(format!("type `{}` is empty", field.type_name));
+                        return Err(format!(
+                            "type `{}` is empty",
+                            escape_control(&field.type_name)
+                        )
+                        .into());
                     }
                 }
             }
             if offset > spec::MAX_PAYLOAD {
-                return Err(format!("`{name}` is larger than a ULog message can hold"));
+                return Err(format!(
+                    "`{}` is larger than a ULog message can hold",
+                    escape_control(name)
+                )
+                .into());
             }
         }
     }

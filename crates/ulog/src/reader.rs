@@ -10,6 +10,7 @@
 use crate::error::ReadError;
 use crate::format::UlogType;
 use crate::spec::{self, LogLevel, msg};
+use helicon_config::escape_control;
 use std::io::{ErrorKind, Read};
 
 /// The file header.
@@ -123,6 +124,93 @@ pub struct KeyValue {
     pub value: Value,
 }
 
+/// One part of an INFO_MULTIPLE sequence as written: its key and the bytes
+/// of its value, undecoded (the parts of a long text or blob are joined as
+/// bytes, [`MultiInfo`], and decoded when asked).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InfoPart<'a> {
+    /// The element type as written (`char`, `uint8_t`): the key's type
+    /// without its array length.
+    pub element_type: String,
+    /// The key's name.
+    pub name: String,
+    /// The value's bytes (of a `char[n]` part, all that follow the key; of
+    /// an array of numbers, its `n` elements).
+    pub bytes: &'a [u8],
+}
+
+/// An INFO_MULTIPLE sequence, its parts' bytes joined: one allocation the
+/// size of the value, decoded by [`MultiInfo::value`] or printed by its
+/// `Display` (which decodes element by element, allocating nothing per
+/// element).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MultiInfo {
+    /// The element type as written (`char`, `uint8_t`).
+    pub element_type: String,
+    /// The key's name.
+    pub name: String,
+    /// The joined bytes of the parts.
+    pub bytes: Vec<u8>,
+}
+
+impl MultiInfo {
+    /// The element type, when it is a base type.
+    pub fn base_type(&self) -> Option<UlogType> {
+        UlogType::from_name(&self.element_type)
+    }
+
+    /// The key's type of the joined value (`char[1234]`).
+    pub fn type_name(&self) -> String {
+        let n = self
+            .base_type()
+            .map_or(self.bytes.len(), |t| self.bytes.len() / t.size());
+        format!("{}[{n}]", self.element_type)
+    }
+
+    /// The joined value decoded: text for `char` (invalid UTF-8 replaced),
+    /// an array for another base type, raw bytes for an unknown type.
+    pub fn value(&self) -> Value {
+        match self.base_type() {
+            Some(UlogType::Char) => Value::Str(text(&self.bytes)),
+            Some(t) => Value::Array(
+                self.bytes
+                    .chunks_exact(t.size())
+                    .map(|c| decode_value(t, c))
+                    .collect(),
+            ),
+            None => Value::Raw(self.bytes.clone()),
+        }
+    }
+}
+
+impl std::fmt::Display for MultiInfo {
+    /// As [`Value`]'s `Display` of [`MultiInfo::value`].
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.base_type() {
+            Some(UlogType::Char) => {
+                for chunk in self.bytes.utf8_chunks() {
+                    f.write_str(chunk.valid())?;
+                    if !chunk.invalid().is_empty() {
+                        f.write_str("\u{FFFD}")?;
+                    }
+                }
+                Ok(())
+            }
+            Some(t) => {
+                f.write_str("[")?;
+                for (i, c) in self.bytes.chunks_exact(t.size()).enumerate() {
+                    if i > 0 {
+                        f.write_str(", ")?;
+                    }
+                    write!(f, "{}", decode_value(t, c))?;
+                }
+                f.write_str("]")
+            }
+            None => write!(f, "<{} bytes>", self.bytes.len()),
+        }
+    }
+}
+
 /// One message of a ULog file.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Message<'a> {
@@ -143,8 +231,8 @@ pub enum Message<'a> {
     InfoMultiple {
         /// This continues the previous message of the same key.
         is_continued: bool,
-        /// Key and this part's value.
-        kv: KeyValue,
+        /// Key and this part's bytes.
+        part: InfoPart<'a>,
     },
     /// A parameter (value or change).
     Parameter(KeyValue),
@@ -231,6 +319,29 @@ fn kind_name(kind: u8) -> String {
         format!("'{}'", kind as char)
     } else {
         format!("0x{kind:02x}")
+    }
+}
+
+/// The reader of a ULog file opened by [`UlogReader::open`].
+pub type FileReader = UlogReader<std::io::BufReader<helicon_config::Bounded<std::fs::File>>>;
+
+impl FileReader {
+    /// Open the ULog file at `path` and read its header. Only a regular file
+    /// is opened (a FIFO or a device such as `/dev/zero` is refused before
+    /// any read, [`helicon_config::open_bounded`]); the errors name it.
+    pub fn open(path: &std::path::Path) -> Result<FileReader, ReadError> {
+        let name = path.display().to_string();
+        let src = helicon_config::open_bounded(path, u64::MAX).map_err(|e| match e {
+            helicon_config::ConfigError::Io { source, .. } => ReadError::Io {
+                file: name.clone(),
+                source,
+            },
+            other => ReadError::Io {
+                file: name.clone(),
+                source: std::io::Error::other(other.to_string()),
+            },
+        })?;
+        UlogReader::new(std::io::BufReader::new(src), &name)
     }
 }
 
@@ -383,7 +494,7 @@ fn parse_message(kind: u8, b: &[u8]) -> Result<Message<'_>, String> {
             let (&cont, rest) = b.split_first().ok_or_else(short)?;
             Message::InfoMultiple {
                 is_continued: cont != 0,
-                kv: parse_key_value(rest)?,
+                part: parse_info_part(rest)?,
             }
         }
         msg::PARAMETER => Message::Parameter(parse_key_value(b)?),
@@ -441,10 +552,10 @@ fn parse_typed_name(s: &str) -> Result<(String, Option<usize>, String), String> 
     let s = s.trim();
     let (ty, name) = s
         .split_once(' ')
-        .ok_or_else(|| format!("`{s}` is not `type name`"))?;
+        .ok_or_else(|| format!("`{}` is not `type name`", escape_control(s)))?;
     let name = name.trim();
     if name.is_empty() || ty.is_empty() {
-        return Err(format!("`{s}` is not `type name`"));
+        return Err(format!("`{}` is not `type name`", escape_control(s)));
     }
     let (ty, len) = match ty.split_once('[') {
         Some((t, rest)) => {
@@ -452,7 +563,7 @@ fn parse_typed_name(s: &str) -> Result<(String, Option<usize>, String), String> 
                 .strip_suffix(']')
                 .and_then(|n| n.parse::<usize>().ok())
                 .filter(|n| *n <= spec::MAX_PAYLOAD)
-                .ok_or_else(|| format!("`{s}`: bad array length"))?;
+                .ok_or_else(|| format!("`{}`: bad array length", escape_control(s)))?;
             (t, Some(n))
         }
         None => (ty, None),
@@ -483,7 +594,11 @@ fn parse_format(b: &[u8]) -> Result<Format, String> {
     })
 }
 
-fn parse_key_value(b: &[u8]) -> Result<KeyValue, String> {
+/// A key: its type, array length and name, and the value's bytes after it.
+type SplitKey<'a> = (String, Option<usize>, String, &'a [u8]);
+
+/// A key-value payload → (type, array length, name, value bytes).
+fn split_key(b: &[u8]) -> Result<SplitKey<'_>, String> {
     let (&key_len, rest) = b.split_first().ok_or_else(|| "no key length".to_string())?;
     let key_len = usize::from(key_len);
     let key = rest
@@ -491,18 +606,46 @@ fn parse_key_value(b: &[u8]) -> Result<KeyValue, String> {
         .ok_or_else(|| format!("key of {key_len} bytes beyond the message"))?;
     let key = std::str::from_utf8(key).map_err(|_| "key is not UTF-8".to_string())?;
     let (type_name, array_len, name) = parse_typed_name(key)?;
-    let raw = &rest[key_len..];
+    Ok((type_name, array_len, name, &rest[key_len..]))
+}
+
+fn parse_info_part(b: &[u8]) -> Result<InfoPart<'_>, String> {
+    let (element_type, array_len, name, raw) = split_key(b)?;
+    let bytes = match UlogType::from_name(&element_type) {
+        Some(UlogType::Char) | None => raw,
+        Some(t) => {
+            let n = t.size() * array_len.unwrap_or(1);
+            raw.get(..n).ok_or_else(|| {
+                format!("value of `{}` shorter than its type", escape_control(&name))
+            })?
+        }
+    };
+    Ok(InfoPart {
+        element_type,
+        name,
+        bytes,
+    })
+}
+
+fn parse_key_value(b: &[u8]) -> Result<KeyValue, String> {
+    let (type_name, array_len, name, raw) = split_key(b)?;
     let value = match (UlogType::from_name(&type_name), array_len) {
         (Some(UlogType::Char), _) => Value::Str(text(raw)),
         (Some(t), None) => {
             if raw.len() < t.size() {
-                return Err(format!("value of `{name}` shorter than its type"));
+                return Err(format!(
+                    "value of `{}` shorter than its type",
+                    escape_control(&name)
+                ));
             }
             decode_value(t, raw)
         }
         (Some(t), Some(n)) => {
             if raw.len() < t.size() * n {
-                return Err(format!("value of `{name}` shorter than its type"));
+                return Err(format!(
+                    "value of `{}` shorter than its type",
+                    escape_control(&name)
+                ));
             }
             Value::Array(
                 raw.chunks_exact(t.size())

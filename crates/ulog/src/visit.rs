@@ -1,13 +1,73 @@
 //! One pass over a ULog file with the formats resolved: subscriptions,
 //! data records with their timestamps, information, parameters, text
 //! messages and dropouts, handed to a callback as [`Event`]s.
+//!
+//! # Cost
+//!
+//! A pass costs time and memory linear in the file with a small factor,
+//! whatever the file holds:
+//!
+//! - a format is flattened once, when a topic of it is first subscribed,
+//!   and shared by every subscription of it (a format declared again with
+//!   other fields drops the flattened formats; the columns flattened over a
+//!   pass are bounded, [`Limits::flattened_columns`]);
+//! - an INFO_MULTIPLE sequence is joined as bytes ([`MultiInfo`]), one
+//!   sequence at a time, of at most [`Limits::info_multiple_bytes`];
+//! - subscriptions, formats and the fields of a format are bounded
+//!   ([`Limits`]); beyond a limit the pass stops with
+//!   [`ReadError::Limit`], naming the file, the offset and what was
+//!   exceeded.
+//!
+//! Every other message is read, handled and dropped (the reader holds one
+//! message of at most 64 KiB).
 
 use crate::error::ReadError;
-use crate::flat::{FlatFormat, flatten};
-use crate::reader::{Format, KeyValue, Message, UlogReader, Value};
+use crate::flat::{FlatFormat, FlattenError, MAX_COLUMNS, flatten_limited};
+use crate::reader::{Format, InfoPart, KeyValue, Message, MultiInfo, UlogReader, Value};
 use crate::spec::LogLevel;
+use helicon_config::escape_control;
 use std::collections::HashMap;
 use std::io::Read;
+use std::sync::Arc;
+
+/// The bounds of a pass: each well above what a PX4 or helicon flight log
+/// needs (PX4's logger subscribes a few hundred topic instances of a few
+/// hundred formats, none of more than a few hundred fields; its longest
+/// multi-part information, the boot console, is tens of kilobytes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Limits {
+    /// Subscriptions (ADD_LOGGED messages) in a file.
+    pub subscriptions: usize,
+    /// Distinct formats (FORMAT messages of distinct names).
+    pub formats: usize,
+    /// Fields written in one FORMAT message.
+    pub format_fields: usize,
+    /// Columns of one flattened format (at most [`MAX_COLUMNS`]).
+    pub columns: usize,
+    /// Columns flattened over the whole pass (each format once, again only
+    /// after a format was declared anew).
+    pub flattened_columns: usize,
+    /// Bytes of one joined INFO_MULTIPLE sequence.
+    pub info_multiple_bytes: usize,
+}
+
+impl Limits {
+    /// The limits of [`visit`].
+    pub const DEFAULT: Limits = Limits {
+        subscriptions: 4096,
+        formats: 4096,
+        format_fields: 4096,
+        columns: MAX_COLUMNS,
+        flattened_columns: 1 << 20,
+        info_multiple_bytes: 16 << 20,
+    };
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Limits::DEFAULT
+    }
+}
 
 /// A subscribed topic instance.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -16,8 +76,8 @@ pub struct Subscription {
     pub name: String,
     /// Instance.
     pub multi_id: u8,
-    /// Its columns.
-    pub format: FlatFormat,
+    /// Its columns (shared by every subscription of the format).
+    pub format: Arc<FlatFormat>,
     /// Index of the `timestamp` column.
     pub timestamp_column: usize,
 }
@@ -27,10 +87,10 @@ pub struct Subscription {
 pub enum Event<'a> {
     /// An INFO message.
     Info(&'a KeyValue),
-    /// An INFO_MULTIPLE sequence, its parts joined (strings and arrays
-    /// concatenated); reported when the next message is not its
-    /// continuation. A key may have several sequences.
-    InfoMultiple(&'a KeyValue),
+    /// An INFO_MULTIPLE sequence, its parts' bytes joined; reported when
+    /// the next message is not its continuation. A key may have several
+    /// sequences.
+    InfoMultiple(&'a MultiInfo),
     /// A parameter; `in_data` for a change during the log, at the newest
     /// timestamp seen so far.
     Parameter {
@@ -117,16 +177,107 @@ fn malformed(file: &str, at: u64, kind: &str, rule: String) -> ReadError {
 
 /// Read all of `reader`, calling `f` for each event. A truncated file ends
 /// the pass normally with [`End::Truncated`]; any other read error, a
-/// record shorter than its format, or an error of `f` stops it.
+/// record shorter than its format, a [`Limits::DEFAULT`] exceeded, or an
+/// error of `f` stops it.
 pub fn visit<R: Read, E: From<ReadError>>(
+    reader: UlogReader<R>,
+    f: impl FnMut(Event<'_>) -> Result<(), E>,
+) -> Result<PassSummary, E> {
+    visit_with(reader, &Limits::DEFAULT, f)
+}
+
+/// The flattened formats of a pass and what they cost.
+struct Flattened<'l> {
+    formats: HashMap<String, Format>,
+    cache: HashMap<String, Arc<FlatFormat>>,
+    columns_so_far: usize,
+    limits: &'l Limits,
+}
+
+impl Flattened<'_> {
+    /// Declare `fmt`: the same declaration again changes nothing; another
+    /// one drops the flattened formats (any may nest it).
+    fn declare(&mut self, fmt: Format) -> Result<(), (String, usize)> {
+        if fmt.fields.len() > self.limits.format_fields {
+            return Err((
+                format!("fields in format `{}`", escape_control(&fmt.name)),
+                self.limits.format_fields,
+            ));
+        }
+        match self.formats.get(&fmt.name) {
+            Some(old) if *old == fmt => return Ok(()),
+            Some(_) => self.cache.clear(),
+            None if self.formats.len() >= self.limits.formats => {
+                return Err(("formats".to_string(), self.limits.formats));
+            }
+            None => {}
+        }
+        self.formats.insert(fmt.name.clone(), fmt);
+        Ok(())
+    }
+
+    /// The flattened format `name` (flattened at its first use).
+    fn get(&mut self, name: &str) -> Result<Arc<FlatFormat>, Broken> {
+        if let Some(f) = self.cache.get(name) {
+            return Ok(Arc::clone(f));
+        }
+        let left = self
+            .limits
+            .flattened_columns
+            .saturating_sub(self.columns_so_far);
+        let max = self.limits.columns.min(left);
+        let flat = flatten_limited(name, &self.formats, max).map_err(|e| match e {
+            FlattenError::Rule(rule) => Broken::Rule(rule),
+            FlattenError::TooManyColumns { topic, .. } if max < self.limits.columns => {
+                Broken::Limit(
+                    format!("columns flattened in all (at topic `{topic}`)"),
+                    self.limits.flattened_columns,
+                )
+            }
+            FlattenError::TooManyColumns { topic, limit } => {
+                Broken::Limit(format!("columns in topic `{topic}`"), limit)
+            }
+        })?;
+        self.columns_so_far += flat.columns.len();
+        let flat = Arc::new(flat);
+        self.cache.insert(name.to_string(), Arc::clone(&flat));
+        Ok(flat)
+    }
+}
+
+/// A subscription refused: a rule of the format, or a limit.
+enum Broken {
+    Rule(String),
+    Limit(String, usize),
+}
+
+fn limit(file: &str, offset: u64, what: String, limit: usize) -> ReadError {
+    ReadError::Limit {
+        file: file.to_string(),
+        offset,
+        what,
+        limit: limit as u64,
+    }
+}
+
+/// [`visit`] within `limits`.
+#[allow(clippy::too_many_lines)] // one pass: each message kind to its event
+pub fn visit_with<R: Read, E: From<ReadError>>(
     mut reader: UlogReader<R>,
+    limits: &Limits,
     mut f: impl FnMut(Event<'_>) -> Result<(), E>,
 ) -> Result<PassSummary, E> {
     let file = reader.file_name().to_string();
-    let mut formats: HashMap<String, Format> = HashMap::new();
+    let mut flat = Flattened {
+        formats: HashMap::new(),
+        cache: HashMap::new(),
+        columns_so_far: 0,
+        limits,
+    };
+    let mut subscriptions = 0usize;
     let mut subs: HashMap<u16, (Subscription, Option<u64>)> = HashMap::new();
     let mut in_data = false;
-    let mut pending: Option<KeyValue> = None;
+    let mut pending: Option<MultiInfo> = None;
     let mut newest_us = 0u64;
     let mut summary = PassSummary {
         end: End::Complete,
@@ -152,18 +303,37 @@ pub fn visit<R: Read, E: From<ReadError>>(
         }
         match m {
             Message::Format(fmt) => {
-                formats.insert(fmt.name.clone(), fmt);
+                flat.declare(fmt)
+                    .map_err(|(what, n)| limit(&file, at, what, n))?;
             }
             Message::Info(kv) => f(Event::Info(&kv))?,
-            Message::InfoMultiple { is_continued, kv } => {
+            Message::InfoMultiple { is_continued, part } => {
                 match pending.as_mut() {
-                    Some(p) if is_continued && p.name == kv.name => join(p, kv),
+                    Some(p) if is_continued && p.name == part.name => join(p, &part),
                     _ => {
                         if let Some(p) = pending.take() {
                             f(Event::InfoMultiple(&p))?;
                         }
-                        pending = Some(kv);
+                        pending = Some(MultiInfo {
+                            element_type: part.element_type,
+                            name: part.name,
+                            bytes: part.bytes.to_vec(),
+                        });
                     }
+                }
+                if let Some(p) = &pending
+                    && p.bytes.len() > limits.info_multiple_bytes
+                {
+                    return Err(limit(
+                        &file,
+                        at,
+                        format!(
+                            "bytes in information `{}` (parts joined)",
+                            escape_control(&p.name)
+                        ),
+                        limits.info_multiple_bytes,
+                    )
+                    .into());
                 }
                 continue;
             }
@@ -178,8 +348,20 @@ pub fn visit<R: Read, E: From<ReadError>>(
                 name,
             } => {
                 in_data = true;
-                let sub = subscription(name, multi_id, &formats)
-                    .map_err(|rule| malformed(&file, at, "'A'", rule))?;
+                subscriptions += 1;
+                if subscriptions > limits.subscriptions {
+                    return Err(limit(
+                        &file,
+                        at,
+                        "subscriptions".to_string(),
+                        limits.subscriptions,
+                    )
+                    .into());
+                }
+                let sub = subscription(name, multi_id, &mut flat).map_err(|b| match b {
+                    Broken::Rule(rule) => malformed(&file, at, "'A'", rule),
+                    Broken::Limit(what, n) => limit(&file, at, what, n),
+                })?;
                 subs.insert(msg_id, (sub, None));
                 if let Some((topic, _)) = subs.get(&msg_id) {
                     f(Event::Subscribed { msg_id, topic })?;
@@ -241,15 +423,18 @@ pub fn visit<R: Read, E: From<ReadError>>(
     Ok(summary)
 }
 
-/// The subscription of topic `name`, its format flattened.
+/// The subscription of topic `name`, its format flattened (once a pass).
 fn subscription(
     name: String,
     multi_id: u8,
-    formats: &HashMap<String, Format>,
-) -> Result<Subscription, String> {
-    let format = flatten(&name, formats)?;
+    flat: &mut Flattened<'_>,
+) -> Result<Subscription, Broken> {
+    let format = flat.get(&name)?;
     let Some(timestamp_column) = format.timestamp_column() else {
-        return Err(format!("topic `{name}` has no `uint64_t timestamp` field"));
+        return Err(Broken::Rule(format!(
+            "topic `{}` has no `uint64_t timestamp` field",
+            escape_control(&name)
+        )));
     };
     Ok(Subscription {
         name,
@@ -264,25 +449,25 @@ fn record_timestamp(topic: &Subscription, payload: &[u8]) -> Result<u64, String>
     if payload.len() < topic.format.min_len {
         return Err(format!(
             "`{}` record of {} bytes, its format needs {}",
-            topic.name,
+            escape_control(&topic.name),
             payload.len(),
             topic.format.min_len
         ));
     }
     match topic.format.value(payload, topic.timestamp_column) {
         Some(Value::UInt(t)) => Ok(t),
-        _ => Err(format!("`{}` record without its timestamp", topic.name)),
+        _ => Err(format!(
+            "`{}` record without its timestamp",
+            escape_control(&topic.name)
+        )),
     }
 }
 
-/// Append a continuation part to an INFO_MULTIPLE sequence.
-fn join(to: &mut KeyValue, part: KeyValue) {
-    match (&mut to.value, part.value) {
-        (Value::Str(a), Value::Str(b)) => a.push_str(&b),
-        (Value::Array(a), Value::Array(b)) => a.extend(b),
-        (Value::Raw(a), Value::Raw(b)) => a.extend(b),
-        // parts of different types: keep the first, as the specification
-        // gives no meaning to the mix
-        _ => {}
+/// Append a continuation part to an INFO_MULTIPLE sequence: its bytes, when
+/// of the sequence's element type (parts of another type are left out, as
+/// the specification gives no meaning to the mix).
+fn join(to: &mut MultiInfo, part: &InfoPart<'_>) {
+    if to.element_type == part.element_type {
+        to.bytes.extend_from_slice(part.bytes);
     }
 }

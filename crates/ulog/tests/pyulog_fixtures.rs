@@ -52,7 +52,7 @@ fn collect(path: &Path) -> Collected {
                 c.info.insert(kv.name.clone(), kv.value.clone());
             }
             Event::InfoMultiple(kv) => {
-                let Value::Str(text) = &kv.value else {
+                let Value::Str(text) = &kv.value() else {
                     panic!("{}: not text", kv.name)
                 };
                 c.info_multiple

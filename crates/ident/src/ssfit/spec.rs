@@ -85,9 +85,13 @@ impl SsSpec {
     /// Read a model file (relative `frf` paths resolved from its folder).
     pub fn from_file(path: &Path) -> Result<SsSpec> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| IdentError::Parse {
+        let text = helicon_model::config_error::read_text_bounded(
+            path,
+            helicon_model::config_error::MAX_TEXT_BYTES,
+        )
+        .map_err(|e| IdentError::Parse {
             file: file.clone(),
-            message: format!("cannot read: {e}"),
+            message: format!("cannot read: {}", e.into_io()),
         })?;
         let base = path.parent().unwrap_or(Path::new(""));
         SsSpec::from_toml_str(&text, &file, base)

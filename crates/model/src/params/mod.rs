@@ -511,10 +511,12 @@ impl Params {
     /// Parameters from a TOML file overriding the Bergen Twin.
     pub fn from_file(path: &Path) -> Result<Params, ParamError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ParamError::Io {
-            file: file.clone(),
-            source,
-        })?;
+        let text =
+            crate::config_error::read_text_bounded(path, crate::config_error::MAX_TEXT_BYTES)
+                .map_err(|e| ParamError::Io {
+                    file: file.clone(),
+                    source: e.into_io(),
+                })?;
         Self::from_toml_str(&text, &file)
     }
 
