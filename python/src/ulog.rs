@@ -122,8 +122,11 @@ pub fn read(path: &Path) -> Result<Log> {
         reader,
         |ev| -> std::result::Result<(), helicon_ulog::ReadError> {
             match ev {
-                Event::Info(kv) | Event::InfoMultiple(kv) => {
+                Event::Info(kv) => {
                     log.info.insert(kv.name.clone(), kv.value.to_string());
+                }
+                Event::InfoMultiple(m) => {
+                    log.info.insert(m.name.clone(), m.value().to_string());
                 }
                 Event::Parameter { kv, .. } => {
                     if let Some(v) = number(&kv.value) {
