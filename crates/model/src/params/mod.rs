@@ -131,10 +131,12 @@ impl ParamError {
 }
 
 /// Keys of the cross-key rules and the key they are compared with.
-const CROSS_KEY_PARTNERS: [(&str, &str); 3] = [
+const CROSS_KEY_PARTNERS: [(&str, &str); 5] = [
     ("s_min", "s_max"),
     ("hinge_offset_m", "radius_m"),
     ("inner_radius_m", "outer_radius_m"),
+    ("friction_dynamic", "friction_static"),
+    ("contact_x_rear_m", "contact_x_front_m"),
 ];
 
 /// The 1-based line where the dotted `key` (e.g. `servo.tail.s_min`) is
@@ -349,6 +351,97 @@ impl YawGyro {
     }
 }
 
+/// The optional landing gear (skids as four contact points) and the flat
+/// ground it stands on, see [`crate::landing_gear`]. Disabled by default:
+/// the thesis's model has no ground.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LandingGear {
+    /// 1 when the block is on, 0 when off (TOML `true`/`false` or 1/0).
+    pub enabled: f64,
+    /// The ground plane's NED down coordinate under the NED origin (m).
+    pub ground_down_m: f64,
+    /// The ground's slope (rad): the plane rises toward north by this angle.
+    pub ground_slope_rad: f64,
+    /// Body x of the front skid ends (m, forward of the CM).
+    pub contact_x_front_m: f64,
+    /// Body x of the rear skid ends (m, forward of the CM; negative aft).
+    pub contact_x_rear_m: f64,
+    /// Half the skid track (m): the skids are at body y = ±this.
+    pub contact_y_half_m: f64,
+    /// Body z of the skids (m, below the CM).
+    pub contact_z_m: f64,
+    /// Normal (and tangential) spring per contact point (N/m).
+    pub stiffness_n_m: f64,
+    /// Normal (and tangential) damper per contact point (N·s/m).
+    pub damping_n_s_m: f64,
+    /// μs, static friction coefficient.
+    pub friction_static: f64,
+    /// μd, dynamic (sliding) friction coefficient.
+    pub friction_dynamic: f64,
+    /// Sliding speed of the smooth static-to-dynamic transition (m/s).
+    pub stribeck_speed_m_s: f64,
+}
+
+impl LandingGear {
+    /// Whether the block is on.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled != 0.0
+    }
+}
+
+/// The optional ground effect on the main rotor's inflow (Cheeseman and
+/// Bennett), see [`crate::ground_effect`]. Needs the landing gear's ground
+/// plane; disabled by default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundEffect {
+    /// 1 when the block is on, 0 when off.
+    pub enabled: f64,
+    /// The smallest hub height over R the formula is used at (below it the
+    /// height is clamped to this): 0.5, where the closed form's validity ends.
+    pub min_height_ratio: f64,
+}
+
+impl GroundEffect {
+    /// Whether the block is on.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled != 0.0
+    }
+}
+
+/// The optional drivetrain: rotor speed Ω as a state driven by an engine
+/// under a governor, see [`crate::drivetrain`]. Disabled by default: Ω is
+/// the constant `main_rotor.omega_rad_s`, as in the thesis (ch. 5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Drivetrain {
+    /// 1 when the block is on, 0 when off.
+    pub enabled: f64,
+    /// Rotor, stabilizer bar and transmission inertia about the main shaft
+    /// (kg·m²), the tail rotor's referred to it.
+    pub inertia_kg_m2: f64,
+    /// Engine torque at full throttle, at the main shaft (N·m).
+    pub engine_torque_max_n_m: f64,
+    /// Transmission friction, viscous (N·m per rad/s, i.e. N·m·s/rad).
+    pub friction_n_m_s: f64,
+    /// Governor proportional gain (throttle per rad/s of speed error).
+    pub governor_kp_s: f64,
+    /// Governor integral gain (throttle per rad of accumulated speed error).
+    pub governor_ki_per_rad: f64,
+    /// Spool-up time (s): the governor's speed reference ramps from 0 to Ω
+    /// in this time.
+    pub spool_up_s: f64,
+    /// Below this rotor speed the blade aerodynamics are evaluated at it and
+    /// the rotors' forces scaled by (Ω / this)² (rad/s): the model's
+    /// ratios divide by ΩR.
+    pub aero_floor_rad_s: f64,
+}
+
+impl Drivetrain {
+    /// Whether the block is on.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled != 0.0
+    }
+}
+
 /// Every model constant. Build with [`Params::bergen_twin`] or
 /// [`Params::from_toml_str`] / [`Params::from_file`]; all are validated.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -374,6 +467,12 @@ pub struct Params {
     pub control: Control,
     /// The optional yaw-rate gyro (off by default).
     pub yaw_gyro: YawGyro,
+    /// The optional landing gear and ground (off by default).
+    pub landing_gear: LandingGear,
+    /// The optional ground effect (off by default).
+    pub ground_effect: GroundEffect,
+    /// The optional drivetrain, rotor speed as a state (off by default).
+    pub drivetrain: Drivetrain,
 }
 
 const ZERO_SERVO: Servo = Servo {
@@ -461,6 +560,34 @@ impl Params {
                 kp_s: 0.0,
                 ki: 0.0,
                 max_rate_rad_s: 0.0,
+            },
+            landing_gear: LandingGear {
+                enabled: 0.0,
+                ground_down_m: 0.0,
+                ground_slope_rad: 0.0,
+                contact_x_front_m: 0.0,
+                contact_x_rear_m: 0.0,
+                contact_y_half_m: 0.0,
+                contact_z_m: 0.0,
+                stiffness_n_m: 0.0,
+                damping_n_s_m: 0.0,
+                friction_static: 0.0,
+                friction_dynamic: 0.0,
+                stribeck_speed_m_s: 0.0,
+            },
+            ground_effect: GroundEffect {
+                enabled: 0.0,
+                min_height_ratio: 0.0,
+            },
+            drivetrain: Drivetrain {
+                enabled: 0.0,
+                inertia_kg_m2: 0.0,
+                engine_torque_max_n_m: 0.0,
+                friction_n_m_s: 0.0,
+                governor_kp_s: 0.0,
+                governor_ki_per_rad: 0.0,
+                spool_up_s: 0.0,
+                aero_floor_rad_s: 0.0,
             },
         }
     }
@@ -626,6 +753,43 @@ impl Params {
                 "must be < stabilizer_bar.outer_radius_m",
             ));
         }
+        let lg = &self.landing_gear;
+        if lg.ground_slope_rad.abs() >= 1.0 {
+            return Err(invalid(
+                "landing_gear.ground_slope_rad",
+                lg.ground_slope_rad,
+                "must be within +-1 rad (57 deg): a steeper ground is a wall",
+            ));
+        }
+        if lg.friction_dynamic > lg.friction_static {
+            return Err(invalid(
+                "landing_gear.friction_dynamic",
+                lg.friction_dynamic,
+                "must be <= landing_gear.friction_static",
+            ));
+        }
+        if lg.contact_x_rear_m >= lg.contact_x_front_m {
+            return Err(invalid(
+                "landing_gear.contact_x_rear_m",
+                lg.contact_x_rear_m,
+                "must be < landing_gear.contact_x_front_m",
+            ));
+        }
+        if self.ground_effect.min_height_ratio < 0.5 {
+            return Err(invalid(
+                "ground_effect.min_height_ratio",
+                self.ground_effect.min_height_ratio,
+                "must be >= 0.5: below z/R = 0.5 the Cheeseman-Bennett formula is outside its validity \
+                 (and its factor reaches zero at z/R = 0.25)",
+            ));
+        }
+        if self.ground_effect.is_enabled() && !lg.is_enabled() {
+            return Err(invalid(
+                "ground_effect.enabled",
+                1.0,
+                "needs landing_gear.enabled: the ground effect needs the ground plane",
+            ));
+        }
         Ok(())
     }
 
@@ -718,7 +882,7 @@ mod tests {
         assert_eq!(p.servos[3].s_min, -0.37);
         assert_eq!(p.stabilizer_bar.outer_radius_m, 0.65);
         assert_eq!(p.tail_rotor.radius_m, 0.18);
-        assert_eq!(descriptor_count(), 81);
+        assert_eq!(descriptor_count(), 103);
     }
 
     #[test]
