@@ -610,7 +610,9 @@ impl Params {
                 file: file.to_string(),
                 message: e.to_string(),
             })?;
-        if let Some(d) = descriptors().find(|d| lookup(&table, d.section, d.key).is_none()) {
+        if let Some(d) = descriptors().find(|d| {
+            !OPTIONAL_SECTIONS.contains(&d.section) && lookup(&table, d.section, d.key).is_none()
+        }) {
             return Err(ParamError::Invalid {
                 file: file.to_string(),
                 line: None,
@@ -620,6 +622,20 @@ impl Params {
             });
         }
         let mut p = Params::zeroed();
+        // the optional blocks' sections may be left out: their values are
+        // then the embedded file's (the block off)
+        let embedded: toml::Table =
+            BERGEN_TWIN_TOML
+                .parse()
+                .map_err(|e: toml::de::Error| ParamError::Syntax {
+                    file: "<embedded bergen_twin.toml>".to_string(),
+                    message: e.to_string(),
+                })?;
+        for section in OPTIONAL_SECTIONS {
+            if let Some(toml::Value::Table(t)) = embedded.get(section) {
+                p.apply_table(t, section, "<embedded bergen_twin.toml>", &mut 0)?;
+            }
+        }
         p.apply_table(&table, "", file, &mut 0)
             .map_err(|e| e.located(text))?;
         p.validate(file).map_err(|e| e.located(text))?;
@@ -815,7 +831,19 @@ impl Params {
              # see `params/bergen_twin.toml`. Ω is inferred (not printed in the thesis).\n",
         );
         let mut section = "";
+        let embedded = Params::bergen_twin();
+        let mut defaults = embedded;
         for d in descriptors() {
+            // an optional block left at the embedded values (off) is not
+            // written: the file (and every hash of it) is the one of before
+            // the block existed
+            if OPTIONAL_SECTIONS.contains(&d.section)
+                && descriptors()
+                    .filter(|o| o.section == d.section)
+                    .all(|o| *(o.field)(&mut copy.clone()) == *(o.field)(&mut defaults))
+            {
+                continue;
+            }
             if d.section != section {
                 section = d.section;
                 let _ = write!(out, "\n[{section}]\n");
@@ -833,6 +861,12 @@ impl Params {
         out
     }
 }
+
+/// The sections of the optional blocks beyond the thesis's model (landing
+/// gear, ground effect, drivetrain): a complete file may leave them out
+/// (their embedded values apply, the blocks off), and [`Params::to_toml`]
+/// leaves them out while they hold the embedded values.
+pub const OPTIONAL_SECTIONS: [&str; 3] = ["landing_gear", "ground_effect", "drivetrain"];
 
 /// Servo TOML sections in input order.
 pub const SERVO_SECTIONS: [&str; 4] = [
@@ -897,6 +931,23 @@ mod tests {
         assert_eq!(p.body.iyy_kg_m2, 0.62);
         let again = Params::parse_complete(&p.to_toml(), "roundtrip").unwrap();
         assert_eq!(again, p);
+    }
+
+    #[test]
+    fn optional_blocks_at_their_defaults_are_left_out_and_round_trip_when_set() {
+        let p = Params::bergen_twin();
+        let text = p.to_toml();
+        for s in OPTIONAL_SECTIONS {
+            assert!(!text.contains(&format!("[{s}]")), "{s}");
+        }
+        assert_eq!(Params::parse_complete(&text, "t").unwrap(), p);
+        let mut q = p;
+        q.landing_gear.enabled = 1.0;
+        q.drivetrain.spool_up_s = 3.0;
+        let text = q.to_toml();
+        assert!(text.contains("[landing_gear]") && text.contains("[drivetrain]"));
+        assert!(!text.contains("[ground_effect]"));
+        assert_eq!(Params::parse_complete(&text, "t").unwrap(), q);
     }
 
     #[test]
