@@ -209,7 +209,7 @@ impl Consts {
         Consts {
             omega_rad_s: mr.omega_rad_s,
             mr_grid: Grid::new(0.0, mr.radius_m - mr.hinge_offset_m),
-            tr: TailRotorConsts::new(&params),
+            tr: TailRotorConsts::new(params),
             lift_k: 0.5 * rho * mr.chord_m * mr.lift_slope_per_rad,
             drag_k: 0.5 * rho * mr.chord_m * mr.drag_coefficient,
             a_cal_sb: rho * sb.lift_slope_per_rad * sb.chord_m / (2.0 * sb.paddle_inertia_kg_m2),

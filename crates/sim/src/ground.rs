@@ -65,7 +65,7 @@ impl GroundSection {
     /// Check the times and that the parameters have the blocks it needs.
     pub fn validate(&self, file: &str, duration_s: f64) -> Result<(), ScenarioError> {
         let bad = |field: &str, v: f64, rule: &str| {
-            ScenarioError::invalid(file, &format!("ground.{field}"), v, rule)
+            ScenarioError::invalid(file, format!("ground.{field}"), v, rule)
         };
         for (field, v) in [
             ("spool_up_s", self.spool_up_s),
@@ -144,7 +144,7 @@ impl Phase {
 /// What the ground log keeps of one sample.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct GroundSample {
-    /// Lowest skid point's height above the ground (m; ≤ 0 in contact).
+    /// Lowest skid point's height above the ground (m; ≤ 0 in contact; NaN without the landing gear).
     pub clearance_m: f64,
     /// Rotor speed Ω (rad/s).
     pub omega_rad_s: f64,

@@ -780,31 +780,6 @@ pub fn write_cases_index(
     Ok((summary, report))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn figure_column_positions_match_the_names() {
-        for j in 0..4 {
-            assert_eq!(FIG_COLUMNS[REF0 + j], format!("ref_{}", OUTPUTS[j]));
-            assert_eq!(FIG_COLUMNS[OUT0 + j], OUTPUTS[j]);
-            assert_eq!(FIG_COLUMNS[SERVO0 + j], INPUT_NAMES[j]);
-        }
-        for (i, m) in MEASURED_NAMES.iter().enumerate() {
-            assert_eq!(FIG_COLUMNS[ERR0 + i], format!("err_{m}"));
-        }
-        assert_eq!(
-            &FIG_COLUMNS[WIND0..WIND0 + 3],
-            &["wind_n", "wind_e", "wind_d"]
-        );
-        assert_eq!(&FIG_COLUMNS[LAMBDA0..], &["lambda_mr", "lambda_tr"]);
-        for c in FIG_COLUMNS {
-            assert!(crate::log_csv::log_column(c).is_some(), "{c}");
-        }
-    }
-}
-
 /// The columns of `ground.csv`, in order (SI units in the names).
 pub const GROUND_COLUMNS: [&str; 14] = [
     "t_s",
@@ -908,4 +883,29 @@ pub fn write_ground(
         files.push(path);
     }
     Ok(files)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn figure_column_positions_match_the_names() {
+        for j in 0..4 {
+            assert_eq!(FIG_COLUMNS[REF0 + j], format!("ref_{}", OUTPUTS[j]));
+            assert_eq!(FIG_COLUMNS[OUT0 + j], OUTPUTS[j]);
+            assert_eq!(FIG_COLUMNS[SERVO0 + j], INPUT_NAMES[j]);
+        }
+        for (i, m) in MEASURED_NAMES.iter().enumerate() {
+            assert_eq!(FIG_COLUMNS[ERR0 + i], format!("err_{m}"));
+        }
+        assert_eq!(
+            &FIG_COLUMNS[WIND0..WIND0 + 3],
+            &["wind_n", "wind_e", "wind_d"]
+        );
+        assert_eq!(&FIG_COLUMNS[LAMBDA0..], &["lambda_mr", "lambda_tr"]);
+        for c in FIG_COLUMNS {
+            assert!(crate::log_csv::log_column(c).is_some(), "{c}");
+        }
+    }
 }

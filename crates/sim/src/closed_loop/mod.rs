@@ -574,30 +574,15 @@ fn fly_with(
             row.u = command;
             row.excitation = exc.into();
             if let Some(c) = contact_start {
-                let plane = prepared.model.ground_plane();
-                let gear = &params.landing_gear;
-                ground_rows.push(GroundRow {
-                    t_s: t,
-                    height_m: plane.height_m(&Vector3::new(
-                        x_start[ix::X],
-                        x_start[ix::Y],
-                        x_start[ix::Z],
-                    )),
-                    sample: crate::ground::GroundSample {
-                        clearance_m: if gear.is_enabled() {
-                            helicon_model::landing_gear::clearance_m(gear, &x_start)
-                        } else {
-                            f64::INFINITY
-                        },
-                        omega_rad_s: omega_start,
-                        throttle: step.aux.throttle,
-                        normal_n: c.normal_n,
-                        friction_n: c.friction_n.iter().sum(),
-                        ground_effect_factor: step.aux.ground_effect_factor,
-                        phase: plan.as_ref().map_or(2.0, |p| p.phase().code()),
-                        blend: plan.as_ref().map_or(1.0, |p| p.blend()),
-                    },
-                });
+                ground_rows.push(ground_row(
+                    prepared,
+                    plan.as_ref(),
+                    t,
+                    &x_start,
+                    omega_start,
+                    &c,
+                    &step.aux,
+                ));
             }
             if let Some(h) = health.as_ref().map(ImuHealthMonitor::health) {
                 row.imu_health = [
@@ -640,6 +625,39 @@ fn fly_with(
         sensors,
         summary,
     })
+}
+
+/// The ground row of one sample: the state at its start, the contact there,
+/// the plan, the plant's auxiliary outputs.
+fn ground_row(
+    prepared: &Prepared,
+    plan: Option<&crate::ground::GroundPlan>,
+    t_s: f64,
+    x: &State,
+    omega_rad_s: f64,
+    contact: &helicon_model::landing_gear::ContactWrench,
+    aux: &Aux,
+) -> GroundRow {
+    let plane = prepared.model.ground_plane();
+    let gear = &prepared.model.params().landing_gear;
+    GroundRow {
+        t_s,
+        height_m: plane.height_m(&Vector3::new(x[ix::X], x[ix::Y], x[ix::Z])),
+        sample: crate::ground::GroundSample {
+            clearance_m: if gear.is_enabled() {
+                helicon_model::landing_gear::clearance_m(gear, x)
+            } else {
+                f64::NAN
+            },
+            omega_rad_s,
+            throttle: aux.throttle,
+            normal_n: contact.normal_n,
+            friction_n: contact.friction_n.iter().sum(),
+            ground_effect_factor: aux.ground_effect_factor,
+            phase: plan.map_or(2.0, |p| p.phase().code()),
+            blend: plan.map_or(1.0, crate::ground::GroundPlan::blend),
+        },
+    }
 }
 
 impl LogRow {
