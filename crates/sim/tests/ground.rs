@@ -34,6 +34,7 @@ fn ground_to_ground_flies_spools_takes_off_and_lands() {
     // starts at rest on the skids, rotor stopped
     assert_eq!(first.sample.omega_rad_s, 0.0);
     assert!(first.sample.clearance_m < 0.0);
+    assert!(((first.sample.normal_n.iter().sum::<f64>() - weight) / weight).abs() < 1e-3);
     // on the ground before the take-off: spooled up to the governed speed,
     // still on the skids
     let before = f.ground.iter().rfind(|r| r.t_s < g.takeoff_s).unwrap();

@@ -86,11 +86,22 @@ impl<'a> Plant<'a> {
                 anchors: Anchors::default(),
             };
             prepared.model.update_anchors(&mut state);
+            let contact = if p.landing_gear.is_enabled() {
+                contact_wrench(
+                    &p.landing_gear,
+                    prepared.model.ground_plane(),
+                    prepared.model.contact_points_body_m(),
+                    &x,
+                    &state.anchors,
+                )
+            } else {
+                ContactWrench::default()
+            };
             PlantGround {
                 rotor,
                 anchors: state.anchors,
                 drive,
-                contact: ContactWrench::default(),
+                contact,
             }
         });
         Plant {
