@@ -354,6 +354,8 @@ pub fn fly_and_write_with(
         .with_context(|| format!("writing the run outputs to {}", out.display()))?;
     let files = finish_run(out, scenario, prepared, &flight.summary, rows)
         .with_context(|| format!("writing the run outputs to {}", out.display()))?;
+    helicon_sim::output::write_ground(out, &flight.ground, &scenario.name)
+        .with_context(|| format!("writing the ground files to {}", out.display()))?;
     Ok((flight, files, fly_s, t2.elapsed().as_secs_f64()))
 }
 

@@ -4,20 +4,24 @@
 //! 400 Hz controller drives the servos). The default step is 1/400 s
 //! ([`DEFAULT_STEP_S`]), the thesis's sampling time.
 
-use crate::model::{Aux, Model, ModelError};
+use crate::drivetrain::{DriveCommand, RotorState};
+use crate::model::{Aux, Model, ModelError, PlantState, PlantVector};
 use crate::options::InflowMode;
+use crate::state::NX;
 use crate::state::{Input, State};
 use nalgebra::Vector3;
 
 /// Default integration step (s): 1/400 s.
 pub const DEFAULT_STEP_S: f64 = 1.0 / 400.0;
 
-/// One classical RK4 step of ẋ = f(x), (10.1)–(10.5), for any fallible `f`.
-pub fn rk4<E>(
-    x: &State,
+/// One classical RK4 step of ẋ = f(x), (10.1)–(10.5), for any fallible `f`
+/// on a fixed-size vector (the model's [`State`], or the plant's
+/// [`crate::PlantVector`]).
+pub fn rk4<const N: usize, E>(
+    x: &nalgebra::SVector<f64, N>,
     dt: f64,
-    mut f: impl FnMut(&State) -> Result<State, E>,
-) -> Result<State, E> {
+    mut f: impl FnMut(&nalgebra::SVector<f64, N>) -> Result<nalgebra::SVector<f64, N>, E>,
+) -> Result<nalgebra::SVector<f64, N>, E> {
     let k1 = f(x)?;
     let k2 = f(&(x + k1 * (0.5 * dt)))?;
     let k3 = f(&(x + k2 * (0.5 * dt)))?;
@@ -26,6 +30,54 @@ pub fn rk4<E>(
 }
 
 impl Model {
+    /// One RK4 step of the plant ([`Model::plant_derivative`]): the 30
+    /// states and the drivetrain's integrated together, the inputs, the
+    /// wind, the drive command and the friction anchors held; the anchors
+    /// then follow ([`Model::update_anchors`]). The inflow of each stage is
+    /// warm-started from the previous stage's. Returns the auxiliary outputs
+    /// at the start of the step; on error the plant is left unchanged.
+    pub fn plant_step(
+        &self,
+        plant: &mut PlantState,
+        u: &Input,
+        wind_ned: &Vector3<f64>,
+        drive: &DriveCommand,
+        dt: f64,
+    ) -> Result<Aux, ModelError> {
+        let mut first: Option<Aux> = None;
+        let mut lam: Option<(f64, f64)> = None;
+        let anchors = plant.anchors;
+        let next = rk4(&plant.vector(), dt, |v| {
+            let mut s = PlantState {
+                x: State::zeros(),
+                rotor: RotorState {
+                    omega_rad_s: 0.0,
+                    governor_integral: 0.0,
+                },
+                anchors,
+            };
+            s.set_vector(v);
+            let mode = match lam {
+                Some((l, lt)) => InflowMode::ConvergedFrom {
+                    lambda_mr_hint: l,
+                    lambda_tr_hint: lt,
+                },
+                None => InflowMode::Converged,
+            };
+            let (xd, rd, a) = self.plant_derivative(&s, u, wind_ned, mode, drive)?;
+            lam = Some((a.lambda_mr, a.lambda_tr));
+            first.get_or_insert(a);
+            let mut d = PlantVector::zeros();
+            d.fixed_rows_mut::<NX>(0).copy_from(&xd);
+            d[NX] = rd.omega_rad_s;
+            d[NX + 1] = rd.governor_integral;
+            Ok(d)
+        })?;
+        plant.set_vector(&next);
+        self.update_anchors(plant);
+        Ok(first.unwrap_or_default())
+    }
+
     /// One RK4 step with converged inflow; returns the new state and the
     /// auxiliary outputs at the start of the step.
     pub fn step(

@@ -29,11 +29,14 @@ pub mod config_error {
     pub use helicon_config::*;
 }
 pub mod drag;
+pub mod drivetrain;
 pub mod flapping;
 pub mod ground;
+pub mod ground_effect;
 pub mod gyro;
 pub mod inflow;
 pub mod integrate;
+pub mod landing_gear;
 pub mod linearize;
 pub mod model;
 pub mod options;
@@ -49,7 +52,7 @@ pub use helicon_core::frames;
 pub use helicon_core::state;
 
 pub use config_error::ConfigError;
-pub use model::{Aux, Model, ModelError};
+pub use model::{Aux, Model, ModelError, NX_PLANT, PlantState, PlantVector};
 pub use options::{InflowMode, ModelOptions, Preset};
 pub use params::{ParamError, Params};
 pub use state::{

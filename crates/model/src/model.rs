@@ -12,10 +12,12 @@
 
 use crate::actuators::servo_derivative;
 use crate::drag::{DragWrench, drag};
+use crate::drivetrain::{DriveCommand, RotorState};
 use crate::flapping::StabilizerBarCoefficients;
 use crate::flapping::{FlapBody, main_rotor_accel};
 use crate::frames::EulerTrig;
 use crate::inflow::{InflowError, InflowProblem};
+use crate::landing_gear::{Anchors, ContactWrench, GroundPlane, N_CONTACT};
 use crate::options::{InflowMode, ModelOptions, Preset, SbVelocityScale, WindSign};
 use crate::params::Params;
 use crate::rigid_body::{angular_accel, linear_accel};
@@ -118,11 +120,66 @@ pub struct Aux {
     /// solver's residual with converged inflow, the iteration's with the
     /// thesis emulation.
     pub inflow_residual: [f64; 2],
+    /// The landing gear's forces (zero with the block off or in the air).
+    pub contact: ContactWrench,
+    /// The ground-effect factor k_G on the main rotor's induced velocity
+    /// (1 − (R/4z)²; 0 when the block is off, i.e. not evaluated).
+    pub ground_effect_factor: f64,
+    /// The rotor speed Ω the evaluation used (rad/s).
+    pub omega_rad_s: f64,
+    /// The rotors' aerodynamic load at the main shaft, Q_mr + G·Q_tr (N·m),
+    /// the torque the engine must give at constant speed.
+    pub rotor_load_n_m: f64,
+    /// The drivetrain's throttle (0 … 1; 0 when the block is off).
+    pub throttle: f64,
+}
+
+/// The plant's state beyond the model's 30: the drivetrain's (used when
+/// `drivetrain.enabled`) and the landing gear's friction anchors (used when
+/// `landing_gear.enabled`). The 30-state model, its trim and its
+/// linearization do not see them: with both blocks off
+/// [`Model::plant_derivative`] is [`Model::derivative_with`] bit for bit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlantState {
+    /// The model's 30 states.
+    pub x: State,
+    /// Rotor speed and governor integrator.
+    pub rotor: RotorState,
+    /// The friction anchors (held over an integration step).
+    pub anchors: Anchors,
+}
+
+/// Number of integrated plant states: the model's 30, then Ω and the
+/// governor's integrator.
+pub const NX_PLANT: usize = NX + 2;
+
+/// The integrated plant vector `[x (30), Ω, I]`.
+pub type PlantVector = nalgebra::SVector<f64, NX_PLANT>;
+
+impl PlantState {
+    /// The integrated part as one vector.
+    pub fn vector(&self) -> PlantVector {
+        let mut v = PlantVector::zeros();
+        v.fixed_rows_mut::<NX>(0).copy_from(&self.x);
+        v[NX] = self.rotor.omega_rad_s;
+        v[NX + 1] = self.rotor.governor_integral;
+        v
+    }
+
+    /// Split an integrated vector back into the states (the anchors kept).
+    pub fn set_vector(&mut self, v: &PlantVector) {
+        self.x = v.fixed_rows::<NX>(0).into_owned();
+        self.rotor = RotorState {
+            omega_rad_s: v[NX],
+            governor_integral: v[NX + 1],
+        };
+    }
 }
 
 /// Precomputed constants.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Consts {
+    omega_rad_s: f64,
     mr_grid: Grid,
     tr: TailRotorConsts,
     lift_k: f64,
@@ -135,17 +192,12 @@ struct Consts {
     wind_sign: f64,
 }
 
-/// The helicopter model: parameters, preset options and precomputed constants.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Model {
-    params: Params,
-    options: ModelOptions,
-    c: Consts,
-}
-
-impl Model {
-    /// A model from validated parameters and options.
-    pub fn new(params: Params, options: ModelOptions) -> Model {
+impl Consts {
+    /// The constants at rotor speed `omega_rad_s` (the tail rotor at G·Ω).
+    fn new(params: &Params, options: &ModelOptions, omega_rad_s: f64) -> Consts {
+        let mut at = *params;
+        at.main_rotor.omega_rad_s = omega_rad_s;
+        let params = &at;
         let mr = &params.main_rotor;
         let sb = &params.stabilizer_bar;
         let rho = params.environment.rho_kg_m3;
@@ -154,9 +206,10 @@ impl Model {
             SbVelocityScale::Physical => 1.0,
             SbVelocityScale::OuterRadius => sb.outer_radius_m / mr.radius_m,
         };
-        let c = Consts {
+        Consts {
+            omega_rad_s: mr.omega_rad_s,
             mr_grid: Grid::new(0.0, mr.radius_m - mr.hinge_offset_m),
-            tr: TailRotorConsts::new(&params),
+            tr: TailRotorConsts::new(params),
             lift_k: 0.5 * rho * mr.chord_m * mr.lift_slope_per_rad,
             drag_k: 0.5 * rho * mr.chord_m * mr.drag_coefficient,
             a_cal_sb: rho * sb.lift_slope_per_rad * sb.chord_m / (2.0 * sb.paddle_inertia_kg_m2),
@@ -172,8 +225,100 @@ impl Model {
                 WindSign::Physical => -1.0,
                 WindSign::Thesis => 1.0,
             },
+        }
+    }
+}
+
+/// The ground blocks' precomputed geometry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct GroundConsts {
+    plane: GroundPlane,
+    points_body_m: [Vector3<f64>; N_CONTACT],
+}
+
+/// The helicopter model: parameters, preset options and precomputed constants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Model {
+    params: Params,
+    options: ModelOptions,
+    c: Consts,
+    ground: GroundConsts,
+}
+
+/// The extra inputs of a plant evaluation.
+#[derive(Debug, Clone, Copy)]
+struct PlantInputs<'a> {
+    rotor: &'a RotorState,
+    drive: &'a DriveCommand,
+    anchors: &'a Anchors,
+}
+
+impl Model {
+    /// A model from validated parameters and options.
+    pub fn new(params: Params, options: ModelOptions) -> Model {
+        let c = Consts::new(&params, &options, params.main_rotor.omega_rad_s);
+        let ground = GroundConsts {
+            plane: GroundPlane::new(&params.landing_gear),
+            points_body_m: crate::landing_gear::contact_points_body_m(&params.landing_gear),
         };
-        Model { params, options, c }
+        Model {
+            params,
+            options,
+            c,
+            ground,
+        }
+    }
+
+    /// The ground plane of `[landing_gear]`.
+    pub fn ground_plane(&self) -> &GroundPlane {
+        &self.ground.plane
+    }
+
+    /// The contact points in body axes (m).
+    pub fn contact_points_body_m(&self) -> &[Vector3<f64>; N_CONTACT] {
+        &self.ground.points_body_m
+    }
+
+    /// The plant derivative: the 30 states with the landing gear's forces
+    /// (when on, with the friction `anchors` held) and, when the drivetrain
+    /// is on, the rotor speed and governor states under `drive`
+    /// ([`crate::drivetrain`]). With both blocks off the 30 states are
+    /// [`Model::derivative_with`]'s bit for bit and the rotor rates are 0.
+    /// Returns (ẋ, the rotor states' rates as a [`RotorState`], aux).
+    pub fn plant_derivative(
+        &self,
+        plant: &PlantState,
+        u: &Input,
+        wind_ned: &Vector3<f64>,
+        inflow: InflowMode,
+        drive: &DriveCommand,
+    ) -> Result<(State, RotorState, Aux), ModelError> {
+        if !plant.rotor.omega_rad_s.is_finite() || !plant.rotor.governor_integral.is_finite() {
+            return Err(ModelError::NonFinite {
+                what: "state",
+                name: "omega_rad_s",
+                value: plant.rotor.omega_rad_s + plant.rotor.governor_integral,
+            });
+        }
+        let ext = PlantInputs {
+            rotor: &plant.rotor,
+            drive,
+            anchors: &plant.anchors,
+        };
+        self.eval(&plant.x, u, wind_ned, inflow, Some(ext))
+    }
+
+    /// After an integration step of the plant: the friction anchors follow
+    /// ([`Anchors::update`]); nothing with the landing gear off.
+    pub fn update_anchors(&self, plant: &mut PlantState) {
+        if self.params.landing_gear.is_enabled() {
+            plant.anchors.update(
+                &self.params.landing_gear,
+                &self.ground.plane,
+                &self.ground.points_body_m,
+                &plant.x,
+            );
+        }
     }
 
     /// The Bergen Industrial Twin with a preset.
@@ -202,8 +347,11 @@ impl Model {
         self.derivative_with(x, u, wind_ned, InflowMode::Converged)
     }
 
-    /// ẋ = f(x, u, wind_ned) with a chosen inflow mode.
-    #[allow(clippy::too_many_lines)] // the blocks of Figure 4.4 in data-flow order in one hot function (no call overhead, no allocation)
+    /// ẋ = f(x, u, wind_ned) with a chosen inflow mode. With the ground
+    /// effect on, its factor at the hub's height enters the inflow; the
+    /// landing gear and the drivetrain need the plant's extra states and
+    /// enter only [`Model::plant_derivative`] (Ω is the constant
+    /// `main_rotor.omega_rad_s` here).
     pub fn derivative_with(
         &self,
         x: &State,
@@ -211,11 +359,53 @@ impl Model {
         wind_ned: &Vector3<f64>,
         inflow: InflowMode,
     ) -> Result<(State, Aux), ModelError> {
+        self.eval(x, u, wind_ned, inflow, None)
+            .map(|(xdot, _, aux)| (xdot, aux))
+    }
+
+    #[allow(clippy::too_many_lines)] // the blocks of Figure 4.4 in data-flow order in one hot function (no call overhead, no allocation)
+    fn eval(
+        &self,
+        x: &State,
+        u: &Input,
+        wind_ned: &Vector3<f64>,
+        inflow: InflowMode,
+        ext: Option<PlantInputs<'_>>,
+    ) -> Result<(State, RotorState, Aux), ModelError> {
         check_finite(x, u, wind_ned)?;
         let p = &self.params;
-        let mr = &p.main_rotor;
         let geo = &p.geometry;
-        let c = &self.c;
+        // Rotor speed: the constant Ω, or the drivetrain's state (evaluated
+        // at no less than the aerodynamic floor, the rotors' forces scaled by
+        // (Ω/Ω_eval)² below it).
+        let drive_on = p.drivetrain.is_enabled() && ext.is_some();
+        let (c_var, omega_now, aero_scale);
+        let c = if let (true, Some(e)) = (drive_on, ext.as_ref()) {
+            let w = e.rotor.omega_rad_s.max(0.0);
+            let w_eval = w.max(p.drivetrain.aero_floor_rad_s);
+            omega_now = w;
+            aero_scale = (w / w_eval) * (w / w_eval);
+            if w_eval == p.main_rotor.omega_rad_s {
+                &self.c
+            } else {
+                c_var = Consts::new(p, &self.options, w_eval);
+                &c_var
+            }
+        } else {
+            omega_now = p.main_rotor.omega_rad_s;
+            aero_scale = 1.0;
+            &self.c
+        };
+        let mr_at;
+        let mr = if c.omega_rad_s == p.main_rotor.omega_rad_s {
+            &p.main_rotor
+        } else {
+            mr_at = crate::params::MainRotor {
+                omega_rad_s: c.omega_rad_s,
+                ..p.main_rotor
+            };
+            &mr_at
+        };
         let (phi, theta, psi) = (x[ix::PHI], x[ix::THETA], x[ix::PSI]);
         let trig = EulerTrig::new(phi, theta, psi);
         if trig.ct.abs() < 1e-9 {
@@ -307,16 +497,50 @@ impl Model {
         let theta_tr = x[ix::THETA_TR];
         let tr_problem = tail_rotor::inflow_problem(&c.tr, &mu_tr, theta_tr, pr, rr);
 
+        // Ground effect (Cheeseman–Bennett): the induced velocity is k_G
+        // times momentum theory's at the same thrust (crate::ground_effect).
+        // With λ' = μz − λi the out-of-ground-effect ratio and λ = μz − k_G·λi,
+        // (7.33) in λ' is the same affine problem with C_T0' = C_T0 + C_T1(1−k)μz
+        // and C_T1' = k·C_T1; λ = (1−k)μz + k·λ'.
+        let ge = if p.ground_effect.is_enabled() {
+            let hub_b = Vector3::new(-geo.kappa_h_m, 0.0, -geo.kappa_v_m);
+            let hub_ned = Vector3::new(x[ix::X], x[ix::Y], x[ix::Z]) + ned_from_body * hub_b;
+            let (k, _) = crate::ground_effect::inflow_factor(
+                self.ground.plane.height_m(&hub_ned),
+                mr.radius_m,
+                p.ground_effect.min_height_ratio,
+            );
+            aux.ground_effect_factor = k;
+            Some((k, (1.0 - k) * mr_problem.mu_axial))
+        } else {
+            None
+        };
+        let mr_solve = match ge {
+            Some((k, shift)) => InflowProblem {
+                ct0: mr_problem.ct0 + mr_problem.ct1 * shift,
+                ct1: k * mr_problem.ct1,
+                ..mr_problem
+            },
+            None => mr_problem,
+        };
+        let to_prime = |l: f64| match ge {
+            Some((k, shift)) => (l - shift) / k,
+            None => l,
+        };
+        let from_prime = |l: f64| match ge {
+            Some((k, shift)) => shift + k * l,
+            None => l,
+        };
         let (lam_flap, lam, lam_tr) = match inflow {
             InflowMode::Converged | InflowMode::ConvergedFrom { .. } => {
                 let (h_mr, h_tr) = match inflow {
                     InflowMode::ConvergedFrom {
                         lambda_mr_hint,
                         lambda_tr_hint,
-                    } => (Some(lambda_mr_hint), Some(lambda_tr_hint)),
+                    } => (Some(to_prime(lambda_mr_hint)), Some(lambda_tr_hint)),
                     _ => (None, None),
                 };
-                let s = mr_problem
+                let s = mr_solve
                     .solve_from(h_mr)
                     .map_err(|source| ModelError::Inflow {
                         rotor: "main rotor",
@@ -330,7 +554,8 @@ impl Model {
                     })?;
                 aux.inflow_iterations = [s.iterations, st.iterations];
                 aux.inflow_residual = [s.residual, st.residual];
-                (s.lambda, s.lambda, st.lambda)
+                let l = from_prime(s.lambda);
+                (l, l, st.lambda)
             }
             InflowMode::ThesisIteration {
                 lambda_mr_in,
@@ -340,10 +565,11 @@ impl Model {
                 if iterations == 0 {
                     return Err(ModelError::ZeroInflowIterations);
                 }
-                let l = mr_problem.thesis_iterate(lambda_mr_in, iterations);
+                let l_prime = mr_solve.thesis_iterate(to_prime(lambda_mr_in), iterations);
+                let l = from_prime(l_prime);
                 let lt = tr_problem.thesis_iterate(lambda_tr_in, iterations);
                 aux.inflow_iterations = [iterations, iterations];
-                aux.inflow_residual = [mr_problem.residual(l), tr_problem.residual(lt)];
+                aux.inflow_residual = [mr_solve.residual(l_prime), tr_problem.residual(lt)];
                 if !(l.is_finite() && lt.is_finite()) {
                     let source = InflowError::NoConvergence {
                         iterations,
@@ -367,12 +593,15 @@ impl Model {
 
         // Main-rotor forces and torques (7.7)–(7.9), (7.21), (7.22), (7.25).
         let ks_half = 0.5 * b * mr.spring_n_m_per_rad;
-        let f_hub = Vector3::new(b * bi.fx.at(lam), b * bi.fy.at(lam), -b * bi.lift.at(lam));
-        let t_hub = Vector3::new(
-            b * bi.tx.at(lam) + ks_half * flap.z,
-            b * bi.ty.at(lam) + ks_half * flap.y,
-            b * bi.tz.at(lam),
-        );
+        let mut f_hub = Vector3::new(b * bi.fx.at(lam), b * bi.fy.at(lam), -b * bi.lift.at(lam));
+        let mut t_hub = Vector3::new(b * bi.tx.at(lam), b * bi.ty.at(lam), b * bi.tz.at(lam));
+        if aero_scale != 1.0 {
+            f_hub *= aero_scale;
+            t_hub *= aero_scale;
+        }
+        // the hinge springs' torque is not aerodynamic
+        t_hub.x += ks_half * flap.z;
+        t_hub.y += ks_half * flap.y;
         // (7.26): hub offset from the CM.
         let t_mr = Vector3::new(
             t_hub.x + f_hub.y * geo.kappa_v_m,
@@ -382,14 +611,20 @@ impl Model {
         aux.force_mr_hub_n = f_hub;
         aux.torque_mr_hub_nm = t_hub;
         aux.torque_mr_body_nm = t_mr;
-        let vi = hub.z - lam * c.tip_speed;
-        aux.vi_mr_m_s = vi;
-
+        let mut vi = hub.z - lam * c.tip_speed;
         // Tail rotor (D.39)–(D.43).
-        let f_tr = tail_rotor::thrust_y(&c.tr, &mu_tr, theta_tr, pr, rr, lam_tr);
-        let tq_tr = tail_rotor::torque_y(&c.tr, &mu_tr, theta_tr, pr, rr, lam_tr);
+        let mut f_tr = tail_rotor::thrust_y(&c.tr, &mu_tr, theta_tr, pr, rr, lam_tr);
+        let mut tq_tr = tail_rotor::torque_y(&c.tr, &mu_tr, theta_tr, pr, rr, lam_tr);
+        let mut vi_tr = v_tr.y - lam_tr * c.tr.tip_speed;
+        if aero_scale != 1.0 {
+            let s = aero_scale.sqrt();
+            vi = hub.z + (vi - hub.z) * s;
+            vi_tr = v_tr.y + (vi_tr - v_tr.y) * s;
+            f_tr *= aero_scale;
+            tq_tr *= aero_scale;
+        }
+        aux.vi_mr_m_s = vi;
         let t_tr = tail_rotor::body_torque(f_tr, tq_tr, geo.kappa_v_tr_m, geo.kappa_h_tr_m);
-        let vi_tr = v_tr.y - lam_tr * c.tr.tip_speed;
         aux.force_tr_y_n = f_tr;
         aux.torque_tr_body_nm = t_tr;
         aux.vi_tr_m_s = vi_tr;
@@ -409,11 +644,45 @@ impl Model {
         );
         aux.drag = d;
 
+        // The rotors' load at the main shaft: the drag torques opposing
+        // the rotation, Q_mr = −hτz and G·Q_tr with Q_tr = tτy·(sign of the
+        // tail rotor's spin, −1: tτy < 0 is drag in hover).
+        let load = -t_hub.z - p.tail_rotor.gear_ratio * tq_tr;
+        aux.rotor_load_n_m = load;
+        aux.omega_rad_s = omega_now;
+        let mut rotor_rates = RotorState {
+            omega_rad_s: 0.0,
+            governor_integral: 0.0,
+        };
+
         // Summation (8.3), (8.5).
         let m = p.body.mass_kg;
         let grav = m * trig.gravity_body(p.environment.g_m_s2);
-        let force = f_hub + Vector3::new(0.0, f_tr, 0.0) + d.force_body_n + grav;
-        let torque = t_mr + t_tr + d.torque_body_nm;
+        let mut force = f_hub + Vector3::new(0.0, f_tr, 0.0) + d.force_body_n + grav;
+        let mut torque = t_mr + t_tr + d.torque_body_nm;
+        if let (true, Some(e)) = (drive_on, ext.as_ref()) {
+            let (w_dot, i_dot, thr) =
+                crate::drivetrain::derivative(&p.drivetrain, e.drive, e.rotor, load);
+            rotor_rates = RotorState {
+                omega_rad_s: w_dot,
+                governor_integral: i_dot,
+            };
+            aux.throttle = thr;
+            // the engine's reaction: hτz − J Ω̇ about the shaft (body z)
+            torque.z -= p.drivetrain.inertia_kg_m2 * w_dot;
+        }
+        if let (true, Some(e)) = (p.landing_gear.is_enabled(), ext.as_ref()) {
+            let cw = crate::landing_gear::contact_wrench(
+                &p.landing_gear,
+                &self.ground.plane,
+                &self.ground.points_body_m,
+                x,
+                e.anchors,
+            );
+            force += cw.force_body_n;
+            torque += cw.torque_body_nm;
+            aux.contact = cw;
+        }
         aux.force_gravity_body_n = grav;
         aux.force_total_body_n = force;
         aux.torque_total_body_nm = torque;
@@ -504,7 +773,7 @@ impl Model {
         xdot[ix::B1SB] = sb_rate.y;
         xdot[ix::A1SB_DOT] = sb_ddot.x;
         xdot[ix::B1SB_DOT] = sb_ddot.y;
-        Ok((xdot, aux))
+        Ok((xdot, rotor_rates, aux))
     }
 }
 

@@ -152,6 +152,24 @@ pub enum TrimError {
     /// The target is not finite.
     #[error("trim target has a non-finite component")]
     BadTarget,
+    /// With the landing gear on, the trim point (the NED origin) is on or
+    /// under the ground: a trim is a flight condition.
+    #[error(
+        "{field} = {ground_down_m} m puts the ground {height_m} m below the trim point (the NED \
+         origin), at or above the skids' contact ({contact_m} m below the CM, \
+         landing_gear.contact_z_m): a trim is a flight condition; put the ground more than \
+         {contact_m} m below the origin"
+    )]
+    OnGround {
+        /// The parameter that places the ground.
+        field: &'static str,
+        /// Its value (m).
+        ground_down_m: f64,
+        /// The trim point's height above the ground along its normal (m).
+        height_m: f64,
+        /// The skids' depth below the CM (m).
+        contact_m: f64,
+    },
     /// The trim converged but is outside the physical ranges of the model
     /// ([`Trim::validity`]).
     #[error(
@@ -263,6 +281,18 @@ pub fn trim(model: &Model, target: &TrimTarget, options: &TrimOptions) -> Result
         && target.wind_ned_m_s.iter().all(|v| v.is_finite()))
     {
         return Err(TrimError::BadTarget);
+    }
+    let gear = &model.params().landing_gear;
+    if gear.is_enabled() {
+        let height_m = model.ground_plane().height_m(&Vector3::zeros());
+        if height_m <= gear.contact_z_m {
+            return Err(TrimError::OnGround {
+                field: "landing_gear.ground_down_m",
+                ground_down_m: gear.ground_down_m,
+                height_m,
+                contact_m: gear.contact_z_m,
+            });
+        }
     }
     let m = unbounded(model);
     let (x0, u0) = options.initial.unwrap_or_else(|| cold_start(model, target));

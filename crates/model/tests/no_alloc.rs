@@ -39,3 +39,42 @@ fn derivative_and_step_do_not_allocate() {
         );
     }
 }
+
+#[test]
+fn plant_step_with_the_ground_blocks_does_not_allocate() {
+    use helicon_model::drivetrain::{RotorState, Spool};
+    use helicon_model::landing_gear::{Anchors, resting_state};
+    use helicon_model::{Params, PlantState};
+    let mut p = Params::bergen_twin();
+    p.landing_gear.enabled = 1.0;
+    p.ground_effect.enabled = 1.0;
+    p.drivetrain.enabled = 1.0;
+    let model = Model::new(p, Preset::Physical.options());
+    let x = resting_state(&p.landing_gear, 14.0, 9.82, &State::zeros());
+    let mut s = PlantState {
+        x,
+        rotor: RotorState {
+            omega_rad_s: 0.0,
+            governor_integral: 0.0,
+        },
+        anchors: Anchors::default(),
+    };
+    let mut spool = Spool::stopped(&p);
+    spool.start(0.0);
+    let u = Input::new(0.05, 0.0, 0.0, 0.1);
+    let wind = Vector3::new(1.0, -2.0, 0.3);
+    let _ = model
+        .plant_step(&mut s, &u, &wind, &spool.command, 1.0 / 400.0)
+        .unwrap();
+    let before = allocations();
+    for _ in 0..1000 {
+        // spooling up through the aerodynamic floor, on the skids
+        model
+            .plant_step(&mut s, &u, &wind, &spool.command, 1.0 / 400.0)
+            .unwrap();
+        spool.step(1.0 / 400.0);
+    }
+    let after = allocations();
+    assert!(s.rotor.omega_rad_s > 10.0 && s.x.iter().all(|v| v.is_finite()));
+    assert_eq!(after - before, 0, "{} allocations", after - before);
+}

@@ -8,6 +8,7 @@
 //! - [`sensors`]: IMU, magnetometer and GPS models with a seeded RNG;
 //! - [`vibration`]: vibration at the IMU and the sensors' internal stages
 //!   (mechanical range and bandwidth, internal low-pass; thesis Appendix A);
+//! - [`ground`]: starting on the ground, the take-off and landing plan, the ground metrics;
 //! - [`shaker`]: the shaker experiment of Appendix A (hidden saturation);
 //! - [`trajectory`]: a scripted smooth trajectory to drive the sensors;
 //! - [`envelope`]: jerk-limited mission references and the gain schedule a scenario flies;
@@ -18,6 +19,7 @@
 pub mod closed_loop;
 pub mod envelope;
 pub mod excitation;
+pub mod ground;
 pub mod log_csv;
 pub mod mc;
 pub mod metrics;

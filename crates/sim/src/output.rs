@@ -780,6 +780,111 @@ pub fn write_cases_index(
     Ok((summary, report))
 }
 
+/// The columns of `ground.csv`, in order (SI units in the names).
+pub const GROUND_COLUMNS: [&str; 14] = [
+    "t_s",
+    "height_m",
+    "clearance_m",
+    "omega_rad_s",
+    "throttle",
+    "normal_front_left_n",
+    "normal_front_right_n",
+    "normal_rear_left_n",
+    "normal_rear_right_n",
+    "normal_total_n",
+    "friction_total_n",
+    "ground_effect_factor",
+    "phase",
+    "blend",
+];
+
+/// The ground files of a flight with the ground blocks on (nothing when
+/// `rows` is empty): `ground.csv` ([`GROUND_COLUMNS`]: the CM's height
+/// above the ground, the skids' clearance (empty without the landing gear),
+/// rotor speed, throttle, the contact points' normal forces, friction, the
+/// ground-effect factor, the plan's phase 0 ground, 1 taking off, 2 flying,
+/// 3 landed, and the blend from ground idle to the flight law) and
+/// `ground.png`/`ground.svg` (height and clearance, rotor speed, contact
+/// forces, throttle and blend). Returns the files written.
+pub fn write_ground(
+    dir: &Path,
+    rows: &[crate::closed_loop::GroundRow],
+    title: &str,
+) -> Result<Vec<PathBuf>, OutputError> {
+    if rows.is_empty() {
+        return Ok(Vec::new());
+    }
+    let csv_path = dir.join("ground.csv");
+    let mut text = GROUND_COLUMNS.join(",");
+    text.push('\n');
+    for r in rows {
+        let g = &r.sample;
+        let cells = [
+            r.t_s,
+            r.height_m,
+            g.clearance_m,
+            g.omega_rad_s,
+            g.throttle,
+            g.normal_n[0],
+            g.normal_n[1],
+            g.normal_n[2],
+            g.normal_n[3],
+            g.normal_n.iter().sum(),
+            g.friction_n,
+            g.ground_effect_factor,
+            g.phase,
+            g.blend,
+        ];
+        for (i, v) in cells.iter().enumerate() {
+            if i > 0 {
+                text.push(',');
+            }
+            if v.is_finite() {
+                let _ = write!(text, "{v:?}");
+            }
+        }
+        text.push('\n');
+    }
+    std::fs::write(&csv_path, text).map_err(|e| io_err(&csv_path, e))?;
+    let pts = |f: &dyn Fn(&crate::closed_loop::GroundRow) -> f64| -> Vec<(f64, f64)> {
+        rows.iter().map(|r| (r.t_s, f(r))).collect()
+    };
+    let height = pts(&|r| r.height_m);
+    let clearance = pts(&|r| r.sample.clearance_m);
+    let omega = pts(&|r| r.sample.omega_rad_s);
+    let total = pts(&|r| r.sample.normal_n.iter().sum());
+    let per: Vec<Vec<(f64, f64)>> = (0..4).map(|i| pts(&|r| r.sample.normal_n[i])).collect();
+    let friction = pts(&|r| r.sample.friction_n);
+    let throttle = pts(&|r| r.sample.throttle);
+    let blend = pts(&|r| r.sample.blend);
+    let names = helicon_model::landing_gear::CONTACT_NAMES;
+    let mut forces = Panel::new("contact force [N]").series(Series::new("normal, total", &total));
+    for (i, p) in per.iter().enumerate() {
+        forces = forces.series(Series::new(names[i], p));
+    }
+    forces = forces.series(Series::new("friction, total", &friction).dashed());
+    let fig = Figure::new(&format!("{title}: ground"), "time [s]")
+        .panel(
+            Panel::new("height [m]")
+                .series(Series::new("CM above ground", &height))
+                .series(Series::new("skid clearance", &clearance)),
+        )
+        .panel(Panel::new("rotor speed [rad/s]").series(Series::new("Ω", &omega)))
+        .panel(forces)
+        .panel(
+            Panel::new("[0 … 1]")
+                .series(Series::new("throttle", &throttle))
+                .series(Series::new("blend idle → law", &blend).dashed()),
+        );
+    let mut files = vec![csv_path];
+    for ext in ["png", "svg"] {
+        let path = dir.join(format!("ground.{ext}"));
+        fig.write(&path)?;
+        files.push(path);
+    }
+    Ok(files)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -226,6 +226,11 @@ pub struct Scenario {
     /// Log.
     #[serde(default)]
     pub log: LogSection,
+    /// Start on the ground, take off and land ([`crate::ground`]). Not
+    /// written when absent, so the effective scenarios (and campaign
+    /// hashes) without it are unchanged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<crate::ground::GroundSection>,
     /// The expanded `[[case]]` entries (see [`Scenario::cases`]); not a TOML key.
     #[serde(skip)]
     pub variants: Vec<Scenario>,
@@ -524,6 +529,9 @@ impl Scenario {
             .validate(file)
             .map_err(|e| e.within(file, "sensors"))?;
         self.validate_envelope(file)?;
+        if let Some(g) = &self.ground {
+            g.validate(file, self.duration_s)?;
+        }
         crate::excitation::Excitations::new(&self.excitation, file)?;
         crate::wind::Wind::from_config(&self.wind).map_err(|e| e.within(file, "wind"))?;
         Ok(())

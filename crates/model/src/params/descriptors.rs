@@ -43,7 +43,7 @@ pub struct Magnitude {
 /// `parameters_at_the_ends_of_their_ranges_keep_the_derivative_finite`
 /// evaluates the model with every key at an end of its range). A value
 /// beyond them is a unit or typing mistake, not a helicopter.
-pub const MAGNITUDES: [(&str, Magnitude); 13] = [
+pub const MAGNITUDES: [(&str, Magnitude); 18] = [
     ("m", mag("length", 1e-4, 1e3)),
     ("m^2", mag("area", 1e-8, 1e6)),
     ("kg", mag("mass", 1e-3, 1e6)),
@@ -57,6 +57,11 @@ pub const MAGNITUDES: [(&str, Magnitude); 13] = [
     ("kg/m^3", mag("density", 1e-6, 1e4)),
     ("m/s^2", mag("acceleration", 1e-3, 1e3)),
     ("s", mag("time", 1e-6, 1e3)),
+    ("N/m", mag("stiffness", 1e-3, 1e9)),
+    ("N*s/m", mag("damping", 1e-6, 1e7)),
+    ("m/s", mag("speed", 1e-6, 1e3)),
+    ("N*m", mag("torque", 1e-6, 1e7)),
+    ("N*m*s/rad", mag("rotary damping", 1e-9, 1e6)),
 ];
 
 const fn mag(family: &'static str, min_positive: f64, max_abs: f64) -> Magnitude {
@@ -578,6 +583,191 @@ const YAW_GYRO: [Descriptor; 4] = [
     ),
 ];
 
+const LANDING_GEAR: [Descriptor; 12] = [
+    d!(
+        "landing_gear",
+        "enabled",
+        "1",
+        "landing gear and ground on (skid contact points)",
+        Flag,
+        |p| p.landing_gear.enabled
+    ),
+    d!(
+        "landing_gear",
+        "ground_down_m",
+        "m",
+        "NED down coordinate of the ground under the origin",
+        Finite,
+        |p| p.landing_gear.ground_down_m
+    ),
+    d!(
+        "landing_gear",
+        "ground_slope_rad",
+        "rad",
+        "ground slope, rising toward north",
+        Finite,
+        |p| p.landing_gear.ground_slope_rad
+    ),
+    d!(
+        "landing_gear",
+        "contact_x_front_m",
+        "m",
+        "body x of the front skid ends (forward)",
+        Finite,
+        |p| p.landing_gear.contact_x_front_m
+    ),
+    d!(
+        "landing_gear",
+        "contact_x_rear_m",
+        "m",
+        "body x of the rear skid ends (forward; negative aft)",
+        Finite,
+        |p| p.landing_gear.contact_x_rear_m
+    ),
+    d!(
+        "landing_gear",
+        "contact_y_half_m",
+        "m",
+        "half the skid track (body y = +-this)",
+        Positive,
+        |p| p.landing_gear.contact_y_half_m
+    ),
+    d!(
+        "landing_gear",
+        "contact_z_m",
+        "m",
+        "body z of the skids (below the CM)",
+        Positive,
+        |p| p.landing_gear.contact_z_m
+    ),
+    d!(
+        "landing_gear",
+        "stiffness_n_m",
+        "N/m",
+        "k spring per contact point",
+        Positive,
+        |p| p.landing_gear.stiffness_n_m
+    ),
+    d!(
+        "landing_gear",
+        "damping_n_s_m",
+        "N*s/m",
+        "c damper per contact point",
+        NonNegative,
+        |p| p.landing_gear.damping_n_s_m
+    ),
+    d!(
+        "landing_gear",
+        "friction_static",
+        "1",
+        "μs static friction",
+        NonNegative,
+        |p| p.landing_gear.friction_static
+    ),
+    d!(
+        "landing_gear",
+        "friction_dynamic",
+        "1",
+        "μd sliding friction",
+        NonNegative,
+        |p| p.landing_gear.friction_dynamic
+    ),
+    d!(
+        "landing_gear",
+        "stribeck_speed_m_s",
+        "m/s",
+        "sliding speed of the static-to-dynamic transition",
+        Positive,
+        |p| p.landing_gear.stribeck_speed_m_s
+    ),
+];
+
+const GROUND_EFFECT: [Descriptor; 2] = [
+    d!(
+        "ground_effect",
+        "enabled",
+        "1",
+        "ground effect on the main-rotor inflow on",
+        Flag,
+        |p| p.ground_effect.enabled
+    ),
+    d!(
+        "ground_effect",
+        "min_height_ratio",
+        "1",
+        "z/R below which the height is clamped (>= 0.5)",
+        Positive,
+        |p| p.ground_effect.min_height_ratio
+    ),
+];
+
+const DRIVETRAIN: [Descriptor; 8] = [
+    d!(
+        "drivetrain",
+        "enabled",
+        "1",
+        "rotor speed as a state (engine, governor) on",
+        Flag,
+        |p| p.drivetrain.enabled
+    ),
+    d!(
+        "drivetrain",
+        "inertia_kg_m2",
+        "kg*m^2",
+        "J rotor + transmission inertia, main shaft",
+        Positive,
+        |p| p.drivetrain.inertia_kg_m2
+    ),
+    d!(
+        "drivetrain",
+        "engine_torque_max_n_m",
+        "N*m",
+        "engine torque at full throttle, main shaft",
+        Positive,
+        |p| p.drivetrain.engine_torque_max_n_m
+    ),
+    d!(
+        "drivetrain",
+        "friction_n_m_s",
+        "N*m*s/rad",
+        "transmission friction (viscous)",
+        NonNegative,
+        |p| p.drivetrain.friction_n_m_s
+    ),
+    d!(
+        "drivetrain",
+        "governor_kp_s",
+        "s",
+        "governor Kp, throttle per rad/s",
+        NonNegative,
+        |p| p.drivetrain.governor_kp_s
+    ),
+    d!(
+        "drivetrain",
+        "governor_ki_per_rad",
+        "1/rad",
+        "governor Ki, throttle per rad",
+        NonNegative,
+        |p| p.drivetrain.governor_ki_per_rad
+    ),
+    d!(
+        "drivetrain",
+        "spool_up_s",
+        "s",
+        "spool-up time, 0 to governed speed",
+        Positive,
+        |p| p.drivetrain.spool_up_s
+    ),
+    d!(
+        "drivetrain",
+        "aero_floor_rad_s",
+        "rad/s",
+        "rotor speed floor of the blade aerodynamics",
+        Positive,
+        |p| p.drivetrain.aero_floor_rad_s
+    ),
+];
+
 /// All parameter descriptors, in file order.
 pub fn descriptors() -> impl Iterator<Item = &'static Descriptor> {
     BASE.iter()
@@ -586,6 +776,9 @@ pub fn descriptors() -> impl Iterator<Item = &'static Descriptor> {
         .chain(SERVO_LON.iter())
         .chain(SERVO_TR.iter())
         .chain(YAW_GYRO.iter())
+        .chain(LANDING_GEAR.iter())
+        .chain(GROUND_EFFECT.iter())
+        .chain(DRIVETRAIN.iter())
 }
 
 /// Number of parameter keys.

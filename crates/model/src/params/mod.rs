@@ -131,10 +131,12 @@ impl ParamError {
 }
 
 /// Keys of the cross-key rules and the key they are compared with.
-const CROSS_KEY_PARTNERS: [(&str, &str); 3] = [
+const CROSS_KEY_PARTNERS: [(&str, &str); 5] = [
     ("s_min", "s_max"),
     ("hinge_offset_m", "radius_m"),
     ("inner_radius_m", "outer_radius_m"),
+    ("friction_dynamic", "friction_static"),
+    ("contact_x_rear_m", "contact_x_front_m"),
 ];
 
 /// The 1-based line where the dotted `key` (e.g. `servo.tail.s_min`) is
@@ -349,6 +351,97 @@ impl YawGyro {
     }
 }
 
+/// The optional landing gear (skids as four contact points) and the flat
+/// ground it stands on, see [`crate::landing_gear`]. Disabled by default:
+/// the thesis's model has no ground.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LandingGear {
+    /// 1 when the block is on, 0 when off (TOML `true`/`false` or 1/0).
+    pub enabled: f64,
+    /// The ground plane's NED down coordinate under the NED origin (m).
+    pub ground_down_m: f64,
+    /// The ground's slope (rad): the plane rises toward north by this angle.
+    pub ground_slope_rad: f64,
+    /// Body x of the front skid ends (m, forward of the CM).
+    pub contact_x_front_m: f64,
+    /// Body x of the rear skid ends (m, forward of the CM; negative aft).
+    pub contact_x_rear_m: f64,
+    /// Half the skid track (m): the skids are at body y = ±this.
+    pub contact_y_half_m: f64,
+    /// Body z of the skids (m, below the CM).
+    pub contact_z_m: f64,
+    /// Normal (and tangential) spring per contact point (N/m).
+    pub stiffness_n_m: f64,
+    /// Normal (and tangential) damper per contact point (N·s/m).
+    pub damping_n_s_m: f64,
+    /// μs, static friction coefficient.
+    pub friction_static: f64,
+    /// μd, dynamic (sliding) friction coefficient.
+    pub friction_dynamic: f64,
+    /// Sliding speed of the smooth static-to-dynamic transition (m/s).
+    pub stribeck_speed_m_s: f64,
+}
+
+impl LandingGear {
+    /// Whether the block is on.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled != 0.0
+    }
+}
+
+/// The optional ground effect on the main rotor's inflow (Cheeseman and
+/// Bennett), see [`crate::ground_effect`]. Needs the landing gear's ground
+/// plane; disabled by default.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundEffect {
+    /// 1 when the block is on, 0 when off.
+    pub enabled: f64,
+    /// The smallest hub height over R the formula is used at (below it the
+    /// height is clamped to this): 0.5, where the closed form's validity ends.
+    pub min_height_ratio: f64,
+}
+
+impl GroundEffect {
+    /// Whether the block is on.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled != 0.0
+    }
+}
+
+/// The optional drivetrain: rotor speed Ω as a state driven by an engine
+/// under a governor, see [`crate::drivetrain`]. Disabled by default: Ω is
+/// the constant `main_rotor.omega_rad_s`, as in the thesis (ch. 5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Drivetrain {
+    /// 1 when the block is on, 0 when off.
+    pub enabled: f64,
+    /// Rotor, stabilizer bar and transmission inertia about the main shaft
+    /// (kg·m²), the tail rotor's referred to it.
+    pub inertia_kg_m2: f64,
+    /// Engine torque at full throttle, at the main shaft (N·m).
+    pub engine_torque_max_n_m: f64,
+    /// Transmission friction, viscous (N·m per rad/s, i.e. N·m·s/rad).
+    pub friction_n_m_s: f64,
+    /// Governor proportional gain (throttle per rad/s of speed error).
+    pub governor_kp_s: f64,
+    /// Governor integral gain (throttle per rad of accumulated speed error).
+    pub governor_ki_per_rad: f64,
+    /// Spool-up time (s): the governor's speed reference ramps from 0 to Ω
+    /// in this time.
+    pub spool_up_s: f64,
+    /// Below this rotor speed the blade aerodynamics are evaluated at it and
+    /// the rotors' forces scaled by (Ω / this)² (rad/s): the model's
+    /// ratios divide by ΩR.
+    pub aero_floor_rad_s: f64,
+}
+
+impl Drivetrain {
+    /// Whether the block is on.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled != 0.0
+    }
+}
+
 /// Every model constant. Build with [`Params::bergen_twin`] or
 /// [`Params::from_toml_str`] / [`Params::from_file`]; all are validated.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -374,6 +467,12 @@ pub struct Params {
     pub control: Control,
     /// The optional yaw-rate gyro (off by default).
     pub yaw_gyro: YawGyro,
+    /// The optional landing gear and ground (off by default).
+    pub landing_gear: LandingGear,
+    /// The optional ground effect (off by default).
+    pub ground_effect: GroundEffect,
+    /// The optional drivetrain, rotor speed as a state (off by default).
+    pub drivetrain: Drivetrain,
 }
 
 const ZERO_SERVO: Servo = Servo {
@@ -462,6 +561,34 @@ impl Params {
                 ki: 0.0,
                 max_rate_rad_s: 0.0,
             },
+            landing_gear: LandingGear {
+                enabled: 0.0,
+                ground_down_m: 0.0,
+                ground_slope_rad: 0.0,
+                contact_x_front_m: 0.0,
+                contact_x_rear_m: 0.0,
+                contact_y_half_m: 0.0,
+                contact_z_m: 0.0,
+                stiffness_n_m: 0.0,
+                damping_n_s_m: 0.0,
+                friction_static: 0.0,
+                friction_dynamic: 0.0,
+                stribeck_speed_m_s: 0.0,
+            },
+            ground_effect: GroundEffect {
+                enabled: 0.0,
+                min_height_ratio: 0.0,
+            },
+            drivetrain: Drivetrain {
+                enabled: 0.0,
+                inertia_kg_m2: 0.0,
+                engine_torque_max_n_m: 0.0,
+                friction_n_m_s: 0.0,
+                governor_kp_s: 0.0,
+                governor_ki_per_rad: 0.0,
+                spool_up_s: 0.0,
+                aero_floor_rad_s: 0.0,
+            },
         }
     }
 
@@ -483,7 +610,9 @@ impl Params {
                 file: file.to_string(),
                 message: e.to_string(),
             })?;
-        if let Some(d) = descriptors().find(|d| lookup(&table, d.section, d.key).is_none()) {
+        if let Some(d) = descriptors().find(|d| {
+            !OPTIONAL_SECTIONS.contains(&d.section) && lookup(&table, d.section, d.key).is_none()
+        }) {
             return Err(ParamError::Invalid {
                 file: file.to_string(),
                 line: None,
@@ -493,6 +622,20 @@ impl Params {
             });
         }
         let mut p = Params::zeroed();
+        // the optional blocks' sections may be left out: their values are
+        // then the embedded file's (the block off)
+        let embedded: toml::Table =
+            BERGEN_TWIN_TOML
+                .parse()
+                .map_err(|e: toml::de::Error| ParamError::Syntax {
+                    file: "<embedded bergen_twin.toml>".to_string(),
+                    message: e.to_string(),
+                })?;
+        for section in OPTIONAL_SECTIONS {
+            if let Some(toml::Value::Table(t)) = embedded.get(section) {
+                p.apply_table(t, section, "<embedded bergen_twin.toml>", &mut 0)?;
+            }
+        }
         p.apply_table(&table, "", file, &mut 0)
             .map_err(|e| e.located(text))?;
         p.validate(file).map_err(|e| e.located(text))?;
@@ -628,6 +771,43 @@ impl Params {
                 "must be < stabilizer_bar.outer_radius_m",
             ));
         }
+        let lg = &self.landing_gear;
+        if lg.ground_slope_rad.abs() >= 1.0 {
+            return Err(invalid(
+                "landing_gear.ground_slope_rad",
+                lg.ground_slope_rad,
+                "must be within +-1 rad (57 deg): a steeper ground is a wall",
+            ));
+        }
+        if lg.friction_dynamic > lg.friction_static {
+            return Err(invalid(
+                "landing_gear.friction_dynamic",
+                lg.friction_dynamic,
+                "must be <= landing_gear.friction_static",
+            ));
+        }
+        if lg.contact_x_rear_m >= lg.contact_x_front_m {
+            return Err(invalid(
+                "landing_gear.contact_x_rear_m",
+                lg.contact_x_rear_m,
+                "must be < landing_gear.contact_x_front_m",
+            ));
+        }
+        if self.ground_effect.min_height_ratio < 0.5 {
+            return Err(invalid(
+                "ground_effect.min_height_ratio",
+                self.ground_effect.min_height_ratio,
+                "must be >= 0.5: below z/R = 0.5 the Cheeseman-Bennett formula is outside its validity \
+                 (and its factor reaches zero at z/R = 0.25)",
+            ));
+        }
+        if self.ground_effect.is_enabled() && !lg.is_enabled() {
+            return Err(invalid(
+                "ground_effect.enabled",
+                1.0,
+                "needs landing_gear.enabled: the ground effect needs the ground plane",
+            ));
+        }
         Ok(())
     }
 
@@ -653,7 +833,19 @@ impl Params {
              # see `params/bergen_twin.toml`. Ω is inferred (not printed in the thesis).\n",
         );
         let mut section = "";
+        let embedded = Params::bergen_twin();
+        let mut defaults = embedded;
         for d in descriptors() {
+            // an optional block left at the embedded values (off) is not
+            // written: the file (and every hash of it) is the one of before
+            // the block existed
+            if OPTIONAL_SECTIONS.contains(&d.section)
+                && descriptors()
+                    .filter(|o| o.section == d.section)
+                    .all(|o| *(o.field)(&mut copy.clone()) == *(o.field)(&mut defaults))
+            {
+                continue;
+            }
             if d.section != section {
                 section = d.section;
                 let _ = write!(out, "\n[{section}]\n");
@@ -671,6 +863,12 @@ impl Params {
         out
     }
 }
+
+/// The sections of the optional blocks beyond the thesis's model (landing
+/// gear, ground effect, drivetrain): a complete file may leave them out
+/// (their embedded values apply, the blocks off), and [`Params::to_toml`]
+/// leaves them out while they hold the embedded values.
+pub const OPTIONAL_SECTIONS: [&str; 3] = ["landing_gear", "ground_effect", "drivetrain"];
 
 /// Servo TOML sections in input order.
 pub const SERVO_SECTIONS: [&str; 4] = [
@@ -720,7 +918,7 @@ mod tests {
         assert_eq!(p.servos[3].s_min, -0.37);
         assert_eq!(p.stabilizer_bar.outer_radius_m, 0.65);
         assert_eq!(p.tail_rotor.radius_m, 0.18);
-        assert_eq!(descriptor_count(), 81);
+        assert_eq!(descriptor_count(), 103);
     }
 
     #[test]
@@ -735,6 +933,23 @@ mod tests {
         assert_eq!(p.body.iyy_kg_m2, 0.62);
         let again = Params::parse_complete(&p.to_toml(), "roundtrip").unwrap();
         assert_eq!(again, p);
+    }
+
+    #[test]
+    fn optional_blocks_at_their_defaults_are_left_out_and_round_trip_when_set() {
+        let p = Params::bergen_twin();
+        let text = p.to_toml();
+        for s in OPTIONAL_SECTIONS {
+            assert!(!text.contains(&format!("[{s}]")), "{s}");
+        }
+        assert_eq!(Params::parse_complete(&text, "t").unwrap(), p);
+        let mut q = p;
+        q.landing_gear.enabled = 1.0;
+        q.drivetrain.spool_up_s = 3.0;
+        let text = q.to_toml();
+        assert!(text.contains("[landing_gear]") && text.contains("[drivetrain]"));
+        assert!(!text.contains("[ground_effect]"));
+        assert_eq!(Params::parse_complete(&text, "t").unwrap(), q);
     }
 
     #[test]

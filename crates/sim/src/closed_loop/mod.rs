@@ -216,6 +216,9 @@ pub fn prepare_with_params(
     scenario: &Scenario,
     params: Params,
 ) -> Result<Prepared, ClosedLoopError> {
+    if let Some(g) = &scenario.ground {
+        g.check_params(&params, &scenario.name)?;
+    }
     let model = Model::new(params, scenario.preset.options());
     let target = TrimTarget {
         velocity_ned_m_s: Vector3::from(scenario.trim.velocity_ned_m_s),
@@ -347,11 +350,26 @@ pub struct LogRow {
     pub excitation: [f64; 4],
 }
 
+/// One sample of the ground blocks (kept with the log's decimation).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundRow {
+    /// Time (s).
+    pub t_s: f64,
+    /// The CM's height above the ground plane (m).
+    pub height_m: f64,
+    /// Rotor speed, contact forces, plan phase.
+    pub sample: crate::ground::GroundSample,
+}
+
 /// A finished flight: the log and the summary.
 #[derive(Debug, Clone)]
 pub struct Flight {
     /// Samples (every `[log] decimation`-th).
     pub log: Vec<LogRow>,
+    /// The ground blocks' samples, at the log's rows, kept in memory also
+    /// when the log is streamed (empty unless the parameters enable the
+    /// landing gear or the drivetrain).
+    pub ground: Vec<GroundRow>,
     /// Every sensor frame given to the flight software, with its truth
     /// (`[log] sensors = true` with sensor models in the loop; else empty).
     pub sensors: Vec<SensorLogRow>,
@@ -546,6 +564,15 @@ fn fly_with(
         check_log_memory(n + 1, std::mem::size_of::<SensorLogRow>())?;
     }
     let mut plant = Plant::new(scenario, prepared, ts);
+    let params = prepared.model.params();
+    let mut plan = scenario
+        .ground
+        .map(|g| crate::ground::GroundPlan::new(&g, params, ts, &plant.x));
+    let mut ground_rows = Vec::new();
+    if plant.ground.is_some() {
+        check_log_memory(rows, std::mem::size_of::<GroundRow>())?;
+        ground_rows.reserve(rows);
+    }
     let mut onboard = OnBoard::new(scenario, prepared, &plant.x)?;
     let mut wind = Wind::from_config(&scenario.wind)?;
     let mut health = imu_health_monitor(scenario, prepared)?;
@@ -579,11 +606,37 @@ fn fly_with(
             }
         };
         let x_start = plant.x;
-        let step = plant.advance(&tel.command, &wind_ned);
+        let omega_start = plant.omega_rad_s();
+        let contact_start = plant.ground.as_ref().map(|g| g.contact);
+        let command = match plan.as_mut() {
+            Some(plan) => {
+                let on_ground = contact_start.is_some_and(|c| c.on_ground());
+                let c = plan.command(t, &tel.command, on_ground, &plant.x, omega_start);
+                plan.observe_contact(contact_start.map_or(0.0, |c| c.total_normal_n()));
+                if let Some(g) = plant.ground.as_mut() {
+                    g.drive = plan.drive(params);
+                }
+                c
+            }
+            None => tel.command,
+        };
+        let step = plant.advance(&command, &wind_ned);
         // the log keeps every `decimation`-th sample (and the last one)
         if k % decimation == 0 || k == n {
             let mut row = LogRow::new(t, &x_start, &tel, r, &wind_ned, &step.aux);
+            row.u = command;
             row.excitation = exc.into();
+            if let Some(c) = contact_start {
+                ground_rows.push(ground_row(
+                    prepared,
+                    plan.as_ref(),
+                    t,
+                    &x_start,
+                    omega_start,
+                    &c,
+                    &step.aux,
+                ));
+            }
             if let Some(h) = health.as_ref().map(ImuHealthMonitor::health) {
                 row.imu_health = [
                     h.vibration_rms_m_s2,
@@ -624,12 +677,47 @@ fn fly_with(
     if let Some(cb) = progress.as_mut() {
         cb(1.0);
     }
-    let summary = summarize(scenario, prepared, &acc, reason, t);
+    let mut summary = summarize(scenario, prepared, &acc, reason, t);
+    summary.ground = plan.map(|p| p.metrics(plant.omega_rad_s()));
     Ok(Flight {
         log,
+        ground: ground_rows,
         sensors,
         summary,
     })
+}
+
+/// The ground row of one sample: the state at its start, the contact there,
+/// the plan, the plant's auxiliary outputs.
+fn ground_row(
+    prepared: &Prepared,
+    plan: Option<&crate::ground::GroundPlan>,
+    t_s: f64,
+    x: &State,
+    omega_rad_s: f64,
+    contact: &helicon_model::landing_gear::ContactWrench,
+    aux: &Aux,
+) -> GroundRow {
+    let plane = prepared.model.ground_plane();
+    let gear = &prepared.model.params().landing_gear;
+    GroundRow {
+        t_s,
+        height_m: plane.height_m(&Vector3::new(x[ix::X], x[ix::Y], x[ix::Z])),
+        sample: crate::ground::GroundSample {
+            clearance_m: if gear.is_enabled() {
+                helicon_model::landing_gear::clearance_m(gear, x)
+            } else {
+                f64::NAN
+            },
+            omega_rad_s,
+            throttle: aux.throttle,
+            normal_n: contact.normal_n,
+            friction_n: contact.friction_n.iter().sum(),
+            ground_effect_factor: aux.ground_effect_factor,
+            phase: plan.map_or(2.0, |p| p.phase().code()),
+            blend: plan.map_or(1.0, crate::ground::GroundPlan::blend),
+        },
+    }
 }
 
 impl LogRow {

@@ -5,6 +5,9 @@
 use super::*;
 use helicon_core::SensorComputer;
 use helicon_core::schedule::{AnyPredictor, Law};
+use helicon_model::drivetrain::{DriveCommand, RotorState, Spool, governed_state};
+use helicon_model::landing_gear::{Anchors, ContactWrench, contact_wrench, resting_state};
+use helicon_model::{PlantState, PlantVector};
 
 /// The plant: the nonlinear model integrated with RK4 between controller
 /// samples, inputs and wind held, inflow warm-started from the last solution.
@@ -22,6 +25,22 @@ pub(super) struct Plant<'a> {
     /// The yaw-rate gyro between the tail input and the tail servo, when
     /// the parameters enable it (run once per controller sample).
     gyro: Option<YawGyroBlock>,
+    /// The plant's states beyond the 30 (rotor speed, governor, friction
+    /// anchors), when the parameters enable the landing gear or the
+    /// drivetrain; `None` keeps the thesis's plant step unchanged.
+    pub(super) ground: Option<PlantGround>,
+}
+
+/// The ground blocks' part of the plant.
+pub(super) struct PlantGround {
+    /// Rotor speed and governor integrator.
+    pub(super) rotor: RotorState,
+    /// Friction anchors.
+    anchors: Anchors,
+    /// The engine's command, held over a sample (set by the plan).
+    pub(super) drive: DriveCommand,
+    /// The contact at the end of the last step.
+    pub(super) contact: ContactWrench,
 }
 
 /// What one plant step reports.
@@ -35,9 +54,60 @@ pub(super) struct PlantStep {
 
 impl<'a> Plant<'a> {
     pub(super) fn new(scenario: &Scenario, prepared: &'a Prepared, ts: f64) -> Self {
+        let p = prepared.model.params();
+        let on_ground = scenario.ground.is_some_and(|g| g.on_ground);
+        let mut x = initial_state(scenario, &prepared.trim);
+        if on_ground {
+            // resting on the skids at the design point's north and east,
+            // servos centred, blades still
+            let mut rest = State::zeros();
+            rest[ix::X] = x[ix::X];
+            rest[ix::Y] = x[ix::Y];
+            x = resting_state(&p.landing_gear, p.body.mass_kg, p.environment.g_m_s2, &rest);
+        }
+        let ground = (p.landing_gear.is_enabled() || p.drivetrain.is_enabled()).then(|| {
+            let (rotor, drive) = if on_ground && p.drivetrain.is_enabled() {
+                (
+                    RotorState {
+                        omega_rad_s: 0.0,
+                        governor_integral: 0.0,
+                    },
+                    Spool::stopped(p).command,
+                )
+            } else {
+                (
+                    governed_state(p, prepared.trim.aux.rotor_load_n_m),
+                    Spool::governed(p).command,
+                )
+            };
+            let mut state = PlantState {
+                x,
+                rotor,
+                anchors: Anchors::default(),
+            };
+            prepared.model.update_anchors(&mut state);
+            let contact = if p.landing_gear.is_enabled() {
+                contact_wrench(
+                    &p.landing_gear,
+                    prepared.model.ground_plane(),
+                    prepared.model.contact_points_body_m(),
+                    &x,
+                    &state.anchors,
+                )
+            } else {
+                ContactWrench::default()
+            };
+            PlantGround {
+                rotor,
+                anchors: state.anchors,
+                drive,
+                contact,
+            }
+        });
         Plant {
             model: &prepared.model,
-            x: initial_state(scenario, &prepared.trim),
+            x,
+            ground,
             lambda: (prepared.trim.aux.lambda_mr, prepared.trim.aux.lambda_tr),
             xdot: State::zeros(),
             inflow: scenario.plant.inflow,
@@ -74,6 +144,9 @@ impl<'a> Plant<'a> {
             u_servo[3] = gyro.step(u[3], self.x[ix::R]);
         }
         let u = &u_servo;
+        if self.ground.is_some() {
+            return self.advance_ground(u, wind_ned);
+        }
         let mut first: Option<(Aux, State)> = None;
         let mut error = None;
         let (inflow, iterations, model) = (self.inflow, self.inflow_iterations, self.model);
@@ -106,6 +179,96 @@ impl<'a> Plant<'a> {
                     break;
                 }
             }
+        }
+        let (aux, xdot) = first.unwrap_or_default();
+        self.xdot = xdot;
+        PlantStep { aux, error }
+    }
+}
+
+impl Plant<'_> {
+    /// The rotor speed (rad/s): the drivetrain's state, or the constant Ω.
+    pub(super) fn omega_rad_s(&self) -> f64 {
+        match &self.ground {
+            Some(g) => g.rotor.omega_rad_s,
+            None => self.model.params().main_rotor.omega_rad_s,
+        }
+    }
+
+    /// [`Plant::advance`] with the ground blocks: the 30 states and the
+    /// drivetrain's integrated together ([`Model::plant_derivative`]), the
+    /// friction anchors following after each step.
+    fn advance_ground(&mut self, u: &Input, wind_ned: &Vector3<f64>) -> PlantStep {
+        let mut first: Option<(Aux, State)> = None;
+        let mut error = None;
+        let (inflow, iterations, model) = (self.inflow, self.inflow_iterations, self.model);
+        let lam = &mut self.lambda;
+        let Some(g) = self.ground.as_mut() else {
+            return PlantStep {
+                aux: Aux::default(),
+                error: None,
+            };
+        };
+        let mut state = PlantState {
+            x: self.x,
+            rotor: g.rotor,
+            anchors: g.anchors,
+        };
+        let drive = g.drive;
+        for _ in 0..self.substeps {
+            let anchors = state.anchors;
+            let res = rk4(&state.vector(), self.h_s, |v| {
+                let mut s = PlantState {
+                    x: State::zeros(),
+                    rotor: state.rotor,
+                    anchors,
+                };
+                s.set_vector(v);
+                let mode = match inflow {
+                    PlantInflow::Converged => InflowMode::ConvergedFrom {
+                        lambda_mr_hint: lam.0,
+                        lambda_tr_hint: lam.1,
+                    },
+                    PlantInflow::ThesisIteration => InflowMode::ThesisIteration {
+                        lambda_mr_in: lam.0,
+                        lambda_tr_in: lam.1,
+                        iterations,
+                    },
+                };
+                let (d, rd, a) = model.plant_derivative(&s, u, wind_ned, mode, &drive)?;
+                *lam = (a.lambda_mr, a.lambda_tr);
+                if first.is_none() {
+                    first = Some((a, d));
+                }
+                let mut dv = PlantVector::zeros();
+                dv.fixed_rows_mut::<{ helicon_model::NX }>(0).copy_from(&d);
+                dv[helicon_model::NX] = rd.omega_rad_s;
+                dv[helicon_model::NX + 1] = rd.governor_integral;
+                Ok::<_, ModelError>(dv)
+            });
+            match res {
+                Ok(next) => {
+                    state.set_vector(&next);
+                    model.update_anchors(&mut state);
+                }
+                Err(e) => {
+                    error = Some(e);
+                    break;
+                }
+            }
+        }
+        self.x = state.x;
+        g.rotor = state.rotor;
+        g.anchors = state.anchors;
+        let p = model.params();
+        if p.landing_gear.is_enabled() {
+            g.contact = contact_wrench(
+                &p.landing_gear,
+                model.ground_plane(),
+                model.contact_points_body_m(),
+                &state.x,
+                &state.anchors,
+            );
         }
         let (aux, xdot) = first.unwrap_or_default();
         self.xdot = xdot;

@@ -150,6 +150,10 @@ pub struct Summary {
     pub design_spectral_radius: f64,
     /// Pincer α of the design.
     pub design_alpha: f64,
+    /// Take-off and landing metrics (`[ground]` scenarios only; not written
+    /// otherwise, so the summaries of other flights are unchanged).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ground: Option<crate::ground::GroundMetrics>,
 }
 
 /// Make a heading-error sequence continuous (no 2π jumps) and shift it by the
@@ -347,6 +351,7 @@ pub(super) fn summarize(
         metrics_stride: acc.stride,
         design_spectral_radius: rho,
         design_alpha: prepared.gains.set.alpha,
+        ground: None,
     }
 }
 
