@@ -403,7 +403,7 @@ impl FusionFilter {
             }
             let forced = self.gate.reset_after > 0 && self.streak[g] >= self.gate.reset_after;
             // a NaN NIS (an overflowing innovation) is refused too
-            if !(nis <= self.gate.nis) && !forced {
+            if (nis.is_nan() || nis > self.gate.nis) && !forced {
                 self.streak[g] = self.streak[g].saturating_add(1);
                 self.rejected += 1;
                 return Ok(false);

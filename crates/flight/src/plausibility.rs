@@ -28,6 +28,11 @@ use helicon_core::SensorFrame;
 use helicon_setup::sensors::SensorConfig;
 use serde::{Deserialize, Serialize};
 
+/// `v` is not at most `max` (NaN included).
+fn beyond(v: f64, max: f64) -> bool {
+    v.is_nan() || v > max
+}
+
 /// The limits (TOML `[plausibility]` of the on-board configuration).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -77,7 +82,7 @@ impl PlausibilityConfig {
             } else {
                 Err(ConfigError::invalid(
                     file,
-                    &format!("plausibility.{field}"),
+                    format!("plausibility.{field}"),
                     v,
                     format!("must be finite, in [{lo}, {hi}]"),
                 ))
@@ -291,7 +296,8 @@ impl SensorGate {
     /// Check one frame; `quality` is the receiver's report of the frame's
     /// fix, when it gives one (positions are in the NED frame of home).
     pub fn check(&mut self, frame: &SensorFrame, quality: Option<&GpsQuality>) -> Gated {
-        let bad_axis = |v: &nalgebra::Vector3<f64>, max: f64| v.iter().any(|x| !(x.abs() <= max));
+        let bad_axis =
+            |v: &nalgebra::Vector3<f64>, max: f64| v.iter().any(|x| beyond(x.abs(), max));
         let imu = if bad_axis(&frame.imu.specific_force_body_m_s2, self.accel_max_m_s2) {
             Some(Rejection::AccelRange)
         } else if bad_axis(&frame.imu.gyro_body_rad_s, self.gyro_max_rad_s) {
@@ -302,7 +308,7 @@ impl SensorGate {
         let mut out = *frame;
         let mag = frame.mag_body.and_then(|m| {
             let n = m.norm();
-            (!(n >= self.mag_min && n <= self.mag_max)).then_some(Rejection::MagField)
+            (beyond(n, self.mag_max) || beyond(self.mag_min, n)).then_some(Rejection::MagField)
         });
         if mag.is_some() {
             out.mag_body = None;
@@ -356,18 +362,18 @@ impl SensorGate {
                 return Some(Rejection::GpsNoFix);
             }
             if q.satellites < c.gps_min_satellites
-                || !(q.h_acc_m <= c.gps_max_h_acc_m)
-                || !(q.v_acc_m <= c.gps_max_v_acc_m)
-                || !(q.s_acc_m_s <= c.gps_max_s_acc_m_s)
+                || beyond(q.h_acc_m, c.gps_max_h_acc_m)
+                || beyond(q.v_acc_m, c.gps_max_v_acc_m)
+                || beyond(q.s_acc_m_s, c.gps_max_s_acc_m_s)
             {
                 return Some(Rejection::GpsQuality);
             }
         }
-        if !(g.position_ned_m.norm() <= c.gps_max_range_m) {
+        if beyond(g.position_ned_m.norm(), c.gps_max_range_m) {
             return Some(Rejection::GpsRange);
         }
         if let Some(v) = g.velocity_ned_m_s
-            && !(v.norm() <= c.gps_max_speed_m_s)
+            && beyond(v.norm(), c.gps_max_speed_m_s)
         {
             return Some(Rejection::GpsSpeed);
         }

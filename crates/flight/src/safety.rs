@@ -367,6 +367,7 @@ impl Supervisor {
     /// Take in this sample's health and the receiver's latest frame;
     /// `heading_rad` is the estimated heading (held on entering a
     /// failsafe). Returns the change of mode, if any (at most one per sample).
+    #[allow(clippy::too_many_lines)] // one sample's rules in priority order
     pub fn update(
         &mut self,
         h: &Health,

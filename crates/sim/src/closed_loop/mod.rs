@@ -543,6 +543,7 @@ fn imu_health_monitor(
     .map_err(Into::into)
 }
 
+#[allow(clippy::too_many_lines)] // one flight in order: set up, step (ground plan, stop flag), log, summarise
 fn fly_with(
     scenario: &Scenario,
     prepared: &Prepared,
