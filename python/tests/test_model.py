@@ -117,7 +117,8 @@ def test_params_default_dict_toml_roundtrip(tmp_path):
     d = p.to_dict()
     assert d["servo"]["tail"]["s_min"] == -0.37 and d["main_rotor"]["blades"] == 2
     assert d["yaw_gyro"]["enabled"] is False
-    assert len(p) == len(helicon.Params.keys()) == 81 and "body.mass_kg" in p
+    # 81 of the thesis model, 22 of the ground blocks (landing gear, ground effect, drivetrain)
+    assert len(p) == len(helicon.Params.keys()) == 103 and "body.mass_kg" in p
     f = tmp_path / "heli.toml"
     f.write_text(p.replace({"body": {"mass_kg": 12.5}}).to_toml())
     q = helicon.Params.from_file(f)
