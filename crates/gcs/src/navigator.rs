@@ -565,8 +565,14 @@ impl Navigator {
     }
 
     /// Follow a guided target (enters guided); `false` (nothing changes) for
-    /// a non-finite one or a position outside the fence.
+    /// a non-finite one, a position outside the fence, or while returning or
+    /// landing: a stream of targets already on its way must not take the
+    /// vehicle out of a failsafe's return, so leaving RETURN or LAND takes an
+    /// explicit mode change (HOLD) first.
     pub fn guided(&mut self, at: &NavInput, target: GuidedTarget, events: &mut Events) -> bool {
+        if matches!(self.mode, NavMode::Return | NavMode::Land) {
+            return false;
+        }
         let ok = match target {
             GuidedTarget::Velocity(v, y) => {
                 v.iter().all(|x| x.is_finite()) && y.is_none_or(f64::is_finite)

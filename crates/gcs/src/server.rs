@@ -995,6 +995,14 @@ impl Server {
         }));
     }
 
+    /// The vehicle's mode when it is returning or landing (guided targets
+    /// do not take it out of either).
+    fn returning_or_landing(&self) -> Option<NavMode> {
+        self.status
+            .map(|s| s.nav_mode)
+            .filter(|m| matches!(m, NavMode::Return | NavMode::Land))
+    }
+
     fn armed(&self) -> bool {
         self.arm_requested
             .unwrap_or(self.status.is_some_and(|s| s.armed))
@@ -1078,10 +1086,17 @@ impl Server {
     }
 
     /// `MAV_CMD_DO_REPOSITION` (COMMAND_INT, a global frame): a guided goto,
-    /// inside the fence only.
+    /// inside the fence only, and not while returning or landing.
     fn reposition(&mut self, c: &COMMAND_INT_DATA) -> MavResult {
         if !self.armed() {
             self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
+            return MavResult::MAV_RESULT_DENIED;
+        }
+        if let Some(mode) = self.returning_or_landing() {
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                &format!("goto refused: mode {} (set HOLD first)", mode.as_str()),
+            );
             return MavResult::MAV_RESULT_DENIED;
         }
         let yaw = f64::from(c.param4);
@@ -1383,6 +1398,13 @@ impl Server {
             self.text(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 "guided refused: not armed",
+            );
+            return;
+        }
+        if let Some(mode) = self.returning_or_landing() {
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                &format!("guided refused: mode {} (set HOLD first)", mode.as_str()),
             );
             return;
         }

@@ -525,4 +525,18 @@ fn fence_breach_acts_as_gf_action_says() {
     }
     assert!(!s.nav.takeoff(&s.at(), 16.0, &mut ev));
     assert_eq!(s.nav.mode(), NavMode::Hold);
+    // a return or a landing is not left by a guided target (a stream on its
+    // way when the fence acted), only by a mode change
+    let near = GuidedTarget::Velocity(Vector3::new(1.0, 0.0, 0.0), None);
+    for mode in [NavMode::Return, NavMode::Land] {
+        match mode {
+            NavMode::Return => s.nav.return_home(&s.at(), &mut ev),
+            _ => s.nav.land(&s.at(), &mut ev),
+        }
+        assert!(!s.nav.guided(&s.at(), near, &mut ev));
+        assert_eq!(s.nav.mode(), mode);
+        s.nav.hold(&s.at(), &mut ev);
+        assert!(s.nav.guided(&s.at(), near, &mut ev));
+        assert_eq!(s.nav.mode(), NavMode::Guided);
+    }
 }

@@ -630,6 +630,8 @@ fn a_guided_flight_out_of_the_fence_returns_and_lands() {
                 .any(|t| t == "fence breached (GF_MAX_HOR_DIST): return")
         {
             breach_at = Some(h.truth_ned_m);
+            // a station still streaming does not fly it out again
+            c.send(&position_target_velocity(1.5, 0.0));
         }
         if !h.vehicle().armed() {
             break;
@@ -650,9 +652,19 @@ fn a_guided_flight_out_of_the_fence_returns_and_lands() {
         "fence 12 m: breach seen at {:.2} m (truth), farthest {farthest:.2} m; {texts:?}",
         breach_at.xy().norm()
     );
-    for want in ["mode RETURN", "mode LAND", "landed"] {
+    for want in [
+        "mode RETURN",
+        "guided refused: mode RETURN (set HOLD first)",
+        "mode LAND",
+        "landed",
+    ] {
         assert!(texts.iter().any(|t| t == want), "no {want}: {texts:?}");
     }
+    let returned = texts.iter().position(|t| t == "mode RETURN").unwrap();
+    assert!(
+        !texts[returned..].iter().any(|t| t == "mode GUIDED"),
+        "{texts:?}"
+    );
     assert!(!h.vehicle().armed());
     // the estimate crossed 12 m; the truth differs by the navigation's
     // error; the stop from 1.5 m/s at 1 m/s² is 1.1 m
