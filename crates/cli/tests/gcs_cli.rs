@@ -36,6 +36,7 @@ fn status(t_s: f64) -> VehicleStatus {
         mission_current: (0, 0),
         link_lost: false,
         load: 0.1,
+        ground: helicon_gcs::link::GroundState::default(),
     }
 }
 

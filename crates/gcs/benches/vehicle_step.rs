@@ -52,7 +52,7 @@ fn bench_vehicle_step(c: &mut Criterion) {
         home: Geodetic::new(57.0146, 9.9869, 20.0).unwrap(),
         navigator: NavigatorConfig::default(),
         signing_key: None,
-        rates_hz: [100.0; 9],
+        rates_hz: [100.0; 10],
     };
     let handle = server::spawn(config, server_end).unwrap();
     let mut plan = Plan::default();
@@ -72,6 +72,7 @@ fn bench_vehicle_step(c: &mut Criterion) {
         t_s: 0.0,
         position_ned_m: Vector3::new(1.0, 2.0, -10.0),
         yaw_rad: 0.0,
+        on_ground: None,
     };
     assert!(nav.start_mission(&at, &mut Events::default()));
     let mut v = Vehicle::new(nav, vehicle_end, 1);

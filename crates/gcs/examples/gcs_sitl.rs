@@ -21,7 +21,7 @@ mod harness;
 use harness::{Harness, scenario};
 use helicon_devices::Geodetic;
 use helicon_gcs::navigator::NavigatorConfig;
-use helicon_gcs::server::{DEFAULT_ADDRESS, ServerConfig, parse_address};
+use helicon_gcs::server::{DEFAULT_ADDRESS, STREAMS, ServerConfig, parse_address};
 use helicon_sim::closed_loop::prepare;
 use std::time::{Duration, Instant};
 
@@ -51,9 +51,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         navigator: NavigatorConfig::default(),
         signing_key: None,
         rates_hz: if full_rate {
-            [100.0; 9]
+            [100.0; STREAMS.len()]
         } else if no_streams {
-            [0.0; 9]
+            [0.0; STREAMS.len()]
         } else {
             helicon_gcs::server::default_rates_hz()
         },

@@ -45,6 +45,73 @@ pub struct FlightMode {
     pub law_flies: bool,
 }
 
+/// On the ground or in the air, as MAVLink's `MAV_LANDED_STATE` tells it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LandedState {
+    /// The flight software has no land detector (a flight that starts in
+    /// the air): nothing is claimed.
+    #[default]
+    Undefined,
+    /// Resting on the ground (disarmed, spooling, ready, landed).
+    OnGround,
+    /// Flying.
+    InAir,
+    /// Taking off: the commands ramping from ground idle, not yet lifted off.
+    Takeoff,
+    /// Landing: descending to touch down.
+    Landing,
+}
+
+impl LandedState {
+    /// `MAV_LANDED_STATE`'s value (0 undefined … 4 landing).
+    pub fn code(self) -> u8 {
+        match self {
+            LandedState::Undefined => 0,
+            LandedState::OnGround => 1,
+            LandedState::InAir => 2,
+            LandedState::Takeoff => 3,
+            LandedState::Landing => 4,
+        }
+    }
+}
+
+/// The main rotor's run-up, as the ground station is told it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RotorRunup {
+    /// The engine is off and the rotor at rest.
+    Stopped,
+    /// The engine runs and the rotor is coming up to speed.
+    SpoolingUp,
+    /// At the governed speed (also: a flight without a spool state).
+    #[default]
+    AtSpeed,
+    /// The engine is cut and the rotor running down.
+    SpoolingDown,
+}
+
+/// The flight software's ground state for the ground station: whether it
+/// is on the ground and where the rotor's run-up is (the defaults: no land
+/// detector, the rotor at speed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct GroundState {
+    /// On the ground or in the air.
+    pub landed: LandedState,
+    /// The rotor's run-up.
+    pub rotor: RotorRunup,
+}
+
+impl GroundState {
+    /// The land detector's word for the navigator: `None` without one,
+    /// otherwise whether the helicopter is on the ground.
+    pub fn on_ground(&self) -> Option<bool> {
+        match self.landed {
+            LandedState::Undefined => None,
+            LandedState::OnGround => Some(true),
+            _ => Some(false),
+        }
+    }
+}
+
 /// One sample's state for the ground station.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VehicleStatus {
@@ -80,6 +147,8 @@ pub struct VehicleStatus {
     pub link_lost: bool,
     /// The control task's load (compute time / period, 0..1).
     pub load: f64,
+    /// On the ground or in the air, and the rotor's run-up.
+    pub ground: GroundState,
 }
 
 /// Something to tell the operator.
@@ -160,6 +229,7 @@ pub struct Vehicle {
     samples: u64,
     dropped: u64,
     sent: u64,
+    ground: GroundState,
 }
 
 impl Vehicle {
@@ -177,11 +247,37 @@ impl Vehicle {
                 t_s: 0.0,
                 position_ned_m: Vector3::zeros(),
                 yaw_rad: 0.0,
+                on_ground: None,
             },
             status_every: status_every.max(1),
             samples: 0,
             dropped: 0,
             sent: 0,
+            ground: GroundState::default(),
+        }
+    }
+
+    /// The flight software's ground state of this sample (call before
+    /// [`Vehicle::step`]; without a call: no land detector, the rotor at
+    /// speed). With a land detector, a landing ends at touchdown and the
+    /// flight software disarms ([`Vehicle::disarmed`] tells the vehicle).
+    pub fn set_ground(&mut self, ground: GroundState) {
+        self.ground = ground;
+        self.at.on_ground = ground.on_ground();
+    }
+
+    /// The flight software disarmed by itself (on the ground after a
+    /// landing, or the pilot's kill): the navigator idles and the operator
+    /// is told.
+    pub fn disarmed(&mut self, t_s: f64) {
+        if self.armed {
+            self.armed = false;
+            let mut events = Events::default();
+            self.nav.idle(&self.at, &mut events);
+            self.send(Downlink::Event(t_s, VehicleEvent::Armed(false)));
+            for e in events.iter() {
+                self.send(Downlink::Event(t_s, VehicleEvent::Nav(e)));
+            }
         }
     }
 
@@ -298,7 +394,9 @@ impl Vehicle {
         self.nav.fence(&at, &mut events);
         let reference = self.nav.step(&at, &mut events);
         for e in events.iter() {
-            if e == NavEvent::Landed && self.armed {
+            // with a land detector the flight software disarms after its
+            // time on the ground, not the navigator at touchdown
+            if e == NavEvent::Landed && self.armed && self.ground.on_ground().is_none() {
                 self.armed = false;
                 arm = Some(false);
                 self.send(Downlink::Event(t_s, VehicleEvent::Armed(false)));
@@ -343,6 +441,7 @@ impl Vehicle {
             mission_current: (current, u16::try_from(plan.len()).unwrap_or(u16::MAX)),
             link_lost: self.nav.link_lost(),
             load,
+            ground: self.ground,
         }
     }
 }

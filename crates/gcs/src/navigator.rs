@@ -396,6 +396,9 @@ pub struct NavInput {
     pub position_ned_m: Vector3<f64>,
     /// Estimated heading (rad).
     pub yaw_rad: f64,
+    /// The flight software's land detector: on the ground or not (`None`:
+    /// it has none, and a landing ends at `landed_height_m` above home).
+    pub on_ground: Option<bool>,
 }
 
 /// A guided target from the ground station.
@@ -773,7 +776,14 @@ impl Navigator {
             NavMode::Return if error.xy().norm() <= self.config.acceptance_radius_m => {
                 self.land(at, events);
             }
-            NavMode::Land if at.position_ned_m.z >= -self.config.landed_height_m => {
+            // touchdown: the land detector's word when there is one (the
+            // descent crawls on below the target until it comes), else the
+            // height above home
+            NavMode::Land
+                if at
+                    .on_ground
+                    .unwrap_or(at.position_ned_m.z >= -self.config.landed_height_m) =>
+            {
                 events.push(NavEvent::Landed);
                 self.idle(at, events);
             }

@@ -48,7 +48,7 @@
 
 use crate::fence::Fence;
 use crate::geo::{MissionError, global_position_ned_m, plan_of};
-use crate::link::{Downlink, ServerEnd, Uplink, VehicleEvent, VehicleStatus};
+use crate::link::{Downlink, LandedState, ServerEnd, Uplink, VehicleEvent, VehicleStatus};
 use crate::navigator::{GuidedTarget, NavEvent, NavMode, NavigatorConfig};
 use crate::params::{PARAMS, ParamError, ParamTable};
 use helicon_devices::{Geodetic, LocalNed};
@@ -83,7 +83,7 @@ pub const MAX_GUIDED_SPEED_M_S: f64 = 50.0;
 
 /// The messages the server streams, with their default rates (Hz; 0: off
 /// until asked for).
-pub const STREAMS: [(u32, &str, f64); 9] = [
+pub const STREAMS: [(u32, &str, f64); 10] = [
     (HEARTBEAT_DATA::ID, "HEARTBEAT", 1.0),
     (SYS_STATUS_DATA::ID, "SYS_STATUS", 1.0),
     (ATTITUDE_DATA::ID, "ATTITUDE", 10.0),
@@ -93,6 +93,7 @@ pub const STREAMS: [(u32, &str, f64); 9] = [
     (VFR_HUD_DATA::ID, "VFR_HUD", 4.0),
     (SERVO_OUTPUT_RAW_DATA::ID, "SERVO_OUTPUT_RAW", 2.0),
     (RC_CHANNELS_DATA::ID, "RC_CHANNELS", 0.0),
+    (EXTENDED_SYS_STATE_DATA::ID, "EXTENDED_SYS_STATE", 1.0),
 ];
 
 /// The server's settings.
@@ -743,6 +744,18 @@ impl Server {
                     ..SYS_STATUS_DATA::DEFAULT
                 })
             }
+            EXTENDED_SYS_STATE_DATA::ID => {
+                MavMessage::EXTENDED_SYS_STATE(EXTENDED_SYS_STATE_DATA {
+                    vtol_state: MavVtolState::MAV_VTOL_STATE_UNDEFINED,
+                    landed_state: match s.ground.landed {
+                        LandedState::Undefined => MavLandedState::MAV_LANDED_STATE_UNDEFINED,
+                        LandedState::OnGround => MavLandedState::MAV_LANDED_STATE_ON_GROUND,
+                        LandedState::InAir => MavLandedState::MAV_LANDED_STATE_IN_AIR,
+                        LandedState::Takeoff => MavLandedState::MAV_LANDED_STATE_TAKEOFF,
+                        LandedState::Landing => MavLandedState::MAV_LANDED_STATE_LANDING,
+                    },
+                })
+            }
             ATTITUDE_DATA::ID => MavMessage::ATTITUDE(ATTITUDE_DATA {
                 time_boot_ms: ms,
                 roll: s.attitude_rad.x as f32,
@@ -1129,6 +1142,13 @@ impl Server {
                 );
                 return MavResult::MAV_RESULT_DENIED;
             }
+            if !s.armed && s.ground.on_ground() == Some(false) {
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    "refused: arm off the ground",
+                );
+                return MavResult::MAV_RESULT_DENIED;
+            }
             let r = self.accepted(Uplink::Arm(true));
             if r == MavResult::MAV_RESULT_ACCEPTED {
                 self.arm_requested = Some(true);
@@ -1136,7 +1156,10 @@ impl Server {
             r
         } else if arm == 0.0 {
             // disarming in the air stops the law: only on the ground, or forced
-            let on_ground = s.nav_mode == NavMode::Idle;
+            let on_ground = match s.ground.on_ground() {
+                Some(g) => g,
+                None => s.nav_mode == NavMode::Idle,
+            };
             if !on_ground && force != 21196.0 {
                 self.text(
                     MavSeverity::MAV_SEVERITY_WARNING,

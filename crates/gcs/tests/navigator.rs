@@ -54,6 +54,7 @@ impl Sim {
             t_s: self.t,
             position_ned_m: self.p,
             yaw_rad: self.yaw,
+            on_ground: None,
         }
     }
 

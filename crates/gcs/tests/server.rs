@@ -41,6 +41,7 @@ fn status(t_s: f64, armed: bool, nav_mode: NavMode) -> VehicleStatus {
         mission_current: (0, 0),
         link_lost: false,
         load: 0.1,
+        ground: helicon_gcs::link::GroundState::default(),
     }
 }
 
