@@ -14,7 +14,7 @@
 //! ```
 //!
 //! Servo command (computer → avionics, type 0x01, L = 9): `flags` (u8, bit 0
-//! armed), then the four servo commands `[S_col, S_lat, S_lon, S_tr]` in the
+//! armed, bit 1 throttle hold: the engine cut), then the four servo commands `[S_col, S_lat, S_lon, S_tr]` in the
 //! model's units as i16 in steps of 1e-4 (range ±3.2767; the model's servo
 //! ranges are within ±0.75).
 //!
@@ -56,6 +56,10 @@ pub struct ServoCommand {
     /// The computer's permission to drive the servos; the avionics holds
     /// the servos at the pilot's commands when false.
     pub armed: bool,
+    /// Throttle hold: the engine cut (at idle with the rotor free), as a
+    /// helicopter's throttle-hold switch; clear, the governor runs the
+    /// rotor up to its speed and holds it.
+    pub throttle_hold: bool,
     /// `[S_col, S_lat, S_lon, S_tr]` in counts of [`SERVO_QUANTUM`].
     pub servo_counts: [i16; 4],
 }
@@ -108,6 +112,7 @@ impl ServoCommand {
         Ok(Self {
             seq,
             armed,
+            throttle_hold: false,
             servo_counts: to_counts(u)?,
         })
     }
@@ -120,7 +125,7 @@ impl ServoCommand {
     /// Encodes the frame.
     pub fn encode(&self) -> EncodedFrame {
         let mut p = [0u8; SERVO_LEN];
-        p[0] = u8::from(self.armed);
+        p[0] = u8::from(self.armed) | (u8::from(self.throttle_hold) << 1);
         for (i, c) in self.servo_counts.iter().enumerate() {
             p[1 + 2 * i..3 + 2 * i].copy_from_slice(&c.to_le_bytes());
         }
@@ -221,10 +226,11 @@ impl Protocol for Avionics {
         }
         let (kind, seq, p) = (f[3], f[4], &f[5..n - 2]);
         match (kind, p.len()) {
-            (TYPE_SERVO_COMMAND, SERVO_LEN) if p[0] & !1 == 0 => {
+            (TYPE_SERVO_COMMAND, SERVO_LEN) if p[0] & !3 == 0 => {
                 Ok(AvionicsMessage::Servo(ServoCommand {
                     seq,
                     armed: p[0] & 1 != 0,
+                    throttle_hold: p[0] & 2 != 0,
                     servo_counts: core::array::from_fn(|i| i16_at(p, 1 + 2 * i)),
                 }))
             }

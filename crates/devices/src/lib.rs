@@ -22,7 +22,7 @@
 //!
 //! ```
 //! use helicon_devices::{AvionicsDecoder, AvionicsMessage, ServoCommand};
-//! let frame = ServoCommand { seq: 7, armed: true, servo_counts: [1850, 0, -12, 300] }.encode();
+//! let frame = ServoCommand { seq: 7, armed: true, throttle_hold: false, servo_counts: [1850, 0, -12, 300] }.encode();
 //! let mut bytes = b"line noise".to_vec();
 //! bytes.extend_from_slice(frame.as_bytes());
 //! let mut decoder = AvionicsDecoder::new();

@@ -109,6 +109,7 @@ fn decoder_statistics_count_what_was_rejected() {
     let frame = ServoCommand {
         seq: 1,
         armed: true,
+        throttle_hold: false,
         servo_counts: [1, 2, 3, 4],
     }
     .encode();

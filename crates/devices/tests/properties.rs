@@ -137,13 +137,16 @@ fn nav_pvt() -> impl Strategy<Value = NavPvt> {
 
 fn avionics_msg() -> impl Strategy<Value = AvionicsMessage> {
     prop_oneof![
-        (any::<u8>(), any::<bool>(), any::<[i16; 4]>()).prop_map(|(seq, armed, c)| {
-            AvionicsMessage::Servo(ServoCommand {
-                seq,
-                armed,
-                servo_counts: c,
-            })
-        }),
+        (any::<u8>(), any::<bool>(), any::<bool>(), any::<[i16; 4]>()).prop_map(
+            |(seq, armed, throttle_hold, c)| {
+                AvionicsMessage::Servo(ServoCommand {
+                    seq,
+                    armed,
+                    throttle_hold,
+                    servo_counts: c,
+                })
+            }
+        ),
         (
             any::<u8>(),
             any::<bool>(),

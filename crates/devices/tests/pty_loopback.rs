@@ -50,6 +50,7 @@ fn frames_cross_a_pty_both_ways() {
     let cmd = ServoCommand {
         seq: 9,
         armed: true,
+        throttle_hold: false,
         servo_counts: [1850, -7500, 7500, 3000],
     };
     link.write_all(cmd.encode().as_bytes()).unwrap();
@@ -93,6 +94,7 @@ fn the_on_board_side_may_reopen_the_port() {
     let frame = ServoCommand {
         seq: 3,
         armed: false,
+        throttle_hold: false,
         servo_counts: [0, 1, 2, 3],
     }
     .encode();
@@ -105,6 +107,7 @@ fn the_on_board_side_may_reopen_the_port() {
         vec![AvionicsMessage::Servo(ServoCommand {
             seq: 3,
             armed: false,
+            throttle_hold: false,
             servo_counts: [0, 1, 2, 3]
         })]
     );
@@ -157,6 +160,7 @@ fn a_full_output_buffer_drops_frames_without_blocking() {
     let frame = ServoCommand {
         seq: 3,
         armed: true,
+        throttle_hold: false,
         servo_counts: [1850, -7500, 7500, 3000],
     }
     .encode();

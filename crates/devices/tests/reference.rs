@@ -118,6 +118,10 @@ fn avionics_frames_match_the_documented_layout() {
             "servo" => AvionicsMessage::Servo(ServoCommand {
                 seq,
                 armed: c["armed"].as_bool().unwrap(),
+                throttle_hold: c
+                    .get("throttle_hold")
+                    .and_then(|v| v.as_bool())
+                    .unwrap_or(false),
                 servo_counts: core::array::from_fn(|i| int(&c["servo_counts"][i]) as i16),
             }),
             _ => AvionicsMessage::Rc(RcInput {

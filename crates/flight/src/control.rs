@@ -4,6 +4,7 @@
 //! `SensorComputer` `helicon sim` flies) computes the law, the mode
 //! picks what goes to the servos. Allocation-free.
 
+use crate::landing::{Landing, LandingInput, LandingStep};
 use crate::plausibility::{GpsQuality, Rejection, SensorGate};
 use crate::safety::{Health, Mode, RcInput, RcLink, SafetyEvent, Supervisor};
 use helicon_core::ServoLimits;
@@ -59,6 +60,12 @@ pub struct ControlOutput {
     /// that count is 1 or a power of two (the log's and the operator's
     /// text: the first and each doubling, never one per sample).
     pub rejection: Option<(Rejection, u64)>,
+    /// The engine is cut (the servo frame's throttle hold): on the ground
+    /// disarmed, with the ground logic ([`ControlTask::with_landing`]);
+    /// never without it.
+    pub throttle_hold: bool,
+    /// The ground logic's step, when the task has it.
+    pub landing: Option<LandingStep>,
 }
 
 /// A change of the IMU health monitor's flags (the settling flag aside):
@@ -153,6 +160,7 @@ pub struct ControlTask {
     gate: Option<SensorGate>,
     servo_limits: Option<ServoLimits>,
     rc_refused: u64,
+    landing: Option<Landing>,
 }
 
 impl ControlTask {
@@ -174,7 +182,31 @@ impl ControlTask {
             gate: None,
             servo_limits: None,
             rc_refused: 0,
+            landing: None,
         }
+    }
+
+    /// The same task flying from the ground to the ground with `landing`:
+    /// it starts on the ground, disarmed, the engine cut; arming runs the
+    /// rotor up, a climb takes off, the land detector lands and disarms
+    /// ([`crate::landing`]); arming off the ground is refused, and the
+    /// receiver's arm switch disarms only on the ground.
+    #[must_use]
+    pub fn with_landing(mut self, landing: Landing) -> Self {
+        self.supervisor.set_landed(landing.on_ground());
+        self.landing = Some(landing);
+        self
+    }
+
+    /// The ground logic, when the task has it.
+    pub fn landing(&self) -> Option<&Landing> {
+        self.landing.as_ref()
+    }
+
+    /// The supervisor has the helicopter armed (its flag: it takes effect
+    /// at the next step).
+    pub fn armed(&self) -> bool {
+        self.supervisor.armed()
     }
 
     /// The same task refusing implausible sensor samples by `gate` before
@@ -219,12 +251,14 @@ impl ControlTask {
     }
 
     /// Arm or disarm from the ground station (takes effect at the next
-    /// step; holds until the receiver's arm switch moves).
-    pub fn set_armed(&mut self, armed: bool) {
+    /// step; holds until the receiver's arm switch moves). `false` when
+    /// refused: arming off the ground, with the ground logic.
+    pub fn set_armed(&mut self, armed: bool) -> bool {
         if armed {
-            self.supervisor.arm();
+            self.supervisor.arm()
         } else {
             self.supervisor.disarm();
+            true
         }
     }
 
@@ -334,12 +368,12 @@ impl ControlTask {
             imu_health = Some(h);
         }
         let mut telemetry = None;
+        let reference = self.supervisor.reference(&tick.reference);
         if let Some(frame) = &frame {
-            let reference = self.supervisor.reference(&tick.reference);
             let u_exc = offset.map_or_else(Input::zeros, |o| o.0);
             // outside the law's modes the predictor is told what the
             // servos get (the pilot's sticks, the trim), not the idle law's
-            let applied = match self.supervisor.mode() {
+            let mut applied = match self.supervisor.mode() {
                 Mode::Auto | Mode::Hold | Mode::Descent => None,
                 Mode::Manual | Mode::Disarmed | Mode::ImuLost => Some(self.supervisor.servo(
                     &self.u_trim,
@@ -347,6 +381,18 @@ impl ControlTask {
                     self.rc.as_ref(),
                 )),
             };
+            // on the ground: the law's integrators held, the predictor told
+            // the blend from ground idle (of the last command, this one's
+            // comes after)
+            if let Some(l) = &self.landing {
+                if l.holds_law() {
+                    self.computer.reset_feedback();
+                }
+                if self.supervisor.mode() != Mode::Manual && l.blend() < 1.0 {
+                    let cmd = applied.unwrap_or(self.law);
+                    applied = Some(l.idle() + (cmd - l.idle()) * l.blend());
+                }
+            }
             match self
                 .computer
                 .step_applied(frame, &reference, &u_exc, applied.as_ref())
@@ -376,6 +422,25 @@ impl ControlTask {
         if !servo.iter().all(|v| v.is_finite()) {
             servo = self.u_trim;
         }
+        let mut landing = None;
+        if let Some(l) = self.landing.as_mut() {
+            let mode = self.supervisor.mode();
+            servo = l.servo(&servo, mode == Mode::Manual);
+            let nav = telemetry.and_then(|t: Telemetry| t.navigation);
+            let step = l.update(&LandingInput {
+                now_s: tick.now_s,
+                armed: self.supervisor.armed(),
+                auto: mode == Mode::Auto,
+                reference: &reference,
+                position_velocity_ned: nav.map(|n| (n.position_ned_m, n.velocity_ned_m_s)),
+                gyro_body_rad_s: frame.map(|f| f.imu.gyro_body_rad_s),
+            });
+            if step.disarm {
+                self.supervisor.disarm_landed();
+            }
+            self.supervisor.set_landed(l.on_ground());
+            landing = Some(step);
+        }
         if let Some(l) = &self.servo_limits {
             for i in 0..servo.len() {
                 servo[i] = servo[i].clamp(l.min[i], l.max[i]);
@@ -391,6 +456,8 @@ impl ControlTask {
             imu_health_change,
             rc_link_change,
             rejection,
+            throttle_hold: landing.is_some_and(|l| l.throttle_hold),
+            landing,
         }
     }
 }

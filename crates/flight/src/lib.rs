@@ -26,6 +26,7 @@
 pub mod config;
 pub mod control;
 pub mod ground;
+pub mod landing;
 pub mod mission;
 pub mod onboard;
 pub mod plausibility;

@@ -123,6 +123,14 @@ impl Mission {
     pub fn step(&mut self, t_s: f64, last: &LastStep, task: &mut ControlTask) -> Reference {
         match &mut self.references {
             References::Ground(v) => {
+                if let Some(l) = task.landing() {
+                    v.set_ground(l.ground_state());
+                }
+                // the flight software disarmed by itself (after a landing,
+                // the pilot's kill) or refused the arming (off the ground)
+                if v.armed() && !task.armed() {
+                    v.disarmed(t_s);
+                }
                 let out = v.step(
                     t_s,
                     last.telemetry.as_ref(),
@@ -130,8 +138,10 @@ impl Mission {
                     &last.servo,
                     last.load,
                 );
-                if let Some(a) = out.arm {
-                    task.set_armed(a);
+                if let Some(a) = out.arm
+                    && !task.set_armed(a)
+                {
+                    v.notify(t_s, VehicleEvent::Warning("arm refused: not on the ground"));
                 }
                 out.reference
             }

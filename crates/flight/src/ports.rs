@@ -566,11 +566,12 @@ impl DeviceServos {
 }
 
 impl ServoPort for DeviceServos {
-    fn send(&mut self, u: &Input) -> Result<(), PortError> {
-        let cmd = ServoCommand::from_inputs(self.seq, true, u).map_err(|e| PortError {
+    fn send(&mut self, u: &Input, throttle_hold: bool) -> Result<(), PortError> {
+        let mut cmd = ServoCommand::from_inputs(self.seq, true, u).map_err(|e| PortError {
             port: "servo command".into(),
             message: e.to_string(),
         })?;
+        cmd.throttle_hold = throttle_hold;
         self.seq = self.seq.wrapping_add(1);
         if self.port.try_reopen()
             && let (Some(slot), Some(link)) = (&self.slot, self.port.link.as_ref())

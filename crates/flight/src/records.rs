@@ -3,6 +3,7 @@
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
 use crate::control::{ControlOutput, ImuHealthChange, Tick};
+use crate::landing::SpoolState;
 use crate::plausibility::Rejection;
 use crate::ports::DeviceEvent;
 use crate::safety::{Mode, RcInput, RcLink, Reason, SafetyEvent};
@@ -77,6 +78,17 @@ pub enum FlightRecord {
         /// Frames dropped so far.
         dropped: u64,
     },
+    /// The ground logic's state changed (written as a text message).
+    Spool {
+        /// On-board time (s).
+        t_s: f64,
+        /// The state before.
+        from: SpoolState,
+        /// The state now.
+        to: SpoolState,
+        /// A take-off given up (no lift-off).
+        aborted: bool,
+    },
 }
 
 /// The log's flight mode of a supervisor mode.
@@ -103,7 +115,9 @@ pub fn failsafe_reason(r: Reason) -> Option<FailsafeReason> {
         Reason::ImuRejected | Reason::GpsRejected | Reason::MagRejected => {
             Some(FailsafeReason::SensorImplausible)
         }
-        Reason::Armed | Reason::Disarmed | Reason::HoldElapsed | Reason::Kill => None,
+        Reason::Armed | Reason::Disarmed | Reason::HoldElapsed | Reason::Kill | Reason::Landed => {
+            None
+        }
     }
 }
 
@@ -252,6 +266,26 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 "device",
             )
         }
+        FlightRecord::Spool {
+            t_s,
+            from,
+            to,
+            aborted,
+        } => {
+            let ts = timestamp_us(*t_s, "ground state")?;
+            let (level, why) = if *aborted {
+                (LogLevel::Warning, ": no lift-off, take-off given up")
+            } else {
+                (LogLevel::Info, "")
+            };
+            log_fmt(
+                log,
+                level,
+                ts,
+                format_args!("ground: {} -> {}{why}", from.as_str(), to.as_str()),
+                "ground: state changed",
+            )
+        }
         FlightRecord::ServoDropped { t_s, dropped } => {
             let ts = timestamp_us(*t_s, "servo drop")?;
             log_fmt(
@@ -312,6 +346,16 @@ pub fn step_records(
     }
     if let Some(ev) = out.event {
         push(FlightRecord::Event(ev));
+    }
+    if let Some(l) = &out.landing
+        && let Some((from, to)) = l.change
+    {
+        push(FlightRecord::Spool {
+            t_s: tick.now_s,
+            from,
+            to,
+            aborted: l.takeoff_aborted,
+        });
     }
     if let (Some(f), Some(h)) = (&tick.frame, &out.imu_health) {
         push(FlightRecord::Log(LogRecord::ImuHealth(ImuHealthRecord {

@@ -91,8 +91,9 @@ pub trait RcPort: Send + 'static {
 
 /// The servo side of the avionics board.
 pub trait ServoPort: Send + 'static {
-    /// Send one servo frame, without waiting for its transmission.
-    fn send(&mut self, u: &Input) -> Result<(), PortError>;
+    /// Send one servo frame, without waiting for its transmission;
+    /// `throttle_hold`: the engine cut (on the ground, disarmed).
+    fn send(&mut self, u: &Input, throttle_hold: bool) -> Result<(), PortError>;
 
     /// Frames dropped so far because the port could not take them (its
     /// output buffer full): counted, not errors.
@@ -204,6 +205,10 @@ struct ThreadResult {
 #[derive(Debug, Clone, Copy)]
 struct ServoItem {
     u: Input,
+    throttle_hold: bool,
+    /// On the ground (the watchdog then cuts the engine at ground idle
+    /// rather than fly the trim).
+    on_ground: bool,
     arrived_ns: Option<u64>,
 }
 
@@ -735,6 +740,18 @@ fn control_loop(
         if let Some(link) = out.rc_link_change {
             mission.notify(now_s, VehicleEvent::Warning(link.rc_text()));
         }
+        if let Some(l) = &out.landing
+            && let Some((_, to)) = l.change
+        {
+            mission.notify(
+                now_s,
+                if l.takeoff_aborted {
+                    VehicleEvent::Warning("take-off given up: no lift-off")
+                } else {
+                    VehicleEvent::Notice(to.text())
+                },
+            );
+        }
         if out.telemetry.is_some() {
             last.telemetry = out.telemetry;
         }
@@ -746,7 +763,7 @@ fn control_loop(
             let _ = d.push(r);
         }
         if let Some(d) = ctx.direct.as_mut() {
-            match d.servos.send(&out.servo) {
+            match d.servos.send(&out.servo, out.throttle_hold) {
                 Ok(()) => d.frames += 1,
                 Err(e) => {
                     d.error.get_or_insert(e.to_string());
@@ -764,6 +781,10 @@ fn control_loop(
         } else {
             let item = ServoItem {
                 u: out.servo,
+                throttle_hold: out.throttle_hold,
+                on_ground: task
+                    .landing()
+                    .is_some_and(crate::landing::Landing::on_ground),
                 arrived_ns: arrival.map(|a| a.arrived_ns),
             };
             if ctx.servo.push(item).is_err() {
@@ -891,10 +912,13 @@ fn avionics_loop<V: ServoPort>(
     let t0 = realtime::monotonic_ns();
     let mut tripped = false;
     let mut drop_log = DropLog::default();
+    // the last frame's engine and ground state (for the watchdog)
+    let mut last = (false, false);
     loop {
         let mut sent = false;
         while let Ok(item) = ring.pop() {
-            if let Err(e) = port.send(&item.u) {
+            last = (item.throttle_hold, item.on_ground);
+            if let Err(e) = port.send(&item.u, item.throttle_hold) {
                 result.error.get_or_insert(e.to_string());
             } else {
                 result.servo_frames += 1;
@@ -917,12 +941,18 @@ fn avionics_loop<V: ServoPort>(
             break;
         }
         // the watchdog: a silent control task hands the servos to the trim
+        // in the air; on the ground it cuts the engine at ground idle (the
+        // trim's collective would lift off with nothing flying it)
         let now = realtime::monotonic_ns();
         let silent = now.saturating_sub(last_output_ns.load(Ordering::Relaxed));
         if options.pacing == Pacing::Clock && !tripped && silent > watchdog_ns {
             tripped = true;
             result.watchdog_trips += 1;
-            if port.send(&options.u_trim).is_ok() {
+            let (u, hold) = match last {
+                (_, true) => (Input::zeros(), true),
+                (hold, false) => (options.u_trim, hold),
+            };
+            if port.send(&u, hold).is_ok() {
                 result.servo_frames += 1;
             }
             let rec = FlightRecord::Watchdog {

@@ -32,10 +32,13 @@
 //! its first frame) and stays there for `rc.arm_hold_s` (default 0.5 s: a
 //! glitching or toggling channel does nothing); the ground station's arm or
 //! disarm ([`Supervisor::arm`], [`Supervisor::disarm`]) holds until the
-//! switch moves again. With a kill channel configured (`rc.kill_channel`)
-//! the arm switch disarms only on the ground ([`Supervisor::set_landed`]),
-//! and the kill channel held `rc.kill_hold_s` disarms at any time (reason
-//! `kill`). A receiver frame with a channel outside the receiver's range is
+//! switch moves again. Once the supervisor is told where the helicopter is
+//! ([`Supervisor::set_landed`]: the land detector of
+//! [`crate::landing`]), arming off the ground is refused and the arm
+//! switch disarms only on the ground; so it does with a kill channel
+//! configured (`rc.kill_channel`). The kill channel held `rc.kill_hold_s`
+//! disarms at any time (reason `kill`); the ground logic disarms after its
+//! time on the ground (reason `landed`). A receiver frame with a channel outside the receiver's range is
 //! refused: not a frame of the pilot's.
 //!
 //! Sensor faults: a sample refused by the plausibility gate
@@ -122,6 +125,8 @@ pub enum Reason {
     MagRejected,
     /// The receiver's kill channel was held (`rc.kill_hold_s`): disarmed.
     Kill,
+    /// Disarmed on the ground after a landing (`landing.disarm_after_s`).
+    Landed,
 }
 
 impl Reason {
@@ -144,6 +149,7 @@ impl Reason {
             Reason::GpsRejected => "gps_rejected",
             Reason::MagRejected => "mag_rejected",
             Reason::Kill => "kill",
+            Reason::Landed => "landed",
         }
     }
 
@@ -284,6 +290,11 @@ pub struct Supervisor {
     /// refuses the fix).
     prev_gps_s: f64,
     landed: bool,
+    /// Told where it is at least once: arming off the ground is refused,
+    /// and the arm switch disarms only on the ground.
+    ground_known: bool,
+    /// The last disarm was the one after a landing.
+    landed_disarm: bool,
 }
 
 impl Supervisor {
@@ -312,6 +323,8 @@ impl Supervisor {
             rejecting: [false; 3],
             prev_gps_s: t0_s,
             landed: false,
+            ground_known: false,
+            landed_disarm: false,
         }
     }
 
@@ -329,6 +342,7 @@ impl Supervisor {
     /// on the ground.
     pub fn set_landed(&mut self, landed: bool) {
         self.landed = landed;
+        self.ground_known = true;
     }
 
     /// The navigation refused this sample's GPS fix (its innovation gate):
@@ -340,13 +354,34 @@ impl Supervisor {
 
     /// Arm (as the arm switch would): the first update enters auto. SITL
     /// starts armed, as a pilot arms on the ground before the flight.
-    pub fn arm(&mut self) {
+    /// Refused (`false`) off the ground, once told where it is
+    /// ([`Supervisor::set_landed`]).
+    pub fn arm(&mut self) -> bool {
+        if self.ground_known && !self.landed && !self.armed {
+            return false;
+        }
         self.armed = true;
+        self.landed_disarm = false;
+        true
     }
 
     /// Disarm (as the arm switch would; the ground station's disarm).
     pub fn disarm(&mut self) {
         self.armed = false;
+    }
+
+    /// Disarm after the time on the ground that follows a landing (the
+    /// reason `landed`).
+    pub fn disarm_landed(&mut self) {
+        if self.armed {
+            self.armed = false;
+            self.landed_disarm = true;
+        }
+    }
+
+    /// Armed (the flag: the mode follows at the next update).
+    pub fn armed(&self) -> bool {
+        self.armed
     }
 
     /// The mode now.
@@ -473,6 +508,8 @@ impl Supervisor {
         } else if !self.armed {
             let r = if self.kill_since.is_some() {
                 Reason::Kill
+            } else if self.landed_disarm {
+                Reason::Landed
             } else {
                 Reason::Disarmed
             };
@@ -556,10 +593,11 @@ impl Supervisor {
         self.arm_pending = None;
         self.rc_armed = Some(rc.armed);
         if rc.armed {
-            if self.kill_since.is_none() {
+            if self.kill_since.is_none() && !(self.ground_known && !self.landed) {
                 self.armed = true;
+                self.landed_disarm = false;
             }
-        } else if self.rc_config.kill_channel.is_none() || self.landed {
+        } else if (self.rc_config.kill_channel.is_none() && !self.ground_known) || self.landed {
             self.armed = false;
         }
     }

@@ -163,6 +163,9 @@ pub enum VehicleEvent {
     /// A warning of the flight software for the operator (a status text
     /// at warning severity), e.g. the IMU health monitor's.
     Warning(&'static str),
+    /// A notice of the flight software for the operator (a status text at
+    /// info severity), e.g. the rotor at speed.
+    Notice(&'static str),
 }
 
 /// From the vehicle to the ground station.

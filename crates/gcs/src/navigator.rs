@@ -835,9 +835,11 @@ impl Navigator {
         let mut v = error * (speed / d);
         if self.mode == NavMode::Land {
             // straight down at the descent speed, slowing near the ground
+            // to a crawl (0.3 m/s at the default: PX4's MPC_LAND_CRWL,
+            // faster than the land detector's "no vertical movement")
             v.z = c
                 .descent_speed_m_s
-                .min((c.position_gain_1_s * error.z).max(0.3 * c.descent_speed_m_s));
+                .min((c.position_gain_1_s * error.z).max(0.6 * c.descent_speed_m_s));
         }
         v
     }

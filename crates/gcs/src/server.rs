@@ -612,6 +612,9 @@ impl Server {
             VehicleEvent::Warning(text) => {
                 self.text(MavSeverity::MAV_SEVERITY_WARNING, text);
             }
+            VehicleEvent::Notice(text) => {
+                self.text(MavSeverity::MAV_SEVERITY_INFO, text);
+            }
             VehicleEvent::FlightMode(name, reason) => {
                 self.text(
                     MavSeverity::MAV_SEVERITY_WARNING,

@@ -1,0 +1,760 @@
+//! From the ground to the ground on board: the rotor's run-up (the spool
+//! state), the land detector, the take-off and the landing.
+//!
+//! ```text
+//!  disarmed ─arm─► spooling up ─runup_s─► ready ─climb asked─► taking off ─lift-off─► flying
+//!      ▲                                    ▲  ◄─climb withdrawn / no lift-off─┘          │
+//!      └─spooldown_s── spooling down ◄─disarm (any state)    landed ◄─land detector─────┘
+//!                            ▲                                 │ (climb asked: taking off)
+//!                            └──────── disarm_after_s ─────────┘
+//! ```
+//!
+//! - **The engine** runs from arming to disarming: the servo frame's
+//!   throttle hold is released when armed ([`LandingStep::throttle_hold`]).
+//!   The rotor is taken as at speed `runup_s` after the engine started (the
+//!   governor's soft start, as a helicopter speed controller's run-up
+//!   timer: there is no rotor-speed sensor on this airframe).
+//! - **On the ground** (disarmed, spooling up, ready, landed, spooling
+//!   down) the servos get ground idle — zero collective, centred cyclic and
+//!   tail — whatever the mode; the law runs (its estimator too) with its
+//!   integrators held at zero.
+//! - **Take-off**: ready, in `auto`, with a reference that climbs (the
+//!   navigator's take-off, a mission's first leg, a scenario's `vd < 0`),
+//!   the servo command blends from ground idle into the law's over
+//!   `takeoff_ramp_s`, the integrators still held, until lift-off: the
+//!   estimated height `liftoff_height_m` above where it stood, or a climb
+//!   faster than `liftoff_climb_m_s`. The integrators then run. A climb
+//!   withdrawn before lift-off, or no lift-off `takeoff_timeout_s` after the
+//!   ramp, blends back to ground idle (ready).
+//! - **The land detector** (PX4's three stages): *ground contact* — no
+//!   vertical movement (|vd| < `z_vel_max_m_s`), no horizontal movement
+//!   (< `xy_vel_max_m_s`), and a low collective (below `low_collective` of
+//!   the way from ground idle to the hover trim) or a descent asked for
+//!   that does not happen; held a third of `trigger_s`, the command starts
+//!   blending down to ground idle. *Maybe landed* — ground contact, the
+//!   collective sent within a tenth of the way and no rotation (every body
+//!   rate below `rot_max_deg_s`), a third of `trigger_s`. *Landed* — maybe
+//!   landed a third of `trigger_s` more. Losing a condition goes back to
+//!   flying (and the command back to the law).
+//! - **Landed**: ground idle; `disarm_after_s` on the ground disarms (the
+//!   reason `landed`); a climb asked for before takes off again.
+//!
+//! The detector reads the navigation's velocity (GPS/IMU fusion: not the
+//! model-based predictor, which knows no ground), the IMU's rates and the
+//! collective actually sent. Allocation-free; every field checked by
+//! [`LandingConfig::validate`].
+
+use helicon_config::ConfigError;
+use helicon_core::Reference;
+use helicon_core::state::Input;
+use helicon_gcs::link::{GroundState, LandedState, RotorRunup};
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+/// The ground logic's settings (`[landing]` in `onboard.toml`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LandingConfig {
+    /// From engine start to the rotor at speed (s): longer than the
+    /// governor's soft start (the Bergen Twin's spools up in 5 s).
+    pub runup_s: f64,
+    /// From engine cut to the rotor taken as stopped (s).
+    pub spooldown_s: f64,
+    /// The blend from ground idle into the law at take-off, and back down
+    /// at touchdown (s).
+    pub takeoff_ramp_s: f64,
+    /// No lift-off this long after the take-off ramp ends: the take-off is
+    /// given up (s).
+    pub takeoff_timeout_s: f64,
+    /// Lift-off: the estimated height above the standing point (m).
+    pub liftoff_height_m: f64,
+    /// Lift-off: an estimated climb faster than this (m/s).
+    pub liftoff_climb_m_s: f64,
+    /// No vertical movement: |vd| below this (m/s; PX4's `LNDMC_Z_VEL_MAX`).
+    pub z_vel_max_m_s: f64,
+    /// No horizontal movement: the ground speed below this (m/s; PX4's
+    /// `LNDMC_XY_VEL_MAX`).
+    pub xy_vel_max_m_s: f64,
+    /// No rotation: every body rate below this (deg/s; PX4's `LNDMC_ROT_MAX`).
+    pub rot_max_deg_s: f64,
+    /// The three stages together take this long with every condition met
+    /// (s; PX4's `LNDMC_TRIG_TIME`).
+    pub trigger_s: f64,
+    /// A low collective: below this fraction of the way from ground idle
+    /// to the hover trim (0..1).
+    pub low_collective: f64,
+    /// Disarm this long after landing (s; PX4's `COM_DISARM_LAND`; negative:
+    /// never).
+    pub disarm_after_s: f64,
+}
+
+impl Default for LandingConfig {
+    fn default() -> Self {
+        LandingConfig {
+            runup_s: 8.0,
+            spooldown_s: 10.0,
+            takeoff_ramp_s: 2.0,
+            takeoff_timeout_s: 10.0,
+            liftoff_height_m: 0.3,
+            liftoff_climb_m_s: 0.3,
+            z_vel_max_m_s: 0.25,
+            xy_vel_max_m_s: 1.5,
+            rot_max_deg_s: 20.0,
+            trigger_s: 1.0,
+            low_collective: 0.6,
+            disarm_after_s: 2.0,
+        }
+    }
+}
+
+impl LandingConfig {
+    /// Check every field (`file` names the configuration in errors).
+    pub fn validate(&self, file: &str) -> Result<(), ConfigError> {
+        let ranges = [
+            ("landing.runup_s", self.runup_s, 0.0, 120.0),
+            ("landing.spooldown_s", self.spooldown_s, 0.0, 300.0),
+            ("landing.takeoff_ramp_s", self.takeoff_ramp_s, 0.1, 30.0),
+            (
+                "landing.takeoff_timeout_s",
+                self.takeoff_timeout_s,
+                0.5,
+                120.0,
+            ),
+            ("landing.liftoff_height_m", self.liftoff_height_m, 0.05, 5.0),
+            (
+                "landing.liftoff_climb_m_s",
+                self.liftoff_climb_m_s,
+                0.05,
+                5.0,
+            ),
+            ("landing.z_vel_max_m_s", self.z_vel_max_m_s, 0.01, 3.0),
+            ("landing.xy_vel_max_m_s", self.xy_vel_max_m_s, 0.01, 10.0),
+            ("landing.rot_max_deg_s", self.rot_max_deg_s, 1.0, 360.0),
+            ("landing.trigger_s", self.trigger_s, 0.1, 10.0),
+            ("landing.low_collective", self.low_collective, 0.05, 0.95),
+            ("landing.disarm_after_s", self.disarm_after_s, -1.0, 600.0),
+        ];
+        for (field, v, lo, hi) in ranges {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(ConfigError::invalid(
+                    file,
+                    field,
+                    v,
+                    format!("must be within {lo}..={hi}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Where the helicopter is between the ground and the air.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SpoolState {
+    /// On the ground, engine off.
+    Disarmed,
+    /// Armed on the ground, the rotor coming up to speed.
+    SpoolingUp,
+    /// On the ground, the rotor at speed, waiting for a climb.
+    Ready,
+    /// The command blending into the law, not yet lifted off.
+    TakingOff,
+    /// In the air.
+    Flying,
+    /// Landed, the rotor at speed (disarms after `disarm_after_s`).
+    Landed,
+    /// Disarmed, the engine cut, the rotor running down.
+    SpoolingDown,
+}
+
+impl SpoolState {
+    /// The name in logs and status texts.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SpoolState::Disarmed => "disarmed",
+            SpoolState::SpoolingUp => "spooling up",
+            SpoolState::Ready => "ready",
+            SpoolState::TakingOff => "taking off",
+            SpoolState::Flying => "flying",
+            SpoolState::Landed => "landed",
+            SpoolState::SpoolingDown => "spooling down",
+        }
+    }
+
+    /// A code for the log (0 … 6 in declaration order).
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// The operator's text on entering the state (one MAVLink STATUSTEXT).
+    pub fn text(self) -> &'static str {
+        match self {
+            SpoolState::Disarmed => "rotor stopped",
+            SpoolState::SpoolingUp => "engine on: rotor spooling up",
+            SpoolState::Ready => "rotor at speed: ready for take-off",
+            SpoolState::TakingOff => "taking off",
+            SpoolState::Flying => "lift-off",
+            SpoolState::Landed => "touchdown: on the ground",
+            SpoolState::SpoolingDown => "engine cut: rotor spooling down",
+        }
+    }
+}
+
+/// The land detector's stage (PX4's).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LandStage {
+    /// In the air (or on the ground and not yet known landed).
+    Air,
+    /// Touching the ground: the command blends down.
+    GroundContact,
+    /// Maybe landed: minimal collective, no rotation.
+    MaybeLanded,
+    /// Landed.
+    Landed,
+}
+
+/// One sample's view of the flight for the ground logic.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LandingInput<'a> {
+    /// On-board time (s).
+    pub now_s: f64,
+    /// The supervisor has the helicopter armed.
+    pub armed: bool,
+    /// The mode flies the mission's reference (`auto`).
+    pub auto: bool,
+    /// The reference flown this sample.
+    pub reference: &'a Reference,
+    /// The navigation's position and velocity NED (m, m/s), when it runs.
+    pub position_velocity_ned: Option<(Vector3<f64>, Vector3<f64>)>,
+    /// The IMU's body rates of the sample (rad/s), when one came.
+    pub gyro_body_rad_s: Option<Vector3<f64>>,
+}
+
+/// What the ground logic decided for a sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LandingStep {
+    /// The state changed this sample: (from, to).
+    pub change: Option<(SpoolState, SpoolState)>,
+    /// Disarm now: `disarm_after_s` on the ground after landing.
+    pub disarm: bool,
+    /// The engine is cut (the servo frame's throttle hold).
+    pub throttle_hold: bool,
+    /// A take-off was given up (no lift-off): told to the operator.
+    pub takeoff_aborted: bool,
+}
+
+/// The spool state machine and the land detector.
+#[derive(Debug, Clone)]
+pub struct Landing {
+    config: LandingConfig,
+    ts_s: f64,
+    idle: Input,
+    hover_collective: f64,
+    state: SpoolState,
+    since_s: f64,
+    stage: LandStage,
+    stage_since_s: f64,
+    blend: f64,
+    /// The estimated position where it stood (NED, m).
+    ground_ned_m: Option<Vector3<f64>>,
+    /// When the take-off ramp reached the law.
+    ramp_done_s: Option<f64>,
+    /// The collective sent last sample.
+    last_collective: f64,
+    /// Since when a descent has been asked for without a break (s).
+    descent_since_s: Option<f64>,
+    /// A take-off was given up: a climb must be withdrawn and asked again.
+    climb_refused: bool,
+}
+
+impl Landing {
+    /// The ground logic of `config` at control period `ts_s`, with the hover
+    /// trim `u_trim` (its collective sets what a low collective is);
+    /// starting on the ground, disarmed, at `t0_s`.
+    pub fn new(config: LandingConfig, ts_s: f64, u_trim: &Input, t0_s: f64) -> Self {
+        Landing {
+            config,
+            ts_s,
+            idle: Input::zeros(),
+            hover_collective: u_trim[0],
+            state: SpoolState::Disarmed,
+            since_s: t0_s,
+            stage: LandStage::Landed,
+            stage_since_s: t0_s,
+            blend: 0.0,
+            ground_ned_m: None,
+            ramp_done_s: None,
+            last_collective: 0.0,
+            descent_since_s: None,
+            climb_refused: false,
+        }
+    }
+
+    /// The state now.
+    pub fn state(&self) -> SpoolState {
+        self.state
+    }
+
+    /// The land detector's stage now.
+    pub fn stage(&self) -> LandStage {
+        self.stage
+    }
+
+    /// The blend from ground idle (0) to the command of the mode (1).
+    pub fn blend(&self) -> f64 {
+        self.blend
+    }
+
+    /// Ground idle: the servo commands on the ground.
+    pub fn idle(&self) -> &Input {
+        &self.idle
+    }
+
+    /// On the ground (not taking off, not flying).
+    pub fn on_ground(&self) -> bool {
+        !matches!(self.state, SpoolState::TakingOff | SpoolState::Flying)
+            && self.stage == LandStage::Landed
+    }
+
+    /// The law's integrators are held at zero this sample (on the ground,
+    /// and taking off until lift-off).
+    pub fn holds_law(&self) -> bool {
+        self.state != SpoolState::Flying
+    }
+
+    /// The rotor is at speed (ready, taking off, flying, landed).
+    pub fn rotor_at_speed(&self) -> bool {
+        matches!(
+            self.state,
+            SpoolState::Ready | SpoolState::TakingOff | SpoolState::Flying | SpoolState::Landed
+        )
+    }
+
+    /// The ground station's view.
+    pub fn ground_state(&self) -> GroundState {
+        let landed = match (self.state, self.stage) {
+            (SpoolState::TakingOff, _) => LandedState::Takeoff,
+            (SpoolState::Flying, LandStage::Air) => LandedState::InAir,
+            (SpoolState::Flying, _) => LandedState::Landing,
+            (SpoolState::SpoolingDown, LandStage::Air) => LandedState::InAir,
+            _ => LandedState::OnGround,
+        };
+        let rotor = match self.state {
+            SpoolState::Disarmed => RotorRunup::Stopped,
+            SpoolState::SpoolingUp => RotorRunup::SpoolingUp,
+            SpoolState::SpoolingDown => RotorRunup::SpoolingDown,
+            _ => RotorRunup::AtSpeed,
+        };
+        GroundState { landed, rotor }
+    }
+
+    /// The servo command sent: `mode_command` (the law's, the pilot's, the
+    /// trim) blended from ground idle; the pilot's sticks (`manual`) pass
+    /// unchanged. Remembers the collective for the detector.
+    pub fn servo(&mut self, mode_command: &Input, manual: bool) -> Input {
+        let out = if manual || self.blend >= 1.0 {
+            *mode_command
+        } else {
+            self.idle + (mode_command - self.idle) * self.blend
+        };
+        self.last_collective = out[0];
+        out
+    }
+
+    fn enter(&mut self, to: SpoolState, now_s: f64, change: &mut Option<(SpoolState, SpoolState)>) {
+        if to != self.state {
+            *change = Some((change.map_or(self.state, |c| c.0), to));
+            self.state = to;
+            self.since_s = now_s;
+        }
+    }
+
+    fn set_stage(&mut self, stage: LandStage, now_s: f64) {
+        if stage != self.stage {
+            self.stage = stage;
+            self.stage_since_s = now_s;
+        }
+    }
+
+    /// One sample, after the law: the state's transitions and the blend of
+    /// the next command. Call [`Landing::servo`] for this sample's command
+    /// before. No allocation.
+    pub fn update(&mut self, i: &LandingInput<'_>) -> LandingStep {
+        let c = self.config;
+        let now = i.now_s;
+        let mut change = None;
+        let mut disarm = false;
+        let mut takeoff_aborted = false;
+        let ramp = self.ts_s / c.takeoff_ramp_s;
+        let (pos, vel) = match i.position_velocity_ned {
+            Some((p, v)) if p.iter().chain(v.iter()).all(|x| x.is_finite()) => (Some(p), Some(v)),
+            _ => (None, None),
+        };
+        let mut climb_asked = i.armed && i.auto && i.reference.velocity_ned_m_s.z < -0.1;
+        if !climb_asked {
+            self.climb_refused = false;
+        }
+        climb_asked &= !self.climb_refused;
+        if !i.armed {
+            self.settle_disarmed(i, vel, now);
+            match self.state {
+                SpoolState::Disarmed => {}
+                SpoolState::SpoolingDown => {
+                    if now - self.since_s >= c.spooldown_s {
+                        self.enter(SpoolState::Disarmed, now, &mut change);
+                    }
+                }
+                _ => self.enter(SpoolState::SpoolingDown, now, &mut change),
+            }
+            self.blend = 0.0;
+        } else {
+            match self.state {
+                SpoolState::Disarmed | SpoolState::SpoolingDown => {
+                    self.enter(SpoolState::SpoolingUp, now, &mut change);
+                }
+                SpoolState::SpoolingUp => {
+                    if now - self.since_s >= c.runup_s - 1e-9 {
+                        self.enter(SpoolState::Ready, now, &mut change);
+                    }
+                }
+                SpoolState::Ready | SpoolState::Landed => {
+                    self.blend = (self.blend - ramp).max(0.0);
+                    if climb_asked {
+                        self.ground_ned_m = pos;
+                        self.ramp_done_s = None;
+                        self.enter(SpoolState::TakingOff, now, &mut change);
+                    } else if self.state == SpoolState::Landed
+                        && c.disarm_after_s >= 0.0
+                        && now - self.since_s >= c.disarm_after_s - 1e-9
+                    {
+                        disarm = true;
+                    }
+                }
+                SpoolState::TakingOff => {
+                    self.blend = (self.blend + ramp).min(1.0);
+                    if self.blend >= 1.0 && self.ramp_done_s.is_none() {
+                        self.ramp_done_s = Some(now);
+                    }
+                    let lifted = match (pos, vel, self.ground_ned_m) {
+                        (Some(p), Some(v), Some(g)) => {
+                            g.z - p.z >= c.liftoff_height_m || -v.z >= c.liftoff_climb_m_s
+                        }
+                        (Some(_), Some(v), None) => -v.z >= c.liftoff_climb_m_s,
+                        _ => false,
+                    };
+                    if lifted {
+                        self.set_stage(LandStage::Air, now);
+                        self.enter(SpoolState::Flying, now, &mut change);
+                    } else if !climb_asked {
+                        self.enter(SpoolState::Ready, now, &mut change);
+                    } else if self
+                        .ramp_done_s
+                        .is_some_and(|t| now - t >= c.takeoff_timeout_s)
+                    {
+                        takeoff_aborted = true;
+                        self.climb_refused = true;
+                        self.enter(SpoolState::Ready, now, &mut change);
+                    }
+                }
+                SpoolState::Flying => self.detect(i, vel, now, ramp, &mut change),
+            }
+        }
+        LandingStep {
+            change,
+            disarm,
+            throttle_hold: matches!(self.state, SpoolState::Disarmed | SpoolState::SpoolingDown),
+            takeoff_aborted,
+        }
+    }
+
+    /// Disarmed off the ground (a kill in the air): on the ground again
+    /// once still and not rotating for the whole trigger time.
+    fn settle_disarmed(&mut self, i: &LandingInput<'_>, vel: Option<Vector3<f64>>, now: f64) {
+        if self.stage == LandStage::Landed {
+            return;
+        }
+        let c = self.config;
+        let still = vel
+            .is_some_and(|v| v.z.abs() < c.z_vel_max_m_s && v.xy().norm() < c.xy_vel_max_m_s)
+            && i.gyro_body_rad_s
+                .is_some_and(|w| w.iter().all(|r| r.abs().to_degrees() < c.rot_max_deg_s));
+        if !still {
+            self.set_stage(LandStage::Air, now);
+        } else if self.stage == LandStage::Air {
+            self.set_stage(LandStage::MaybeLanded, now);
+        } else if now - self.stage_since_s >= c.trigger_s - 1e-9 {
+            self.set_stage(LandStage::Landed, now);
+        }
+    }
+
+    /// The land detector in flight, and the blend it drives.
+    fn detect(
+        &mut self,
+        i: &LandingInput<'_>,
+        vel: Option<Vector3<f64>>,
+        now: f64,
+        ramp: f64,
+        change: &mut Option<(SpoolState, SpoolState)>,
+    ) {
+        let c = self.config;
+        let way = |col: f64| {
+            let span = self.hover_collective - self.idle[0];
+            if span.abs() < 1e-9 {
+                1.0
+            } else {
+                (col - self.idle[0]) / span
+            }
+        };
+        let still =
+            vel.is_some_and(|v| v.z.abs() < c.z_vel_max_m_s && v.xy().norm() < c.xy_vel_max_m_s);
+        // a descent asked for (faster than "no vertical movement", PX4's
+        // 1.1·LNDMC_Z_VEL_MAX) for the whole trigger time that does not
+        // happen: the ground stops it (a descent just begun has not yet
+        // moved)
+        if i.reference.velocity_ned_m_s.z >= 1.1 * c.z_vel_max_m_s {
+            self.descent_since_s.get_or_insert(now);
+        } else {
+            self.descent_since_s = None;
+        }
+        let descent_asked = self
+            .descent_since_s
+            .is_some_and(|t| now - t >= c.trigger_s - 1e-9);
+        let low = way(self.last_collective) < c.low_collective;
+        let contact = still && (low || descent_asked);
+        let rotating = i
+            .gyro_body_rad_s
+            .is_none_or(|w| w.iter().any(|r| r.abs().to_degrees() >= c.rot_max_deg_s));
+        let minimal = way(self.last_collective) <= 0.1;
+        let third = c.trigger_s / 3.0 - 1e-9;
+        let held = now - self.stage_since_s >= third;
+        let next = match self.stage {
+            _ if !contact => LandStage::Air,
+            LandStage::Air => LandStage::GroundContact,
+            LandStage::GroundContact if held && minimal && !rotating => LandStage::MaybeLanded,
+            LandStage::GroundContact => LandStage::GroundContact,
+            LandStage::MaybeLanded if !minimal || rotating => LandStage::GroundContact,
+            LandStage::MaybeLanded if held => LandStage::Landed,
+            s => s,
+        };
+        // entering ground contact restarts its clock; the command blends
+        // down once contact has held a third of the trigger time
+        if next == LandStage::GroundContact && self.stage == LandStage::Air {
+            self.set_stage(LandStage::GroundContact, now);
+        } else {
+            self.set_stage(next, now);
+        }
+        match self.stage {
+            LandStage::Air => self.blend = (self.blend + ramp).min(1.0),
+            LandStage::GroundContact if !held => {}
+            _ => self.blend = (self.blend - ramp).max(0.0),
+        }
+        if self.stage == LandStage::Landed {
+            self.enter(SpoolState::Landed, now, change);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TS: f64 = 0.0025;
+
+    fn trim() -> Input {
+        Input::new(0.1, 0.0, 0.0, 0.05)
+    }
+
+    fn input<'a>(
+        now_s: f64,
+        armed: bool,
+        reference: &'a Reference,
+        pv: (Vector3<f64>, Vector3<f64>),
+        gyro: Vector3<f64>,
+    ) -> LandingInput<'a> {
+        LandingInput {
+            now_s,
+            armed,
+            auto: true,
+            reference,
+            position_velocity_ned: Some(pv),
+            gyro_body_rad_s: Some(gyro),
+        }
+    }
+
+    #[test]
+    fn the_defaults_are_valid_and_each_field_is_checked() {
+        LandingConfig::default().validate("onboard.toml").unwrap();
+        let mut c = LandingConfig::default();
+        c.trigger_s = f64::NAN;
+        let e = c.validate("onboard.toml").unwrap_err().to_string();
+        assert!(e.contains("landing.trigger_s"), "{e}");
+        let mut c = LandingConfig::default();
+        c.runup_s = -1.0;
+        assert!(c.validate("x").is_err());
+    }
+
+    /// Arm, run-up, a climb asked, the ramp, lift-off, a landing detected
+    /// in its three stages, the disarm after the time on the ground, the
+    /// spool-down: every transition at its time.
+    #[test]
+    fn from_the_ground_to_the_ground() {
+        let c = LandingConfig::default();
+        let mut l = Landing::new(c, TS, &trim(), 0.0);
+        let hover = Reference::default();
+        let climb = Reference {
+            velocity_ned_m_s: Vector3::new(0.0, 0.0, -1.0),
+            yaw_rad: 0.0,
+        };
+        let still = (Vector3::new(0.0, 0.0, -0.3), Vector3::zeros());
+        let mut t = 0.0;
+        let mut log = Vec::new();
+        let mut step = |l: &mut Landing, t: f64, armed: bool, r: &Reference, pv, law: &Input| {
+            let u = l.servo(law, false);
+            let s = l.update(&input(t, armed, r, pv, Vector3::zeros()));
+            (u, s)
+        };
+        // disarmed: ground idle, engine cut
+        let (u, s) = step(&mut l, t, false, &hover, still, &trim());
+        assert_eq!(u, Input::zeros());
+        assert!(s.throttle_hold && l.on_ground());
+        // armed: spooling up for runup_s, ready after
+        while t < c.runup_s + 0.01 {
+            t += TS;
+            let (u, s) = step(&mut l, t, true, &hover, still, &trim());
+            assert_eq!(u, Input::zeros());
+            assert!(!s.throttle_hold);
+            if let Some(ch) = s.change {
+                log.push((t, ch));
+            }
+        }
+        assert_eq!(l.state(), SpoolState::Ready);
+        assert!((log[1].0 - c.runup_s).abs() < 2.0 * TS, "{log:?}");
+        // a climb: the ramp, held integrators, then lift-off at 0.3 m
+        let law = Input::new(0.12, 0.0, 0.0, 0.05);
+        let t_climb = t;
+        let mut z = -0.3;
+        while l.state() != SpoolState::Flying {
+            t += TS;
+            if t - t_climb > 1.0 {
+                z -= 0.5 * TS;
+            }
+            let (u, _) = step(
+                &mut l,
+                t,
+                true,
+                &climb,
+                (Vector3::new(0.0, 0.0, z), Vector3::new(0.0, 0.0, -0.1)),
+                &law,
+            );
+            assert!(u[0] <= law[0] + 1e-12);
+            assert!(l.holds_law() || l.state() == SpoolState::Flying);
+            assert!(t - t_climb < 5.0, "no lift-off");
+        }
+        assert!((-0.3 - z - c.liftoff_height_m).abs() < 0.01, "{z}");
+        assert_eq!(l.ground_state().landed, LandedState::InAir);
+        // the landing: still, a descent asked, the collective falling with
+        // the blend: contact, maybe landed, landed within the trigger time
+        // plus the ramp down
+        let down = Reference {
+            velocity_ned_m_s: Vector3::new(0.0, 0.0, 0.3),
+            yaw_rad: 0.0,
+        };
+        let t_touch = t;
+        while l.state() != SpoolState::Landed {
+            t += TS;
+            step(&mut l, t, true, &down, still, &law);
+            assert!(t - t_touch < 5.0, "not landed");
+        }
+        let took = t - t_touch;
+        // the descent asked for a trigger time, contact a third of it, the
+        // ramp to a tenth of hover, two thirds more
+        assert!(
+            took > 2.0 * c.trigger_s && took < 2.0 * c.trigger_s + c.takeoff_ramp_s,
+            "{took}"
+        );
+        assert!(l.on_ground());
+        // disarm after disarm_after_s, then spool down
+        let t_landed = t;
+        loop {
+            t += TS;
+            let (_, s) = step(&mut l, t, true, &down, still, &law);
+            if s.disarm {
+                break;
+            }
+        }
+        assert!((t - t_landed - c.disarm_after_s).abs() < 2.0 * TS);
+        let (_, s) = step(&mut l, t + TS, false, &down, still, &law);
+        assert_eq!(
+            s.change,
+            Some((SpoolState::Landed, SpoolState::SpoolingDown))
+        );
+        assert!(s.throttle_hold);
+    }
+
+    /// In the air, hovering at the trim collective, or descending: no
+    /// ground contact, ever.
+    #[test]
+    fn no_landing_in_a_hover_or_a_descent() {
+        let mut l = Landing::new(LandingConfig::default(), TS, &trim(), 0.0);
+        l.state = SpoolState::Flying;
+        l.stage = LandStage::Air;
+        l.blend = 1.0;
+        let hover = Reference::default();
+        let down = Reference {
+            velocity_ned_m_s: Vector3::new(0.0, 0.0, 0.5),
+            yaw_rad: 0.0,
+        };
+        for k in 0..4000 {
+            let t = f64::from(k) * TS;
+            // a hover: still, the trim collective
+            let (r, v) = if k < 2000 {
+                (&hover, Vector3::new(0.2, 0.0, 0.05))
+            } else {
+                (&down, Vector3::new(0.0, 0.0, 0.45))
+            };
+            l.servo(&trim(), false);
+            l.update(&input(
+                t,
+                true,
+                r,
+                (Vector3::new(0.0, 0.0, -5.0), v),
+                Vector3::zeros(),
+            ));
+            assert_eq!(l.state(), SpoolState::Flying, "t = {t}");
+        }
+        assert_eq!(l.blend(), 1.0);
+    }
+
+    /// A climb withdrawn before lift-off goes back to ready; no lift-off
+    /// within the timeout is given up.
+    #[test]
+    fn a_takeoff_without_liftoff_is_given_up() {
+        let c = LandingConfig::default();
+        let mut l = Landing::new(c, TS, &trim(), 0.0);
+        l.state = SpoolState::Ready;
+        let climb = Reference {
+            velocity_ned_m_s: Vector3::new(0.0, 0.0, -1.0),
+            yaw_rad: 0.0,
+        };
+        let still = (Vector3::zeros(), Vector3::zeros());
+        let mut t = 0.0;
+        let mut aborted = false;
+        while t < c.takeoff_ramp_s + c.takeoff_timeout_s + 1.0 {
+            t += TS;
+            l.servo(&trim(), false);
+            let s = l.update(&input(t, true, &climb, still, Vector3::zeros()));
+            if s.takeoff_aborted {
+                aborted = true;
+                assert!(
+                    (t - c.takeoff_ramp_s - c.takeoff_timeout_s).abs() < 0.01,
+                    "{t}"
+                );
+                break;
+            }
+        }
+        assert!(aborted);
+        assert_eq!(l.state(), SpoolState::Ready);
+        // armed, ready: the arm refusal aside, the run-up is not redone
+        assert!(l.rotor_at_speed());
+    }
+}
