@@ -31,6 +31,7 @@ use helicon_devices::{AvionicsDecoder, Geodetic, LocalNed, NavPvt, PtyPair, VnCo
 use helicon_flight::config::{FailsafeConfig, RcConfig, RealtimeConfig, StaleLimits};
 use helicon_flight::control::{ControlTask, StepReport};
 use helicon_flight::ground;
+use helicon_flight::landing::{Landing, LandingConfig};
 use helicon_flight::mission::{Mission, References};
 use helicon_flight::plausibility::{PlausibilityConfig, SensorGate};
 use helicon_flight::ports::{DeviceSensors, avionics_ports, open_port, stick_us};
@@ -153,6 +154,10 @@ pub struct SitlResult {
     pub log_csv: PathBuf,
     /// Its rows.
     pub log_rows: usize,
+    /// The true state at the end of the flight (the simulator's frame).
+    pub final_state: helicon_model::State,
+    /// The true state at the start.
+    pub initial_state: helicon_model::State,
 }
 
 /// Errors of a SITL run (a divergence is an outcome, not an error).
@@ -214,13 +219,30 @@ pub fn run(
         message: format!("cannot create: {e}"),
     })?;
     let mut hw = Hardware::new(scenario, prepared)?;
+    if options.gcs.is_some() {
+        // the navigator gives the references, not the scenario
+        hw = hw.without_heading_check();
+    }
     let ts = hw.sample_time_s();
     let x0 = *hw.state();
     let p = prepared.model.params();
-    let computer = flight_computer(&prepared.onboard_setup(scenario, &x0))?;
+    let on_ground = scenario.ground.is_some_and(|g| g.on_ground);
+    // home is where the helicopter stands: starting on the ground, the
+    // on-board side's origin (its GPS home, the navigator's) is the ground
+    // below the simulator's origin (the design point, in the air)
+    let ground_down_m = if on_ground {
+        p.landing_gear.ground_down_m
+    } else {
+        0.0
+    };
+    let mut x0_onboard = x0;
+    x0_onboard[helicon_model::state::ix::Z] -= ground_down_m;
+    let computer = flight_computer(&prepared.onboard_setup(scenario, &x0_onboard))?;
     let u_trim = prepared.gains.set.u_trim;
     let mut supervisor = Supervisor::new(options.stale, options.failsafe, 0.0);
     let home_geo = Geodetic::new(HOME.0, HOME.1, HOME.2).map_err(dev("home"))?;
+    let onboard_home_geo =
+        LocalNed::new(home_geo).to_geodetic(&nalgebra::Vector3::new(0.0, 0.0, ground_down_m));
 
     let mut wires = Wires {
         imu: PtyPair::open().map_err(dev("IMU pseudo-terminal"))?,
@@ -234,7 +256,12 @@ pub fn run(
     let av_port = open_port(wires.avionics.slave_path(), 115_200).map_err(dev("avionics"))?;
     let (rc_port, servo_port) =
         avionics_ports(av_port, RcConfig::default()).map_err(dev("avionics"))?;
-    let sensors = DeviceSensors::new(imu_port, gps_port, home, scenario.sensors.gps.latency_s);
+    let sensors = DeviceSensors::new(
+        imu_port,
+        gps_port,
+        LocalNed::new(onboard_home_geo),
+        scenario.sensors.gps.latency_s,
+    );
     let lockstep = options.speed == Speed::Max;
     // lock-step: the sensor server reads the receiver too (deterministic);
     // real time: the receiver has its own thread, as on board
@@ -273,8 +300,8 @@ pub fn run(
                 address: address.clone(),
                 ..GcsSection::default()
             };
-            let (m, server) =
-                ground::start(&section, home_geo, "--gcs", ts).map_err(dev("ground station"))?;
+            let (m, server) = ground::start(&section, onboard_home_geo, "--gcs", ts)
+                .map_err(dev("ground station"))?;
             (m, Some(server))
         }
         None => {
@@ -291,7 +318,7 @@ pub fn run(
     let mission = mission.with_excitation(
         Excitations::new(&scenario.excitation, &scenario.name).map_err(ClosedLoopError::from)?,
     );
-    let task = ControlTask::new(computer, supervisor, u_trim)
+    let mut task = ControlTask::new(computer, supervisor, u_trim)
         .with_imu_health(imu_health_at(
             p.environment.g_m_s2,
             ts,
@@ -304,6 +331,10 @@ pub fn run(
             &scenario.name,
         )?)
         .with_servo_limits(p.servo_limits());
+    if on_ground {
+        // from the ground to the ground: the on-board ground logic flies
+        task = task.with_landing(Landing::new(LandingConfig::default(), ts, &u_trim, 0.0));
+    }
     let handle = runtime::spawn(
         task,
         mission,
@@ -344,7 +375,8 @@ pub fn run(
     let mut last_vn: Option<VnCommon> = None;
     let mut rc_seq = 0u8;
     let mut sent = Vec::new();
-    let mut received = Vec::with_capacity(hw.samples());
+    // (a long run grows it: at most ten minutes up front)
+    let mut received = Vec::with_capacity(hw.samples().min(240_000));
     let mut samples = 0u64;
     let timeout = Duration::from_secs(10);
     let t0 = helicon_flight::realtime::monotonic_ns();
@@ -435,12 +467,15 @@ pub fn run(
                 .map_err(dev("avionics"))?;
                 decoder.push_with(&buf[..n], |m| {
                     if let AvionicsMessage::Servo(c) = m {
-                        got = Some(c.inputs());
+                        got = Some((c.inputs(), c.throttle_hold));
                     }
                 });
             }
             match got {
-                Some(v) => u = v,
+                Some((v, hold)) => {
+                    u = v;
+                    hw.set_throttle_hold(hold);
+                }
                 None => break,
             }
         } else {
@@ -456,11 +491,16 @@ pub fn run(
                 if n == 0 {
                     break;
                 }
+                let mut hold = None;
                 decoder.push_with(&buf[..n], |m| {
                     if let AvionicsMessage::Servo(c) = m {
                         u = c.inputs();
+                        hold = Some(c.throttle_hold);
                     }
                 });
+                if let Some(h) = hold {
+                    hw.set_throttle_hold(h);
+                }
             }
         }
         // the telemetry of this sample (lock-step: pushed before its servo frame)
@@ -539,7 +579,52 @@ pub fn run(
         ulog,
         log_csv,
         log_rows,
+        final_state: *hw.state(),
+        initial_state: x0,
     })
+}
+
+/// Ground height below the simulator's origin (m) when [`ground_start`]
+/// puts a scenario on the ground: the design point (the trim, in the air)
+/// stays where it was, 5 m above the skids' ground.
+pub const GROUND_START_DOWN_M: f64 = 5.0;
+
+/// `scenario` put on the ground, as `helicon sitl --gcs` flies it: its
+/// parameters with the landing gear (the ground [`GROUND_START_DOWN_M`]
+/// below the origin unless the parameters place it), the drivetrain and the
+/// ground effect on, and a `[ground]` section starting on the skids, rotor
+/// stopped. A scenario that already starts on the ground is returned as it
+/// is. The simulator's take-off plan of `[ground]` is not used by SITL: the
+/// on-board ground logic flies the take-off and the landing.
+pub fn ground_start(scenario: &Scenario) -> Result<(Scenario, helicon_model::Params), SitlError> {
+    let mut params = match &scenario.params {
+        Some(p) => {
+            helicon_model::Params::from_file(&scenario.resolve(p)).map_err(ClosedLoopError::from)?
+        }
+        None => helicon_model::Params::bergen_twin(),
+    };
+    let mut s = scenario.clone();
+    if s.ground.is_some_and(|g| g.on_ground) {
+        return Ok((s, params));
+    }
+    let gear = &mut params.landing_gear;
+    if !gear.is_enabled() {
+        gear.enabled = 1.0;
+    }
+    if gear.ground_down_m <= gear.contact_z_m + 1.0 {
+        gear.ground_down_m = GROUND_START_DOWN_M;
+    }
+    params.ground_effect.enabled = 1.0;
+    params.drivetrain.enabled = 1.0;
+    s.ground = Some(helicon_sim::ground::GroundSection {
+        on_ground: true,
+        spool_up_s: 0.0,
+        takeoff_s: 0.0,
+        ramp_s: 2.0_f64.min(s.duration_s.max(1e-3)),
+        land_after_s: 0.0,
+        shutdown_delay_s: 0.0,
+    });
+    Ok((s, params))
 }
 
 impl SitlResult {

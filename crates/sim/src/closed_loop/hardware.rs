@@ -55,6 +55,12 @@ pub struct Hardware<'a> {
     pending: Option<(Vector3<f64>, [f64; 4])>,
     reason: Option<(Termination, String)>,
     t_end_s: f64,
+    /// The engine's spool ramp, with the drivetrain (started or stopped by
+    /// the servo frame's throttle hold: [`Hardware::set_throttle_hold`]).
+    spool: Option<helicon_model::drivetrain::Spool>,
+    /// The heading is checked against the scenario's references (off when
+    /// the references come from elsewhere: a ground station's navigator).
+    heading_check: bool,
 }
 
 impl<'a> Hardware<'a> {
@@ -62,7 +68,16 @@ impl<'a> Hardware<'a> {
     pub fn new(scenario: &'a Scenario, prepared: &'a Prepared) -> Result<Self, ClosedLoopError> {
         let ts = prepared.gains.set.sample_time_s;
         let (n, _) = sample_counts(scenario, ts);
-        let g = prepared.model.params().environment.g_m_s2;
+        let p = prepared.model.params();
+        let g = p.environment.g_m_s2;
+        let on_ground = scenario.ground.is_some_and(|g| g.on_ground);
+        let spool = p.drivetrain.is_enabled().then(|| {
+            if on_ground {
+                helicon_model::drivetrain::Spool::stopped(p)
+            } else {
+                helicon_model::drivetrain::Spool::governed(p)
+            }
+        });
         Ok(Hardware {
             scenario,
             prepared,
@@ -77,7 +92,37 @@ impl<'a> Hardware<'a> {
             pending: None,
             reason: None,
             t_end_s: 0.0,
+            spool,
+            heading_check: true,
         })
+    }
+
+    /// The same hardware without the heading check against the scenario's
+    /// references (a ground station's navigator gives them instead).
+    #[must_use]
+    pub fn without_heading_check(mut self) -> Self {
+        self.heading_check = false;
+        self
+    }
+
+    /// The servo frame's throttle hold: set, the engine is cut; clear, the
+    /// governor spools the rotor up (from its speed now) and holds it. No
+    /// effect without the drivetrain (the rotor then turns at its constant
+    /// speed).
+    pub fn set_throttle_hold(&mut self, hold: bool) {
+        let omega = self.plant.omega_rad_s();
+        if let Some(spool) = self.spool.as_mut() {
+            if hold {
+                spool.stop();
+            } else {
+                spool.start(omega);
+            }
+        }
+    }
+
+    /// The rotor speed now (rad/s).
+    pub fn rotor_speed_rad_s(&self) -> f64 {
+        self.plant.omega_rad_s()
     }
 
     /// The true full state now (the start of the flight before any step:
@@ -130,6 +175,12 @@ impl<'a> Hardware<'a> {
         let (wind_ned, r) = self.pending.take()?;
         let t = self.k as f64 * self.ts;
         let x_start = self.plant.x;
+        if let Some(spool) = self.spool.as_mut() {
+            spool.step(self.ts);
+            if let Some(g) = self.plant.ground.as_mut() {
+                g.drive = spool.command;
+            }
+        }
         let step = self.plant.advance(u, &wind_ned);
         let decimation = self.scenario.log.decimation.max(1) as usize;
         let kept = self.k % decimation == 0 || self.k == self.n;
@@ -167,7 +218,11 @@ impl<'a> Hardware<'a> {
             self.scenario,
             &self.plant.x,
             t + self.ts,
-            self.schedule.at(t + self.ts)[3],
+            if self.heading_check {
+                self.schedule.at(t + self.ts)[3]
+            } else {
+                self.plant.x[ix::PSI]
+            },
         ) {
             self.reason = Some(stop);
         }
