@@ -81,7 +81,11 @@ pub struct SitlArgs {
     /// `udpin:HOST:PORT` (it listens). The helicopter then starts disarmed,
     /// the simulated receiver is silent, and the navigator flies what the
     /// operator commands (arm, takeoff, missions): the scenario's
-    /// `[[reference]]` are ignored; its duration still ends the run.
+    /// `[[reference]]` are ignored. The helicopter starts on the ground
+    /// (landing gear, drivetrain and ground effect on when the scenario has
+    /// no `[ground]`), disarmed, rotor stopped, and the run lasts until
+    /// stopped (Ctrl-C) — at most as long as `--max-log-bytes` allows the
+    /// on-board log — unless `--duration` is given.
     #[arg(long, value_name = "ADDRESS", conflicts_with_all = ["manual_at", "rc_failsafe_at", "rc_silent_at"])]
     pub gcs: Option<String>,
     #[command(flatten)]
@@ -154,6 +158,33 @@ fn plan_logs(
     plan_log(case, prepared, &a.log)
 }
 
+/// How long a ground-station run without `--duration` may last: until the
+/// on-board log (written at its full rate) would pass `max_log_bytes`, and
+/// within the simulator's work limit.
+fn gcs_duration_s(
+    case: &Scenario,
+    prepared: &helicon_sim::closed_loop::Prepared,
+    max_log_bytes: u64,
+) -> f64 {
+    let ts = prepared.gains.set.sample_time_s;
+    let at = |duration_s: f64| {
+        let mut c = case.clone();
+        c.duration_s = duration_s;
+        sitl::estimate_ulog_bytes(&c, ts, true) as f64
+    };
+    let head = at(0.0);
+    let per_s = (at(100.0) - head) / 100.0;
+    let by_log = if per_s > 0.0 {
+        (max_log_bytes as f64 - head) / per_s
+    } else {
+        f64::INFINITY
+    };
+    let by_work =
+        helicon_sim::scenario::MAX_PLANT_STEPS * ts / f64::from(case.plant.substeps.max(1));
+    // 1 % under both limits: the estimate rounds
+    (0.99 * by_log.min(by_work)).max(ts)
+}
+
 /// Run `helicon sitl`.
 pub fn run(a: &SitlArgs) -> Result<()> {
     check_time("--gps-loss-at", a.gps_loss_at)?;
@@ -182,7 +213,40 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         } else {
             root.clone()
         };
-        let (prepared, _) = prepare_step(&case)?;
+        let prepared = if a.gcs.is_some() {
+            // with a ground station: on the ground, disarmed, rotor stopped
+            let (grounded, params) = sitl::ground_start(&case)
+                .with_context(|| format!("scenario `{}`: putting it on the ground", case.name))?;
+            if case.ground.is_none() {
+                writeln!(
+                    con,
+                    "{}: on the ground {} m below the design point (landing gear, drivetrain and ground effect on), disarmed, rotor stopped",
+                    case.name,
+                    sitl::GROUND_START_DOWN_M
+                );
+            }
+            case = grounded;
+            let prepared = helicon_sim::closed_loop::prepare_with_params(&case, params)
+                .with_context(|| {
+                    format!(
+                        "scenario `{}`: preparing the design point and gains",
+                        case.name
+                    )
+                })?;
+            if a.duration.is_none() {
+                case.duration_s = gcs_duration_s(&case, &prepared, a.log.max_log_bytes);
+                writeln!(
+                    con,
+                    "{}: flying until stopped (Ctrl-C), at most {:.0} min (the on-board log's --max-log-bytes {})",
+                    case.name,
+                    case.duration_s / 60.0,
+                    human_bytes(a.log.max_log_bytes)
+                );
+            }
+            prepared
+        } else {
+            prepare_step(&case)?.0
+        };
         case.check_work(&source, prepared.gains.set.sample_time_s)?;
         let log_stride = plan_logs(&case, &prepared, a)?;
         let options = SitlOptions {

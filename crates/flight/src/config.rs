@@ -300,6 +300,10 @@ pub struct OnboardConfig {
     /// The sensors' plausibility limits.
     #[serde(default)]
     pub plausibility: crate::plausibility::PlausibilityConfig,
+    /// From the ground to the ground: the rotor's run-up, the land
+    /// detector, take-off and landing ([`crate::landing`]).
+    #[serde(default)]
+    pub landing: crate::landing::LandingConfig,
     /// Log folder.
     #[serde(default)]
     pub log: LogConfig,
@@ -433,6 +437,7 @@ impl OnboardConfig {
         }
         self.rc.validate(file)?;
         self.plausibility.validate(file)?;
+        self.landing.validate(file)?;
         if !(1..=99).contains(&self.realtime.priority) {
             return Err(ConfigError::invalid(
                 file,

@@ -55,6 +55,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LandingConfig {
+    /// The ground logic runs (the on-board program starts on the ground;
+    /// off only for a start in the air, as scripted test hardware has).
+    pub enabled: bool,
     /// From engine start to the rotor at speed (s): longer than the
     /// governor's soft start (the Bergen Twin's spools up in 5 s).
     pub runup_s: f64,
@@ -91,6 +94,7 @@ pub struct LandingConfig {
 impl Default for LandingConfig {
     fn default() -> Self {
         LandingConfig {
+            enabled: true,
             runup_s: 8.0,
             spooldown_s: 10.0,
             takeoff_ramp_s: 2.0,

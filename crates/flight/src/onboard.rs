@@ -256,7 +256,7 @@ pub fn run_until(
         x0: &x0,
     })?;
     let u_trim = gains.set.u_trim;
-    let task = ControlTask::new(
+    let mut task = ControlTask::new(
         computer,
         Supervisor::new(cfg.stale, cfg.failsafe, 0.0).with_rc(cfg.rc),
         u_trim,
@@ -269,6 +269,11 @@ pub fn run_until(
     )?)
     .with_gate(gate)
     .with_servo_limits(params.servo_limits());
+    if cfg.landing.enabled {
+        // on the ground, disarmed, the engine cut: the ground logic flies
+        // the run-up, the take-off and the landing
+        task = task.with_landing(crate::landing::Landing::new(cfg.landing, ts, &u_trim, 0.0));
+    }
     let dir = cfg.resolve(&cfg.log.dir);
     std::fs::create_dir_all(&dir).map_err(|e| OnboardError::Log {
         path: dir.display().to_string(),

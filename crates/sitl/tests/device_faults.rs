@@ -99,6 +99,7 @@ fn fly(tag: &str, fault: Fault, at_s: f64, extra: &str, duration_s: f64) -> Run 
          [stale]\nimu_s = 0.05\ngps_s = 1.0\nmag_s = 0.5\nrc_s = 0.3\n\
          [failsafe]\nhold_s = 30.0\n\
          [rc]\narm_hold_s = 0.2\n\
+         [landing]\nenabled = false\n\
          [log]\ndir = \"logs\"\n\
          [realtime]\nsched_fifo = false\nmlockall = false\n{extra}\n",
         links[0].display(),

@@ -49,6 +49,7 @@ fn fly(
          [devices.gps]\npath = \"{}\"\nbaud = 115200\n\
          [devices.avionics]\npath = \"{}\"\nbaud = 115200\n\
          [stale]\nimu_s = 0.5\ngps_s = 5.0\nmag_s = 5.0\n{stale}\n\
+         [landing]\nenabled = false\n\
          [log]\ndir = \"logs\"\n\
          [realtime]\nsched_fifo = false\nmlockall = false\n",
         imu.slave_path().display(),
