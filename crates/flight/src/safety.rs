@@ -936,6 +936,46 @@ mod tests {
         );
     }
 
+    /// Told where it is (the land detector): arming off the ground is
+    /// refused, by the ground station and by the arm switch; in the air the
+    /// arm switch does not disarm (no kill channel configured); on the
+    /// ground it does; the disarm after a landing has its own reason.
+    #[test]
+    fn off_the_ground_no_arming_and_no_disarm_by_the_switch() {
+        let mut s = Supervisor::new(StaleLimits::default(), FailsafeConfig::default(), 0.0)
+            .with_rc(instant());
+        let (on, off) = (rc(false, true), rc(false, false));
+        s.set_landed(false);
+        assert!(!s.arm());
+        assert!(s.update(&health(0.0, true), Some(&on), 0.0).is_none());
+        assert_eq!(s.mode(), Mode::Disarmed);
+        // on the ground: the switch (moved again) arms
+        s.set_landed(true);
+        s.update(&health(0.02, true), Some(&off), 0.0);
+        let ev = s.update(&health(0.04, true), Some(&on), 0.0).unwrap();
+        assert_eq!(ev.to, Mode::Auto);
+        // in the air the switch low does nothing
+        s.set_landed(false);
+        for k in 3..60 {
+            assert!(
+                s.update(&health(f64::from(k) * 0.02, true), Some(&off), 0.0)
+                    .is_none()
+            );
+        }
+        assert_eq!(s.mode(), Mode::Auto);
+        // landed: the switch low disarms
+        s.set_landed(true);
+        s.update(&health(1.3, true), Some(&on), 0.0);
+        let ev = s.update(&health(1.32, true), Some(&off), 0.0).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Disarmed, Reason::Disarmed));
+        // armed again by the ground station; the ground logic's disarm
+        assert!(s.arm());
+        s.update(&health(1.34, true), None, 0.0).unwrap();
+        s.disarm_landed();
+        let ev = s.update(&health(1.36, true), None, 0.0).unwrap();
+        assert_eq!((ev.to, ev.reason), (Mode::Disarmed, Reason::Landed));
+    }
+
     /// With a kill channel the arm switch does not disarm in flight; the
     /// kill channel held 0.1 s does, and the arm switch must move to arm
     /// again. A frame with a channel out of range is not the pilot's.

@@ -22,7 +22,7 @@ fn a_full_servo_port_drops_and_counts_frames_without_blocking() {
     let sender = std::thread::spawn(move || {
         for k in 0..frames {
             let u = Input::repeat(0.01 * (k % 10) as f64);
-            servos.send(&u).unwrap();
+            servos.send(&u, false).unwrap();
         }
         tx.send(servos.dropped()).unwrap();
     });

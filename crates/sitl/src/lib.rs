@@ -241,8 +241,12 @@ pub fn run(
     let u_trim = prepared.gains.set.u_trim;
     let mut supervisor = Supervisor::new(options.stale, options.failsafe, 0.0);
     let home_geo = Geodetic::new(HOME.0, HOME.1, HOME.2).map_err(dev("home"))?;
-    let onboard_home_geo =
-        LocalNed::new(home_geo).to_geodetic(&nalgebra::Vector3::new(0.0, 0.0, ground_down_m));
+    // (the origin itself in the air: bit for bit, no round trip)
+    let onboard_home_geo = if on_ground {
+        LocalNed::new(home_geo).to_geodetic(&nalgebra::Vector3::new(0.0, 0.0, ground_down_m))
+    } else {
+        home_geo
+    };
 
     let mut wires = Wires {
         imu: PtyPair::open().map_err(dev("IMU pseudo-terminal"))?,
