@@ -158,6 +158,45 @@ fn plan_logs(
     plan_log(case, prepared, &a.log)
 }
 
+/// A ground-station run's design, `case` put on the ground, disarmed,
+/// rotor stopped ([`sitl::ground_start`]), and without `--duration` as long
+/// as [`gcs_duration_s`] allows; told on `con`.
+fn prepare_on_the_ground(
+    case: &mut Scenario,
+    a: &SitlArgs,
+    con: &mut Console,
+) -> Result<helicon_sim::closed_loop::Prepared> {
+    let (mut grounded, params) = sitl::ground_start(case)
+        .with_context(|| format!("scenario `{}`: putting it on the ground", case.name))?;
+    if case.ground.is_none() {
+        writeln!(
+            con,
+            "{}: on the ground {} m below the design point (landing gear, drivetrain and ground effect on), disarmed, rotor stopped",
+            case.name,
+            sitl::GROUND_START_DOWN_M
+        );
+    }
+    let prepared =
+        helicon_sim::closed_loop::prepare_with_params(&grounded, params).with_context(|| {
+            format!(
+                "scenario `{}`: preparing the design point and gains",
+                grounded.name
+            )
+        })?;
+    if a.duration.is_none() {
+        grounded.duration_s = gcs_duration_s(&grounded, &prepared, a.log.max_log_bytes);
+        writeln!(
+            con,
+            "{}: flying until stopped (Ctrl-C), at most {:.0} min (the on-board log's --max-log-bytes {})",
+            grounded.name,
+            grounded.duration_s / 60.0,
+            human_bytes(a.log.max_log_bytes)
+        );
+    }
+    *case = grounded;
+    Ok(prepared)
+}
+
 /// How long a ground-station run without `--duration` may last: until the
 /// on-board log (written at its full rate) would pass `max_log_bytes`, and
 /// within the simulator's work limit.
@@ -213,39 +252,9 @@ pub fn run(a: &SitlArgs) -> Result<()> {
         } else {
             root.clone()
         };
-        let prepared = if a.gcs.is_some() {
-            // with a ground station: on the ground, disarmed, rotor stopped
-            let (grounded, params) = sitl::ground_start(&case)
-                .with_context(|| format!("scenario `{}`: putting it on the ground", case.name))?;
-            if case.ground.is_none() {
-                writeln!(
-                    con,
-                    "{}: on the ground {} m below the design point (landing gear, drivetrain and ground effect on), disarmed, rotor stopped",
-                    case.name,
-                    sitl::GROUND_START_DOWN_M
-                );
-            }
-            case = grounded;
-            let prepared = helicon_sim::closed_loop::prepare_with_params(&case, params)
-                .with_context(|| {
-                    format!(
-                        "scenario `{}`: preparing the design point and gains",
-                        case.name
-                    )
-                })?;
-            if a.duration.is_none() {
-                case.duration_s = gcs_duration_s(&case, &prepared, a.log.max_log_bytes);
-                writeln!(
-                    con,
-                    "{}: flying until stopped (Ctrl-C), at most {:.0} min (the on-board log's --max-log-bytes {})",
-                    case.name,
-                    case.duration_s / 60.0,
-                    human_bytes(a.log.max_log_bytes)
-                );
-            }
-            prepared
-        } else {
-            prepare_step(&case)?.0
+        let prepared = match a.gcs {
+            Some(_) => prepare_on_the_ground(&mut case, a, &mut con)?,
+            None => prepare_step(&case)?.0,
         };
         case.check_work(&source, prepared.gains.set.sample_time_s)?;
         let log_stride = plan_logs(&case, &prepared, a)?;

@@ -588,12 +588,16 @@ mod tests {
     #[test]
     fn the_defaults_are_valid_and_each_field_is_checked() {
         LandingConfig::default().validate("onboard.toml").unwrap();
-        let mut c = LandingConfig::default();
-        c.trigger_s = f64::NAN;
+        let c = LandingConfig {
+            trigger_s: f64::NAN,
+            ..LandingConfig::default()
+        };
         let e = c.validate("onboard.toml").unwrap_err().to_string();
         assert!(e.contains("landing.trigger_s"), "{e}");
-        let mut c = LandingConfig::default();
-        c.runup_s = -1.0;
+        let c = LandingConfig {
+            runup_s: -1.0,
+            ..LandingConfig::default()
+        };
         assert!(c.validate("x").is_err());
     }
 
@@ -612,7 +616,7 @@ mod tests {
         let still = (Vector3::new(0.0, 0.0, -0.3), Vector3::zeros());
         let mut t = 0.0;
         let mut log = Vec::new();
-        let mut step = |l: &mut Landing, t: f64, armed: bool, r: &Reference, pv, law: &Input| {
+        let step = |l: &mut Landing, t: f64, armed: bool, r: &Reference, pv, law: &Input| {
             let u = l.servo(law, false);
             let s = l.update(&input(t, armed, r, pv, Vector3::zeros()));
             (u, s)

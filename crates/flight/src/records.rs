@@ -121,6 +121,30 @@ pub fn failsafe_reason(r: Reason) -> Option<FailsafeReason> {
     }
 }
 
+/// A change of the ground logic's state, as a log text (a warning when a
+/// take-off was given up).
+fn write_spool<W: Write>(
+    log: &mut FlightLog<W>,
+    t_s: f64,
+    from: SpoolState,
+    to: SpoolState,
+    aborted: bool,
+) -> Result<(), WriteError> {
+    let ts = timestamp_us(t_s, "ground state")?;
+    let (level, why) = if aborted {
+        (LogLevel::Warning, ": no lift-off, take-off given up")
+    } else {
+        (LogLevel::Info, "")
+    };
+    log_fmt(
+        log,
+        level,
+        ts,
+        format_args!("ground: {} -> {}{why}", from.as_str(), to.as_str()),
+        "ground: state changed",
+    )
+}
+
 fn is_failsafe(m: Mode) -> bool {
     matches!(m, Mode::Hold | Mode::Descent | Mode::ImuLost)
 }
@@ -159,6 +183,7 @@ fn log_fmt<W: Write>(
 }
 
 /// Write one ring item to the flight log (no allocation).
+#[allow(clippy::too_many_lines)] // one arm per record kind
 pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Result<(), WriteError> {
     match r {
         FlightRecord::Log(x) => log.write(x),
@@ -271,21 +296,7 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
             from,
             to,
             aborted,
-        } => {
-            let ts = timestamp_us(*t_s, "ground state")?;
-            let (level, why) = if *aborted {
-                (LogLevel::Warning, ": no lift-off, take-off given up")
-            } else {
-                (LogLevel::Info, "")
-            };
-            log_fmt(
-                log,
-                level,
-                ts,
-                format_args!("ground: {} -> {}{why}", from.as_str(), to.as_str()),
-                "ground: state changed",
-            )
-        }
+        } => write_spool(log, *t_s, *from, *to, *aborted),
         FlightRecord::ServoDropped { t_s, dropped } => {
             let ts = timestamp_us(*t_s, "servo drop")?;
             log_fmt(

@@ -593,7 +593,7 @@ impl Supervisor {
         self.arm_pending = None;
         self.rc_armed = Some(rc.armed);
         if rc.armed {
-            if self.kill_since.is_none() && !(self.ground_known && !self.landed) {
+            if self.kill_since.is_none() && (self.landed || !self.ground_known) {
                 self.armed = true;
                 self.landed_disarm = false;
             }

@@ -7,7 +7,8 @@
 //! arms, starts it at once (the take-off waits for the rotor), sees the
 //! landing and the disarm, waits 30 s more and finds the helicopter on the
 //! ground, upright, within 2 m of home — over several seeds (the wait, the
-//! wind's gusts and the sensors' noise).
+//! wind's gusts and the sensors' noise). The first seed then flies again:
+//! arm, take off, land.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // a failed unwrap is a failed test
 
 mod common;
@@ -224,7 +225,7 @@ fn item(command: MavCmd, n_m: f64, e_m: f64, height_m: f32) -> MISSION_ITEM_INT_
 
 /// One flight from the ground to the ground; the measured figures.
 #[allow(clippy::too_many_lines)] // one flight, its checks in order
-fn flight(seed: u64) -> (f64, f64, f64) {
+fn flight(seed: u64, again: bool) -> (f64, f64, f64) {
     // the wait on the ground before arming: 5-60 s, drawn from the seed
     let wait_s =
         5.0 + (seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11) as f64 / (1u64 << 53) as f64 * 55.0;
@@ -234,7 +235,7 @@ fn flight(seed: u64) -> (f64, f64, f64) {
         .unwrap()
         .connect::<MavMessage>()
         .unwrap();
-    let (s, params) = sitl::ground_start(&scenario(seed, wait_s + 150.0)).unwrap();
+    let (s, params) = sitl::ground_start(&scenario(seed, wait_s + 230.0)).unwrap();
     let prepared = prepare_with_params(&s, params).unwrap();
     let mut opts = common::options(&format!("ground{seed}"));
     opts.keep_frames = false;
@@ -323,6 +324,36 @@ fn flight(seed: u64) -> (f64, f64, f64) {
     });
     assert!(stayed, "seed {seed}: left the ground after landing");
     assert!(!run.is_finished(), "seed {seed}: the run ended by itself");
+    if again {
+        // and again: arm, take off (it waits for the run-up), land
+        assert_eq!(
+            c.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, 1.0, 0.0),
+            MavResult::MAV_RESULT_ACCEPTED
+        );
+        assert!(c.until(2.0, |c| c.armed == Some(true)));
+        assert_eq!(
+            c.command(MavCmd::MAV_CMD_NAV_TAKEOFF, 0.0, 4.0),
+            MavResult::MAV_RESULT_ACCEPTED
+        );
+        assert!(
+            c.until(30.0, |c| c.landed_state
+                == Some(MavLandedState::MAV_LANDED_STATE_IN_AIR)),
+            "seed {seed}: the second take-off did not lift off: {:?}",
+            c.texts
+        );
+        c.until(8.0, |_| false);
+        assert_eq!(
+            c.command(MavCmd::MAV_CMD_NAV_LAND, 0.0, 0.0),
+            MavResult::MAV_RESULT_ACCEPTED
+        );
+        assert!(
+            c.until(60.0, |c| c.armed == Some(false)),
+            "seed {seed}: not disarmed after the second landing: {:?}",
+            c.texts
+        );
+        c.until(5.0, |_| false);
+        assert!(!run.is_finished(), "seed {seed}: the run ended by itself");
+    }
     let r = loop {
         c.heartbeat();
         if run.is_finished() {
@@ -362,6 +393,6 @@ fn flight(seed: u64) -> (f64, f64, f64) {
 #[test]
 fn from_the_ground_to_the_ground_with_a_ground_station() {
     for seed in [1, 2, 3] {
-        flight(seed);
+        flight(seed, seed == 1);
     }
 }
