@@ -181,11 +181,6 @@ impl Client {
                     item.seq = r.seq;
                     self.send(&MavMessage::MISSION_ITEM_INT(item));
                 }
-                Some(MavMessage::MISSION_REQUEST(r)) => {
-                    let mut item = items[usize::from(r.seq)].clone();
-                    item.seq = r.seq;
-                    self.send(&MavMessage::MISSION_ITEM_INT(item));
-                }
                 Some(MavMessage::MISSION_ACK(a)) => {
                     assert_eq!(a.mavtype, MavMissionResult::MAV_MISSION_ACCEPTED);
                     return;
