@@ -88,6 +88,7 @@
 
 mod campaign;
 mod draws;
+mod landing;
 mod record;
 mod report;
 mod runner;
@@ -98,6 +99,7 @@ mod store;
 
 pub use campaign::*;
 pub use draws::*;
+pub use landing::*;
 pub use record::*;
 pub use runner::*;
 pub use stats::*;
