@@ -262,7 +262,8 @@ impl GroundPlan {
             touchdown_xy: None,
             last_xy: horizontal(x0),
             prev_v: ned_velocity(x0),
-            ground_down: -helicon_model::landing_gear::GroundPlane::new(&params.landing_gear).up_ned,
+            ground_down: -helicon_model::landing_gear::GroundPlane::new(&params.landing_gear)
+                .up_ned,
             metrics: GroundMetrics::default(),
         }
     }

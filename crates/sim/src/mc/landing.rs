@@ -199,7 +199,9 @@ impl LandingVerdict {
 
     /// The criteria failed, in report order.
     pub fn failures(self) -> impl Iterator<Item = LandingFailure> {
-        LandingFailure::ALL.into_iter().filter(move |f| self.has(*f))
+        LandingFailure::ALL
+            .into_iter()
+            .filter(move |f| self.has(*f))
     }
 
     /// `ok`, or the failed criteria joined by `;` (`hard_landing;tip_over`).
@@ -344,10 +346,16 @@ mod tests {
         // 0 of 20: upper bound z²/(n + z²)
         let (lo, hi) = wilson_interval(0, 20, Z_95);
         assert_eq!(lo, 0.0);
-        assert!((hi - Z_95 * Z_95 / (20.0 + Z_95 * Z_95)).abs() < 1e-15, "{hi}");
+        assert!(
+            (hi - Z_95 * Z_95 / (20.0 + Z_95 * Z_95)).abs() < 1e-15,
+            "{hi}"
+        );
         // 10 of 100: the textbook (0.0552, 0.1744)
         let (lo, hi) = wilson_interval(10, 100, Z_95);
-        assert!((lo - 0.05523).abs() < 5e-5 && (hi - 0.17437).abs() < 5e-5, "{lo} {hi}");
+        assert!(
+            (lo - 0.05523).abs() < 5e-5 && (hi - 0.17437).abs() < 5e-5,
+            "{lo} {hi}"
+        );
         assert_eq!(wilson_interval(5, 5, Z_95).1, 1.0);
     }
 

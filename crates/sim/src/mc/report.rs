@@ -67,12 +67,17 @@ pub(super) fn finish(manifest: &Manifest, store: &Store, out: &Path) -> Result<S
     })?;
     finish_file(&runs_path, wr)?;
     finish_file(&traces_path, wt)?;
-    let (pct, _) = percentiles(metric_count(ground), &PERCENTILES, SELECT_BITS, &mut |feed| {
-        each_run(store, |_, r, _| {
-            feed_metrics(r, feed);
-            Ok(())
-        })
-    })?;
+    let (pct, _) = percentiles(
+        metric_count(ground),
+        &PERCENTILES,
+        SELECT_BITS,
+        &mut |feed| {
+            each_run(store, |_, r, _| {
+                feed_metrics(r, feed);
+                Ok(())
+            })
+        },
+    )?;
     let hist = histograms(store, &acc, ground)?;
     let stats = acc.finish(&manifest.name, &manifest.hash, &pct);
     let json = out.join("stats.json");

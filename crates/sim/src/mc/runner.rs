@@ -82,7 +82,8 @@ impl Campaign {
         let layout = self.layout(Shard { k: 0, m: 1 });
         // the metrics and, with [ground], the `landing` column
         let ground = self.landing.is_some();
-        let numbers = (4 + self.dispersions.len() + metric_count(ground) + usize::from(ground)) as u64;
+        let numbers =
+            (4 + self.dispersions.len() + metric_count(ground) + usize::from(ground)) as u64;
         let run_slot = layout.bytes_per_run() - 40 * trace_points;
         let disk_bytes_per_run = run_slot + 26 * numbers + 60;
         let disk_bytes_per_traced_run = disk_bytes_per_run + trace_points * (40 + 6 * 26);

@@ -1,9 +1,9 @@
 //! The output folder: manifest, `runs.csv` / `traces.csv` (written line by
 //! line from the run store, see `slots.rs`), and [`merge`].
 
+use super::landing::LandingCriteria;
 use super::report::finish;
 use super::slots::{Layout, Slot, Store};
-use super::landing::LandingCriteria;
 use super::{FORMAT_VERSION, McError, McReport, RunRecord, Shard, TracePoint, metric_names};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
