@@ -232,6 +232,18 @@ impl WindKey {
     }
 }
 
+/// Why `key` cannot be dispersed in `scenario`, if it cannot.
+fn key_rule(key: &str, scenario: &Scenario) -> Option<&'static str> {
+    match WindKey::parse(key) {
+        Some(w) => w.slot(&mut scenario.wind.clone()).is_none().then_some(
+            "the scenario has no such wind section to disperse (add it to its [wind])",
+        ),
+        None => param_field(key).is_none().then_some(
+            "not a parameter key (run `helicon params` for the list) nor a wind key (wind.steady.north_m_s, wind.steady.east_m_s, wind.steady.down_m_s, wind.thesis.max_gust_m_s, wind.thesis.turbulence_sigma_m_s, wind.dryden.w20_m_s)",
+        ),
+    }
+}
+
 /// Is `name` a key a `[[dispersion]]` may disperse (a parameter or a wind key)?
 pub(super) fn dispersion_key_known(name: &str) -> bool {
     param_field(name).is_some() || WindKey::parse(name).is_some()
@@ -311,23 +323,8 @@ impl Campaign {
         let mut first_of: BTreeMap<&str, usize> = BTreeMap::new();
         for (i, d) in raw.dispersion.iter().enumerate() {
             let at = |f: &str| format!("dispersion[{i}].{f}");
-            if let Some(w) = WindKey::parse(&d.param) {
-                let mut wind = scenario.wind.clone();
-                if w.slot(&mut wind).is_none() {
-                    return Err(bad(
-                        &at("param"),
-                        d.param.clone(),
-                        "the scenario has no such wind section to disperse (add it to its [wind])",
-                    )
-                    .into());
-                }
-            } else if param_field(&d.param).is_none() {
-                return Err(bad(
-                    &at("param"),
-                    d.param.clone(),
-                    "not a parameter key (run `helicon params` for the list) nor a wind key (wind.steady.north_m_s, wind.steady.east_m_s, wind.steady.down_m_s, wind.thesis.max_gust_m_s, wind.thesis.turbulence_sigma_m_s, wind.dryden.w20_m_s)",
-                )
-                .into());
+            if let Some(rule) = key_rule(&d.param, &scenario) {
+                return Err(bad(&at("param"), d.param.clone(), rule).into());
             }
             if let Some(j) = first_of.insert(&d.param, i) {
                 // two runs.csv columns of one name could not be read back
