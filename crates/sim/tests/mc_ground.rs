@@ -185,6 +185,19 @@ fn ground_columns_round_trip_through_the_store() {
     assert_eq!(again.stats, first.stats);
     let manifest = read(&out.join("manifest.json"));
     assert!(manifest.contains("\"landing\""), "{manifest}");
+    // two shards merged: the same files as the unsharded campaign
+    let (s0, s1, merged) = (tmp("rt-s0"), tmp("rt-s1"), tmp("rt-merged"));
+    for (k, d) in [(0, &s0), (1, &s1)] {
+        let opts = RunOptions {
+            shard: Some(helicon_sim::mc::Shard { k, m: 2 }),
+            ..RunOptions::default()
+        };
+        run(&c, &opts, d, None).unwrap();
+    }
+    helicon_sim::mc::merge(&[s0.to_path_buf(), s1.to_path_buf()], &merged).unwrap();
+    for f in ["runs.csv", "stats.json", "stats.md", "traces.csv"] {
+        assert_eq!(read(&merged.join(f)), read(&out.join(f)), "{f}");
+    }
     assert!(stats1.contains("\"failure_rate_high\""));
 }
 

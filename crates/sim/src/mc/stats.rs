@@ -533,12 +533,13 @@ impl Stats {
 }
 
 impl GroundStats {
-    /// The take-off and landing section of `stats.md`.
-    fn markdown(&self, s: &mut String) {
+    /// One line: the failures, the rate and its interval, the criteria
+    /// failed (`4 of 200 runs failed (failure rate 2.0 %, 95 % Wilson
+    /// interval 0.8 % – 5.0 %): 1 diverged, 3 tip_over`).
+    pub fn headline(&self) -> String {
         let pc = |x: f64| format!("{:.1} %", 100.0 * x);
-        let _ = writeln!(
-            s,
-            "\n## Take-offs and landings\n\n{} of {} runs failed (failure rate {}, {:.0} % Wilson interval {} – {}).\n",
+        let mut s = format!(
+            "{} of {} runs failed (failure rate {}, {:.0} % Wilson interval {} – {})",
             self.failed,
             self.runs,
             pc(self.failure_rate),
@@ -546,6 +547,22 @@ impl GroundStats {
             pc(self.failure_rate_low),
             pc(self.failure_rate_high)
         );
+        let failed: Vec<String> = self
+            .criteria_failed
+            .iter()
+            .filter(|c| c.runs > 0)
+            .map(|c| format!("{} {}", c.runs, c.criterion.as_str()))
+            .collect();
+        if !failed.is_empty() {
+            s.push_str(": ");
+            s.push_str(&failed.join(", "));
+        }
+        s
+    }
+
+    /// The take-off and landing section of `stats.md`.
+    fn markdown(&self, s: &mut String) {
+        let _ = writeln!(s, "\n## Take-offs and landings\n\n{}.\n", self.headline());
         let c = &self.criteria;
         let limit = |x: f64| {
             if x.is_finite() {
