@@ -137,6 +137,9 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
             s.failed,
             100.0 * s.failure_fraction
         );
+        if let Some(g) = &s.ground {
+            crate::console::note!("take-offs and landings: {}", g.headline());
+        }
         return Ok(());
     }
     if let Some(McCommand::Status(st)) = &args.command {
@@ -232,6 +235,9 @@ pub fn run_mc(args: &McArgs) -> Result<()> {
             f.first_run,
             f.example
         );
+    }
+    if let Some(g) = &s.ground {
+        crate::console::note!("take-offs and landings: {}", g.headline());
     }
     crate::console::note!("outputs in {}", out.display());
     Ok(())

@@ -306,3 +306,34 @@ fn mc_slurm_dry_run_writes_the_array_and_merge_scripts_and_status_follows_the_sh
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn mc_of_the_ground_campaign_prints_the_take_off_and_landing_failure_rate() {
+    let d = tmpdir("ground");
+    let campaign = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../campaigns/ground.toml");
+    let o = helicon_in(
+        &d,
+        &[
+            "mc",
+            campaign.to_str().unwrap(),
+            "--runs",
+            "2",
+            "--out",
+            "g",
+        ],
+    );
+    no_panic(&o);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = format!("{}{}", text(&o.stdout), text(&o.stderr));
+    assert!(
+        out.contains("take-offs and landings: 0 of 2 runs failed (failure rate 0.0 %, 95 % Wilson interval 0.0 % – "),
+        "{out}"
+    );
+    let md = std::fs::read_to_string(d.join("g/stats.md")).unwrap();
+    assert!(
+        md.contains("## Take-offs and landings") && md.contains("| hard_landing | 2 m/s | 0 |"),
+        "{md}"
+    );
+    assert!(d.join("g/hist_touchdown_vertical_speed_m_s.png").exists());
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -186,6 +186,11 @@ pub struct GroundMetrics {
     pub touchdown_drift_m: Option<f64>,
     /// The largest total normal force in the landing (N).
     pub touchdown_peak_normal_n: Option<f64>,
+    /// The largest tilt of the airframe from the ground's normal (the angle
+    /// between the body z axis and the ground's down normal, rad) over the
+    /// samples with a skid loaded: on the ground before lift-off and after
+    /// touchdown. 0 when the skids never carried load.
+    pub max_tilt_on_ground_rad: f64,
     /// The rotor speed at the end (rad/s).
     pub final_omega_rad_s: f64,
 }
@@ -206,6 +211,8 @@ pub struct GroundPlan {
     touchdown_xy: Option<Vector3<f64>>,
     last_xy: Vector3<f64>,
     prev_v: Vector3<f64>,
+    /// The ground plane's down normal (NED), for the tilt on the ground.
+    ground_down: Vector3<f64>,
     metrics: GroundMetrics,
 }
 
@@ -216,6 +223,13 @@ fn horizontal(x: &State) -> Vector3<f64> {
 fn ned_velocity(x: &State) -> Vector3<f64> {
     helicon_model::frames::ned_from_body(x[ix::PHI], x[ix::THETA], x[ix::PSI])
         * Vector3::new(x[ix::U], x[ix::V], x[ix::W])
+}
+
+/// The angle between the body z axis and `down` (a unit vector, NED), rad.
+fn tilt_rad(x: &State, down: &Vector3<f64>) -> f64 {
+    let body_down = helicon_model::frames::ned_from_body(x[ix::PHI], x[ix::THETA], x[ix::PSI])
+        * Vector3::new(0.0, 0.0, 1.0);
+    body_down.dot(down).clamp(-1.0, 1.0).acos()
 }
 
 impl GroundPlan {
@@ -248,6 +262,8 @@ impl GroundPlan {
             touchdown_xy: None,
             last_xy: horizontal(x0),
             prev_v: ned_velocity(x0),
+            ground_down: -helicon_model::landing_gear::GroundPlane::new(&params.landing_gear)
+                .up_ned,
             metrics: GroundMetrics::default(),
         }
     }
@@ -265,6 +281,10 @@ impl GroundPlan {
         omega_rad_s: f64,
     ) -> Input {
         let s = self.section;
+        if on_ground {
+            let tilt = tilt_rad(x, &self.ground_down);
+            self.metrics.max_tilt_on_ground_rad = self.metrics.max_tilt_on_ground_rad.max(tilt);
+        }
         if let Some(spool) = self.spool.as_mut() {
             if t_s >= s.spool_up_s && self.touchdown_at.is_none() {
                 spool.start(omega_rad_s);

@@ -1,6 +1,7 @@
 //! The campaign file: dispersions, design mode, loading and validation, hash.
 
 use super::McError;
+use super::landing::{LandingCriteria, LandingSection};
 use crate::closed_loop::fnv1a_hex;
 use crate::scenario::{Scenario, ScenarioError};
 use helicon_model::Params;
@@ -100,6 +101,8 @@ struct CampaignFile {
     trace_runs: Option<usize>,
     #[serde(default)]
     dispersion: Vec<Dispersion>,
+    #[serde(default)]
+    landing: Option<LandingSection>,
 }
 
 /// A loaded, validated campaign.
@@ -127,6 +130,10 @@ pub struct Campaign {
     pub trace_runs: Option<usize>,
     /// Dispersions, in file order.
     pub dispersions: Vec<Dispersion>,
+    /// The take-off and landing criteria: present exactly when the
+    /// scenario has a `[ground]` section (the file's `[landing]` table, or
+    /// the defaults).
+    pub landing: Option<LandingCriteria>,
     /// The campaign file's text (copied into the output folder).
     pub source: String,
     /// Hash of everything that determines a run (not `runs`); recomputed by
@@ -149,6 +156,97 @@ pub struct CampaignOverrides {
     pub params: Option<PathBuf>,
     /// Keep traces only for the runs with an index below this.
     pub trace_runs: Option<usize>,
+}
+
+/// A dispersed value of the scenario's wind: a `[[dispersion]]` key
+/// `wind.…` instead of a parameter key. Relative and absolute kinds work as
+/// for parameters, around the base scenario's value (the steady wind's
+/// components are 0 when the scenario has no `[wind.steady]`; the thesis
+/// and Dryden values need their section in the scenario).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WindKey {
+    /// `wind.steady.north_m_s`: the steady wind's north component (m/s, where the air moves to).
+    SteadyNorth,
+    /// `wind.steady.east_m_s`: its east component (m/s).
+    SteadyEast,
+    /// `wind.steady.down_m_s`: its down component (m/s).
+    SteadyDown,
+    /// `wind.thesis.max_gust_m_s`: the thesis wind's gust amplitude (m/s).
+    ThesisMaxGust,
+    /// `wind.thesis.turbulence_sigma_m_s`: the thesis wind's turbulence σ (m/s).
+    ThesisTurbulenceSigma,
+    /// `wind.dryden.w20_m_s`: the Dryden turbulence's wind speed at 20 ft (m/s).
+    DrydenW20,
+}
+
+impl WindKey {
+    /// Every wind key.
+    pub const ALL: [WindKey; 6] = [
+        WindKey::SteadyNorth,
+        WindKey::SteadyEast,
+        WindKey::SteadyDown,
+        WindKey::ThesisMaxGust,
+        WindKey::ThesisTurbulenceSigma,
+        WindKey::DrydenW20,
+    ];
+
+    /// The key as written in `[[dispersion]]` and `runs.csv`.
+    pub fn key(self) -> &'static str {
+        match self {
+            WindKey::SteadyNorth => "wind.steady.north_m_s",
+            WindKey::SteadyEast => "wind.steady.east_m_s",
+            WindKey::SteadyDown => "wind.steady.down_m_s",
+            WindKey::ThesisMaxGust => "wind.thesis.max_gust_m_s",
+            WindKey::ThesisTurbulenceSigma => "wind.thesis.turbulence_sigma_m_s",
+            WindKey::DrydenW20 => "wind.dryden.w20_m_s",
+        }
+    }
+
+    /// The wind key of `name`, if it is one.
+    pub fn parse(name: &str) -> Option<WindKey> {
+        WindKey::ALL.into_iter().find(|k| k.key() == name)
+    }
+
+    /// The value it disperses in `wind` (`None`: its section is absent; the
+    /// steady wind is created at rest when absent).
+    pub fn slot(self, wind: &mut crate::wind::WindConfig) -> Option<&mut f64> {
+        use crate::wind::SteadyWindConfig;
+        fn steady(i: usize, w: &mut crate::wind::WindConfig) -> Option<&mut f64> {
+            w.steady
+                .get_or_insert(SteadyWindConfig {
+                    wind_ned_m_s: [0.0; 3],
+                })
+                .wind_ned_m_s
+                .get_mut(i)
+        }
+        match self {
+            WindKey::SteadyNorth => steady(0, wind),
+            WindKey::SteadyEast => steady(1, wind),
+            WindKey::SteadyDown => steady(2, wind),
+            WindKey::ThesisMaxGust => wind.thesis.as_mut().map(|t| &mut t.max_gust_m_s),
+            WindKey::ThesisTurbulenceSigma => {
+                wind.thesis.as_mut().map(|t| &mut t.turbulence_sigma_m_s)
+            }
+            WindKey::DrydenW20 => wind.dryden.as_mut().map(|d| &mut d.w20_m_s),
+        }
+    }
+}
+
+/// Why `key` cannot be dispersed in `scenario`, if it cannot.
+fn key_rule(key: &str, scenario: &Scenario) -> Option<&'static str> {
+    match WindKey::parse(key) {
+        Some(w) => w.slot(&mut scenario.wind.clone()).is_none().then_some(
+            "the scenario has no such wind section to disperse (add it to its [wind])",
+        ),
+        None => param_field(key).is_none().then_some(
+            "not a parameter key (run `helicon params` for the list) nor a wind key (wind.steady.north_m_s, wind.steady.east_m_s, wind.steady.down_m_s, wind.thesis.max_gust_m_s, wind.thesis.turbulence_sigma_m_s, wind.dryden.w20_m_s)",
+        ),
+    }
+}
+
+/// Is `name` a key a `[[dispersion]]` may disperse (a parameter or a wind key)?
+pub(super) fn dispersion_key_known(name: &str) -> bool {
+    param_field(name).is_some() || WindKey::parse(name).is_some()
 }
 
 /// Find a parameter by its `section.key`.
@@ -225,13 +323,8 @@ impl Campaign {
         let mut first_of: BTreeMap<&str, usize> = BTreeMap::new();
         for (i, d) in raw.dispersion.iter().enumerate() {
             let at = |f: &str| format!("dispersion[{i}].{f}");
-            if param_field(&d.param).is_none() {
-                return Err(bad(
-                    &at("param"),
-                    d.param.clone(),
-                    "not a parameter key (run `helicon params` for the list)",
-                )
-                .into());
+            if let Some(rule) = key_rule(&d.param, &scenario) {
+                return Err(bad(&at("param"), d.param.clone(), rule).into());
             }
             if let Some(j) = first_of.insert(&d.param, i) {
                 // two runs.csv columns of one name could not be read back
@@ -276,6 +369,18 @@ impl Campaign {
                 .into());
             }
         }
+        let landing = match (&scenario.ground, &raw.landing) {
+            (Some(g), l) => Some(l.unwrap_or_default().resolve(file, g.takeoff_s)?),
+            (None, Some(_)) => {
+                return Err(bad(
+                    "landing",
+                    "given".into(),
+                    "needs a scenario with a [ground] section (take-offs and landings to judge)",
+                )
+                .into());
+            }
+            (None, None) => None,
+        };
         let name = raw.name.clone().unwrap_or_else(|| scenario.name.clone());
         let mut c = Campaign {
             name,
@@ -289,6 +394,7 @@ impl Campaign {
             trace_rate_hz: raw.trace_rate_hz,
             trace_runs: raw.trace_runs,
             dispersions: raw.dispersion,
+            landing,
             source: text.to_string(),
             hash: String::new(),
             overrides: Vec::new(),
@@ -345,6 +451,10 @@ impl Campaign {
         }
         for d in &self.dispersions {
             let _ = writeln!(s, "{d:?}");
+        }
+        if let Some(l) = &self.landing {
+            // only with [ground]: the hashes of the other campaigns are unchanged
+            let _ = writeln!(s, "landing={l:?}");
         }
         let sc = toml::to_string(&self.scenario).map_err(|e| McError::Serialize {
             file: format!("{file} [scenario]"),

@@ -1,6 +1,6 @@
 //! The random draws of one run (its own ChaCha8 stream).
 
-use super::campaign::param_field;
+use super::campaign::{WindKey, param_field};
 use super::{Campaign, DispersionKind, DistributionKind};
 use helicon_model::Params;
 use rand::{Rng, SeedableRng};
@@ -20,6 +20,9 @@ pub struct Draw {
     pub values: Vec<f64>,
     /// The dispersed parameters (not yet validated).
     pub params: Params,
+    /// The scenario's wind with its dispersed values (`wind.…` keys; not
+    /// yet validated; the seed is the scenario's, `wind_seed` is flown).
+    pub wind: crate::wind::WindConfig,
 }
 
 impl Campaign {
@@ -30,6 +33,7 @@ impl Campaign {
         let wind_seed = rng.next_u64();
         let sensor_seed = rng.next_u64();
         let mut params = self.nominal;
+        let mut wind = self.scenario.wind.clone();
         let mut values = Vec::with_capacity(self.dispersions.len());
         for d in &self.dispersions {
             let delta = match d.distribution {
@@ -54,9 +58,12 @@ impl Campaign {
                     w * (2.0 * u - 1.0)
                 }
             };
-            let v = match param_field(&d.param) {
-                Some(f) => {
-                    let slot = f(&mut params);
+            let slot = match param_field(&d.param) {
+                Some(f) => Some(f(&mut params)),
+                None => WindKey::parse(&d.param).and_then(|w| w.slot(&mut wind)),
+            };
+            let v = match slot {
+                Some(slot) => {
                     *slot = match d.kind {
                         DispersionKind::Relative => *slot * (1.0 + delta),
                         DispersionKind::Absolute => *slot + delta,
@@ -81,6 +88,7 @@ impl Campaign {
             },
             values,
             params,
+            wind,
         }
     }
 }

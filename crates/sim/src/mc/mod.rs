@@ -28,6 +28,14 @@
 //! half_width = 0.1                # uniform on nominal·(1 ± 0.1)
 //! ```
 //!
+//! A `[[dispersion]]` may also name a wind key of the scenario
+//! ([`WindKey`]: `wind.steady.north_m_s`, `wind.dryden.w20_m_s`, …). A
+//! campaign whose scenario has `[ground]` carries each run's ground
+//! metrics ([`GROUND_METRIC_NAMES`]) and judges its take-off and landing by
+//! the `[landing]` table ([`LandingCriteria`]; defaults in
+//! [`LandingSection::resolve`]): the failure rate with its Wilson interval
+//! is `stats.json`'s `ground` ([`GroundStats`]).
+//!
 //! # What one run is
 //!
 //! Run `i` draws everything from its own stream: `ChaCha8Rng` seeded with the
@@ -88,6 +96,7 @@
 
 mod campaign;
 mod draws;
+mod landing;
 mod record;
 mod report;
 mod runner;
@@ -98,6 +107,7 @@ mod store;
 
 pub use campaign::*;
 pub use draws::*;
+pub use landing::*;
 pub use record::*;
 pub use runner::*;
 pub use stats::*;

@@ -1,7 +1,7 @@
 //! What one run produces: its `runs.csv` row (with its typed outcome and
 //! termination) and its trace.
 
-use super::campaign::param_field;
+use super::campaign::dispersion_key_known;
 use crate::closed_loop::{Outcome, Termination};
 use serde::{Deserialize, Serialize};
 
@@ -28,6 +28,58 @@ pub const METRIC_NAMES: [&str; 20] = [
     "effort_rms_S_lon",
     "effort_rms_S_tr",
 ];
+
+/// The ground metrics of a campaign whose scenario has `[ground]`: more
+/// columns of `runs.csv` after [`METRIC_NAMES`], and more values of a
+/// record's `metrics`, in this order (the fields of
+/// [`GroundMetrics`](crate::ground::GroundMetrics); empty when the flight
+/// had none, e.g. no touchdown).
+pub const GROUND_METRIC_NAMES: [&str; 11] = [
+    "liftoff_time_s",
+    "liftoff_drift_m",
+    "liftoff_omega_rad_s",
+    "touchdown_time_s",
+    "touchdown_vertical_speed_m_s",
+    "touchdown_horizontal_speed_m_s",
+    "touchdown_offset_m",
+    "touchdown_drift_m",
+    "touchdown_peak_normal_n",
+    "max_tilt_on_ground_rad",
+    "final_omega_rad_s",
+];
+
+/// The metric names of a record: [`METRIC_NAMES`], then
+/// [`GROUND_METRIC_NAMES`] for a campaign with `[ground]`.
+pub fn metric_names(ground: bool) -> impl Iterator<Item = &'static str> {
+    let g = if ground { GROUND_METRIC_NAMES.len() } else { 0 };
+    METRIC_NAMES
+        .iter()
+        .chain(GROUND_METRIC_NAMES.iter().take(g))
+        .copied()
+}
+
+/// The number of metrics of a record ([`metric_names`]).
+pub fn metric_count(ground: bool) -> usize {
+    METRIC_NAMES.len() + if ground { GROUND_METRIC_NAMES.len() } else { 0 }
+}
+
+/// The ground metrics of a flight as record values, in
+/// [`GROUND_METRIC_NAMES`] order.
+pub fn ground_values(m: &crate::ground::GroundMetrics) -> [Option<f64>; 11] {
+    [
+        m.liftoff_time_s,
+        m.liftoff_drift_m,
+        m.liftoff_omega_rad_s,
+        m.touchdown_time_s,
+        m.touchdown_vertical_speed_m_s,
+        m.touchdown_horizontal_speed_m_s,
+        m.touchdown_offset_m,
+        m.touchdown_drift_m,
+        m.touchdown_peak_normal_n,
+        Some(m.max_tilt_on_ground_rad),
+        Some(m.final_omega_rad_s),
+    ]
+}
 
 /// How a run ended, in one word (the `outcome` column of `runs.csv`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -184,7 +236,7 @@ impl RunTermination {
                 RunTermination::Flight(word.parse::<Termination>()?)
             }
             RunOutcome::Invalid => {
-                if param_field(word).is_none() {
+                if !dispersion_key_known(word) {
                     return Err(format!(
                         "`{word}` is not a parameter key (an invalid run names the key that broke its rule)"
                     ));
@@ -230,8 +282,9 @@ pub struct RunRecord {
     pub reason: String,
     /// Time reached (s).
     pub t_end_s: f64,
-    /// Metrics in [`METRIC_NAMES`] order (`None`: not settled / not flown;
-    /// never a non-finite number).
+    /// Metrics in [`METRIC_NAMES`] order, then, for a campaign with
+    /// `[ground]`, [`GROUND_METRIC_NAMES`] (`None`: not settled / not flown
+    /// / no such event; never a non-finite number).
     pub metrics: Vec<Option<f64>>,
 }
 

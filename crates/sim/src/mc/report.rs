@@ -5,12 +5,12 @@
 
 use super::select::percentiles;
 use super::slots::{Slot, Store};
-use super::stats::{PERCENTILES, SELECT_BITS, StatsAcc, feed_metrics};
+use super::stats::{PERCENTILES, SELECT_BITS, StatsAcc, counted, feed_metrics};
 use super::store::{
     Manifest, RUNS, TRACE_HEADER, TRACES, create, csv_line, finish_file, io_err, record_fields,
     trace_lines, write_file, write_json,
 };
-use super::{METRIC_NAMES, McError, Stats, TracePoint, csv_header};
+use super::{McError, Stats, TracePoint, csv_header, metric_count, metric_names};
 use crate::plot::{LinePlot, Series};
 use crate::scenario::OUTPUTS;
 use std::io::Write as _;
@@ -40,16 +40,18 @@ pub(super) fn finish(manifest: &Manifest, store: &Store, out: &Path) -> Result<S
     let traces_path = out.join(TRACES);
     let mut wr = create(&runs_path)?;
     let mut wt = create(&traces_path)?;
-    wr.write_all(csv_line(&csv_header(&manifest.dispersed))?.as_bytes())
+    let landing = manifest.landing;
+    let ground = landing.is_some();
+    wr.write_all(csv_line(&csv_header(&manifest.dispersed, ground))?.as_bytes())
         .map_err(|e| io_err(&runs_path, "write", e))?;
     writeln!(wt, "{TRACE_HEADER}").map_err(|e| io_err(&traces_path, "write", e))?;
-    let mut acc = StatsAcc::new();
+    let mut acc = StatsAcc::new(landing);
     // envelope grid: the time of sample k (from the lowest run having it)
     let mut env_t: Vec<Option<f64>> = vec![None; store.layout().trace_points];
     let mut env_len = 0usize;
     let mut tr: Vec<TracePoint> = Vec::new();
     each_run(store, |j, r, tlen| {
-        wr.write_all(csv_line(&record_fields(r))?.as_bytes())
+        wr.write_all(csv_line(&record_fields(r, landing.as_ref()))?.as_bytes())
             .map_err(|e| io_err(&runs_path, "write", e))?;
         acc.add(r);
         if tlen > 0 {
@@ -65,13 +67,18 @@ pub(super) fn finish(manifest: &Manifest, store: &Store, out: &Path) -> Result<S
     })?;
     finish_file(&runs_path, wr)?;
     finish_file(&traces_path, wt)?;
-    let (pct, _) = percentiles(METRIC_NAMES.len(), &PERCENTILES, SELECT_BITS, &mut |feed| {
-        each_run(store, |_, r, _| {
-            feed_metrics(r, feed);
-            Ok(())
-        })
-    })?;
-    let hist = histograms(store, &acc)?;
+    let (pct, _) = percentiles(
+        metric_count(ground),
+        &PERCENTILES,
+        SELECT_BITS,
+        &mut |feed| {
+            each_run(store, |_, r, _| {
+                feed_metrics(r, feed);
+                Ok(())
+            })
+        },
+    )?;
+    let hist = histograms(store, &acc, ground)?;
     let stats = acc.finish(&manifest.name, &manifest.hash, &pct);
     let json = out.join("stats.json");
     stats.check_finite(&json.display().to_string())?;
@@ -84,7 +91,18 @@ pub(super) fn finish(manifest: &Manifest, store: &Store, out: &Path) -> Result<S
     Ok(stats)
 }
 
-/// A histogram of one metric over the completed runs.
+/// The ground metrics plotted as histograms (campaigns with `[ground]`).
+const GROUND_HISTOGRAMS: [&str; 7] = [
+    "liftoff_time_s",
+    "liftoff_drift_m",
+    "touchdown_vertical_speed_m_s",
+    "touchdown_horizontal_speed_m_s",
+    "touchdown_offset_m",
+    "touchdown_drift_m",
+    "max_tilt_on_ground_rad",
+];
+
+/// A histogram of one metric over the runs counted in its statistics.
 struct Histogram {
     metric: &'static str,
     lo: f64,
@@ -93,11 +111,16 @@ struct Histogram {
 }
 
 /// The histograms (one pass over the store) of the rms, max and settling
-/// metrics with at least two values: √n bins (5 to 50) over [min, max].
-fn histograms(store: &Store, acc: &StatsAcc) -> Result<Vec<Histogram>, McError> {
+/// metrics and, with `ground`, of the take-off and landing metrics, with at
+/// least two values: √n bins (5 to 50) over [min, max].
+fn histograms(store: &Store, acc: &StatsAcc, ground: bool) -> Result<Vec<Histogram>, McError> {
     let mut hs: Vec<(usize, Histogram)> = Vec::new();
-    for (j, m) in METRIC_NAMES.iter().enumerate() {
-        if !(m.ends_with("_rms") || m.ends_with("_settling_s") || m.ends_with("_max_abs")) {
+    for (j, m) in metric_names(ground).enumerate() {
+        if !(m.ends_with("_rms")
+            || m.ends_with("_settling_s")
+            || m.ends_with("_max_abs")
+            || GROUND_HISTOGRAMS.contains(&m))
+        {
             continue;
         }
         let a = &acc.metrics[j];
@@ -124,14 +147,13 @@ fn histograms(store: &Store, acc: &StatsAcc) -> Result<Vec<Histogram>, McError> 
         return Ok(Vec::new());
     }
     each_run(store, |_, r, _| {
-        if r.completed() {
-            for (j, h) in &mut hs {
-                if let Some(x) = r.metrics.get(*j).copied().flatten()
-                    && x.is_finite()
-                {
-                    let b = (((x - h.lo) / h.width) as usize).min(h.counts.len() - 1);
-                    h.counts[b] += 1;
-                }
+        for (j, h) in &mut hs {
+            if let Some(x) = r.metrics.get(*j).copied().flatten()
+                && x.is_finite()
+                && counted(*j, r)
+            {
+                let b = (((x - h.lo) / h.width) as usize).min(h.counts.len() - 1);
+                h.counts[b] += 1;
             }
         }
         Ok(())
@@ -149,7 +171,12 @@ fn plot_histogram(h: &Histogram, out: &Path) -> Result<(), McError> {
         pts.push((x0 + w, *c as f64));
     }
     pts.push((lo + h.counts.len() as f64 * w, 0.0));
-    LinePlot::new(&format!("{m} (completed runs)"), m, "runs")
+    let over = if GROUND_HISTOGRAMS.contains(&m) {
+        "flown runs"
+    } else {
+        "completed runs"
+    };
+    LinePlot::new(&format!("{m} ({over})"), m, "runs")
         .series(Series::new(m, &pts))
         .write(&out.join(format!("hist_{m}.png")))?;
     Ok(())

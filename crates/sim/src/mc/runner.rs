@@ -7,8 +7,9 @@ use super::store::{
     CAMPAIGN, MANIFEST, Manifest, PARAMS, SCENARIO, check_manifest, io_err, write_file, write_json,
 };
 use super::{
-    Campaign, DesignMode, ErrorStage, FORMAT_VERSION, METRIC_NAMES, McError, RunOutput, RunRecord,
-    RunTermination, Stats, TracePoint,
+    Campaign, DesignMode, ErrorStage, FORMAT_VERSION, GROUND_METRIC_NAMES, McError, RunOutput,
+    RunRecord, RunTermination, Stats, TracePoint, WindKey, ground_values, metric_count,
+    metric_names,
 };
 use crate::closed_loop::{
     ClosedLoopError, LogRow, Prepared, Termination, fly, prepare_with_params,
@@ -79,7 +80,10 @@ impl Campaign {
             (rows / every as f64).ceil() as u64
         };
         let layout = self.layout(Shard { k: 0, m: 1 });
-        let numbers = (4 + self.dispersions.len() + METRIC_NAMES.len()) as u64;
+        // the metrics and, with [ground], the `landing` column
+        let ground = self.landing.is_some();
+        let numbers =
+            (4 + self.dispersions.len() + metric_count(ground) + usize::from(ground)) as u64;
         let run_slot = layout.bytes_per_run() - 40 * trace_points;
         let disk_bytes_per_run = run_slot + 26 * numbers + 60;
         let disk_bytes_per_traced_run = disk_bytes_per_run + trace_points * (40 + 6 * 26);
@@ -110,6 +114,7 @@ impl Campaign {
             k: shard.k,
             m: shard.m,
             trace_runs: self.trace_runs.unwrap_or(usize::MAX),
+            ground: self.landing.is_some(),
         }
     }
 
@@ -123,6 +128,7 @@ impl Campaign {
     #[allow(clippy::too_many_lines)] // one run's stages in order: draw, prepare, fly, record
     pub fn run_one(&self, nominal: &Prepared, index: usize) -> RunOutput {
         let draw = self.draw(index);
+        let ground = self.landing.is_some();
         let not_flown = |termination: RunTermination, reason: String| RunOutput {
             record: RunRecord {
                 index,
@@ -132,7 +138,7 @@ impl Campaign {
                 termination,
                 reason,
                 t_end_s: 0.0,
-                metrics: vec![None; METRIC_NAMES.len()],
+                metrics: vec![None; metric_count(ground)],
             },
             trace: Vec::new(),
         };
@@ -150,7 +156,26 @@ impl Campaign {
                 ),
             };
         }
+        if let Err(e) = crate::wind::Wind::from_config(&draw.wind) {
+            let key = match &e {
+                helicon_model::ConfigError::Invalid { field, .. } => {
+                    WindKey::parse(&format!("wind.{field}"))
+                }
+                _ => None,
+            };
+            return match key {
+                Some(k) => not_flown(
+                    RunTermination::InvalidDraw(k.key().to_string()),
+                    format!("invalid draw: {e}"),
+                ),
+                None => not_flown(
+                    RunTermination::Error(ErrorStage::Parameters),
+                    format!("checking the drawn wind: {e}"),
+                ),
+            };
+        }
         let mut scenario = self.scenario.clone();
+        scenario.wind = draw.wind.clone();
         scenario.wind.seed = draw.wind_seed;
         scenario.sensors.seed = draw.sensor_seed;
         let prepared = match self.design {
@@ -193,7 +218,7 @@ impl Campaign {
             }
         };
         let s = &flight.summary;
-        let mut m = Vec::with_capacity(METRIC_NAMES.len());
+        let mut m = Vec::with_capacity(metric_count(ground));
         for o in OUTPUTS {
             let om = s.metrics.get(o);
             m.push(om.and_then(|v| v.settling_time_s));
@@ -204,10 +229,16 @@ impl Campaign {
         for e in s.control_effort_rms {
             m.push(Some(e));
         }
+        if ground {
+            match &s.ground {
+                Some(g) => m.extend(ground_values(g)),
+                None => m.extend([None; GROUND_METRIC_NAMES.len()]),
+            }
+        }
         let mut termination = RunTermination::Flight(s.termination);
         let mut reason = s.reason.clone().unwrap_or_default();
         let mut bad = Vec::new();
-        for (v, name) in m.iter_mut().zip(METRIC_NAMES) {
+        for (v, name) in m.iter_mut().zip(metric_names(ground)) {
             if let Some(x) = *v
                 && !x.is_finite()
             {
@@ -442,6 +473,7 @@ pub fn run(
         overrides: campaign.overrides.clone(),
         trace_points: layout.trace_points,
         trace_runs: campaign.trace_runs,
+        landing: campaign.landing,
     };
     write_json(&out.join(MANIFEST), &manifest)?;
     write_file(&out.join(CAMPAIGN), &campaign.source)?;

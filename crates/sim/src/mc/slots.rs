@@ -7,7 +7,8 @@
 //!
 //! # Layout (little-endian)
 //!
-//! `runs.bin`, slot of `RUN_HEAD + 8·(dispersions + metrics)` bytes:
+//! `runs.bin`, slot of `RUN_HEAD + 8·(dispersions + metrics)` bytes (the
+//! metrics: 20, and 31 with the ground metrics of a campaign with `[ground]`):
 //!
 //! | bytes | field |
 //! |---|---|
@@ -27,7 +28,7 @@
 //! per point. A slot of zeros, a torn write or a slot whose reason or trace
 //! does not match its checksum is a run not done: flown again on resume.
 
-use super::{METRIC_NAMES, McError, RunOutcome, RunRecord, RunTermination, TracePoint};
+use super::{McError, RunOutcome, RunRecord, RunTermination, TracePoint, metric_count};
 use std::fs::{File, OpenOptions};
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
@@ -79,11 +80,13 @@ pub(super) struct Layout {
     pub(super) m: usize,
     /// Runs with an index below this have a trace (`usize::MAX`: all).
     pub(super) trace_runs: usize,
+    /// A campaign with `[ground]`: each slot holds the ground metrics too.
+    pub(super) ground: bool,
 }
 
 impl Layout {
     fn run_slot(&self) -> usize {
-        RUN_HEAD + 8 * (self.dispersions + METRIC_NAMES.len())
+        RUN_HEAD + 8 * (self.dispersions + metric_count(self.ground))
     }
 
     fn trace_slot(&self) -> usize {
@@ -203,7 +206,7 @@ impl Store {
                 record.termination.as_str()
             )));
         }
-        if record.values.len() != l.dispersions || record.metrics.len() != METRIC_NAMES.len() {
+        if record.values.len() != l.dispersions || record.metrics.len() != metric_count(l.ground) {
             return Err(bad("record of another campaign layout".into()));
         }
         let trace = if l.traced(record.index) { trace } else { &[] };
@@ -326,7 +329,7 @@ impl Store {
         let f = |o: usize| f64::from_bits(u64_at(buf, o));
         let values = (0..l.dispersions).map(|i| f(RUN_HEAD + 8 * i)).collect();
         let m0 = RUN_HEAD + 8 * l.dispersions;
-        let metrics = (0..METRIC_NAMES.len())
+        let metrics = (0..metric_count(l.ground))
             .map(|i| Some(f(m0 + 8 * i)).filter(|v| !v.is_nan()))
             .collect();
         Ok(Slot::Run(

@@ -1,9 +1,10 @@
 //! The output folder: manifest, `runs.csv` / `traces.csv` (written line by
 //! line from the run store, see `slots.rs`), and [`merge`].
 
+use super::landing::LandingCriteria;
 use super::report::finish;
 use super::slots::{Layout, Slot, Store};
-use super::{FORMAT_VERSION, METRIC_NAMES, McError, McReport, RunRecord, Shard, TracePoint};
+use super::{FORMAT_VERSION, McError, McReport, RunRecord, Shard, TracePoint, metric_names};
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::fs::File;
@@ -42,6 +43,10 @@ pub(super) struct Manifest {
     /// Runs with an index below this keep a trace (`None`: all).
     #[serde(default)]
     pub(super) trace_runs: Option<usize>,
+    /// The take-off and landing criteria (campaigns with `[ground]` only:
+    /// their records carry the ground metrics).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) landing: Option<LandingCriteria>,
 }
 
 /// An I/O error on `path` while doing `action`.
@@ -67,16 +72,23 @@ pub(super) fn write_json(path: &Path, value: &impl Serialize) -> Result<(), McEr
     write_file(path, &text)
 }
 
-/// Header of `runs.csv` for the dispersed parameter keys.
-pub fn csv_header(dispersed: &[String]) -> Vec<String> {
+/// Header of `runs.csv` for the dispersed keys; `ground`: a campaign with
+/// `[ground]`, whose rows end with the ground metrics and the `landing`
+/// verdict.
+pub fn csv_header(dispersed: &[String], ground: bool) -> Vec<String> {
     let mut h: Vec<String> = vec!["index".into(), "wind_seed".into(), "sensor_seed".into()];
     h.extend(dispersed.iter().cloned());
     h.extend(["outcome", "termination", "reason", "t_end_s"].map(String::from));
-    h.extend(METRIC_NAMES.iter().map(|s| (*s).to_string()));
+    h.extend(metric_names(ground).map(String::from));
+    if ground {
+        h.push("landing".into());
+    }
     h
 }
 
-pub(super) fn record_fields(r: &RunRecord) -> Vec<String> {
+/// The fields of a `runs.csv` row; with `landing` (a campaign with
+/// `[ground]`), the run's verdict last.
+pub(super) fn record_fields(r: &RunRecord, landing: Option<&LandingCriteria>) -> Vec<String> {
     let mut f = vec![
         r.index.to_string(),
         r.wind_seed.to_string(),
@@ -93,6 +105,9 @@ pub(super) fn record_fields(r: &RunRecord) -> Vec<String> {
             .iter()
             .map(|m| m.map(|v| v.to_string()).unwrap_or_default()),
     );
+    if let Some(l) = landing {
+        f.push(l.classify(r).words());
+    }
     f
 }
 
@@ -261,6 +276,7 @@ pub(super) fn layout_of(m: &Manifest, dir: &Path) -> Result<Layout, McError> {
         k,
         m: mm,
         trace_runs: m.trace_runs.unwrap_or(usize::MAX),
+        ground: m.landing.is_some(),
     })
 }
 
