@@ -12,7 +12,7 @@ use helicon_ulog::messages::{
     ImuHealth as ImuHealthRecord, Mode as ModeRecord, Navigation, RcInput as RcRecord, ServoOutput,
     Timing,
 };
-use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, timestamp_us};
+use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, px4, timestamp_us};
 use std::io::Write;
 
 /// One item of a logger ring.
@@ -77,6 +77,38 @@ pub enum FlightRecord {
         /// Frames dropped so far.
         dropped: u64,
     },
+}
+
+/// The flight log's initial parameters: the control period
+/// (`HC_CTRL_DT_S`, s) and the ground station's table (`table`, empty
+/// without one; [`crate::ground::initial_parameters`]).
+pub fn log_parameters(sample_time_s: f64, table: &[(&'static str, f32)]) -> Vec<(String, f32)> {
+    std::iter::once(("HC_CTRL_DT_S", sample_time_s as f32))
+        .chain(table.iter().copied())
+        .map(|(n, v)| (n.to_string(), v))
+        .collect()
+}
+
+/// PX4's `vehicle_status` of a supervisor mode: armed or not, the
+/// navigation state (hold: loiter, descent: descend, IMU lost: termination,
+/// the servos at the trim in open loop) and whether a failsafe acts.
+pub fn status_mode(m: Mode) -> px4::StatusMode {
+    let (nav_state, failsafe) = match m {
+        Mode::Disarmed | Mode::Auto => (px4::NAV_STATE_AUTO_MISSION, false),
+        Mode::Manual => (px4::NAV_STATE_MANUAL, false),
+        Mode::Hold => (px4::NAV_STATE_AUTO_LOITER, true),
+        Mode::Descent => (px4::NAV_STATE_DESCEND, true),
+        Mode::ImuLost => (px4::NAV_STATE_TERMINATION, true),
+    };
+    px4::StatusMode {
+        arming_state: if m == Mode::Disarmed {
+            px4::ARMING_STATE_DISARMED
+        } else {
+            px4::ARMING_STATE_ARMED
+        },
+        nav_state,
+        failsafe,
+    }
 }
 
 /// The log's flight mode of a supervisor mode.
@@ -150,13 +182,17 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
         FlightRecord::Log(x) => log.write(x),
         FlightRecord::Event(ev) => {
             let ts = timestamp_us(ev.t_s, "mode change")?;
-            // the records' data only: the text below is the event's one
-            // text (FlightLog::write would add a generic one of its own)
-            log.write_data(&LogRecord::Mode(ModeRecord {
-                timestamp: ts,
-                mode: flight_mode(ev.to) as u8,
-                previous: flight_mode(ev.from) as u8,
-            }))?;
+            // the records' data only (and PX4's vehicle_status): the text
+            // below is the event's one text (FlightLog::write would add a
+            // generic one of its own)
+            log.write_mode(
+                &ModeRecord {
+                    timestamp: ts,
+                    mode: flight_mode(ev.to) as u8,
+                    previous: flight_mode(ev.from) as u8,
+                },
+                status_mode(ev.to),
+            )?;
             let raised = is_failsafe(ev.to) && !is_failsafe(ev.from);
             let cleared = is_failsafe(ev.from) && !is_failsafe(ev.to);
             if let Some(code) = failsafe_reason(ev.reason)
@@ -278,7 +314,7 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
 }
 
 /// Everything one control step logs, handed to `push` in order: the frame
-/// (`sensor_imu`, `sensor_mag`, `sensor_gps`), the receiver's frame, the
+/// (`sensor_imu`, `helicon_mag`, `helicon_gps`), the receiver's frame, the
 /// change of mode, the IMU health (`imu_health`, and its change of flags),
 /// the control step (`control`, `navigation`, `estimator_bias` when the
 /// navigation estimates the IMU biases, `excitation` when the mission has

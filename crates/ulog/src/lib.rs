@@ -14,7 +14,7 @@
 //!   log time and every 16 KiB ([`FlushPolicy`]), so a killed process
 //!   leaves a file whose prefix is complete messages.
 //! - [`messages`]: the on-board message set (`control`, `navigation`,
-//!   `sensor_imu`, `sensor_mag`, `sensor_gps`, `servo_output`,
+//!   `sensor_imu`, `helicon_mag`, `helicon_gps`, `servo_output`,
 //!   `rc_input`, `timing`, `failsafe`, `mode`), the helpers that fill them
 //!   from [`helicon_core`]'s `Telemetry` and `SensorFrame`, and
 //!   [`FlightLog`], the writer with the whole set subscribed.
@@ -56,6 +56,7 @@ pub mod export;
 pub mod flat;
 pub mod format;
 pub mod messages;
+pub mod px4;
 pub mod reader;
 pub mod spec;
 pub mod synthetic;

@@ -13,7 +13,7 @@ use helicon_core::lqi::Reference;
 use helicon_core::navigation::NavigationSolution;
 use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame};
 use helicon_ulog::messages::{
-    Control, Failsafe, FailsafeReason, FlightMode, Mode, Navigation, SensorGps, SensorImu, Timing,
+    Control, Failsafe, FailsafeReason, FlightMode, HeliconGps, Mode, Navigation, SensorImu, Timing,
 };
 use helicon_ulog::reader::{Message, UlogReader};
 use helicon_ulog::{
@@ -117,10 +117,10 @@ fn telemetry_and_frames_round_trip() {
     assert!(n.attitude_fix);
     // GPS records carry the fix back
     let f = frame(160);
-    let g = SensorGps::from_fix(f.t_s, f.gps.as_ref().unwrap()).unwrap();
+    let g = HeliconGps::from_fix(f.t_s, f.gps.as_ref().unwrap()).unwrap();
     assert_eq!(g.to_fix(), f.gps);
     assert_eq!(g.fix_type, 3);
-    let g2 = SensorGps::from_fix(0.2, frame(80).gps.as_ref().unwrap()).unwrap();
+    let g2 = HeliconGps::from_fix(0.2, frame(80).gps.as_ref().unwrap()).unwrap();
     assert!(!g2.velocity_valid);
     assert_eq!(g2.to_fix(), frame(80).gps);
 }
