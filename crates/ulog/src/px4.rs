@@ -748,13 +748,14 @@ impl Px4View {
     /// Whether a topic at index `i` is due at `t_us` (and if so, taken as
     /// written): its records keep to a schedule one interval apart, each
     /// slot taken by the first record at or after its time less a tenth of
-    /// the interval (the jitter of the control task's clock), so that the
-    /// topic's mean rate is its interval's; after a gap in the source the
-    /// schedule starts again.
+    /// the interval, at most 1 ms (the jitter of the control task's clock),
+    /// so that the topic's mean rate is its interval's; after a gap in the
+    /// source the schedule starts again.
     fn due(&mut self, i: usize, t_us: u64) -> bool {
         let every = interval_us(i);
+        let early = (every / 10).min(1000);
         match self.next_us[i] {
-            Some(next) if t_us + every / 10 < next => false,
+            Some(next) if t_us + early < next => false,
             Some(next) if t_us <= next + every => {
                 self.next_us[i] = Some(next + every);
                 true
@@ -797,8 +798,12 @@ impl Px4View {
     pub fn from_control(&mut self, c: &Control, out: &mut impl FnMut(Px4Record)) {
         let t = c.timestamp;
         let [phi, theta, psi, .., p, q, r] = c.estimate;
-        if !self.status_started || self.due(STATUS, t) {
+        if !self.status_started {
             self.status_started = true;
+            self.next_us[STATUS] = Some(t + interval_us(STATUS));
+            self.status.timestamp = t;
+            out(Px4Record::Status(self.status));
+        } else if self.due(STATUS, t) {
             self.status.timestamp = t;
             out(Px4Record::Status(self.status));
         }

@@ -127,8 +127,14 @@ fn telemetry_and_frames_round_trip() {
 
 #[test]
 fn logging_records_allocates_nothing() {
-    let mut log =
-        FlightLog::new(std::io::sink(), &LogInfo::default(), FlushPolicy::default()).unwrap();
+    // with a home and a control period: the PX4 view's geodetic topics and
+    // dropouts are written too
+    let info = LogInfo {
+        home: Some(helicon_devices::Geodetic::new(57.0146, 9.9869, 20.0).unwrap()),
+        control_period_us: Some(2500),
+        ..LogInfo::default()
+    };
+    let mut log = FlightLog::new(std::io::sink(), &info, FlushPolicy::default()).unwrap();
     // warm-up: the first flush
     log.log_frame(&frame(0)).unwrap();
     log.log_telemetry(&telemetry(0)).unwrap();
@@ -358,7 +364,8 @@ fn events_as_text_or_data_only() {
                 _ => {}
             }
         }
-        assert_eq!(data, 2);
+        // failsafe, mode, and the mode's PX4 vehicle_status
+        assert_eq!(data, 3);
         texts
     };
     assert_eq!(
