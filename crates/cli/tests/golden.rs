@@ -115,8 +115,9 @@ fn regress_sitl_demo_is_bit_identical() {
     let mut files: Vec<String> = std::fs::read_dir(&csv)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        // the control task's compute times are measured on the wall clock
-        .filter(|f| !f.contains("_timing_"))
+        // the control task's compute times (timing, PX4's cpuload) are
+        // measured on the wall clock
+        .filter(|f| !f.contains("_timing_") && !f.contains("_cpuload_"))
         .collect();
     files.sort();
     let names: Vec<&str> = files.iter().map(String::as_str).collect();

@@ -18,6 +18,10 @@
 //!   `rc_input`, `timing`, `failsafe`, `mode`), the helpers that fill them
 //!   from [`helicon_core`]'s `Telemetry` and `SensorFrame`, and
 //!   [`FlightLog`], the writer with the whole set subscribed.
+//! - [`px4`]: PX4's uORB topics (`vehicle_attitude`, `vehicle_local_position`,
+//!   `sensor_gps`, `vehicle_status` …) in PX4's layout, and [`px4::Px4View`],
+//!   which [`FlightLog`] uses to write them from helicon's records so that
+//!   PX4's tools read the log as a PX4 log.
 //! - [`reader`]: a streaming reader (typed errors; a truncated file gives
 //!   every complete message, then [`ReadError::Truncated`]); [`flat`]:
 //!   formats flattened to columns (nested types, arrays, padding);
