@@ -3,10 +3,13 @@
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
 use crate::control::{ControlOutput, ImuHealthChange, Tick};
+use crate::mission::NavigatorNews;
 use crate::plausibility::Rejection;
 use crate::ports::DeviceEvent;
 use crate::safety::{Mode, RcInput, RcLink, Reason, SafetyEvent};
 use helicon_core::imu_health::ImuHealth;
+use helicon_gcs::navigator::{NavEvent, NavMode};
+use helicon_gcs::params::ParamTable;
 use helicon_ulog::messages::{
     Control, EstimatorBias, Excitation, Failsafe, FailsafeReason, FlightMode,
     ImuHealth as ImuHealthRecord, Mode as ModeRecord, Navigation, RcInput as RcRecord, ServoOutput,
@@ -67,6 +70,15 @@ pub enum FlightRecord {
         t_s: f64,
         /// The device and what happened.
         event: DeviceEvent,
+    },
+    /// What the ground station's navigator did (its mode changes and
+    /// events as text and PX4's `vehicle_status`; a tuning the operator set
+    /// as parameter changes).
+    Navigator {
+        /// On-board time (s).
+        t_s: f64,
+        /// The events and the tuning.
+        news: NavigatorNews,
     },
     /// The avionics port dropped servo frames, its output buffer full (the
     /// line slower than the frames, the board not reading): the count so
@@ -300,6 +312,7 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 "avionics: servo frames dropped",
             )
         }
+        FlightRecord::Navigator { t_s, news } => write_navigator(log, *t_s, news),
         FlightRecord::Watchdog { t_s, silent_s } => {
             let ts = timestamp_us(*t_s, "watchdog")?;
             log_fmt(
@@ -311,6 +324,78 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
             )
         }
     }
+}
+
+/// PX4's navigation state of a navigator mode.
+pub fn nav_state(m: NavMode) -> u8 {
+    match m {
+        NavMode::Idle | NavMode::Hold => px4::NAV_STATE_AUTO_LOITER,
+        NavMode::Takeoff => px4::NAV_STATE_AUTO_TAKEOFF,
+        NavMode::Mission => px4::NAV_STATE_AUTO_MISSION,
+        NavMode::Return => px4::NAV_STATE_AUTO_RTL,
+        NavMode::Land => px4::NAV_STATE_AUTO_LAND,
+        NavMode::Guided => px4::NAV_STATE_OFFBOARD,
+    }
+}
+
+/// The navigator's events as texts (and its mode as PX4's
+/// `vehicle_status`), the operator's tuning as parameter changes (each
+/// value of the parameter table that changed). No allocation.
+fn write_navigator<W: Write>(
+    log: &mut FlightLog<W>,
+    t_s: f64,
+    news: &NavigatorNews,
+) -> Result<(), WriteError> {
+    let ts = timestamp_us(t_s, "navigator")?;
+    for e in news.events.iter() {
+        let (level, what) = match e {
+            NavEvent::Mode(m) => {
+                log.write_navigator_state(ts, nav_state(m))?;
+                (LogLevel::Info, m.as_str())
+            }
+            NavEvent::Current(_) => (LogLevel::Info, "next mission item"),
+            NavEvent::Reached(_) => (LogLevel::Info, "mission item reached"),
+            NavEvent::Landed => (LogLevel::Notice, "landed"),
+            NavEvent::LinkLost => (LogLevel::Critical, "ground station link lost"),
+            NavEvent::LinkRegained => (LogLevel::Notice, "ground station link back"),
+            NavEvent::FenceBreach(true) => (LogLevel::Critical, "fence breached (horizontal)"),
+            NavEvent::FenceBreach(false) => (LogLevel::Critical, "fence breached (height)"),
+        };
+        match e {
+            NavEvent::Current(seq) | NavEvent::Reached(seq) => log_fmt(
+                log,
+                level,
+                ts,
+                format_args!("navigator: {what}: {seq} at t = {t_s:.4} s"),
+                "navigator",
+            )?,
+            NavEvent::Mode(_) => log_fmt(
+                log,
+                level,
+                ts,
+                format_args!("navigator: mode {what} at t = {t_s:.4} s"),
+                "navigator",
+            )?,
+            _ => log_fmt(
+                log,
+                level,
+                ts,
+                format_args!("navigator: {what} at t = {t_s:.4} s"),
+                "navigator",
+            )?,
+        }
+    }
+    if let Some((before, after)) = &news.config_change {
+        let (old, new) = (ParamTable::new(*before), ParamTable::new(*after));
+        for i in 0..new.len() {
+            if let (Some((_, a)), Some((name, b))) = (old.get(i), new.get(i))
+                && a.to_bits() != b.to_bits()
+            {
+                log.parameter_changed(name, b, ts)?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Everything one control step logs, handed to `push` in order: the frame
@@ -420,5 +505,88 @@ fn rc_record(ts: u64, rc: &RcInput) -> RcRecord {
         channel_count: 4,
         manual_switch: rc.manual,
         signal_lost: rc.failsafe,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use helicon_gcs::navigator::{Events, NavigatorConfig};
+    use helicon_ulog::px4::{NAV_STATE_AUTO_RTL, VehicleStatus};
+    use helicon_ulog::reader::{Message, UlogReader};
+    use helicon_ulog::{FlushPolicy, LogInfo, Record};
+
+    /// The navigator's mode, events and the operator's tuning reach the
+    /// log: texts at their levels, `vehicle_status.nav_state`, and a
+    /// parameter change for the one value set.
+    #[test]
+    fn navigator_news_is_logged() {
+        let mut log =
+            FlightLog::new(Vec::new(), &LogInfo::default(), FlushPolicy::default()).expect("log");
+        let armed = SafetyEvent {
+            t_s: 0.5,
+            from: Mode::Disarmed,
+            to: Mode::Auto,
+            reason: Reason::Armed,
+        };
+        write_record(&mut log, &FlightRecord::Event(armed)).expect("event");
+        let mut events = Events::default();
+        events.push(NavEvent::Mode(NavMode::Return));
+        events.push(NavEvent::Reached(2));
+        events.push(NavEvent::LinkLost);
+        let before = NavigatorConfig::default();
+        let mut table = ParamTable::new(before);
+        table.set("NAV_CRUISE_SPD", 1.25).expect("a valid speed");
+        let news = NavigatorNews {
+            events,
+            config_change: Some((before, *table.config())),
+        };
+        write_record(&mut log, &FlightRecord::Navigator { t_s: 1.0, news }).expect("news");
+        let bytes = log.finish().expect("finish");
+        let mut r = UlogReader::new(&bytes[..], "t").expect("reader");
+        let (mut texts, mut params, mut status) = (Vec::new(), Vec::new(), None);
+        let mut status_id = None;
+        while let Some(m) = r.next_message().expect("message") {
+            match m {
+                Message::AddLogged { msg_id, name, .. } if name == VehicleStatus::NAME => {
+                    status_id = Some(msg_id);
+                }
+                Message::Data { msg_id, payload } if Some(msg_id) == status_id => {
+                    status = VehicleStatus::decode(payload);
+                }
+                Message::Logging { level, text, .. } => texts.push((level, text)),
+                Message::Parameter(kv) => params.push((kv.name.clone(), kv.value.to_string())),
+                _ => {}
+            }
+        }
+        let status = status.expect("a vehicle_status");
+        assert_eq!(status.nav_state, NAV_STATE_AUTO_RTL);
+        assert_eq!(status.nav_state_user_intention, NAV_STATE_AUTO_RTL);
+        assert_eq!(status.arming_state, px4::ARMING_STATE_ARMED);
+        let has = |level: LogLevel, s: &str| {
+            texts
+                .iter()
+                .any(|(l, t)| *l == Some(level) && t.starts_with(s))
+        };
+        assert!(
+            has(LogLevel::Info, "navigator: mode RETURN at t = 1.0000 s"),
+            "{texts:?}"
+        );
+        assert!(
+            has(LogLevel::Info, "navigator: mission item reached: 2"),
+            "{texts:?}"
+        );
+        assert!(
+            has(LogLevel::Critical, "navigator: ground station link lost"),
+            "{texts:?}"
+        );
+        assert!(
+            has(LogLevel::Info, "parameter NAV_CRUISE_SPD = 1.25"),
+            "{texts:?}"
+        );
+        assert_eq!(
+            params,
+            vec![("NAV_CRUISE_SPD".to_string(), "1.25".to_string())]
+        );
     }
 }

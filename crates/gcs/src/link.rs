@@ -144,6 +144,12 @@ pub struct VehicleOutput {
     pub reference: Reference,
     /// Arm (`Some(true)`) or disarm (`Some(false)`) the flight software now.
     pub arm: Option<bool>,
+    /// The navigator's events of this sample (also sent to the server):
+    /// for the flight log.
+    pub events: Events,
+    /// The tuning the operator set this sample, before and after (the
+    /// parameter table's values): for the flight log.
+    pub config_change: Option<(NavigatorConfig, NavigatorConfig)>,
 }
 
 /// The vehicle-side half: the navigator fed by the uplink, its status on
@@ -160,6 +166,7 @@ pub struct Vehicle {
     samples: u64,
     dropped: u64,
     sent: u64,
+    config_change: Option<(NavigatorConfig, NavigatorConfig)>,
 }
 
 impl Vehicle {
@@ -182,6 +189,7 @@ impl Vehicle {
             samples: 0,
             dropped: 0,
             sent: 0,
+            config_change: None,
         }
     }
 
@@ -244,7 +252,10 @@ impl Vehicle {
             Uplink::Plan(p) => self.nav.set_plan(*p),
             Uplink::Config(c) => {
                 // validated by the server; a refusal here keeps the old one
-                let _ = self.nav.set_config(c);
+                let before = *self.nav.config();
+                if self.nav.set_config(c).is_ok() {
+                    self.config_change = Some((before, c));
+                }
             }
             Uplink::Guided(g) if flying => {
                 self.nav.guided(&at, g, events);
@@ -310,7 +321,12 @@ impl Vehicle {
             self.send(Downlink::Status(status));
         }
         self.samples += 1;
-        VehicleOutput { reference, arm }
+        VehicleOutput {
+            reference,
+            arm,
+            events,
+            config_change: self.config_change.take(),
+        }
     }
 
     fn status(

@@ -755,6 +755,13 @@ impl<W: Write> FlightLog<W> {
         self.writer.write(self.topics.status, &s)
     }
 
+    /// The ground station's navigator changed its mode at `t_us`: PX4's
+    /// `vehicle_status` with its `nav_state` (`px4::NAV_STATE_*`).
+    pub fn write_navigator_state(&mut self, t_us: u64, nav_state: u8) -> Result<(), WriteError> {
+        let s = self.px4.set_navigator(t_us, nav_state);
+        self.writer.write(self.topics.status, &s)
+    }
+
     /// Write a PX4 record of the view.
     fn write_px4(&mut self, r: &Px4Record) -> Result<(), WriteError> {
         let t = &self.topics;

@@ -692,9 +692,10 @@ pub struct Px4View {
     next_us: [Option<u64>; INTERVALS_US.len()],
     prev_rates: Option<(u64, [f64; 3])>,
     prev_imu_us: Option<u64>,
-    load_window: (u64, u64),
+    load_window: Option<(u64, u64)>,
     status: VehicleStatus,
     status_started: bool,
+    navigator: Option<u8>,
 }
 
 fn f(v: f64) -> f32 {
@@ -719,7 +720,7 @@ impl Px4View {
             next_us: [None; INTERVALS_US.len()],
             prev_rates: None,
             prev_imu_us: None,
-            load_window: (0, 0),
+            load_window: None,
             status: VehicleStatus {
                 arming_state: ARMING_STATE_DISARMED,
                 nav_state: NAV_STATE_AUTO_MISSION,
@@ -742,6 +743,7 @@ impl Px4View {
                 ..VehicleStatus::default()
             },
             status_started: false,
+            navigator: None,
         }
     }
 
@@ -772,8 +774,33 @@ impl Px4View {
         &self.status
     }
 
-    /// The mode changed at `t_us`: the `vehicle_status` to write.
-    pub fn set_mode(&mut self, t_us: u64, mode: StatusMode) -> VehicleStatus {
+    /// The ground station's navigator changed its mode at `t_us` to
+    /// `nav_state` (`NAV_STATE_*`): the `vehicle_status` to write. It is
+    /// the active mode while the flight software is armed and not in a
+    /// failsafe; the intention always.
+    pub fn set_navigator(&mut self, t_us: u64, nav_state: u8) -> VehicleStatus {
+        self.navigator = Some(nav_state);
+        let s = &mut self.status;
+        s.nav_state_user_intention = nav_state;
+        if !s.failsafe && s.arming_state == ARMING_STATE_ARMED && s.nav_state != nav_state {
+            s.nav_state = nav_state;
+            s.nav_state_timestamp = t_us;
+        }
+        s.timestamp = t_us;
+        self.next_us[STATUS] = Some(t_us + interval_us(STATUS));
+        self.status_started = true;
+        self.status
+    }
+
+    /// The mode changed at `t_us`: the `vehicle_status` to write. Under a
+    /// ground station the automatic mode is its navigator's.
+    pub fn set_mode(&mut self, t_us: u64, mut mode: StatusMode) -> VehicleStatus {
+        if let Some(nav) = self.navigator
+            && !mode.failsafe
+            && mode.nav_state == NAV_STATE_AUTO_MISSION
+        {
+            mode.nav_state = nav;
+        }
         let s = &mut self.status;
         if mode.arming_state == ARMING_STATE_ARMED && s.arming_state != ARMING_STATE_ARMED {
             s.armed_time = t_us;
@@ -1052,17 +1079,19 @@ impl Px4View {
     /// The PX4 record of the timing of a control step: `cpuload` every
     /// half second, the control task's compute time over the window.
     pub fn from_timing(&mut self, t: &Timing, out: &mut impl FnMut(Px4Record)) {
-        let (start, busy) = &mut self.load_window;
-        if *start == 0 || t.timestamp < *start {
-            *start = t.timestamp;
-            *busy = 0;
-        }
-        *busy += u64::from(t.compute_time_us);
-        let elapsed = t.timestamp - *start;
+        // the window opens at a step and holds the compute times of the
+        // steps after it (each step's time belongs to the period it ends)
+        let (start, busy) = match self.load_window {
+            Some((start, busy)) if t.timestamp >= start => {
+                (start, busy + u64::from(t.compute_time_us))
+            }
+            _ => (t.timestamp, 0),
+        };
+        self.load_window = Some((start, busy));
+        let elapsed = t.timestamp - start;
         if elapsed >= interval_us(LOAD) {
-            let load = (*busy as f64 / elapsed as f64) as f32;
-            *start = t.timestamp;
-            *busy = 0;
+            let load = (busy as f64 / elapsed as f64) as f32;
+            self.load_window = Some((t.timestamp, 0));
             out(Px4Record::Cpuload(Cpuload {
                 timestamp: t.timestamp,
                 load,
