@@ -88,7 +88,10 @@ const SITL_ULOG: &[(&str, &str)] = &[
     ("flight_vehicle_global_position_0.csv", "46bada9d19b97154"),
     ("flight_vehicle_gps_position_0.csv", "a8b0f581d52b6517"),
     ("flight_vehicle_local_position_0.csv", "69f55735ffd21794"),
-    ("flight_vehicle_local_position_setpoint_0.csv", "9005e26fbdc410f8"),
+    (
+        "flight_vehicle_local_position_setpoint_0.csv",
+        "9005e26fbdc410f8",
+    ),
     ("flight_vehicle_magnetometer_0.csv", "fa5d1bdf92e892fd"),
     ("flight_vehicle_status_0.csv", "4d1b853290a5c59a"),
 ];

@@ -188,53 +188,57 @@ fn log_fmt<W: Write>(
     log.writer_mut().log(level, ts, s)
 }
 
+/// A supervisor event: `mode` and PX4's `vehicle_status`, `failsafe` when
+/// it raises or clears one, and one text naming the precise reason.
+fn write_event<W: Write>(log: &mut FlightLog<W>, ev: &SafetyEvent) -> Result<(), WriteError> {
+    let ts = timestamp_us(ev.t_s, "mode change")?;
+    // the records' data only (and PX4's vehicle_status): the text
+    // below is the event's one text (FlightLog::write would add a
+    // generic one of its own)
+    log.write_mode(
+        &ModeRecord {
+            timestamp: ts,
+            mode: flight_mode(ev.to) as u8,
+            previous: flight_mode(ev.from) as u8,
+        },
+        status_mode(ev.to),
+    )?;
+    let raised = is_failsafe(ev.to) && !is_failsafe(ev.from);
+    let cleared = is_failsafe(ev.from) && !is_failsafe(ev.to);
+    if let Some(code) = failsafe_reason(ev.reason)
+        && (raised || cleared)
+    {
+        log.write_data(&LogRecord::Failsafe(Failsafe {
+            timestamp: ts,
+            reason: code as u8,
+            active: raised,
+        }))?;
+    }
+    let level = if is_failsafe(ev.to) {
+        LogLevel::Critical
+    } else {
+        LogLevel::Notice
+    };
+    log_fmt(
+        log,
+        level,
+        ts,
+        format_args!(
+            "{}: {} -> {} at t = {:.4} s",
+            ev.reason.as_str(),
+            ev.from.as_str(),
+            ev.to.as_str(),
+            ev.t_s
+        ),
+        "mode change",
+    )
+}
+
 /// Write one ring item to the flight log (no allocation).
 pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Result<(), WriteError> {
     match r {
         FlightRecord::Log(x) => log.write(x),
-        FlightRecord::Event(ev) => {
-            let ts = timestamp_us(ev.t_s, "mode change")?;
-            // the records' data only (and PX4's vehicle_status): the text
-            // below is the event's one text (FlightLog::write would add a
-            // generic one of its own)
-            log.write_mode(
-                &ModeRecord {
-                    timestamp: ts,
-                    mode: flight_mode(ev.to) as u8,
-                    previous: flight_mode(ev.from) as u8,
-                },
-                status_mode(ev.to),
-            )?;
-            let raised = is_failsafe(ev.to) && !is_failsafe(ev.from);
-            let cleared = is_failsafe(ev.from) && !is_failsafe(ev.to);
-            if let Some(code) = failsafe_reason(ev.reason)
-                && (raised || cleared)
-            {
-                log.write_data(&LogRecord::Failsafe(Failsafe {
-                    timestamp: ts,
-                    reason: code as u8,
-                    active: raised,
-                }))?;
-            }
-            let level = if is_failsafe(ev.to) {
-                LogLevel::Critical
-            } else {
-                LogLevel::Notice
-            };
-            log_fmt(
-                log,
-                level,
-                ts,
-                format_args!(
-                    "{}: {} -> {} at t = {:.4} s",
-                    ev.reason.as_str(),
-                    ev.from.as_str(),
-                    ev.to.as_str(),
-                    ev.t_s
-                ),
-                "mode change",
-            )
-        }
+        FlightRecord::Event(ev) => write_event(log, ev),
         FlightRecord::ImuHealth { t_s, change } => {
             let ts = timestamp_us(*t_s, "imu health")?;
             let level = if change.flags & ImuHealth::GRAVITY_DEFICIT != 0 {
