@@ -32,10 +32,14 @@ fn export_writes_one_csv_per_topic_and_the_text_files() {
     assert_eq!(lines.count(), 60);
     for topic in [
         "sensor_imu",
-        "sensor_mag",
-        "sensor_gps",
+        "helicon_mag",
+        "helicon_gps",
         "navigation",
         "servo_output",
+        // PX4's topics beside them (no home: no geodetic ones)
+        "vehicle_attitude",
+        "sensor_combined",
+        "vehicle_status",
     ] {
         assert!(
             out.join(format!("helicon_sample_{topic}_0.csv")).exists(),

@@ -30,6 +30,20 @@ pub enum GroundError {
     Server(#[from] GcsError),
 }
 
+/// The ground station's parameter table as the flight starts (PX4's
+/// names, `helicon_gcs::params`): the flight log's initial parameters.
+/// A value the operator sets in flight reaches the navigator, not the log
+/// (docs/ulog.md, "Parameters").
+pub fn initial_parameters(
+    section: &GcsSection,
+    home: Geodetic,
+    file: &str,
+) -> Result<Vec<(&'static str, f32)>, GroundError> {
+    let config = section.server_config(home, file)?;
+    let table = helicon_gcs::params::ParamTable::new(config.navigator);
+    Ok((0..table.len()).filter_map(|i| table.get(i)).collect())
+}
+
 /// Start the ground station of `section` (`file` names it in errors):
 /// the server thread is running when this returns, and the mission is the
 /// navigator the control task flies, disarmed until the operator arms.

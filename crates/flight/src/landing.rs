@@ -245,6 +245,30 @@ pub struct LandingStep {
     pub throttle_hold: bool,
     /// A take-off was given up (no lift-off): told to the operator.
     pub takeoff_aborted: bool,
+    /// The land detector's stage after the sample.
+    pub stage: LandStage,
+    /// The state or the stage changed this sample, or it is the first:
+    /// the log's `vehicle_land_detected` is written.
+    pub report: bool,
+    /// The detector's view of this sample: a low collective, moving
+    /// vertically, moving horizontally, rotating (all false when it does
+    /// not run: on the ground, taking off).
+    pub flags: DetectorFlags,
+}
+
+/// The land detector's conditions of a sample (PX4's names).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct DetectorFlags {
+    /// The collective below `low_collective` of the way to the hover trim.
+    pub low_collective: bool,
+    /// |vd| at or above `z_vel_max_m_s`.
+    pub vertical_movement: bool,
+    /// The ground speed at or above `xy_vel_max_m_s`.
+    pub horizontal_movement: bool,
+    /// A body rate at or above `rot_max_deg_s`.
+    pub rotating: bool,
+    /// A descent asked for (faster than 1.1 × `z_vel_max_m_s`).
+    pub descending: bool,
 }
 
 /// The spool state machine and the land detector.
@@ -269,6 +293,10 @@ pub struct Landing {
     descent_since_s: Option<f64>,
     /// A take-off was given up: a climb must be withdrawn and asked again.
     climb_refused: bool,
+    /// The detector's conditions of the last sample it ran.
+    flags: DetectorFlags,
+    /// Samples updated so far.
+    updates: u64,
 }
 
 impl Landing {
@@ -291,6 +319,8 @@ impl Landing {
             last_collective: 0.0,
             descent_since_s: None,
             climb_refused: false,
+            flags: DetectorFlags::default(),
+            updates: 0,
         }
     }
 
@@ -386,6 +416,8 @@ impl Landing {
     pub fn update(&mut self, i: &LandingInput<'_>) -> LandingStep {
         let c = self.config;
         let now = i.now_s;
+        let stage_before = self.stage;
+        self.flags = DetectorFlags::default();
         let mut change = None;
         let mut disarm = false;
         let mut takeoff_aborted = false;
@@ -463,11 +495,15 @@ impl Landing {
                 SpoolState::Flying => self.detect(i, vel, now, ramp, &mut change),
             }
         }
+        self.updates += 1;
         LandingStep {
             change,
             disarm,
             throttle_hold: matches!(self.state, SpoolState::Disarmed | SpoolState::SpoolingDown),
             takeoff_aborted,
+            stage: self.stage,
+            report: change.is_some() || self.stage != stage_before || self.updates == 1,
+            flags: self.flags,
         }
     }
 
@@ -529,6 +565,13 @@ impl Landing {
             .gyro_body_rad_s
             .is_none_or(|w| w.iter().any(|r| r.abs().to_degrees() >= c.rot_max_deg_s));
         let minimal = way(self.last_collective) <= 0.1;
+        self.flags = DetectorFlags {
+            low_collective: low,
+            vertical_movement: vel.is_none_or(|v| v.z.abs() >= c.z_vel_max_m_s),
+            horizontal_movement: vel.is_none_or(|v| v.xy().norm() >= c.xy_vel_max_m_s),
+            rotating,
+            descending: self.descent_since_s.is_some(),
+        };
         let third = c.trigger_s / 3.0 - 1e-9;
         let held = now - self.stage_since_s >= third;
         let next = match self.stage {

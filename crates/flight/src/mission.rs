@@ -8,6 +8,7 @@ use crate::control::ControlTask;
 use crate::safety::Mode;
 use helicon_core::{Reference, Telemetry};
 use helicon_gcs::link::{FlightMode, Vehicle, VehicleEvent};
+use helicon_gcs::navigator::{Events, NavigatorConfig};
 use helicon_setup::excitation::Excitations;
 use helicon_setup::plan::ReferenceSchedule;
 use nalgebra::Vector3;
@@ -49,6 +50,18 @@ impl std::fmt::Debug for References {
 pub struct Mission {
     references: References,
     excitation: Excitations,
+    news: Option<NavigatorNews>,
+}
+
+/// What the ground station's navigator did in a sample that the flight
+/// log records: its events (mode changes, items reached, link lost, the
+/// fence) and a tuning the operator set (before, after).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavigatorNews {
+    /// The navigator's events.
+    pub events: Events,
+    /// The tuning set, before and after.
+    pub config_change: Option<(NavigatorConfig, NavigatorConfig)>,
 }
 
 /// What the control task did last step, as the ground station's navigator
@@ -80,6 +93,7 @@ impl Mission {
         Mission {
             references,
             excitation: Excitations::default(),
+            news: None,
         }
     }
 
@@ -143,10 +157,22 @@ impl Mission {
                 {
                     v.notify(t_s, VehicleEvent::Warning("arm refused: not on the ground"));
                 }
+                if out.events.iter().next().is_some() || out.config_change.is_some() {
+                    self.news = Some(NavigatorNews {
+                        events: out.events,
+                        config_change: out.config_change,
+                    });
+                }
                 out.reference
             }
             References::Schedule(_) | References::Hold(_) => self.at(t_s).unwrap_or_default(),
         }
+    }
+
+    /// What the navigator did since the last call that the flight log
+    /// records (`None`: nothing, or no ground station).
+    pub fn take_news(&mut self) -> Option<NavigatorNews> {
+        self.news.take()
     }
 
     /// Tell the ground station's operator (a status text), when the

@@ -24,7 +24,7 @@ use helicon_setup::mission::MissionFile;
 use helicon_setup::{OnBoardSetup, flight_computer, imu_health_at};
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo};
 use nalgebra::Vector3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -282,16 +282,34 @@ pub fn run_until(
     // a new file, numbered after the folder's logs: two flights in one
     // second, or a board without a real-time clock, never share a name, and
     // an existing log is never overwritten
-    let unix_s = std::time::SystemTime::now()
+    let unix = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs())
-        .unwrap_or(0);
-    let (log, path) =
-        FlightLog::create_numbered(&dir, unix_s, &LogInfo::default(), FlushPolicy::default())
-            .map_err(|e| OnboardError::Log {
-                path: dir.display().to_string(),
-                message: e.to_string(),
-            })?;
+        .ok();
+    let unix_s = unix.map_or(0, |d| d.as_secs());
+    let table = match &cfg.gcs {
+        Some(g) => ground::initial_parameters(g, home, &cfg.file)?,
+        None => Vec::new(),
+    };
+    let info = LogInfo {
+        // the computer's id where the system keeps one (systemd's)
+        sys_uuid: helicon_config::read_text_bounded(Path::new("/etc/machine-id"), 256)
+            .map(|t| t.trim().to_string())
+            .unwrap_or_default(),
+        // the runtime's clock starts as the log is created (within
+        // milliseconds); a computer without a set clock says 1970
+        start_utc_us: unix
+            .filter(|d| d.as_secs() > 1_000_000_000)
+            .and_then(|d| u64::try_from(d.as_micros()).ok()),
+        home: Some(home),
+        control_period_us: Some((ts * 1e6).round() as u64),
+        parameters: crate::records::log_parameters(ts, &table),
+        ..LogInfo::default()
+    };
+    let (log, path) = FlightLog::create_numbered(&dir, unix_s, &info, FlushPolicy::default())
+        .map_err(|e| OnboardError::Log {
+            path: dir.display().to_string(),
+            message: e.to_string(),
+        })?;
     // the ground station last: its server thread runs from here on
     let (mission, server) = match (&mission_scenario, &cfg.gcs) {
         (_, Some(g)) => {

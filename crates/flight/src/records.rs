@@ -3,17 +3,20 @@
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
 use crate::control::{ControlOutput, ImuHealthChange, Tick};
-use crate::landing::SpoolState;
+use crate::landing::{LandStage, LandingStep, SpoolState};
+use crate::mission::NavigatorNews;
 use crate::plausibility::Rejection;
 use crate::ports::DeviceEvent;
 use crate::safety::{Mode, RcInput, RcLink, Reason, SafetyEvent};
 use helicon_core::imu_health::ImuHealth;
+use helicon_gcs::navigator::{NavEvent, NavMode};
+use helicon_gcs::params::ParamTable;
 use helicon_ulog::messages::{
     Control, EstimatorBias, Excitation, Failsafe, FailsafeReason, FlightMode,
     ImuHealth as ImuHealthRecord, Mode as ModeRecord, Navigation, RcInput as RcRecord, ServoOutput,
     Timing,
 };
-use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, timestamp_us};
+use helicon_ulog::{FlightLog, LogLevel, LogRecord, WriteError, px4, timestamp_us};
 use std::io::Write;
 
 /// One item of a logger ring.
@@ -69,6 +72,15 @@ pub enum FlightRecord {
         /// The device and what happened.
         event: DeviceEvent,
     },
+    /// What the ground station's navigator did (its mode changes and
+    /// events as text and PX4's `vehicle_status`; a tuning the operator set
+    /// as parameter changes).
+    Navigator {
+        /// On-board time (s).
+        t_s: f64,
+        /// The events and the tuning.
+        news: NavigatorNews,
+    },
     /// The avionics port dropped servo frames, its output buffer full (the
     /// line slower than the frames, the board not reading): the count so
     /// far, logged at the first drop and at each doubling.
@@ -89,6 +101,38 @@ pub enum FlightRecord {
         /// A take-off given up (no lift-off).
         aborted: bool,
     },
+}
+
+/// The flight log's initial parameters: the control period
+/// (`HC_CTRL_DT_S`, s) and the ground station's table (`table`, empty
+/// without one; [`crate::ground::initial_parameters`]).
+pub fn log_parameters(sample_time_s: f64, table: &[(&'static str, f32)]) -> Vec<(String, f32)> {
+    std::iter::once(("HC_CTRL_DT_S", sample_time_s as f32))
+        .chain(table.iter().copied())
+        .map(|(n, v)| (n.to_string(), v))
+        .collect()
+}
+
+/// PX4's `vehicle_status` of a supervisor mode: armed or not, the
+/// navigation state (hold: loiter, descent: descend, IMU lost: termination,
+/// the servos at the trim in open loop) and whether a failsafe acts.
+pub fn status_mode(m: Mode) -> px4::StatusMode {
+    let (nav_state, failsafe) = match m {
+        Mode::Disarmed | Mode::Auto => (px4::NAV_STATE_AUTO_MISSION, false),
+        Mode::Manual => (px4::NAV_STATE_MANUAL, false),
+        Mode::Hold => (px4::NAV_STATE_AUTO_LOITER, true),
+        Mode::Descent => (px4::NAV_STATE_DESCEND, true),
+        Mode::ImuLost => (px4::NAV_STATE_TERMINATION, true),
+    };
+    px4::StatusMode {
+        arming_state: if m == Mode::Disarmed {
+            px4::ARMING_STATE_DISARMED
+        } else {
+            px4::ARMING_STATE_ARMED
+        },
+        nav_state,
+        failsafe,
+    }
 }
 
 /// The log's flight mode of a supervisor mode.
@@ -145,6 +189,25 @@ fn write_spool<W: Write>(
     )
 }
 
+/// PX4's `vehicle_land_detected` of the ground logic's step.
+fn land_detected(ts: u64, l: &LandingStep) -> px4::VehicleLandDetected {
+    let f = l.flags;
+    px4::VehicleLandDetected {
+        timestamp: ts,
+        ground_contact: l.stage == LandStage::GroundContact,
+        maybe_landed: l.stage == LandStage::MaybeLanded,
+        landed: l.stage == LandStage::Landed,
+        in_descend: f.descending,
+        has_low_throttle: f.low_collective,
+        vertical_movement: f.vertical_movement,
+        horizontal_movement: f.horizontal_movement,
+        rotational_movement: f.rotating,
+        close_to_ground_or_skipped_check: true,
+        at_rest: l.stage == LandStage::Landed,
+        ..px4::VehicleLandDetected::default()
+    }
+}
+
 fn is_failsafe(m: Mode) -> bool {
     matches!(m, Mode::Hold | Mode::Descent | Mode::ImuLost)
 }
@@ -182,50 +245,58 @@ fn log_fmt<W: Write>(
     log.writer_mut().log(level, ts, s)
 }
 
+/// A supervisor event: `mode` and PX4's `vehicle_status`, `failsafe` when
+/// it raises or clears one, and one text naming the precise reason.
+fn write_event<W: Write>(log: &mut FlightLog<W>, ev: &SafetyEvent) -> Result<(), WriteError> {
+    let ts = timestamp_us(ev.t_s, "mode change")?;
+    // the records' data only (and PX4's vehicle_status): the text
+    // below is the event's one text (FlightLog::write would add a
+    // generic one of its own)
+    log.write_mode(
+        &ModeRecord {
+            timestamp: ts,
+            mode: flight_mode(ev.to) as u8,
+            previous: flight_mode(ev.from) as u8,
+        },
+        status_mode(ev.to),
+    )?;
+    let raised = is_failsafe(ev.to) && !is_failsafe(ev.from);
+    let cleared = is_failsafe(ev.from) && !is_failsafe(ev.to);
+    if let Some(code) = failsafe_reason(ev.reason)
+        && (raised || cleared)
+    {
+        log.write_data(&LogRecord::Failsafe(Failsafe {
+            timestamp: ts,
+            reason: code as u8,
+            active: raised,
+        }))?;
+    }
+    let level = if is_failsafe(ev.to) {
+        LogLevel::Critical
+    } else {
+        LogLevel::Notice
+    };
+    log_fmt(
+        log,
+        level,
+        ts,
+        format_args!(
+            "{}: {} -> {} at t = {:.4} s",
+            ev.reason.as_str(),
+            ev.from.as_str(),
+            ev.to.as_str(),
+            ev.t_s
+        ),
+        "mode change",
+    )
+}
+
 /// Write one ring item to the flight log (no allocation).
 #[allow(clippy::too_many_lines)] // one arm per record kind
 pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Result<(), WriteError> {
     match r {
         FlightRecord::Log(x) => log.write(x),
-        FlightRecord::Event(ev) => {
-            let ts = timestamp_us(ev.t_s, "mode change")?;
-            // the records' data only: the text below is the event's one
-            // text (FlightLog::write would add a generic one of its own)
-            log.write_data(&LogRecord::Mode(ModeRecord {
-                timestamp: ts,
-                mode: flight_mode(ev.to) as u8,
-                previous: flight_mode(ev.from) as u8,
-            }))?;
-            let raised = is_failsafe(ev.to) && !is_failsafe(ev.from);
-            let cleared = is_failsafe(ev.from) && !is_failsafe(ev.to);
-            if let Some(code) = failsafe_reason(ev.reason)
-                && (raised || cleared)
-            {
-                log.write_data(&LogRecord::Failsafe(Failsafe {
-                    timestamp: ts,
-                    reason: code as u8,
-                    active: raised,
-                }))?;
-            }
-            let level = if is_failsafe(ev.to) {
-                LogLevel::Critical
-            } else {
-                LogLevel::Notice
-            };
-            log_fmt(
-                log,
-                level,
-                ts,
-                format_args!(
-                    "{}: {} -> {} at t = {:.4} s",
-                    ev.reason.as_str(),
-                    ev.from.as_str(),
-                    ev.to.as_str(),
-                    ev.t_s
-                ),
-                "mode change",
-            )
-        }
+        FlightRecord::Event(ev) => write_event(log, ev),
         FlightRecord::ImuHealth { t_s, change } => {
             let ts = timestamp_us(*t_s, "imu health")?;
             let level = if change.flags & ImuHealth::GRAVITY_DEFICIT != 0 {
@@ -309,6 +380,7 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 "avionics: servo frames dropped",
             )
         }
+        FlightRecord::Navigator { t_s, news } => write_navigator(log, *t_s, news),
         FlightRecord::Watchdog { t_s, silent_s } => {
             let ts = timestamp_us(*t_s, "watchdog")?;
             log_fmt(
@@ -322,8 +394,80 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
     }
 }
 
+/// PX4's navigation state of a navigator mode.
+pub fn nav_state(m: NavMode) -> u8 {
+    match m {
+        NavMode::Idle | NavMode::Hold => px4::NAV_STATE_AUTO_LOITER,
+        NavMode::Takeoff => px4::NAV_STATE_AUTO_TAKEOFF,
+        NavMode::Mission => px4::NAV_STATE_AUTO_MISSION,
+        NavMode::Return => px4::NAV_STATE_AUTO_RTL,
+        NavMode::Land => px4::NAV_STATE_AUTO_LAND,
+        NavMode::Guided => px4::NAV_STATE_OFFBOARD,
+    }
+}
+
+/// The navigator's events as texts (and its mode as PX4's
+/// `vehicle_status`), the operator's tuning as parameter changes (each
+/// value of the parameter table that changed). No allocation.
+fn write_navigator<W: Write>(
+    log: &mut FlightLog<W>,
+    t_s: f64,
+    news: &NavigatorNews,
+) -> Result<(), WriteError> {
+    let ts = timestamp_us(t_s, "navigator")?;
+    for e in news.events.iter() {
+        let (level, what) = match e {
+            NavEvent::Mode(m) => {
+                log.write_navigator_state(ts, nav_state(m))?;
+                (LogLevel::Info, m.as_str())
+            }
+            NavEvent::Current(_) => (LogLevel::Info, "next mission item"),
+            NavEvent::Reached(_) => (LogLevel::Info, "mission item reached"),
+            NavEvent::Landed => (LogLevel::Notice, "landed"),
+            NavEvent::LinkLost => (LogLevel::Critical, "ground station link lost"),
+            NavEvent::LinkRegained => (LogLevel::Notice, "ground station link back"),
+            NavEvent::FenceBreach(true) => (LogLevel::Critical, "fence breached (horizontal)"),
+            NavEvent::FenceBreach(false) => (LogLevel::Critical, "fence breached (height)"),
+        };
+        match e {
+            NavEvent::Current(seq) | NavEvent::Reached(seq) => log_fmt(
+                log,
+                level,
+                ts,
+                format_args!("navigator: {what}: {seq} at t = {t_s:.4} s"),
+                "navigator",
+            )?,
+            NavEvent::Mode(_) => log_fmt(
+                log,
+                level,
+                ts,
+                format_args!("navigator: mode {what} at t = {t_s:.4} s"),
+                "navigator",
+            )?,
+            _ => log_fmt(
+                log,
+                level,
+                ts,
+                format_args!("navigator: {what} at t = {t_s:.4} s"),
+                "navigator",
+            )?,
+        }
+    }
+    if let Some((before, after)) = &news.config_change {
+        let (old, new) = (ParamTable::new(*before), ParamTable::new(*after));
+        for i in 0..new.len() {
+            if let (Some((_, a)), Some((name, b))) = (old.get(i), new.get(i))
+                && a.to_bits() != b.to_bits()
+            {
+                log.parameter_changed(name, b, ts)?;
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Everything one control step logs, handed to `push` in order: the frame
-/// (`sensor_imu`, `sensor_mag`, `sensor_gps`), the receiver's frame, the
+/// (`sensor_imu`, `helicon_mag`, `helicon_gps`), the receiver's frame, the
 /// change of mode, the IMU health (`imu_health`, and its change of flags),
 /// the control step (`control`, `navigation`, `estimator_bias` when the
 /// navigation estimates the IMU biases, `excitation` when the mission has
@@ -358,15 +502,20 @@ pub fn step_records(
     if let Some(ev) = out.event {
         push(FlightRecord::Event(ev));
     }
-    if let Some(l) = &out.landing
-        && let Some((from, to)) = l.change
-    {
-        push(FlightRecord::Spool {
-            t_s: tick.now_s,
-            from,
-            to,
-            aborted: l.takeoff_aborted,
-        });
+    if let Some(l) = &out.landing {
+        if let Some((from, to)) = l.change {
+            push(FlightRecord::Spool {
+                t_s: tick.now_s,
+                from,
+                to,
+                aborted: l.takeoff_aborted,
+            });
+        }
+        if l.report {
+            push(FlightRecord::Log(LogRecord::LandDetected(land_detected(
+                ts, l,
+            ))));
+        }
     }
     if let (Some(f), Some(h)) = (&tick.frame, &out.imu_health) {
         push(FlightRecord::Log(LogRecord::ImuHealth(ImuHealthRecord {
@@ -439,5 +588,88 @@ fn rc_record(ts: u64, rc: &RcInput) -> RcRecord {
         channel_count: 4,
         manual_switch: rc.manual,
         signal_lost: rc.failsafe,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use helicon_gcs::navigator::{Events, NavigatorConfig};
+    use helicon_ulog::px4::{NAV_STATE_AUTO_RTL, VehicleStatus};
+    use helicon_ulog::reader::{Message, UlogReader};
+    use helicon_ulog::{FlushPolicy, LogInfo, Record};
+
+    /// The navigator's mode, events and the operator's tuning reach the
+    /// log: texts at their levels, `vehicle_status.nav_state`, and a
+    /// parameter change for the one value set.
+    #[test]
+    fn navigator_news_is_logged() {
+        let mut log =
+            FlightLog::new(Vec::new(), &LogInfo::default(), FlushPolicy::default()).expect("log");
+        let armed = SafetyEvent {
+            t_s: 0.5,
+            from: Mode::Disarmed,
+            to: Mode::Auto,
+            reason: Reason::Armed,
+        };
+        write_record(&mut log, &FlightRecord::Event(armed)).expect("event");
+        let mut events = Events::default();
+        events.push(NavEvent::Mode(NavMode::Return));
+        events.push(NavEvent::Reached(2));
+        events.push(NavEvent::LinkLost);
+        let before = NavigatorConfig::default();
+        let mut table = ParamTable::new(before);
+        table.set("NAV_CRUISE_SPD", 1.25).expect("a valid speed");
+        let news = NavigatorNews {
+            events,
+            config_change: Some((before, *table.config())),
+        };
+        write_record(&mut log, &FlightRecord::Navigator { t_s: 1.0, news }).expect("news");
+        let bytes = log.finish().expect("finish");
+        let mut r = UlogReader::new(&bytes[..], "t").expect("reader");
+        let (mut texts, mut params, mut status) = (Vec::new(), Vec::new(), None);
+        let mut status_id = None;
+        while let Some(m) = r.next_message().expect("message") {
+            match m {
+                Message::AddLogged { msg_id, name, .. } if name == VehicleStatus::NAME => {
+                    status_id = Some(msg_id);
+                }
+                Message::Data { msg_id, payload } if Some(msg_id) == status_id => {
+                    status = VehicleStatus::decode(payload);
+                }
+                Message::Logging { level, text, .. } => texts.push((level, text)),
+                Message::Parameter(kv) => params.push((kv.name.clone(), kv.value.to_string())),
+                _ => {}
+            }
+        }
+        let status = status.expect("a vehicle_status");
+        assert_eq!(status.nav_state, NAV_STATE_AUTO_RTL);
+        assert_eq!(status.nav_state_user_intention, NAV_STATE_AUTO_RTL);
+        assert_eq!(status.arming_state, px4::ARMING_STATE_ARMED);
+        let has = |level: LogLevel, s: &str| {
+            texts
+                .iter()
+                .any(|(l, t)| *l == Some(level) && t.starts_with(s))
+        };
+        assert!(
+            has(LogLevel::Info, "navigator: mode RETURN at t = 1.0000 s"),
+            "{texts:?}"
+        );
+        assert!(
+            has(LogLevel::Info, "navigator: mission item reached: 2"),
+            "{texts:?}"
+        );
+        assert!(
+            has(LogLevel::Critical, "navigator: ground station link lost"),
+            "{texts:?}"
+        );
+        assert!(
+            has(LogLevel::Info, "parameter NAV_CRUISE_SPD = 1.25"),
+            "{texts:?}"
+        );
+        assert_eq!(
+            params,
+            vec![("NAV_CRUISE_SPD".to_string(), "1.25".to_string())]
+        );
     }
 }

@@ -717,6 +717,15 @@ fn control_loop(
             reference: mission.step(now_s, &last, &mut task),
             gps_quality: arrival.and_then(|a| a.gps_quality),
         };
+        // the navigator's modes, events and tuning, for the log
+        if let Some(news) = mission.take_news()
+            && ctx
+                .log
+                .push(FlightRecord::Navigator { t_s: now_s, news })
+                .is_err()
+        {
+            log_dropped += 1;
+        }
         let out = task.step_with(&tick, mission.excitation());
         for e in device_events.drain() {
             mission.notify(now_s, VehicleEvent::Warning(e.text()));

@@ -216,6 +216,12 @@ pub struct VehicleOutput {
     pub reference: Reference,
     /// Arm (`Some(true)`) or disarm (`Some(false)`) the flight software now.
     pub arm: Option<bool>,
+    /// The navigator's events of this sample (also sent to the server):
+    /// for the flight log.
+    pub events: Events,
+    /// The tuning the operator set this sample, before and after (the
+    /// parameter table's values): for the flight log.
+    pub config_change: Option<(NavigatorConfig, NavigatorConfig)>,
 }
 
 /// The vehicle-side half: the navigator fed by the uplink, its status on
@@ -233,6 +239,7 @@ pub struct Vehicle {
     dropped: u64,
     sent: u64,
     ground: GroundState,
+    config_change: Option<(NavigatorConfig, NavigatorConfig)>,
 }
 
 impl Vehicle {
@@ -257,6 +264,7 @@ impl Vehicle {
             dropped: 0,
             sent: 0,
             ground: GroundState::default(),
+            config_change: None,
         }
     }
 
@@ -343,7 +351,10 @@ impl Vehicle {
             Uplink::Plan(p) => self.nav.set_plan(*p),
             Uplink::Config(c) => {
                 // validated by the server; a refusal here keeps the old one
-                let _ = self.nav.set_config(c);
+                let before = *self.nav.config();
+                if self.nav.set_config(c).is_ok() {
+                    self.config_change = Some((before, c));
+                }
             }
             Uplink::Guided(g) if flying => {
                 self.nav.guided(&at, g, events);
@@ -411,7 +422,12 @@ impl Vehicle {
             self.send(Downlink::Status(status));
         }
         self.samples += 1;
-        VehicleOutput { reference, arm }
+        VehicleOutput {
+            reference,
+            arm,
+            events,
+            config_change: self.config_change.take(),
+        }
     }
 
     fn status(

@@ -875,7 +875,7 @@ impl Navigator {
 }
 
 /// The events of one step: a small fixed-capacity list (no allocation).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Events {
     items: [Option<NavEvent>; 8],
     len: usize,

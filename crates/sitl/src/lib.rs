@@ -276,10 +276,11 @@ pub fn run(
     };
     // the run folder's own log: a run flown again into its folder replaces it
     let ulog = options.out_dir.join("flight.ulg");
-    let info = LogInfo {
-        sys_name: format!("helicon sitl {}", scenario.name),
-        ..LogInfo::default()
-    };
+    let gcs_section = options.gcs.as_ref().map(|address| GcsSection {
+        address: address.clone(),
+        ..GcsSection::default()
+    });
+    let info = sitl_log_info(scenario, ts, gcs_section.as_ref(), onboard_home_geo)?;
     let log = FlightLog::create_replacing(&ulog, &info, FlushPolicy::default()).map_err(|e| {
         SitlError::Log {
             path: ulog.display().to_string(),
@@ -298,13 +299,9 @@ pub fn run(
     };
     // the ground station arms; without one SITL starts armed, as a pilot
     // arms on the ground
-    let (mission, server) = match &options.gcs {
-        Some(address) => {
-            let section = GcsSection {
-                address: address.clone(),
-                ..GcsSection::default()
-            };
-            let (m, server) = ground::start(&section, onboard_home_geo, "--gcs", ts)
+    let (mission, server) = match &gcs_section {
+        Some(section) => {
+            let (m, server) = ground::start(section, onboard_home_geo, "--gcs", ts)
                 .map_err(dev("ground station"))?;
             (m, Some(server))
         }
@@ -638,6 +635,34 @@ impl SitlResult {
     }
 }
 
+/// The flight log's identification, home, control period and initial
+/// parameters of a SITL run of `scenario` at the control period `ts` (with
+/// the ground station `gcs`, its parameter table; `home` the on-board
+/// side's origin). Deterministic: no clock,
+/// no machine id, so a lock-step run's log is the same bytes every time.
+fn sitl_log_info(
+    scenario: &Scenario,
+    ts: f64,
+    gcs: Option<&GcsSection>,
+    home: Geodetic,
+) -> Result<LogInfo, SitlError> {
+    let table = match gcs {
+        Some(section) => {
+            ground::initial_parameters(section, home, "--gcs").map_err(dev("ground station"))?
+        }
+        None => Vec::new(),
+    };
+    Ok(LogInfo {
+        sys_name: format!("helicon sitl {}", scenario.name),
+        ver_hw: "HELICON_SITL".to_string(),
+        sys_uuid: format!("helicon-sitl-{}", scenario.name),
+        home: Some(home),
+        control_period_us: Some((ts * 1e6).round() as u64),
+        parameters: helicon_flight::records::log_parameters(ts, &table),
+        ..LogInfo::default()
+    })
+}
+
 /// The estimated size (bytes) of the on-board log `flight.ulg` that a SITL
 /// run of `scenario` writes (the log the on-board program writes at its
 /// full rate, never thinned): its header and definitions (exact: written
@@ -646,13 +671,14 @@ impl SitlResult {
 /// `servo_output`, `timing`, and `estimator_bias` with the ESKF,
 /// `excitation` with `[[excitation]]`), the magnetometer's and GPS's
 /// records at their rates, the receiver's at 50 Hz (none with a ground
-/// station, `gcs`), and a SYNC marker per flush. Events and texts are not
-/// counted (a few per flight).
+/// station, `gcs`), PX4's topics at their decimated rates
+/// (`helicon_ulog::px4::bytes_per_s`) and a SYNC marker per flush. Events
+/// and texts are not counted (a few per flight).
 pub fn estimate_ulog_bytes(scenario: &Scenario, sample_time_s: f64, gcs: bool) -> u64 {
     use helicon_ulog::Record;
     use helicon_ulog::messages::{
-        Control, EstimatorBias, Excitation, ImuHealth, Navigation, RcInput, SensorGps, SensorImu,
-        SensorMag, ServoOutput, Timing,
+        Control, EstimatorBias, Excitation, HeliconGps, HeliconMag, ImuHealth, Navigation, RcInput,
+        SensorImu, ServoOutput, Timing,
     };
     // a data message: 3 bytes of header, 2 of message id, the record
     let msg = |size: usize| (size + 5) as f64;
@@ -669,27 +695,29 @@ pub fn estimate_ulog_bytes(scenario: &Scenario, sample_time_s: f64, gcs: bool) -
         step += msg(Excitation::SIZE);
     }
     let ts = sample_time_s.max(1e-6);
+    let (mag_hz, gps_hz) = (scenario.sensors.mag.rate_hz, scenario.sensors.gps.rate_hz);
+    let rc_hz = if gcs { 0.0 } else { 1.0 / (8.0 * ts) };
     let mut per_s = step / ts
-        + msg(SensorMag::SIZE) * scenario.sensors.mag.rate_hz
-        + msg(SensorGps::SIZE) * scenario.sensors.gps.rate_hz;
-    if !gcs {
-        per_s += msg(RcInput::SIZE) / (8.0 * ts);
-    }
+        + msg(HeliconMag::SIZE) * mag_hz
+        + msg(HeliconGps::SIZE) * gps_hz
+        + msg(RcInput::SIZE) * rc_hz
+        + helicon_ulog::px4::bytes_per_s(1.0 / ts, mag_hz, gps_hz, rc_hz);
     // a SYNC (11 bytes) per flush: every 0.1 s of log time, or 16 KiB
     let policy = FlushPolicy::default();
     let flushes_per_s =
         (1e6 / policy.interval_us.max(1) as f64).max(per_s / policy.max_bytes as f64);
     per_s += 11.0 * flushes_per_s;
-    let head = FlightLog::new(
-        Vec::new(),
-        &LogInfo {
-            sys_name: format!("helicon sitl {}", scenario.name),
-            ..LogInfo::default()
-        },
-        policy,
-    )
-    .and_then(FlightLog::finish)
-    .map_or(4096, |b| b.len() as u64);
+    let gcs_section = gcs.then(GcsSection::default);
+    let head = Geodetic::new(HOME.0, HOME.1, HOME.2)
+        .map_err(dev("home"))
+        .and_then(|home| sitl_log_info(scenario, ts, gcs_section.as_ref(), home))
+        .ok()
+        .and_then(|info| {
+            FlightLog::new(Vec::new(), &info, policy)
+                .and_then(FlightLog::finish)
+                .ok()
+        })
+        .map_or(4096, |b| b.len() as u64);
     head + (per_s * scenario.duration_s.max(0.0)).round() as u64
 }
 

@@ -65,7 +65,7 @@ fn sim_and_sitl_agree_up_to_the_transport_quantisation() {
     let mags: Vec<_> = r.sent.iter().filter_map(|f| f.mag_body).collect();
     assert_eq!(mags.len(), 801); // 100 Hz
     for (i, a) in axis.iter().enumerate() {
-        let m = log.f64s("sensor_mag", &format!("field_body{a}"));
+        let m = log.f64s("helicon_mag", &format!("field_body{a}"));
         assert_eq!(m.len(), mags.len());
         for (k, sent) in mags.iter().enumerate() {
             assert!((m[k] - sent[i]).abs() <= f32_bound(sent[i]), "mag {k}");
@@ -75,8 +75,8 @@ fn sim_and_sitl_agree_up_to_the_transport_quantisation() {
     assert!(fixes.len() >= 35, "{} fixes", fixes.len()); // 5 Hz, 2 % dropouts
     let mut worst = [0.0f64; 3];
     for (i, a) in axis.iter().enumerate() {
-        let p = log.f64s("sensor_gps", &format!("position_ned_m{a}"));
-        let v = log.f64s("sensor_gps", &format!("velocity_ned_m_s{a}"));
+        let p = log.f64s("helicon_gps", &format!("position_ned_m{a}"));
+        let v = log.f64s("helicon_gps", &format!("velocity_ned_m_s{a}"));
         assert_eq!(p.len(), fixes.len());
         for (k, fix) in fixes.iter().enumerate() {
             let dp = (p[k] - fix.position_ned_m[i]).abs();

@@ -7,8 +7,8 @@
 //! `cargo run -p helicon-ulog --example ulog_sample -- OUT.ulg`
 
 use helicon_ulog::messages::{
-    Control, EstimatorBias, Excitation, FailsafeReason, FlightMode, ImuHealth, Mode, Navigation,
-    RcInput, SensorGps, SensorImu, SensorMag, ServoOutput, Timing,
+    Control, EstimatorBias, Excitation, FailsafeReason, FlightMode, HeliconGps, HeliconMag,
+    ImuHealth, Mode, Navigation, RcInput, SensorImu, ServoOutput, Timing,
 };
 use helicon_ulog::{FlightLog, FlushPolicy, LogInfo, LogLevel, LogRecord, UlogWriter, WriteError};
 
@@ -89,7 +89,7 @@ pub fn step_records(k: u64) -> Vec<LogRecord> {
         }));
     }
     if k % 4 == 0 {
-        v.push(LogRecord::Mag(SensorMag {
+        v.push(LogRecord::Mag(HeliconMag {
             timestamp: ts,
             field_body: [0.153, 0.008, -0.438],
         }));
@@ -108,7 +108,7 @@ pub fn step_records(k: u64) -> Vec<LogRecord> {
         }));
     }
     if k % 20 == 10 {
-        v.push(LogRecord::Gps(SensorGps {
+        v.push(LogRecord::Gps(HeliconGps {
             timestamp: ts,
             epoch_s: t_s - 0.05,
             position_ned_m: [f(k, 40), f(k, 41), -10.0],
@@ -139,6 +139,7 @@ pub fn build() -> Result<Vec<u8>, WriteError> {
         ver_sw: "fixture".to_string(),
         time_ref_utc_s: Some(3600),
         start_us: 1_000_000,
+        ..LogInfo::default()
     };
     let mut w = UlogWriter::new(Vec::new(), info.start_us, FlushPolicy::default())?;
     w.info_str("sys_name", &info.sys_name)?;

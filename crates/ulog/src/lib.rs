@@ -14,10 +14,14 @@
 //!   log time and every 16 KiB ([`FlushPolicy`]), so a killed process
 //!   leaves a file whose prefix is complete messages.
 //! - [`messages`]: the on-board message set (`control`, `navigation`,
-//!   `sensor_imu`, `sensor_mag`, `sensor_gps`, `servo_output`,
+//!   `sensor_imu`, `helicon_mag`, `helicon_gps`, `servo_output`,
 //!   `rc_input`, `timing`, `failsafe`, `mode`), the helpers that fill them
 //!   from [`helicon_core`]'s `Telemetry` and `SensorFrame`, and
 //!   [`FlightLog`], the writer with the whole set subscribed.
+//! - [`px4`]: PX4's uORB topics (`vehicle_attitude`, `vehicle_local_position`,
+//!   `sensor_gps`, `vehicle_status` …) in PX4's layout, and [`px4::Px4View`],
+//!   which [`FlightLog`] uses to write them from helicon's records so that
+//!   PX4's tools read the log as a PX4 log.
 //! - [`reader`]: a streaming reader (typed errors; a truncated file gives
 //!   every complete message, then [`ReadError::Truncated`]); [`flat`]:
 //!   formats flattened to columns (nested types, arrays, padding);
@@ -56,6 +60,7 @@ pub mod export;
 pub mod flat;
 pub mod format;
 pub mod messages;
+pub mod px4;
 pub mod reader;
 pub mod spec;
 pub mod synthetic;

@@ -7,8 +7,8 @@
 //! | `control` | control step | [`Telemetry`] |
 //! | `navigation` | control step with a navigation solution | [`Telemetry::navigation`] |
 //! | `sensor_imu` | sensor frame | [`SensorFrame::imu`] |
-//! | `sensor_mag` | frame with a magnetometer sample | [`SensorFrame::mag_body`] |
-//! | `sensor_gps` | frame with a GPS solution | [`SensorFrame::gps`] |
+//! | `helicon_mag` | frame with a magnetometer sample | [`SensorFrame::mag_body`] |
+//! | `helicon_gps` | frame with a GPS solution | [`SensorFrame::gps`] |
 //! | `servo_output` | servo update | the runtime (what was sent, and who decided) |
 //! | `rc_input` | RC frame | the runtime (pulse widths, manual switch) |
 //! | `timing` | control step | the runtime (wake-up jitter, compute time, misses) |
@@ -28,6 +28,7 @@
 
 use crate::error::WriteError;
 use crate::format::Record;
+use crate::px4::{self, Px4Record, Px4View};
 use crate::spec::LogLevel;
 use crate::ulog_message;
 use crate::writer::{FlushPolicy, Topic, UlogWriter, timestamp_us};
@@ -35,6 +36,7 @@ use helicon_core::computer::Telemetry;
 use helicon_core::navigation::{ImuBiasEstimate, NavigationSolution};
 use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame};
 use helicon_core::state::NM;
+use helicon_devices::geodetic::Geodetic;
 use std::fs::File;
 use std::io::Write;
 use std::path::Path;
@@ -102,7 +104,7 @@ ulog_message! {
 
 ulog_message! {
     /// A raw magnetometer sample.
-    pub struct SensorMag: "sensor_mag" {
+    pub struct HeliconMag: "helicon_mag" {
         /// Time of the frame (µs).
         timestamp: u64,
         /// Field in body axes, in the units of the configured local field.
@@ -112,7 +114,7 @@ ulog_message! {
 
 ulog_message! {
     /// A GPS solution as delivered.
-    pub struct SensorGps: "sensor_gps" {
+    pub struct HeliconGps: "helicon_gps" {
         /// Time of the frame that delivered it (µs).
         timestamp: u64,
         /// Time of validity of the solution (s, on-board clock).
@@ -406,11 +408,11 @@ impl SensorImu {
     }
 }
 
-impl SensorGps {
+impl HeliconGps {
     /// The record of a GPS solution delivered at time `t_s`.
     pub fn from_fix(t_s: f64, g: &GpsFix) -> Result<Self, WriteError> {
-        Ok(SensorGps {
-            timestamp: timestamp_us(t_s, "sensor_gps")?,
+        Ok(HeliconGps {
+            timestamp: timestamp_us(t_s, "helicon_gps")?,
             epoch_s: g.epoch_s,
             position_ned_m: vec3(&g.position_ned_m),
             velocity_ned_m_s: g.velocity_ned_m_s.as_ref().map_or([0.0; 3], vec3),
@@ -447,14 +449,14 @@ impl SensorGps {
 /// present in the frame.
 pub fn frame_records(
     f: &SensorFrame,
-) -> Result<(SensorImu, Option<SensorMag>, Option<SensorGps>), WriteError> {
+) -> Result<(SensorImu, Option<HeliconMag>, Option<HeliconGps>), WriteError> {
     let imu = SensorImu::from_sample(f.t_s, &f.imu)?;
-    let mag = f.mag_body.as_ref().map(|m| SensorMag {
+    let mag = f.mag_body.as_ref().map(|m| HeliconMag {
         timestamp: imu.timestamp,
         field_body: vec3(m),
     });
     let gps = match &f.gps {
-        Some(g) => Some(SensorGps::from_fix(f.t_s, g)?),
+        Some(g) => Some(HeliconGps::from_fix(f.t_s, g)?),
         None => None,
     };
     Ok((imu, mag, gps))
@@ -470,10 +472,10 @@ pub enum LogRecord {
     Navigation(Navigation),
     /// `sensor_imu`
     Imu(SensorImu),
-    /// `sensor_mag`
-    Mag(SensorMag),
-    /// `sensor_gps`
-    Gps(SensorGps),
+    /// `helicon_mag`
+    Mag(HeliconMag),
+    /// `helicon_gps`
+    Gps(HeliconGps),
     /// `servo_output`
     Servo(ServoOutput),
     /// `rc_input`
@@ -490,19 +492,43 @@ pub enum LogRecord {
     ImuHealth(ImuHealth),
     /// `estimator_bias`
     EstimatorBias(EstimatorBias),
+    /// `vehicle_land_detected` (PX4's topic; a land detector's verdict)
+    LandDetected(px4::VehicleLandDetected),
 }
 
-/// Identification written into the log's INFO messages.
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// Identification written into the log's INFO messages, the parameters
+/// written into its definitions, and what the PX4 view of the log needs.
+#[derive(Debug, Clone, PartialEq)]
 pub struct LogInfo {
     /// `sys_name` (shown by the log viewers).
     pub sys_name: String,
     /// `ver_sw`: the software version (a git hash or version string).
     pub ver_sw: String,
-    /// `time_ref_utc`: offset of the log clock's zero from UTC (s), if known.
+    /// `ver_hw`: the hardware (Flight Review's board name).
+    pub ver_hw: String,
+    /// `sys_uuid`: the computer's unique id (empty: not written).
+    pub sys_uuid: String,
+    /// `time_ref_utc`: PX4's offset of the local time from UTC (s); the
+    /// on-board clock and the GPS's `time_utc_usec` are UTC, so 0.
     pub time_ref_utc_s: Option<i32>,
     /// Header timestamp (µs on the on-board clock).
     pub start_us: u64,
+    /// The UTC time of the on-board clock's zero (µs since 1970), when the
+    /// computer's clock knows it: the GPS's `time_utc_usec` (Flight Review's
+    /// start time). `None` writes 0, PX4's "unknown".
+    pub start_utc_us: Option<u64>,
+    /// The origin of the local NED frame: the geodetic PX4 topics
+    /// (`vehicle_global_position`, `sensor_gps`, `vehicle_gps_position`,
+    /// `vehicle_local_position.ref_lat` …) need it; `None` leaves them out.
+    pub home: Option<Geodetic>,
+    /// The control period (µs): a gap of more than 1.5 periods between two
+    /// `timing` records (missed deadlines) is written as a DROPOUT of the
+    /// time missed. `None`: no dropout is inferred.
+    pub control_period_us: Option<u64>,
+    /// The parameters at the start (`float`), as PX4 logs its own: written
+    /// as PARAMETER messages in the definitions; a change in flight is
+    /// [`FlightLog::parameter_changed`].
+    pub parameters: Vec<(String, f32)>,
 }
 
 impl Default for LogInfo {
@@ -510,10 +536,27 @@ impl Default for LogInfo {
         LogInfo {
             sys_name: "helicon".to_string(),
             ver_sw: env!("CARGO_PKG_VERSION").to_string(),
-            time_ref_utc_s: None,
+            ver_hw: default_ver_hw(),
+            sys_uuid: String::new(),
+            time_ref_utc_s: Some(0),
             start_us: 0,
+            start_utc_us: None,
+            home: None,
+            control_period_us: None,
+            parameters: Vec::new(),
         }
     }
+}
+
+/// `HELICON_<OS>_<ARCH>` of the computer this runs on, e.g.
+/// `HELICON_LINUX_AARCH64`.
+pub fn default_ver_hw() -> String {
+    format!(
+        "HELICON_{}_{}",
+        std::env::consts::OS,
+        std::env::consts::ARCH
+    )
+    .to_ascii_uppercase()
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -521,8 +564,8 @@ struct Topics {
     control: Topic<Control>,
     navigation: Topic<Navigation>,
     imu: Topic<SensorImu>,
-    mag: Topic<SensorMag>,
-    gps: Topic<SensorGps>,
+    mag: Topic<HeliconMag>,
+    gps: Topic<HeliconGps>,
     servo: Topic<ServoOutput>,
     rc: Topic<RcInput>,
     timing: Topic<Timing>,
@@ -531,6 +574,20 @@ struct Topics {
     excitation: Topic<Excitation>,
     imu_health: Topic<ImuHealth>,
     estimator_bias: Topic<EstimatorBias>,
+    attitude: Topic<px4::VehicleAttitude>,
+    angular_velocity: Topic<px4::VehicleAngularVelocity>,
+    local_position: Topic<px4::VehicleLocalPosition>,
+    local_position_setpoint: Topic<px4::VehicleLocalPositionSetpoint>,
+    global_position: Topic<px4::VehicleGlobalPosition>,
+    sensor_combined: Topic<px4::SensorCombined>,
+    sensor_gps: Topic<px4::SensorGps>,
+    vehicle_gps: Topic<px4::VehicleGpsPosition>,
+    magnetometer: Topic<px4::VehicleMagnetometer>,
+    actuator_outputs: Topic<px4::ActuatorOutputs>,
+    input_rc: Topic<px4::InputRc>,
+    status: Topic<px4::VehicleStatus>,
+    land_detected: Topic<px4::VehicleLandDetected>,
+    cpuload: Topic<px4::Cpuload>,
 }
 
 /// The flight log: a [`UlogWriter`] with the whole message set declared
@@ -539,6 +596,9 @@ struct Topics {
 pub struct FlightLog<W: Write> {
     writer: UlogWriter<W>,
     topics: Topics,
+    px4: Px4View,
+    control_period_us: Option<u64>,
+    last_timing_us: Option<u64>,
 }
 
 impl FlightLog<File> {
@@ -584,20 +644,34 @@ impl<W: Write> FlightLog<W> {
     fn with_info(mut w: UlogWriter<W>, info: &LogInfo) -> Result<Self, WriteError> {
         w.info_str("sys_name", &info.sys_name)?;
         w.info_str("ver_sw", &info.ver_sw)?;
+        w.info_str("ver_hw", &info.ver_hw)?;
+        w.info_str("sys_os_name", std::env::consts::OS)?;
+        w.info_str("sys_toolchain", "rustc")?;
+        if !info.sys_uuid.is_empty() {
+            w.info_str("sys_uuid", &info.sys_uuid)?;
+        }
         if let Some(t) = info.time_ref_utc_s {
             w.info_i32("time_ref_utc", t)?;
         }
-        Self::from_writer(w)
+        for (name, value) in &info.parameters {
+            w.parameter_f32(name, *value)?;
+        }
+        let mut log = Self::from_writer(w)?;
+        log.px4 = Px4View::new(info.home, info.start_utc_us);
+        log.control_period_us = info.control_period_us;
+        Ok(log)
     }
 
     /// Declare and subscribe the message set on a writer whose own
     /// information and parameters are written (definitions still open).
+    /// The PX4 view has no home (no geodetic topics) and infers no
+    /// dropouts.
     pub fn from_writer(mut w: UlogWriter<W>) -> Result<Self, WriteError> {
         w.add_format::<Control>()?;
         w.add_format::<Navigation>()?;
         w.add_format::<SensorImu>()?;
-        w.add_format::<SensorMag>()?;
-        w.add_format::<SensorGps>()?;
+        w.add_format::<HeliconMag>()?;
+        w.add_format::<HeliconGps>()?;
         w.add_format::<ServoOutput>()?;
         w.add_format::<RcInput>()?;
         w.add_format::<Timing>()?;
@@ -606,6 +680,20 @@ impl<W: Write> FlightLog<W> {
         w.add_format::<Excitation>()?;
         w.add_format::<ImuHealth>()?;
         w.add_format::<EstimatorBias>()?;
+        w.add_format::<px4::VehicleAttitude>()?;
+        w.add_format::<px4::VehicleAngularVelocity>()?;
+        w.add_format::<px4::VehicleLocalPosition>()?;
+        w.add_format::<px4::VehicleLocalPositionSetpoint>()?;
+        w.add_format::<px4::VehicleGlobalPosition>()?;
+        w.add_format::<px4::SensorCombined>()?;
+        w.add_format::<px4::SensorGps>()?;
+        w.add_format::<px4::VehicleGpsPosition>()?;
+        w.add_format::<px4::VehicleMagnetometer>()?;
+        w.add_format::<px4::ActuatorOutputs>()?;
+        w.add_format::<px4::InputRc>()?;
+        w.add_format::<px4::VehicleStatus>()?;
+        w.add_format::<px4::VehicleLandDetected>()?;
+        w.add_format::<px4::Cpuload>()?;
         let topics = Topics {
             control: w.add_logged(0)?,
             navigation: w.add_logged(0)?,
@@ -620,8 +708,134 @@ impl<W: Write> FlightLog<W> {
             excitation: w.add_logged(0)?,
             imu_health: w.add_logged(0)?,
             estimator_bias: w.add_logged(0)?,
+            attitude: w.add_logged(0)?,
+            angular_velocity: w.add_logged(0)?,
+            local_position: w.add_logged(0)?,
+            local_position_setpoint: w.add_logged(0)?,
+            global_position: w.add_logged(0)?,
+            sensor_combined: w.add_logged(0)?,
+            sensor_gps: w.add_logged(0)?,
+            vehicle_gps: w.add_logged(0)?,
+            magnetometer: w.add_logged(0)?,
+            actuator_outputs: w.add_logged(0)?,
+            input_rc: w.add_logged(0)?,
+            status: w.add_logged(0)?,
+            land_detected: w.add_logged(0)?,
+            cpuload: w.add_logged(0)?,
         };
-        Ok(FlightLog { writer: w, topics })
+        Ok(FlightLog {
+            writer: w,
+            topics,
+            px4: Px4View::new(None, None),
+            control_period_us: None,
+            last_timing_us: None,
+        })
+    }
+
+    /// A parameter changed in flight at `t_us`: a PARAMETER message in the
+    /// data section (PX4's way), preceded by a text naming the change.
+    pub fn parameter_changed(
+        &mut self,
+        name: &str,
+        value: f32,
+        t_us: u64,
+    ) -> Result<(), WriteError> {
+        self.writer.parameter_f32(name, value)?;
+        let mut text = StackText::new();
+        let _ = write_fmt(&mut text, format_args!("parameter {name} = {value}"));
+        self.writer.log(LogLevel::Info, t_us, text.as_str())
+    }
+
+    /// A mode change: the `mode` record and PX4's `vehicle_status` saying
+    /// `status` (the runtime's precise mapping; [`Self::write_data`] maps
+    /// a `mode` record by its [`FlightMode`] alone).
+    pub fn write_mode(&mut self, m: &Mode, status: px4::StatusMode) -> Result<(), WriteError> {
+        self.writer.write(self.topics.mode, m)?;
+        let s = self.px4.set_mode(m.timestamp, status);
+        self.writer.write(self.topics.status, &s)
+    }
+
+    /// The ground station's navigator changed its mode at `t_us`: PX4's
+    /// `vehicle_status` with its `nav_state` (`px4::NAV_STATE_*`).
+    pub fn write_navigator_state(&mut self, t_us: u64, nav_state: u8) -> Result<(), WriteError> {
+        let s = self.px4.set_navigator(t_us, nav_state);
+        self.writer.write(self.topics.status, &s)
+    }
+
+    /// Write a PX4 record of the view.
+    fn write_px4(&mut self, r: &Px4Record) -> Result<(), WriteError> {
+        let t = &self.topics;
+        let w = &mut self.writer;
+        match r {
+            Px4Record::Attitude(x) => w.write(t.attitude, x),
+            Px4Record::AngularVelocity(x) => w.write(t.angular_velocity, x),
+            Px4Record::LocalPosition(x) => w.write(t.local_position, x),
+            Px4Record::LocalPositionSetpoint(x) => w.write(t.local_position_setpoint, x),
+            Px4Record::GlobalPosition(x) => w.write(t.global_position, x),
+            Px4Record::SensorCombined(x) => w.write(t.sensor_combined, x),
+            Px4Record::Gps(x) => {
+                w.write(t.sensor_gps, x)?;
+                w.write(t.vehicle_gps, &px4::VehicleGpsPosition(*x))
+            }
+            Px4Record::Magnetometer(x) => w.write(t.magnetometer, x),
+            Px4Record::ActuatorOutputs(x) => w.write(t.actuator_outputs, x),
+            Px4Record::InputRc(x) => w.write(t.input_rc, x),
+            Px4Record::Status(x) => w.write(t.status, x),
+            Px4Record::Cpuload(x) => w.write(t.cpuload, x),
+        }
+    }
+
+    /// The PX4 records of one helicon record, written after it (at most
+    /// three per record: no allocation).
+    fn write_view(&mut self, r: &LogRecord) -> Result<(), WriteError> {
+        let mut out: [Option<Px4Record>; 3] = [None; 3];
+        let mut n = 0;
+        let mut push = |p: Px4Record| {
+            if let Some(slot) = out.get_mut(n) {
+                *slot = Some(p);
+                n += 1;
+            }
+        };
+        let v = &mut self.px4;
+        match r {
+            LogRecord::Control(x) => v.from_control(x, &mut push),
+            LogRecord::Navigation(x) => v.from_navigation(x, &mut push),
+            LogRecord::Imu(x) => v.from_imu(x, &mut push),
+            LogRecord::Mag(x) => v.from_mag(x, &mut push),
+            LogRecord::Gps(x) => v.from_gps(x, &mut push),
+            LogRecord::Servo(x) => v.from_servo(x, &mut push),
+            LogRecord::Rc(x) => v.from_rc(x, &mut push),
+            LogRecord::Timing(x) => v.from_timing(x, &mut push),
+            LogRecord::Mode(x) => {
+                let mode = FlightMode::from_code(x.mode).unwrap_or(FlightMode::Failsafe);
+                let s = v.set_mode(x.timestamp, status_mode(mode, v.status().nav_state));
+                push(Px4Record::Status(s));
+            }
+            LogRecord::Failsafe(_)
+            | LogRecord::Excitation(_)
+            | LogRecord::ImuHealth(_)
+            | LogRecord::EstimatorBias(_)
+            | LogRecord::LandDetected(_) => {}
+        }
+        for p in out.iter().flatten() {
+            self.write_px4(p)?;
+        }
+        Ok(())
+    }
+
+    /// A DROPOUT for the control steps missed before the `timing` record at
+    /// `t_us` (more than 1.5 control periods since the last one).
+    fn timing_gap(&mut self, t_us: u64) -> Result<(), WriteError> {
+        let last = self.last_timing_us.replace(t_us);
+        if let (Some(period), Some(last)) = (self.control_period_us, last)
+            && t_us > last
+            && 2 * (t_us - last) > 3 * period
+        {
+            let lost_ms = (t_us - last - period).div_ceil(1000).max(1);
+            let ms = u16::try_from(lost_ms).unwrap_or(u16::MAX);
+            self.writer.dropout(ms, t_us)?;
+        }
+        Ok(())
     }
 
     /// The underlying writer (parameters changes, text messages, dropouts,
@@ -632,7 +846,9 @@ impl<W: Write> FlightLog<W> {
 
     /// Write one record's data only: no LOGGING text for failsafe and mode
     /// events (for a runtime that writes its own, more precise text with
-    /// [`UlogWriter::log`]). No allocation.
+    /// [`UlogWriter::log`]), then its PX4 view (`vehicle_attitude` of a
+    /// `control` record …, decimated) and, for a `timing` record after a
+    /// gap, a DROPOUT. No allocation.
     pub fn write_data(&mut self, r: &LogRecord) -> Result<(), WriteError> {
         let t = &self.topics;
         let w = &mut self.writer;
@@ -650,7 +866,12 @@ impl<W: Write> FlightLog<W> {
             LogRecord::Excitation(x) => w.write(t.excitation, x),
             LogRecord::ImuHealth(x) => w.write(t.imu_health, x),
             LogRecord::EstimatorBias(x) => w.write(t.estimator_bias, x),
+            LogRecord::LandDetected(x) => w.write(t.land_detected, x),
+        }?;
+        if let LogRecord::Timing(x) = r {
+            self.timing_gap(x.timestamp)?;
         }
+        self.write_view(r)
     }
 
     /// Write one record (failsafe and mode events also as LOGGING text).
@@ -697,7 +918,7 @@ impl<W: Write> FlightLog<W> {
         Ok(())
     }
 
-    /// Log one sensor frame: `sensor_imu`, and `sensor_mag`/`sensor_gps`
+    /// Log one sensor frame: `sensor_imu`, and `helicon_mag`/`helicon_gps`
     /// when sampled.
     pub fn log_frame(&mut self, f: &SensorFrame) -> Result<(), WriteError> {
         let (imu, mag, gps) = frame_records(f)?;
@@ -714,6 +935,22 @@ impl<W: Write> FlightLog<W> {
     /// Flush and return the output.
     pub fn finish(self) -> Result<W, WriteError> {
         self.writer.finish()
+    }
+}
+
+/// PX4's `vehicle_status` of a helicon flight mode; standby keeps the
+/// navigation state `current`.
+pub fn status_mode(m: FlightMode, current: u8) -> px4::StatusMode {
+    let (arming_state, nav_state, failsafe) = match m {
+        FlightMode::Standby => (px4::ARMING_STATE_DISARMED, current, false),
+        FlightMode::Manual => (px4::ARMING_STATE_ARMED, px4::NAV_STATE_MANUAL, false),
+        FlightMode::Automatic => (px4::ARMING_STATE_ARMED, px4::NAV_STATE_AUTO_MISSION, false),
+        FlightMode::Failsafe => (px4::ARMING_STATE_ARMED, px4::NAV_STATE_AUTO_LOITER, true),
+    };
+    px4::StatusMode {
+        arming_state,
+        nav_state,
+        failsafe,
     }
 }
 
@@ -759,8 +996,8 @@ pub fn record_sizes() -> [(&'static str, usize); 13] {
         (Control::NAME, Control::SIZE),
         (Navigation::NAME, Navigation::SIZE),
         (SensorImu::NAME, SensorImu::SIZE),
-        (SensorMag::NAME, SensorMag::SIZE),
-        (SensorGps::NAME, SensorGps::SIZE),
+        (HeliconMag::NAME, HeliconMag::SIZE),
+        (HeliconGps::NAME, HeliconGps::SIZE),
         (ServoOutput::NAME, ServoOutput::SIZE),
         (RcInput::NAME, RcInput::SIZE),
         (Timing::NAME, Timing::SIZE),
@@ -793,9 +1030,9 @@ mod tests {
         assert_eq!(size("timing"), 37);
         let per_s = 400 * (size("control") + size("navigation") + size("sensor_imu"))
             + 400 * (size("servo_output") + size("timing"))
-            + 100 * size("sensor_mag")
+            + 100 * size("helicon_mag")
             + 50 * size("rc_input")
-            + 5 * size("sensor_gps")
+            + 5 * size("helicon_gps")
             + 10 * 11; // a SYNC per flush
         assert_eq!(per_s.div_ceil(1000), 231); // kB/s
         // the on-board runtime's additions, each per control step

@@ -152,8 +152,8 @@ fn px4_ulog_reads_every_control_step_at_400_hz() {
     // the sensors: an IMU record per step, magnetometer every 4th, GPS every 80th
     let count = |topic: &str| u64s(&parsed.messages[topic][&MultiId::new(0)]["timestamp"]).len();
     assert_eq!(count("sensor_imu") as u64, n);
-    assert_eq!(count("sensor_mag") as u64, n / 4);
-    assert_eq!(count("sensor_gps") as u64, n / 80);
+    assert_eq!(count("helicon_mag") as u64, n / 4);
+    assert_eq!(count("helicon_gps") as u64, n / 80);
     assert_eq!(count("navigation") as u64, n);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -13,7 +13,7 @@ use helicon_core::lqi::Reference;
 use helicon_core::navigation::NavigationSolution;
 use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame};
 use helicon_ulog::messages::{
-    Control, Failsafe, FailsafeReason, FlightMode, Mode, Navigation, SensorGps, SensorImu, Timing,
+    Control, Failsafe, FailsafeReason, FlightMode, HeliconGps, Mode, Navigation, SensorImu, Timing,
 };
 use helicon_ulog::reader::{Message, UlogReader};
 use helicon_ulog::{
@@ -117,18 +117,24 @@ fn telemetry_and_frames_round_trip() {
     assert!(n.attitude_fix);
     // GPS records carry the fix back
     let f = frame(160);
-    let g = SensorGps::from_fix(f.t_s, f.gps.as_ref().unwrap()).unwrap();
+    let g = HeliconGps::from_fix(f.t_s, f.gps.as_ref().unwrap()).unwrap();
     assert_eq!(g.to_fix(), f.gps);
     assert_eq!(g.fix_type, 3);
-    let g2 = SensorGps::from_fix(0.2, frame(80).gps.as_ref().unwrap()).unwrap();
+    let g2 = HeliconGps::from_fix(0.2, frame(80).gps.as_ref().unwrap()).unwrap();
     assert!(!g2.velocity_valid);
     assert_eq!(g2.to_fix(), frame(80).gps);
 }
 
 #[test]
 fn logging_records_allocates_nothing() {
-    let mut log =
-        FlightLog::new(std::io::sink(), &LogInfo::default(), FlushPolicy::default()).unwrap();
+    // with a home and a control period: the PX4 view's geodetic topics and
+    // dropouts are written too
+    let info = LogInfo {
+        home: Some(helicon_devices::Geodetic::new(57.0146, 9.9869, 20.0).unwrap()),
+        control_period_us: Some(2500),
+        ..LogInfo::default()
+    };
+    let mut log = FlightLog::new(std::io::sink(), &info, FlushPolicy::default()).unwrap();
     // warm-up: the first flush
     log.log_frame(&frame(0)).unwrap();
     log.log_telemetry(&telemetry(0)).unwrap();
@@ -358,7 +364,8 @@ fn events_as_text_or_data_only() {
                 _ => {}
             }
         }
-        assert_eq!(data, 2);
+        // failsafe, mode, and the mode's PX4 vehicle_status
+        assert_eq!(data, 3);
         texts
     };
     assert_eq!(
