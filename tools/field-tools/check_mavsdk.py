@@ -21,12 +21,16 @@ async def first(aiter, pred=lambda x: True):
             return x
 
 
+STAGE = ["start"]
+
+
 async def fly(port):
     from mavsdk import System
     from mavsdk.mission import MissionItem, MissionPlan
     drone = System(port=50061)
     await drone.connect(system_address=f"udpout://127.0.0.1:{port}")
     await first(drone.core.connection_state(), lambda s: s.is_connected)
+    STAGE[0] = "connected"
     modes = []
 
     async def watch():
@@ -35,17 +39,26 @@ async def fly(port):
                 modes.append(str(m))
     watcher = asyncio.ensure_future(watch())
     pos = await first(drone.telemetry.position(), lambda p: not math.isnan(p.latitude_deg))
+    STAGE[0] = "position"
     await drone.action.arm()
+    STAGE[0] = "armed"
     await drone.action.takeoff()
+    STAGE[0] = "takeoff accepted"
     await first(drone.telemetry.position(), lambda p: p.relative_altitude_m > 4.0)
+    STAGE[0] = "climbed"
     north = pos.latitude_deg + 8.0 / 111_320.0
-    item = MissionItem(north, pos.longitude_deg, 5.0, 2.0, True, float("nan"), float("nan"),
+    item = MissionItem(north, pos.longitude_deg, 5.0, float("nan"), True, float("nan"), float("nan"),
                        MissionItem.CameraAction.NONE, float("nan"), float("nan"), 1.5, float("nan"),
                        float("nan"), MissionItem.VehicleAction.NONE)
     await drone.mission.upload_mission(MissionPlan([item]))
+    STAGE[0] = "uploaded"
     await drone.mission.start_mission()
-    await first(drone.mission.mission_progress(), lambda p: p.total > 0 and p.current == p.total)
+    STAGE[0] = "started"
+    while not await drone.mission.is_mission_finished():
+        await asyncio.sleep(0.5)
+    STAGE[0] = "mission done"
     await drone.action.land()
+    STAGE[0] = "landing"
     await first(drone.telemetry.armed(), lambda a: not a)
     watcher.cancel()
     return modes
@@ -57,10 +70,10 @@ def check(port):
             modes = asyncio.run(asyncio.wait_for(fly(port), 90))
         except asyncio.TimeoutError:
             print(sitl.tail(), file=sys.stderr)
-            raise CheckFailed("timed out (90 s)")
+            raise CheckFailed(f"timed out after the stage {STAGE[0]!r}")
         except Exception as e:  # MAVSDK's ActionError, MissionError …
             print(sitl.tail(), file=sys.stderr)
-            raise CheckFailed(f"{type(e).__name__}: {e}")
+            raise CheckFailed(f"after the stage {STAGE[0]!r}: {type(e).__name__}: {e}")
         expect("TAKEOFF" in modes and "MISSION" in modes and "LAND" in modes, f"modes {modes}")
         return f"arm, takeoff, mission (1 item), land; modes {' → '.join(modes)}"
 

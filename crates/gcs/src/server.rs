@@ -332,6 +332,9 @@ struct Server {
     pending: Option<Pending>,
     /// The id of the last chunked status text.
     text_id: u16,
+    /// The mission's last item was reached (MISSION_CURRENT's state
+    /// COMPLETE until the mission is flown again or replaced).
+    mission_complete: bool,
     sequence: u8,
     status: Option<VehicleStatus>,
     mission: Vec<MISSION_ITEM_INT_DATA>,
@@ -394,6 +397,7 @@ impl Server {
             src: (0, 0),
             pending: None,
             text_id: 0,
+            mission_complete: false,
             sequence: 0,
             status: None,
             mission: Vec::new(),
@@ -720,12 +724,14 @@ impl Server {
                     );
                 }
                 NavEvent::Current(seq) => {
+                    self.mission_complete = false;
                     if let Some(s) = self.status {
                         let m = self.mission_current(seq, &s);
                         self.send(&m);
                     }
                 }
                 NavEvent::Reached(seq) => {
+                    self.mission_complete = usize::from(seq) + 1 >= self.mission.len();
                     self.send(&MavMessage::MISSION_ITEM_REACHED(
                         MISSION_ITEM_REACHED_DATA { seq },
                     ));
@@ -811,6 +817,8 @@ impl Server {
         let total = self.mission.len() as u16;
         let mission_state = if total == 0 {
             MissionState::MISSION_STATE_NO_MISSION
+        } else if self.mission_complete {
+            MissionState::MISSION_STATE_COMPLETE
         } else if s.nav_mode == NavMode::Mission {
             MissionState::MISSION_STATE_ACTIVE
         } else {
@@ -1173,17 +1181,15 @@ impl Server {
             MavMessage::MISSION_COUNT(c) => self.mission_count(c, from),
             MavMessage::MISSION_ITEM_INT(it) => self.mission_item(it, from),
             MavMessage::MISSION_ITEM(it) => self.mission_item(&item_int(it), from),
-            MavMessage::MISSION_REQUEST_LIST(r) => {
-                if self.mission_type_ok(r.mission_type) {
-                    let count = self.mission.len() as u16;
-                    self.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
-                        count,
-                        target_system: sys,
-                        target_component: comp,
-                        mission_type: r.mission_type,
-                        ..MISSION_COUNT_DATA::DEFAULT
-                    }));
-                }
+            MavMessage::MISSION_REQUEST_LIST(r) if self.mission_type_ok(r.mission_type) => {
+                let count = self.mission.len() as u16;
+                self.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
+                    count,
+                    target_system: sys,
+                    target_component: comp,
+                    mission_type: r.mission_type,
+                    ..MISSION_COUNT_DATA::DEFAULT
+                }));
             }
             MavMessage::MISSION_REQUEST_INT(r) => self.send_item(r.seq, r.mission_type, true),
             MavMessage::MISSION_REQUEST(r) => self.send_item(r.seq, r.mission_type, false),
@@ -1782,6 +1788,7 @@ impl Server {
         if c.count == 0 {
             self.upload = Upload::Idle;
             self.mission.clear();
+            self.mission_complete = false;
             self.uplink(Uplink::Plan(Box::default()));
             self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
             return;
@@ -1841,6 +1848,7 @@ impl Server {
         match plan_of(&self.home, &fence, &items) {
             Ok(plan) => {
                 self.mission = items;
+                self.mission_complete = false;
                 self.uplink(Uplink::Plan(Box::new(plan)));
                 self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
             }
@@ -1886,6 +1894,7 @@ impl Server {
             return;
         }
         self.mission.clear();
+        self.mission_complete = false;
         self.uplink(Uplink::Plan(Box::default()));
         self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission_type);
     }
