@@ -38,7 +38,7 @@ def main() -> int:
         if len(params) == p.param_count:
             break
     print(f"parameters: {len(params)}: {sorted(params)}")
-    assert len(params) == 14, params
+    assert len(params) == p.param_count, params
 
     m.mav.param_set_send(m.target_system, m.target_component, b"NAV_MAX_ACC", 100.0,
                          mavutil.mavlink.MAV_PARAM_TYPE_REAL32)
@@ -56,7 +56,8 @@ def main() -> int:
         return ack.result
 
     assert command(mavutil.mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1, 0, 0, 0, 0, 0, 0) == 0
-    assert command(mavutil.mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, 5) == 0
+    # param7 NaN: the default height (NAV_TKOFF_ALT, 5 m); a number is AMSL, as PX4 reads it
+    assert command(mavutil.mavlink.MAV_CMD_NAV_TAKEOFF, 0, 0, 0, 0, 0, 0, float("nan")) == 0
     top = 0.0
     deadline = time.time() + 30
     while time.time() < deadline and top < 4.7:

@@ -48,7 +48,9 @@ impl Seen {
         let armed = hb
             .base_mode
             .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
-        let mode = NavMode::from_code(hb.custom_mode).map_or("?", NavMode::as_str);
+        let (main, sub) = helicon_gcs::modes::main_sub(hb.custom_mode);
+        let mode = helicon_gcs::modes::nav_of_custom(hb.custom_mode)
+            .map_or_else(|| helicon_gcs::modes::qgc_name(main, sub), NavMode::as_str);
         let mut s = format!(
             "{:?} {} {:<8}",
             hb.mavtype,

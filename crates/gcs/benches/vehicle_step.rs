@@ -52,7 +52,7 @@ fn bench_vehicle_step(c: &mut Criterion) {
         home: Geodetic::new(57.0146, 9.9869, 20.0).unwrap(),
         navigator: NavigatorConfig::default(),
         signing_key: None,
-        rates_hz: [100.0; 10],
+        rates_hz: [100.0; helicon_gcs::server::STREAMS.len()],
     };
     let handle = server::spawn(config, server_end).unwrap();
     let mut plan = Plan::default();

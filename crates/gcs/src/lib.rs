@@ -13,6 +13,8 @@
 //!   local NED frame about home, through `helicon-devices`' WGS-84 geodesy.
 //! - [`link`]: what crosses between the control task and the server thread
 //!   (lock-free `rtrb` rings), and the vehicle-side half ([`link::Vehicle`]).
+//! - [`modes`]: the navigator's modes as PX4's custom modes (what ground
+//!   stations name, set and fly).
 //! - [`params`]: the parameter table (typed, validated).
 //! - [`server`]: the MAVLink 2 server (common dialect, UDP) on its own thread.
 //! - [`config`]: the `[gcs]` section of the on-board configuration.
@@ -21,6 +23,7 @@ pub mod config;
 pub mod fence;
 pub mod geo;
 pub mod link;
+pub mod modes;
 pub mod navigator;
 pub mod params;
 pub mod server;

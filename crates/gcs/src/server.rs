@@ -49,6 +49,7 @@
 use crate::fence::Fence;
 use crate::geo::{MissionError, global_position_ned_m, plan_of};
 use crate::link::{Downlink, LandedState, ServerEnd, Uplink, VehicleEvent, VehicleStatus};
+use crate::modes;
 use crate::navigator::{GuidedTarget, NavEvent, NavMode, NavigatorConfig};
 use crate::params::{PARAMS, ParamError, ParamTable};
 use helicon_devices::{Geodetic, LocalNed};
@@ -83,7 +84,7 @@ pub const MAX_GUIDED_SPEED_M_S: f64 = 50.0;
 
 /// The messages the server streams, with their default rates (Hz; 0: off
 /// until asked for).
-pub const STREAMS: [(u32, &str, f64); 10] = [
+pub const STREAMS: [(u32, &str, f64); 12] = [
     (HEARTBEAT_DATA::ID, "HEARTBEAT", 1.0),
     (SYS_STATUS_DATA::ID, "SYS_STATUS", 1.0),
     (ATTITUDE_DATA::ID, "ATTITUDE", 10.0),
@@ -94,6 +95,8 @@ pub const STREAMS: [(u32, &str, f64); 10] = [
     (SERVO_OUTPUT_RAW_DATA::ID, "SERVO_OUTPUT_RAW", 2.0),
     (RC_CHANNELS_DATA::ID, "RC_CHANNELS", 0.0),
     (EXTENDED_SYS_STATE_DATA::ID, "EXTENDED_SYS_STATE", 1.0),
+    (MISSION_CURRENT_DATA::ID, "MISSION_CURRENT", 1.0),
+    (HOME_POSITION_DATA::ID, "HOME_POSITION", 0.5),
 ];
 
 /// The server's settings.
@@ -258,11 +261,37 @@ enum Upload {
     Receiving {
         /// The peer uploading (its address).
         from: SocketAddr,
+        /// Its system and component (the requests are addressed to them).
+        requester: (u8, u8),
         /// On-board time of its last message (s).
         last_s: f64,
+        /// On-board time the last request went out (s).
+        requested_s: f64,
+        /// Requests repeated for the item expected.
+        retries: u8,
         count: u16,
         items: Vec<MISSION_ITEM_INT_DATA>,
     },
+}
+
+/// The mission protocol's item timeout (on-board s): an item not received
+/// this long after its request is requested again (the MAVLink mission
+/// microservice's default, 1500 ms).
+pub const MISSION_ITEM_TIMEOUT_S: f64 = 1.5;
+
+/// Requests repeated for one item before the upload is cancelled
+/// (`MAV_MISSION_OPERATION_CANCELLED`).
+pub const MISSION_ITEM_RETRIES: u8 = 5;
+
+/// What a ground station asked for before arming: PX4 (and so QGC's
+/// takeoff and start-mission actions) takes the mode first and flies it at
+/// the arming.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Pending {
+    /// Take off to this height above home at the arming.
+    Takeoff(f64),
+    /// Start the mission at the arming.
+    Mission,
 }
 
 /// An upload idle this long (on-board s) may be taken over by another peer.
@@ -277,6 +306,9 @@ struct Peer {
     trusted: bool,
     /// On-board time of its last valid frame (s; `None`: never).
     heard_s: Option<f64>,
+    /// Its last frame was MAVLink 1: it is answered in MAVLink 1 (messages
+    /// with ids above 255, which MAVLink 1 cannot carry, are not sent to it).
+    v1: bool,
     intervals_s: [Option<f64>; STREAMS.len()],
     next_due_s: [f64; STREAMS.len()],
 }
@@ -293,6 +325,16 @@ struct Server {
     peers: Vec<Peer>,
     /// The peer whose message is being handled: answers go to it alone.
     current: Option<usize>,
+    /// The system and component of the message being handled: answers are
+    /// addressed to them.
+    src: (u8, u8),
+    /// A takeoff or mission asked for while disarmed on the ground.
+    pending: Option<Pending>,
+    /// The id of the last chunked status text.
+    text_id: u16,
+    /// The mission's last item was reached (MISSION_CURRENT's state
+    /// COMPLETE until the mission is flown again or replaced).
+    mission_complete: bool,
     sequence: u8,
     status: Option<VehicleStatus>,
     mission: Vec<MISSION_ITEM_INT_DATA>,
@@ -322,8 +364,10 @@ fn addressed_to(msg: &MavMessage, system_id: u8) -> bool {
         msg.message_id(),
         MISSION_COUNT_DATA::ID
             | MISSION_ITEM_INT_DATA::ID
+            | MISSION_ITEM_DATA::ID
             | MISSION_REQUEST_LIST_DATA::ID
             | MISSION_REQUEST_INT_DATA::ID
+            | MISSION_REQUEST_DATA::ID
             | MISSION_CLEAR_ALL_DATA::ID
             | MISSION_ACK_DATA::ID
     );
@@ -350,6 +394,10 @@ impl Server {
             params: ParamTable::new(config.navigator),
             peers: Vec::with_capacity(MAX_PEERS),
             current: None,
+            src: (0, 0),
+            pending: None,
+            text_id: 0,
+            mission_complete: false,
             sequence: 0,
             status: None,
             mission: Vec::new(),
@@ -387,6 +435,7 @@ impl Server {
             configured: false,
             trusted: self.signing.is_none(),
             heard_s: None,
+            v1: false,
             intervals_s: self.config.rates_hz.map(|r| interval_of(r.min(100.0))),
             next_due_s: [0.0; STREAMS.len()],
         }
@@ -459,29 +508,63 @@ impl Server {
         self.send_to(msg, to);
     }
 
-    /// Send to `to`, or (`None`) to every live peer.
+    /// Send to `to`, or (`None`) to every live peer, each in the MAVLink
+    /// version it speaks.
     fn send_to(&mut self, msg: &MavMessage, to: Option<SocketAddr>) {
-        let mut frame = [0u8; mavlink::consts::MAX_FRAME_SIZE];
         let header = self.header();
-        let n = {
-            let mut w: &mut [u8] = &mut frame;
-            match mavlink::write_v2_msg(&mut w, header, msg) {
-                Ok(n) => n,
-                Err(_) => {
-                    self.report.send_errors += 1;
-                    return;
-                }
-            }
-        };
+        self.send_frames(to, msg.message_id(), |version, w| match version {
+            MavlinkVersion::V2 => mavlink::write_v2_msg(w, header, msg).ok(),
+            MavlinkVersion::V1 => mavlink::write_v1_msg(w, header, msg).ok(),
+        });
+    }
+
+    /// Send a frame written by `write` (for a version, into a buffer; `None`:
+    /// it failed) to `to` (a peer or the sender of a refused frame) or to
+    /// every live peer. A MAVLink 1 peer is sent MAVLink 1, and nothing with
+    /// an id MAVLink 1 cannot carry.
+    fn send_frames(
+        &mut self,
+        to: Option<SocketAddr>,
+        id: u32,
+        mut write: impl FnMut(MavlinkVersion, &mut &mut [u8]) -> Option<usize>,
+    ) {
+        let mut targets = [None; MAX_PEERS + 1];
         match to {
-            Some(addr) => self.send_bytes(&frame[..n], addr),
+            Some(addr) => {
+                let v1 = self.peers.iter().any(|p| p.addr == addr && p.v1);
+                targets[0] = Some((addr, v1));
+            }
             None => {
-                for i in 0..self.peers.len() {
-                    if self.live(&self.peers[i]) {
-                        let addr = self.peers[i].addr;
-                        self.send_bytes(&frame[..n], addr);
+                for (t, p) in targets.iter_mut().zip(&self.peers) {
+                    if self.live(p) {
+                        *t = Some((p.addr, p.v1));
                     }
                 }
+            }
+        }
+        let mut frames = [None; 2];
+        for (addr, v1) in targets.into_iter().flatten() {
+            if v1 && id > 255 {
+                continue;
+            }
+            let (version, slot) = if v1 {
+                (MavlinkVersion::V1, 1)
+            } else {
+                (MavlinkVersion::V2, 0)
+            };
+            if frames[slot].is_none() {
+                let mut buf = [0u8; mavlink::consts::MAX_FRAME_SIZE];
+                let mut w: &mut [u8] = &mut buf;
+                match write(version, &mut w) {
+                    Some(n) => frames[slot] = Some((buf, n)),
+                    None => {
+                        self.report.send_errors += 1;
+                        continue;
+                    }
+                }
+            }
+            if let Some((buf, n)) = frames[slot] {
+                self.send_bytes(&buf[..n], addr);
             }
         }
     }
@@ -491,18 +574,32 @@ impl Server {
         self.text_to(severity, text, to);
     }
 
+    /// A status text; one longer than a STATUSTEXT's 50 bytes goes out in
+    /// chunks of 50 with one `id` and `chunk_seq` 0, 1, … (common.xml: the
+    /// last chunk shorter than 50 bytes, or followed by an empty one).
     fn text_to(&mut self, severity: MavSeverity, text: &str, to: Option<SocketAddr>) {
-        let mut bytes = [0u8; 50];
-        let n = text.len().min(50);
-        bytes[..n].copy_from_slice(&text.as_bytes()[..n]);
-        self.send_to(
-            &MavMessage::STATUSTEXT(STATUSTEXT_DATA {
-                severity,
-                text: bytes.into(),
-                ..STATUSTEXT_DATA::DEFAULT
-            }),
-            to,
-        );
+        let bytes = text.as_bytes();
+        let chunks = bytes.len() / 50 + 1;
+        let id = if bytes.len() < 50 {
+            0
+        } else {
+            self.text_id = self.text_id.wrapping_add(1).max(1);
+            self.text_id
+        };
+        for c in 0..chunks.min(256) {
+            let part = &bytes[(c * 50).min(bytes.len())..((c + 1) * 50).min(bytes.len())];
+            let mut chunk = [0u8; 50];
+            chunk[..part.len()].copy_from_slice(part);
+            self.send_to(
+                &MavMessage::STATUSTEXT(STATUSTEXT_DATA {
+                    severity,
+                    text: chunk.into(),
+                    id,
+                    chunk_seq: c as u8,
+                }),
+                to,
+            );
+        }
     }
 
     fn uplink(&mut self, u: Uplink) -> bool {
@@ -555,6 +652,7 @@ impl Server {
 
     fn on_status(&mut self, s: &VehicleStatus) {
         self.status = Some(*s);
+        self.upload_timeout();
         if self.arm_requested == Some(s.armed) {
             self.arm_requested = None;
         }
@@ -629,15 +727,14 @@ impl Server {
                     );
                 }
                 NavEvent::Current(seq) => {
-                    let total = self.mission.len() as u16;
-                    self.send(&MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
-                        seq,
-                        total,
-                        mission_state: MissionState::MISSION_STATE_ACTIVE,
-                        ..MISSION_CURRENT_DATA::DEFAULT
-                    }));
+                    self.mission_complete = false;
+                    if let Some(s) = self.status {
+                        let m = self.mission_current(seq, &s);
+                        self.send(&m);
+                    }
                 }
                 NavEvent::Reached(seq) => {
+                    self.mission_complete = usize::from(seq) + 1 >= self.mission.len();
                     self.send(&MavMessage::MISSION_ITEM_REACHED(
                         MISSION_ITEM_REACHED_DATA { seq },
                     ));
@@ -674,17 +771,31 @@ impl Server {
         }
     }
 
+    /// The PX4 mode reported: the navigator's ([`modes::reported`]), or
+    /// disarmed with a takeoff or mission asked for, that mode (as PX4 is in
+    /// it before the arming, and QGroundControl waits to see it).
+    fn reported_mode(&self, s: &VehicleStatus) -> (u8, u8) {
+        match self.pending {
+            Some(Pending::Takeoff(_)) if !s.armed => modes::px4_of(NavMode::Takeoff),
+            Some(Pending::Mission) if !s.armed => modes::px4_of(NavMode::Mission),
+            _ => modes::reported(s.nav_mode, s.flight_mode.name),
+        }
+    }
+
     fn heartbeat(&self, s: &VehicleStatus) -> HEARTBEAT_DATA {
-        let mut base = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED;
+        let (main, sub) = self.reported_mode(s);
+        // PX4's base mode: custom mode enabled, armed, and the flags of the
+        // mode's kind (pymavlink decodes the auto modes only with all three)
+        let mut base = MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+            | MavModeFlag::MAV_MODE_FLAG_STABILIZE_ENABLED;
         if s.armed {
             base |= MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED;
         }
-        if s.flight_mode.law_flies {
-            base |= MavModeFlag::MAV_MODE_FLAG_STABILIZE_ENABLED
-                | MavModeFlag::MAV_MODE_FLAG_GUIDED_ENABLED
-                | MavModeFlag::MAV_MODE_FLAG_AUTO_ENABLED;
-        } else if s.flight_mode.name == "manual" {
+        if main == modes::MAIN_MANUAL {
             base |= MavModeFlag::MAV_MODE_FLAG_MANUAL_INPUT_ENABLED;
+        } else {
+            base |=
+                MavModeFlag::MAV_MODE_FLAG_GUIDED_ENABLED | MavModeFlag::MAV_MODE_FLAG_AUTO_ENABLED;
         }
         let system_status = if s.link_lost || !matches!(s.flight_mode.name, "auto" | "disarmed") {
             MavState::MAV_STATE_CRITICAL
@@ -694,13 +805,34 @@ impl Server {
             MavState::MAV_STATE_STANDBY
         };
         HEARTBEAT_DATA {
-            custom_mode: s.nav_mode.code(),
+            custom_mode: modes::custom_mode(main, sub),
             mavtype: MavType::MAV_TYPE_HELICOPTER,
-            autopilot: MavAutopilot::MAV_AUTOPILOT_GENERIC,
+            autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
             base_mode: base,
             system_status,
             mavlink_version: 3,
         }
+    }
+
+    /// MISSION_CURRENT: the item flown (the status's) and the mission's
+    /// state.
+    fn mission_current(&self, seq: u16, s: &VehicleStatus) -> MavMessage {
+        let total = self.mission.len() as u16;
+        let mission_state = if total == 0 {
+            MissionState::MISSION_STATE_NO_MISSION
+        } else if self.mission_complete {
+            MissionState::MISSION_STATE_COMPLETE
+        } else if s.nav_mode == NavMode::Mission {
+            MissionState::MISSION_STATE_ACTIVE
+        } else {
+            MissionState::MISSION_STATE_NOT_STARTED
+        };
+        MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
+            seq,
+            total,
+            mission_state,
+            ..MISSION_CURRENT_DATA::DEFAULT
+        })
     }
 
     #[allow(clippy::too_many_lines)] // one message per arm
@@ -815,8 +947,22 @@ impl Server {
                 alt: geo.height_m as f32,
                 climb: (-v.z) as f32,
                 heading: heading_deg as i16,
-                throttle: 0,
+                // the collective servo's place in its 1000–2000 µs range
+                throttle: ((f64::from(servo_us(s.servo[0])) - 1000.0) / 10.0).clamp(0.0, 100.0)
+                    as u16,
             }),
+            MISSION_CURRENT_DATA::ID => self.mission_current(s.mission_current.0, s),
+            HOME_POSITION_DATA::ID => {
+                let home = self.config.home;
+                MavMessage::HOME_POSITION(HOME_POSITION_DATA {
+                    latitude: (home.latitude_deg * 1e7).round() as i32,
+                    longitude: (home.longitude_deg * 1e7).round() as i32,
+                    altitude: (home.height_m * 1000.0).round() as i32,
+                    q: [1.0, 0.0, 0.0, 0.0],
+                    time_usec: (s.t_s * 1e6).max(0.0) as u64,
+                    ..HOME_POSITION_DATA::DEFAULT
+                })
+            }
             SERVO_OUTPUT_RAW_DATA::ID => MavMessage::SERVO_OUTPUT_RAW(SERVO_OUTPUT_RAW_DATA {
                 time_usec: ((s.t_s * 1e6) as u64 & u64::from(u32::MAX)) as u32,
                 servo1_raw: servo_us(s.servo[0]),
@@ -863,9 +1009,7 @@ impl Server {
             return; // our own echo
         }
         let id = raw.message_id();
-        let Ok(msg) = MavMessage::parse(raw.version(), id, raw.payload()) else {
-            return;
-        };
+        let parsed = MavMessage::parse(raw.version(), id, raw.payload());
         if let Some(sig) = &self.signing {
             // unsigned, another key, or a replay (the crate keeps the last
             // timestamp of each link id, system and component)
@@ -875,14 +1019,39 @@ impl Server {
             };
             if !ok {
                 self.report.refused_unsigned += 1;
-                if Self::is_command(id) && addressed_to(&msg, self.config.system_id) {
-                    self.refuse_unsigned(&msg, from);
+                if let Ok(msg) = &parsed
+                    && Self::is_command(id)
+                    && addressed_to(msg, self.config.system_id)
+                {
+                    self.refuse_unsigned(msg, from);
                 }
                 return;
             }
         }
+        // a command the dialect does not define still gets its answer
+        let unknown = match &parsed {
+            Err(_) => UnknownCommand::of(raw),
+            Ok(_) => None,
+        };
+        if parsed.is_err() && unknown.is_none() {
+            return;
+        }
         self.report.received += 1;
         let p = self.peer_of(from);
+        self.peers[p].v1 = matches!(raw, MAVLinkMessageRaw::V1(_));
+        if let Some(u) = unknown {
+            if u.addressed_to(self.config.system_id) {
+                self.current = Some(p);
+                self.ack_unknown(u.command, raw.system_id(), raw.component_id());
+                self.current = None;
+            } else {
+                self.report.other_target += 1;
+            }
+            return;
+        }
+        let Ok(msg) = parsed else {
+            return;
+        };
         if let MavMessage::HEARTBEAT(h) = &msg
             && h.mavtype == MavType::MAV_TYPE_GCS
         {
@@ -893,8 +1062,37 @@ impl Server {
             return;
         }
         self.current = Some(p);
+        self.src = (raw.system_id(), raw.component_id());
         self.dispatch(&msg, from, raw.system_id(), raw.component_id());
         self.current = None;
+    }
+
+    /// `COMMAND_ACK` `MAV_RESULT_UNSUPPORTED` for a command id the dialect
+    /// does not define, to the peer being answered.
+    fn ack_unknown(&mut self, command: u16, sys: u8, comp: u8) {
+        let header = self.header();
+        let to = self.current.map(|i| self.peers[i].addr);
+        let ack = UnknownCommandAck {
+            command,
+            target: (sys, comp),
+        };
+        self.send_frames(to, COMMAND_ACK_DATA::ID, |version, w| {
+            use std::io::Write;
+            match version {
+                MavlinkVersion::V2 => {
+                    let mut f = mavlink::MAVLinkV2MessageRaw::new();
+                    f.serialize_message_data(header, &ack);
+                    w.write_all(f.raw_bytes()).ok()?;
+                    Some(f.raw_bytes().len())
+                }
+                MavlinkVersion::V1 => {
+                    let mut f = mavlink::MAVLinkV1MessageRaw::new();
+                    f.serialize_message_data(header, &ack);
+                    w.write_all(f.raw_bytes()).ok()?;
+                    Some(f.raw_bytes().len())
+                }
+            }
+        });
     }
 
     /// Answer a command that failed signing (to its sender only; the text at
@@ -935,20 +1133,35 @@ impl Server {
                 let p = [
                     c.param1, c.param2, c.param3, c.param4, c.param5, c.param6, c.param7,
                 ];
-                let r = self.command(c.command, p);
+                let r = if c.command == MavCmd::MAV_CMD_DO_REPOSITION {
+                    // PX4's COMMAND_LONG form: degrees as floats, AMSL
+                    let deg = |v: f32| {
+                        if v.is_finite() {
+                            (f64::from(v) * 1e7).round() as i32
+                        } else {
+                            i32::MAX
+                        }
+                    };
+                    self.reposition(MavFrame::MAV_FRAME_GLOBAL, p, deg(p[4]), deg(p[5]), p[6])
+                } else {
+                    self.command(c.command, p)
+                };
                 self.ack(c.command, r, sys, comp);
             }
             MavMessage::COMMAND_INT(c) => {
+                let p = [c.param1, c.param2, c.param3, c.param4, 0.0, 0.0, c.z];
                 let r = if c.command == MavCmd::MAV_CMD_DO_REPOSITION {
-                    self.reposition(c)
+                    self.reposition(c.frame, p, c.x, c.y, c.z)
                 } else {
-                    let p = [c.param1, c.param2, c.param3, c.param4, 0.0, 0.0, c.z];
                     self.command(c.command, p)
                 };
                 self.ack(c.command, r, sys, comp);
             }
             MavMessage::SET_MODE(m) => {
-                let _ = self.set_mode(m.custom_mode);
+                // PX4 (and so pymavlink scripts) acknowledge it as DO_SET_MODE
+                let (main, sub) = modes::main_sub(m.custom_mode);
+                let r = self.set_mode(main, sub);
+                self.ack(MavCmd::MAV_CMD_DO_SET_MODE, r, sys, comp);
             }
             MavMessage::REQUEST_DATA_STREAM(r) => self.request_stream(r),
             MavMessage::PARAM_REQUEST_LIST(_) => {
@@ -970,31 +1183,20 @@ impl Server {
             MavMessage::PARAM_SET(p) => self.param_set(p),
             MavMessage::MISSION_COUNT(c) => self.mission_count(c, from),
             MavMessage::MISSION_ITEM_INT(it) => self.mission_item(it, from),
-            MavMessage::MISSION_REQUEST_LIST(_) => {
+            MavMessage::MISSION_ITEM(it) => self.mission_item(&item_int(it), from),
+            MavMessage::MISSION_REQUEST_LIST(r) if self.mission_type_ok(r.mission_type) => {
                 let count = self.mission.len() as u16;
                 self.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
                     count,
                     target_system: sys,
                     target_component: comp,
+                    mission_type: r.mission_type,
                     ..MISSION_COUNT_DATA::DEFAULT
                 }));
             }
-            MavMessage::MISSION_REQUEST_INT(r) => {
-                if let Some(it) = self.mission.get(r.seq as usize).cloned() {
-                    self.send(&MavMessage::MISSION_ITEM_INT(MISSION_ITEM_INT_DATA {
-                        target_system: sys,
-                        target_component: comp,
-                        ..it
-                    }));
-                } else {
-                    self.mission_ack(MavMissionResult::MAV_MISSION_INVALID_SEQUENCE);
-                }
-            }
-            MavMessage::MISSION_CLEAR_ALL(_) => {
-                self.mission.clear();
-                self.uplink(Uplink::Plan(Box::default()));
-                self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED);
-            }
+            MavMessage::MISSION_REQUEST_INT(r) => self.send_item(r.seq, r.mission_type, true),
+            MavMessage::MISSION_REQUEST(r) => self.send_item(r.seq, r.mission_type, false),
+            MavMessage::MISSION_CLEAR_ALL(c) => self.clear_all(c.mission_type),
             MavMessage::SET_POSITION_TARGET_LOCAL_NED(t) => self.guided(t),
             MavMessage::SET_POSITION_TARGET_GLOBAL_INT(t) => self.guided_global(t),
             _ => {}
@@ -1036,7 +1238,17 @@ impl Server {
     fn takeoff_height(&mut self, h: f64) -> Result<f64, MavResult> {
         match self.fence().check_height(h) {
             Ok(()) if h > 0.0 => Ok(h),
-            Ok(()) => Err(MavResult::MAV_RESULT_DENIED),
+            Ok(()) => {
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    &format!(
+                        "takeoff refused: {:.1} m AMSL is not above home ({:.1} m AMSL)",
+                        h + self.config.home.height_m,
+                        self.config.home.height_m
+                    ),
+                );
+                Err(MavResult::MAV_RESULT_DENIED)
+            }
             Err(v) => {
                 self.text(
                     MavSeverity::MAV_SEVERITY_WARNING,
@@ -1047,14 +1259,45 @@ impl Server {
         }
     }
 
+    /// On the ground: the land detector's word, or (a flight without one)
+    /// the navigator idle.
+    fn on_ground(&self) -> bool {
+        self.status
+            .is_some_and(|s| s.ground.on_ground().unwrap_or(s.nav_mode == NavMode::Idle))
+    }
+
+    /// Take off, or (disarmed on the ground) take off at the arming, as PX4
+    /// does: QGroundControl sends the takeoff first and arms when it is
+    /// accepted.
+    fn takeoff(&mut self, h: f64) -> MavResult {
+        let h = match self.takeoff_height(h) {
+            Ok(h) => h,
+            Err(r) => return r,
+        };
+        self.flying_or_pending(Uplink::Takeoff(h), Pending::Takeoff(h))
+    }
+
+    /// `u` when armed; disarmed on the ground, `p` at the arming.
+    fn flying_or_pending(&mut self, u: Uplink, p: Pending) -> MavResult {
+        if self.armed() {
+            self.pending = None;
+            return self.accepted(u);
+        }
+        if !self.on_ground() {
+            self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
+            return MavResult::MAV_RESULT_DENIED;
+        }
+        self.pending = Some(p);
+        MavResult::MAV_RESULT_ACCEPTED
+    }
+
     fn command(&mut self, command: MavCmd, p: [f32; 7]) -> MavResult {
         let needs_armed = matches!(
             command,
-            MavCmd::MAV_CMD_NAV_TAKEOFF
-                | MavCmd::MAV_CMD_NAV_LAND
+            MavCmd::MAV_CMD_NAV_LAND
                 | MavCmd::MAV_CMD_NAV_RETURN_TO_LAUNCH
                 | MavCmd::MAV_CMD_NAV_LOITER_UNLIM
-                | MavCmd::MAV_CMD_MISSION_START
+                | MavCmd::MAV_CMD_DO_PAUSE_CONTINUE
         );
         if needs_armed && !self.armed() {
             self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
@@ -1063,50 +1306,123 @@ impl Server {
         match command {
             MavCmd::MAV_CMD_COMPONENT_ARM_DISARM => self.arm(p[0], p[1]),
             MavCmd::MAV_CMD_NAV_TAKEOFF => {
-                // param7 NaN (or 0): the default height, as MAVLink allows
-                let h = f64::from(p[6]);
-                let h = if h.is_nan() || h == 0.0 {
+                // param7: the altitude AMSL (PX4's, QGC's and MAVSDK's
+                // reading); NaN: `NAV_TKOFF_ALT` above home
+                let amsl = f64::from(p[6]);
+                let h = if amsl.is_nan() {
                     self.params.config().takeoff_height_m
                 } else {
-                    h
+                    amsl - self.config.home.height_m
                 };
-                match self.takeoff_height(h) {
-                    Ok(h) => self.accepted(Uplink::Takeoff(h)),
-                    Err(r) => r,
-                }
+                self.takeoff(h)
             }
             MavCmd::MAV_CMD_NAV_LAND => self.accepted(Uplink::Land),
             MavCmd::MAV_CMD_NAV_RETURN_TO_LAUNCH => self.accepted(Uplink::Return),
             MavCmd::MAV_CMD_NAV_LOITER_UNLIM => self.accepted(Uplink::Hold),
-            MavCmd::MAV_CMD_MISSION_START => {
-                if self.mission.is_empty() {
-                    return MavResult::MAV_RESULT_DENIED;
-                }
-                self.accepted(Uplink::StartMission)
+            MavCmd::MAV_CMD_DO_PAUSE_CONTINUE if p[0] == 0.0 => self.accepted(Uplink::Hold),
+            MavCmd::MAV_CMD_DO_PAUSE_CONTINUE => {
+                // the navigator restarts a mission, it does not resume one
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    "continue not offered: MISSION_START flies the mission again",
+                );
+                MavResult::MAV_RESULT_UNSUPPORTED
             }
-            MavCmd::MAV_CMD_DO_SET_MODE => self.set_mode(p[1] as u32),
-            MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => self.set_interval(p[0], p[1]),
-            MavCmd::MAV_CMD_REQUEST_MESSAGE => {
-                let id = p[0] as u32;
-                match (STREAMS.iter().any(|(i, _, _)| *i == id), self.status) {
-                    (true, Some(s)) => {
-                        self.send_stream(id, &s);
-                        MavResult::MAV_RESULT_ACCEPTED
+            MavCmd::MAV_CMD_MISSION_START => self.start_mission(),
+            MavCmd::MAV_CMD_DO_SET_MODE => {
+                // PX4's layout: param2 the main mode, param3 the sub mode
+                let byte = |v: f32| {
+                    if (0.0..=255.0).contains(&v) {
+                        v as u8
+                    } else {
+                        0
                     }
-                    (true, None) => MavResult::MAV_RESULT_TEMPORARILY_REJECTED,
-                    _ => MavResult::MAV_RESULT_UNSUPPORTED,
-                }
+                };
+                self.set_mode(byte(p[1]), byte(p[2]))
             }
+            MavCmd::MAV_CMD_SET_MESSAGE_INTERVAL => self.set_interval(p[0], p[1]),
+            MavCmd::MAV_CMD_GET_MESSAGE_INTERVAL => self.message_interval(p[0]),
+            MavCmd::MAV_CMD_REQUEST_MESSAGE => self.request_message(p[0] as u32),
+            MavCmd::MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES => {
+                self.request_message(AUTOPILOT_VERSION_DATA::ID)
+            }
+            MavCmd::MAV_CMD_REQUEST_PROTOCOL_VERSION => {
+                self.request_message(PROTOCOL_VERSION_DATA::ID)
+            }
+            MavCmd::MAV_CMD_GET_HOME_POSITION => self.request_message(HOME_POSITION_DATA::ID),
             _ => MavResult::MAV_RESULT_UNSUPPORTED,
         }
     }
 
-    /// `MAV_CMD_DO_REPOSITION` (COMMAND_INT, a global frame): a guided goto,
-    /// inside the fence only, and not while returning or landing.
-    fn reposition(&mut self, c: &COMMAND_INT_DATA) -> MavResult {
+    fn start_mission(&mut self) -> MavResult {
+        if self.mission.is_empty() {
+            self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: no mission");
+            return MavResult::MAV_RESULT_DENIED;
+        }
+        self.flying_or_pending(Uplink::StartMission, Pending::Mission)
+    }
+
+    /// `MAV_CMD_REQUEST_MESSAGE` (and the older requests of one message):
+    /// the message to the peer that asked. `BATTERY_STATUS` is refused:
+    /// this airframe has no battery monitor (SYS_STATUS says so with its
+    /// battery fields −1 and `UINT16_MAX`).
+    fn request_message(&mut self, id: u32) -> MavResult {
+        let Some(s) = self.status else {
+            return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
+        };
+        if STREAMS.iter().any(|(i, _, _)| *i == id) {
+            self.send_stream(id, &s);
+            return MavResult::MAV_RESULT_ACCEPTED;
+        }
+        let msg = match id {
+            AUTOPILOT_VERSION_DATA::ID => MavMessage::AUTOPILOT_VERSION(autopilot_version()),
+            PROTOCOL_VERSION_DATA::ID => MavMessage::PROTOCOL_VERSION(PROTOCOL_VERSION_DATA {
+                version: 200,
+                min_version: 100,
+                max_version: 200,
+                ..PROTOCOL_VERSION_DATA::DEFAULT
+            }),
+            _ => return MavResult::MAV_RESULT_UNSUPPORTED,
+        };
+        self.send(&msg);
+        MavResult::MAV_RESULT_ACCEPTED
+    }
+
+    /// `MAV_CMD_GET_MESSAGE_INTERVAL`: the peer's interval of a stream in a
+    /// `MESSAGE_INTERVAL` (−1 off; 0: not a message the server streams).
+    fn message_interval(&mut self, id: f32) -> MavResult {
+        let Some(p) = self.current else {
+            return MavResult::MAV_RESULT_FAILED;
+        };
+        let id = if (0.0..=f32::from(u16::MAX)).contains(&id) {
+            id as u16
+        } else {
+            return MavResult::MAV_RESULT_DENIED;
+        };
+        let interval_us = match STREAMS.iter().position(|(m, _, _)| *m == u32::from(id)) {
+            Some(i) => self.peers[p].intervals_s[i].map_or(-1, |iv| (iv * 1e6).round() as i32),
+            None => 0,
+        };
+        self.send(&MavMessage::MESSAGE_INTERVAL(MESSAGE_INTERVAL_DATA {
+            interval_us,
+            message_id: id,
+        }));
+        MavResult::MAV_RESULT_ACCEPTED
+    }
+
+    /// `MAV_CMD_DO_REPOSITION` in a global frame (x, y degrees × 10⁷,
+    /// `i32::MAX`: unchanged; z, NaN: unchanged; param4 the yaw, radians
+    /// as PX4 reads it, NaN: unchanged): a guided goto, inside the fence only,
+    /// and not while returning or landing. Position and altitude both
+    /// unchanged is PX4's pause (QGroundControl's Pause): hold where it is.
+    fn reposition(&mut self, frame: MavFrame, p: [f32; 7], x: i32, y: i32, z: f32) -> MavResult {
         if !self.armed() {
             self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
             return MavResult::MAV_RESULT_DENIED;
+        }
+        let keep_xy = x == i32::MAX || y == i32::MAX;
+        if keep_xy && z.is_nan() {
+            return self.accepted(Uplink::Hold);
         }
         if let Some(mode) = self.returning_or_landing() {
             self.text(
@@ -1115,9 +1431,22 @@ impl Server {
             );
             return MavResult::MAV_RESULT_DENIED;
         }
-        let yaw = f64::from(c.param4);
-        let yaw = yaw.is_finite().then(|| yaw.to_radians());
-        let Ok(p) = global_position_ned_m(&self.home, c.frame, c.x, c.y, c.z) else {
+        let yaw = f64::from(p[3]);
+        let yaw = yaw.is_finite().then_some(yaw);
+        let here = self.status.map_or(Vector3::zeros(), |s| s.position_ned_m);
+        let target = if keep_xy {
+            global_position_ned_m(&self.home, frame, 0, 0, z)
+                .map(|t| Vector3::new(here.x, here.y, t.z))
+        } else {
+            global_position_ned_m(&self.home, frame, x, y, z).map(|t| {
+                if z.is_nan() {
+                    Vector3::new(t.x, t.y, here.z)
+                } else {
+                    t
+                }
+            })
+        };
+        let Ok(p) = target else {
             self.text(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 "goto refused: position or frame not valid",
@@ -1133,6 +1462,7 @@ impl Server {
         }
         self.accepted(Uplink::Guided(GuidedTarget::Position(p, yaw)))
     }
+
     fn arm(&mut self, arm: f32, force: f32) -> MavResult {
         let Some(s) = self.status else {
             return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
@@ -1155,21 +1485,28 @@ impl Server {
             let r = self.accepted(Uplink::Arm(true));
             if r == MavResult::MAV_RESULT_ACCEPTED {
                 self.arm_requested = Some(true);
+                // what was asked for before the arming flies now
+                match self.pending.take() {
+                    Some(Pending::Takeoff(h)) => {
+                        self.uplink(Uplink::Takeoff(h));
+                    }
+                    Some(Pending::Mission) => {
+                        self.uplink(Uplink::StartMission);
+                    }
+                    None => {}
+                }
             }
             r
         } else if arm == 0.0 {
             // disarming in the air stops the law: only on the ground, or forced
-            let on_ground = match s.ground.on_ground() {
-                Some(g) => g,
-                None => s.nav_mode == NavMode::Idle,
-            };
-            if !on_ground && force != 21196.0 {
+            if !self.on_ground() && force != 21196.0 {
                 self.text(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     "refused: disarm in flight (force with 21196)",
                 );
                 return MavResult::MAV_RESULT_DENIED;
             }
+            self.pending = None;
             let r = self.accepted(Uplink::Arm(false));
             if r == MavResult::MAV_RESULT_ACCEPTED {
                 self.arm_requested = Some(false);
@@ -1180,25 +1517,45 @@ impl Server {
         }
     }
 
-    fn set_mode(&mut self, custom: u32) -> MavResult {
-        let Some(mode) = NavMode::from_code(custom) else {
+    /// A PX4 mode (main, sub) to fly ([`modes`]): set by `MAV_CMD_DO_SET_MODE`
+    /// and `SET_MODE`. Disarmed on the ground, TAKEOFF and MISSION fly at
+    /// the arming and HOLD cancels them; a mode helicon does not fly is
+    /// denied.
+    fn set_mode(&mut self, main: u8, sub: u8) -> MavResult {
+        let Some(mode) = modes::nav_of(main, sub) else {
+            self.text(
+                MavSeverity::MAV_SEVERITY_WARNING,
+                &format!("mode refused: PX4 mode {main}/{sub} is not flown"),
+            );
             return MavResult::MAV_RESULT_DENIED;
         };
-        if !self.armed() {
-            return MavResult::MAV_RESULT_DENIED;
+        let armed = self.armed();
+        match mode {
+            NavMode::Takeoff => self.takeoff(self.params.config().takeoff_height_m),
+            NavMode::Mission => self.start_mission(),
+            NavMode::Hold if !armed => {
+                self.pending = None;
+                MavResult::MAV_RESULT_ACCEPTED
+            }
+            _ if !armed => {
+                self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
+                MavResult::MAV_RESULT_DENIED
+            }
+            NavMode::Hold => self.accepted(Uplink::Hold),
+            NavMode::Return => self.accepted(Uplink::Return),
+            NavMode::Land => self.accepted(Uplink::Land),
+            NavMode::Guided if self.status.is_some_and(|s| s.nav_mode == NavMode::Guided) => {
+                MavResult::MAV_RESULT_ACCEPTED
+            }
+            NavMode::Guided => {
+                self.text(
+                    MavSeverity::MAV_SEVERITY_WARNING,
+                    "OFFBOARD: entered by a SET_POSITION_TARGET_* target",
+                );
+                MavResult::MAV_RESULT_DENIED
+            }
+            NavMode::Idle => MavResult::MAV_RESULT_DENIED,
         }
-        let u = match mode {
-            NavMode::Mission if !self.mission.is_empty() => Uplink::StartMission,
-            NavMode::Hold => Uplink::Hold,
-            NavMode::Return => Uplink::Return,
-            NavMode::Land => Uplink::Land,
-            NavMode::Takeoff => match self.takeoff_height(self.params.config().takeoff_height_m) {
-                Ok(h) => Uplink::Takeoff(h),
-                Err(r) => return r,
-            },
-            _ => return MavResult::MAV_RESULT_DENIED,
-        };
-        self.accepted(u)
     }
 
     /// A stream interval of the peer being answered.
@@ -1311,29 +1668,105 @@ impl Server {
         }
     }
 
-    fn mission_ack(&mut self, result: MavMissionResult) {
+    /// A `MISSION_ACK` to the peer and the system/component being answered.
+    fn mission_ack(&mut self, result: MavMissionResult, mission_type: MavMissionType) {
+        let (target_system, target_component) = self.src;
         self.send(&MavMessage::MISSION_ACK(MISSION_ACK_DATA {
-            target_system: 255,
-            target_component: 0,
+            target_system,
+            target_component,
             mavtype: result,
+            mission_type,
             ..MISSION_ACK_DATA::DEFAULT
         }));
     }
 
+    /// Request item `seq` of the upload from its owner (addressed to its
+    /// system and component) and start the item timeout.
     fn request_item(&mut self, seq: u16) {
-        self.send(&MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
-            seq,
-            target_system: 255,
-            target_component: 0,
-            ..MISSION_REQUEST_INT_DATA::DEFAULT
-        }));
+        let now = self.now_s();
+        let Upload::Receiving {
+            from,
+            requester,
+            requested_s,
+            ..
+        } = &mut self.upload
+        else {
+            return;
+        };
+        *requested_s = now;
+        let (to, (target_system, target_component)) = (*from, *requester);
+        self.send_to(
+            &MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
+                seq,
+                target_system,
+                target_component,
+                mission_type: MavMissionType::MAV_MISSION_TYPE_MISSION,
+            }),
+            Some(to),
+        );
+    }
+
+    /// The upload's item timeout (on each status): the expected item is
+    /// requested again after [`MISSION_ITEM_TIMEOUT_S`], and the upload is
+    /// cancelled after [`MISSION_ITEM_RETRIES`] requests went unanswered.
+    fn upload_timeout(&mut self) {
+        let now = self.now_s();
+        let Upload::Receiving {
+            from,
+            requester,
+            requested_s,
+            retries,
+            items,
+            ..
+        } = &mut self.upload
+        else {
+            return;
+        };
+        if now - *requested_s < MISSION_ITEM_TIMEOUT_S {
+            return;
+        }
+        let expected = items.len() as u16;
+        if *retries < MISSION_ITEM_RETRIES {
+            *retries += 1;
+            self.request_item(expected);
+            return;
+        }
+        let (to, (target_system, target_component)) = (*from, *requester);
+        self.upload = Upload::Idle;
+        self.text_to(
+            MavSeverity::MAV_SEVERITY_WARNING,
+            &format!("mission upload cancelled: no item {expected}"),
+            Some(to),
+        );
+        self.send_to(
+            &MavMessage::MISSION_ACK(MISSION_ACK_DATA {
+                target_system,
+                target_component,
+                mavtype: MavMissionResult::MAV_MISSION_OPERATION_CANCELLED,
+                mission_type: MavMissionType::MAV_MISSION_TYPE_MISSION,
+                ..MISSION_ACK_DATA::DEFAULT
+            }),
+            Some(to),
+        );
+    }
+
+    /// A mission type other than the flight mission is refused
+    /// (`MAV_MISSION_UNSUPPORTED`, answered in that type): the fence is the
+    /// cylinder of the `GF_*` parameters, and there are no rally points.
+    /// `true`: the flight mission's.
+    fn mission_type_ok(&mut self, mission_type: MavMissionType) -> bool {
+        if mission_type == MavMissionType::MAV_MISSION_TYPE_MISSION {
+            return true;
+        }
+        self.mission_ack(MavMissionResult::MAV_MISSION_UNSUPPORTED, mission_type);
+        false
     }
 
     fn mission_count(&mut self, c: &MISSION_COUNT_DATA, from: SocketAddr) {
-        if c.mission_type != MavMissionType::MAV_MISSION_TYPE_MISSION {
-            self.mission_ack(MavMissionResult::MAV_MISSION_UNSUPPORTED);
+        if !self.mission_type_ok(c.mission_type) {
             return;
         }
+        let mission = MavMissionType::MAV_MISSION_TYPE_MISSION;
         let now = self.now_s();
         if let Upload::Receiving {
             from: owner,
@@ -1348,23 +1781,27 @@ impl Server {
                 MavSeverity::MAV_SEVERITY_WARNING,
                 "mission refused: another upload in progress",
             );
-            self.mission_ack(MavMissionResult::MAV_MISSION_DENIED);
+            self.mission_ack(MavMissionResult::MAV_MISSION_DENIED, mission);
             return;
         }
         if usize::from(c.count) > crate::navigator::MAX_MISSION_ITEMS * 2 {
-            self.mission_ack(MavMissionResult::MAV_MISSION_NO_SPACE);
+            self.mission_ack(MavMissionResult::MAV_MISSION_NO_SPACE, mission);
             return;
         }
         if c.count == 0 {
             self.upload = Upload::Idle;
             self.mission.clear();
+            self.mission_complete = false;
             self.uplink(Uplink::Plan(Box::default()));
-            self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED);
+            self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
             return;
         }
         self.upload = Upload::Receiving {
             from,
+            requester: self.src,
             last_s: now,
+            requested_s: now,
+            retries: 0,
             count: c.count,
             items: Vec::with_capacity(usize::from(c.count)),
         };
@@ -1372,12 +1809,17 @@ impl Server {
     }
 
     fn mission_item(&mut self, it: &MISSION_ITEM_INT_DATA, from: SocketAddr) {
+        if it.mission_type != MavMissionType::MAV_MISSION_TYPE_MISSION {
+            return; // no upload of another type is ever started
+        }
         let now = self.now_s();
         let Upload::Receiving {
             from: owner,
             last_s,
+            retries,
             count,
             items,
+            ..
         } = &mut self.upload
         else {
             return;
@@ -1387,11 +1829,16 @@ impl Server {
         }
         *last_s = now;
         let expected = items.len() as u16;
-        if it.seq != expected {
-            // a repeat or a skip: ask again for the one expected
+        if it.seq < expected {
+            // a repeat (its request was repeated): already taken
+            return;
+        }
+        if it.seq > expected {
+            // a skip: ask for the one expected
             self.request_item(expected);
             return;
         }
+        *retries = 0;
         items.push(it.clone());
         if items.len() < usize::from(*count) {
             self.request_item(expected + 1);
@@ -1400,20 +1847,59 @@ impl Server {
         let items = std::mem::take(items);
         self.upload = Upload::Idle;
         let fence = *self.fence();
+        let mission = MavMissionType::MAV_MISSION_TYPE_MISSION;
         match plan_of(&self.home, &fence, &items) {
             Ok(plan) => {
                 self.mission = items;
+                self.mission_complete = false;
                 self.uplink(Uplink::Plan(Box::new(plan)));
-                self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED);
+                self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
             }
             Err(MissionError { seq, rule, result }) => {
                 self.text(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     &format!("mission refused: item {seq}: {rule}"),
                 );
-                self.mission_ack(result);
+                self.mission_ack(result, mission);
             }
         }
+    }
+
+    /// A download's item `seq`, as `MISSION_ITEM_INT` (`int`) or the legacy
+    /// `MISSION_ITEM` (answer to `MISSION_REQUEST`), in the requested type.
+    fn send_item(&mut self, seq: u16, mission_type: MavMissionType, int: bool) {
+        if !self.mission_type_ok(mission_type) {
+            return;
+        }
+        let Some(it) = self.mission.get(usize::from(seq)).cloned() else {
+            self.mission_ack(MavMissionResult::MAV_MISSION_INVALID_SEQUENCE, mission_type);
+            return;
+        };
+        let (target_system, target_component) = self.src;
+        let it = MISSION_ITEM_INT_DATA {
+            target_system,
+            target_component,
+            ..it
+        };
+        let msg = if int {
+            MavMessage::MISSION_ITEM_INT(it)
+        } else {
+            MavMessage::MISSION_ITEM(item_float(&it))
+        };
+        self.send(&msg);
+    }
+
+    fn clear_all(&mut self, mission_type: MavMissionType) {
+        // "all" clears the flight mission, the only one there is
+        if mission_type != MavMissionType::MAV_MISSION_TYPE_ALL
+            && !self.mission_type_ok(mission_type)
+        {
+            return;
+        }
+        self.mission.clear();
+        self.mission_complete = false;
+        self.uplink(Uplink::Plan(Box::default()));
+        self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission_type);
     }
 
     /// A guided target as the server takes it: finite, plausible, and a
@@ -1537,6 +2023,168 @@ fn target_of(
         Some(GuidedTarget::Position(position_ned_m, yaw))
     } else {
         None
+    }
+}
+
+/// AUTOPILOT_VERSION: what the server offers (QGroundControl and MAVSDK
+/// choose their protocols by these bits) and helicon's version
+/// (`flight_sw_version` major, minor, patch, 0xFF release type, PX4's layout).
+fn autopilot_version() -> AUTOPILOT_VERSION_DATA {
+    let v = |s: &str| s.parse::<u32>().unwrap_or(0) & 0xFF;
+    let flight_sw_version = (v(env!("CARGO_PKG_VERSION_MAJOR")) << 24)
+        | (v(env!("CARGO_PKG_VERSION_MINOR")) << 16)
+        | (v(env!("CARGO_PKG_VERSION_PATCH")) << 8)
+        | 0xFF;
+    AUTOPILOT_VERSION_DATA {
+        capabilities: MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_INT
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2,
+        flight_sw_version,
+        ..AUTOPILOT_VERSION_DATA::DEFAULT
+    }
+}
+
+/// The scale of a mission item's x and y in `MISSION_ITEM_INT`: degrees ×
+/// 10⁷ in the global frames, metres × 10⁴ in the local ones (common.xml).
+fn int_scale(frame: MavFrame) -> f64 {
+    match frame {
+        MavFrame::MAV_FRAME_LOCAL_NED
+        | MavFrame::MAV_FRAME_LOCAL_ENU
+        | MavFrame::MAV_FRAME_LOCAL_OFFSET_NED
+        | MavFrame::MAV_FRAME_BODY_NED
+        | MavFrame::MAV_FRAME_BODY_OFFSET_NED
+        | MavFrame::MAV_FRAME_BODY_FRD
+        | MavFrame::MAV_FRAME_LOCAL_FRD
+        | MavFrame::MAV_FRAME_LOCAL_FLU => 1e4,
+        _ => 1e7,
+    }
+}
+
+/// The legacy `MISSION_ITEM` (x, y as floats) of an item.
+fn item_float(it: &MISSION_ITEM_INT_DATA) -> MISSION_ITEM_DATA {
+    let k = int_scale(it.frame);
+    MISSION_ITEM_DATA {
+        param1: it.param1,
+        param2: it.param2,
+        param3: it.param3,
+        param4: it.param4,
+        x: (f64::from(it.x) / k) as f32,
+        y: (f64::from(it.y) / k) as f32,
+        z: it.z,
+        seq: it.seq,
+        command: it.command,
+        target_system: it.target_system,
+        target_component: it.target_component,
+        frame: it.frame,
+        current: it.current,
+        autocontinue: it.autocontinue,
+        mission_type: it.mission_type,
+    }
+}
+
+/// The `MISSION_ITEM_INT` of a legacy `MISSION_ITEM` (a non-finite or
+/// out-of-range x or y saturates, and the mission check refuses it).
+fn item_int(it: &MISSION_ITEM_DATA) -> MISSION_ITEM_INT_DATA {
+    let k = int_scale(it.frame);
+    let int = |v: f32| {
+        let v = (f64::from(v) * k).round();
+        if v.is_nan() { i32::MAX } else { v as i32 }
+    };
+    MISSION_ITEM_INT_DATA {
+        param1: it.param1,
+        param2: it.param2,
+        param3: it.param3,
+        param4: it.param4,
+        x: int(it.x),
+        y: int(it.y),
+        z: it.z,
+        seq: it.seq,
+        command: it.command,
+        target_system: it.target_system,
+        target_component: it.target_component,
+        frame: it.frame,
+        current: it.current,
+        autocontinue: it.autocontinue,
+        mission_type: it.mission_type,
+    }
+}
+
+/// A `COMMAND_LONG` or `COMMAND_INT` whose command id the common dialect
+/// does not define (the crate's `MavCmd` has no value for it, so the message
+/// does not parse): its id and target, read from the CRC-checked payload.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct UnknownCommand {
+    command: u16,
+    target_system: u8,
+    target_component: u8,
+}
+
+impl UnknownCommand {
+    /// The command of a frame that did not parse, when it is a command.
+    /// Both messages put the command (u16) at byte 28 and the target system
+    /// and component at 30 and 31 (MAVLink's size-sorted field order); a
+    /// MAVLink 2 payload may be cut after its last non-zero byte.
+    fn of(raw: &MAVLinkMessageRaw) -> Option<Self> {
+        if !matches!(
+            raw.message_id(),
+            COMMAND_LONG_DATA::ID | COMMAND_INT_DATA::ID
+        ) {
+            return None;
+        }
+        let mut p = [0u8; 32];
+        let payload = raw.payload();
+        let n = payload.len().min(32);
+        p[..n].copy_from_slice(&payload[..n]);
+        Some(UnknownCommand {
+            command: u16::from_le_bytes([p[28], p[29]]),
+            target_system: p[30],
+            target_component: p[31],
+        })
+    }
+
+    /// Addressed to this vehicle's autopilot (or broadcast).
+    fn addressed_to(&self, system_id: u8) -> bool {
+        (self.target_system == 0 || self.target_system == system_id)
+            && (self.target_component == 0
+                || self.target_component == MavComponent::MAV_COMP_ID_AUTOPILOT1 as u8)
+    }
+}
+
+/// The `COMMAND_ACK` (`MAV_RESULT_UNSUPPORTED`) of an [`UnknownCommand`]:
+/// the crate's `COMMAND_ACK_DATA` serialised, with its first field (the
+/// command, u16, first on the wire) set to the id `MavCmd` cannot hold.
+struct UnknownCommandAck {
+    command: u16,
+    target: (u8, u8),
+}
+
+impl MessageData for UnknownCommandAck {
+    type Message = MavMessage;
+    const ID: u32 = COMMAND_ACK_DATA::ID;
+    const NAME: &'static str = COMMAND_ACK_DATA::NAME;
+    const EXTRA_CRC: u8 = COMMAND_ACK_DATA::EXTRA_CRC;
+    const ENCODED_LEN: usize = COMMAND_ACK_DATA::ENCODED_LEN;
+
+    fn ser(&self, version: MavlinkVersion, payload: &mut [u8]) -> usize {
+        let ack = COMMAND_ACK_DATA {
+            result: MavResult::MAV_RESULT_UNSUPPORTED,
+            target_system: self.target.0,
+            target_component: self.target.1,
+            ..COMMAND_ACK_DATA::DEFAULT
+        };
+        // at least 3 bytes: the result (non-zero) follows the command
+        let n = ack.ser(version, payload);
+        payload[..2].copy_from_slice(&self.command.to_le_bytes());
+        n
+    }
+
+    fn deser(_: MavlinkVersion, _: &[u8]) -> Result<Self, mavlink::error::ParserError> {
+        // only ever sent
+        Err(mavlink::error::ParserError::UnknownMessage { id: Self::ID })
     }
 }
 

@@ -408,8 +408,9 @@ fn fence_parameters_and_takeoff_heights() {
     let (mut veh, mut c) = (veh, c);
     arm(&mut veh, &mut c);
 
-    // takeoff heights: above the fence, infinite, below ground refused
-    for h in [61.0, f32::INFINITY, -5.0, 3e38] {
+    // takeoff heights (PX4's param7: AMSL; home at 20 m): above the fence,
+    // infinite, below ground refused
+    for h in [81.0, f32::INFINITY, 15.0, 3e38] {
         let from = c.log.len();
         c.send(&long(
             MavCmd::MAV_CMD_NAV_TAKEOFF,
@@ -428,7 +429,7 @@ fn fence_parameters_and_takeoff_heights() {
         MavCmd::MAV_CMD_NAV_TAKEOFF,
         1,
         1,
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 60.0],
+        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 80.0],
     ));
     assert_eq!(
         ack_within(&mut c, from, MavCmd::MAV_CMD_NAV_TAKEOFF, T),

@@ -1,7 +1,10 @@
 //! The server alone, the vehicle's ring ends in the test's hands: what the
 //! ground station's commands put on the uplink, and every refusal answered
 //! (never applied, never a dead server).
-#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+// test helpers: a failed unwrap is a failed test
+// the field tools send the superseded SET_MODE, MISSION_REQUEST and GET_* commands
+#![allow(deprecated)]
 
 mod common;
 
@@ -104,6 +107,8 @@ fn mission_ack(c: &mut Client, items: &[MISSION_ITEM_INT_DATA]) -> MavMissionRes
         cursor = i + 1;
         match m {
             MavMessage::MISSION_REQUEST_INT(r) => {
+                // addressed to the requester (system 255, component 190)
+                assert_eq!((r.target_system, r.target_component), (255, 190));
                 c.send(&MavMessage::MISSION_ITEM_INT(items[r.seq as usize].clone()));
             }
             MavMessage::MISSION_ACK(a) => return a.mavtype,
@@ -157,7 +162,8 @@ fn commands_reach_the_uplink_and_refusals_are_answered() {
         r(
             &mut c,
             MavCmd::MAV_CMD_NAV_TAKEOFF,
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 7.5]
+            // PX4's param7: AMSL (home 20 m), 7.5 m above home
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 27.5]
         ),
         Some(MavResult::MAV_RESULT_ACCEPTED)
     );
@@ -178,7 +184,8 @@ fn commands_reach_the_uplink_and_refusals_are_answered() {
         r(&mut c, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, z),
         Some(MavResult::MAV_RESULT_DENIED)
     );
-    // a mode while armed (hold); an unknown one refused
+    // a mode while armed (PX4's AUTO.LOITER: main 4, sub 3); an unknown
+    // one, and one helicon does not fly (POSCTL), refused
     assert_eq!(
         r(
             &mut c,
@@ -192,6 +199,14 @@ fn commands_reach_the_uplink_and_refusals_are_answered() {
             &mut c,
             MavCmd::MAV_CMD_DO_SET_MODE,
             [1.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        ),
+        Some(MavResult::MAV_RESULT_DENIED)
+    );
+    assert_eq!(
+        r(
+            &mut c,
+            MavCmd::MAV_CMD_DO_SET_MODE,
+            [1.0, 4.0, 3.0, 0.0, 0.0, 0.0, 0.0]
         ),
         Some(MavResult::MAV_RESULT_ACCEPTED)
     );
@@ -221,11 +236,12 @@ fn commands_reach_the_uplink_and_refusals_are_answered() {
         ),
         Some(MavResult::MAV_RESULT_UNSUPPORTED)
     );
+    // (AUTO.RTL)
     assert_eq!(
         r(
             &mut c,
             MavCmd::MAV_CMD_DO_SET_MODE,
-            [1.0, 3.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+            [1.0, 4.0, 5.0, 0.0, 0.0, 0.0, 0.0]
         ),
         Some(MavResult::MAV_RESULT_DENIED)
     );
@@ -342,4 +358,266 @@ fn missions_refused_with_their_reason_and_the_old_one_kept() {
     }
     let report = h.stop();
     assert_eq!(report.send_errors, 0);
+}
+
+/// Push statuses from `t0` to `t1` (s) every 0.1 s, the client reading
+/// all the while (its socket's buffer would overflow).
+fn fly_time(c: &mut Client, v: &mut VehicleEnd, h: &ServerHandle, t: (f64, f64), mode: NavMode) {
+    let mut now = t.0;
+    while now <= t.1 + 1e-9 {
+        let before = h.processed();
+        v.downlink
+            .push(Downlink::Status(status(now, false, mode)))
+            .unwrap();
+        settle(h, before + 1);
+        c.drain();
+        now += 0.1;
+    }
+    std::thread::sleep(Duration::from_millis(20));
+    c.drain();
+}
+
+#[test]
+fn what_the_field_tools_ask_for_is_answered() {
+    let (mut c, mut v, h) = start();
+    settle(&h, 1);
+    let hb = c
+        .wait(0, Duration::from_secs(3), |m| {
+            matches!(m, MavMessage::HEARTBEAT(_))
+        })
+        .expect("heartbeat");
+    let MavMessage::HEARTBEAT(hb) = hb else {
+        unreachable!()
+    };
+    // PX4's autopilot and its AUTO.READY for the idle navigator
+    assert_eq!(hb.autopilot, MavAutopilot::MAV_AUTOPILOT_PX4);
+    assert_eq!(hb.custom_mode, 0x0104_0000);
+    assert!(
+        hb.base_mode
+            .contains(MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED)
+    );
+    c.heartbeat();
+    let r = |c: &mut Client, cmd, p| c.command(cmd, p);
+    let mut p = [0.0f32; 7];
+
+    // AUTOPILOT_VERSION: the capabilities the stations choose by
+    let from = c.log.len();
+    p[0] = AUTOPILOT_VERSION_DATA::ID as f32;
+    assert_eq!(
+        r(&mut c, MavCmd::MAV_CMD_REQUEST_MESSAGE, p),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    let caps = c
+        .collect(from, |m| match m {
+            MavMessage::AUTOPILOT_VERSION(a) => Some(a.capabilities),
+            _ => None,
+        })
+        .pop()
+        .expect("AUTOPILOT_VERSION");
+    assert!(caps.contains(
+        MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_INT
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2
+    ));
+    assert!(!caps.contains(MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FENCE));
+    // no battery monitor: BATTERY_STATUS refused
+    p[0] = BATTERY_STATUS_DATA::ID as f32;
+    assert_eq!(
+        r(&mut c, MavCmd::MAV_CMD_REQUEST_MESSAGE, p),
+        Some(MavResult::MAV_RESULT_UNSUPPORTED)
+    );
+    // the home, and a stream's interval
+    let from = c.log.len();
+    assert_eq!(
+        r(&mut c, MavCmd::MAV_CMD_GET_HOME_POSITION, [0.0; 7]),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    p[0] = ATTITUDE_DATA::ID as f32;
+    assert_eq!(
+        r(&mut c, MavCmd::MAV_CMD_GET_MESSAGE_INTERVAL, p),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    let home = c.collect(from, |m| match m {
+        MavMessage::HOME_POSITION(hp) => Some((hp.latitude, hp.altitude)),
+        _ => None,
+    });
+    assert_eq!(home, vec![(570_146_000, 20_000)]);
+    let iv = c.collect(from, |m| match m {
+        MavMessage::MESSAGE_INTERVAL(i) => Some((u32::from(i.message_id), i.interval_us)),
+        _ => None,
+    });
+    assert_eq!(iv, vec![(ATTITUDE_DATA::ID, 100_000)]);
+
+    // QGroundControl's takeoff: NAV_TAKEOFF disarmed on the ground is
+    // accepted and shown as AUTO.TAKEOFF; the arming then flies it
+    let mut t = [0.0f32; 7];
+    t[6] = f32::NAN;
+    assert_eq!(
+        r(&mut c, MavCmd::MAV_CMD_NAV_TAKEOFF, t),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    let from = c.log.len();
+    fly_time(&mut c, &mut v, &h, (0.1, 1.2), NavMode::Idle);
+    let modes = c.collect(from, |m| match m {
+        MavMessage::HEARTBEAT(hb) => Some(hb.custom_mode),
+        _ => None,
+    });
+    assert_eq!(modes.last(), Some(&0x0204_0000), "{modes:x?}");
+    assert_eq!(
+        uplinks(&mut v)
+            .into_iter()
+            .filter(|x| *x != Uplink::GcsHeartbeat)
+            .count(),
+        0
+    );
+    t[0] = 1.0;
+    t[6] = 0.0;
+    assert_eq!(
+        r(&mut c, MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, t),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    let u: Vec<_> = uplinks(&mut v)
+        .into_iter()
+        .filter(|x| *x != Uplink::GcsHeartbeat)
+        .collect();
+    assert_eq!(u, vec![Uplink::Arm(true), Uplink::Takeoff(5.0)]);
+    // a SET_MODE (QGC's way) is acknowledged as DO_SET_MODE
+    let from = c.log.len();
+    c.send(&MavMessage::SET_MODE(SET_MODE_DATA {
+        custom_mode: 0x0304_0000,
+        target_system: 1,
+        base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+    }));
+    let ack = c.wait(
+        from,
+        Duration::from_secs(3),
+        |m| matches!(m, MavMessage::COMMAND_ACK(a) if a.command == MavCmd::MAV_CMD_DO_SET_MODE),
+    );
+    assert!(
+        matches!(ack, Some(MavMessage::COMMAND_ACK(a)) if a.result == MavResult::MAV_RESULT_ACCEPTED
+            && (a.target_system, a.target_component) == (255, 190))
+    );
+    assert_eq!(
+        uplinks(&mut v)
+            .into_iter()
+            .filter(|x| *x != Uplink::GcsHeartbeat)
+            .collect::<Vec<_>>(),
+        vec![Uplink::Hold]
+    );
+    h.stop();
+}
+
+#[test]
+fn mission_types_and_the_upload_timeout_follow_the_microservice() {
+    let (mut c, mut v, h) = start();
+    settle(&h, 1);
+    assert!(
+        c.wait(0, Duration::from_secs(3), |m| matches!(
+            m,
+            MavMessage::HEARTBEAT(_)
+        ))
+        .is_some()
+    );
+    c.heartbeat();
+    let items = vec![
+        item(0, MavCmd::MAV_CMD_NAV_TAKEOFF, 0, 0, 10.0),
+        item(
+            1,
+            MavCmd::MAV_CMD_NAV_WAYPOINT,
+            570_147_000,
+            99_869_000,
+            10.0,
+        ),
+    ];
+    assert_eq!(
+        mission_ack(&mut c, &items),
+        MavMissionResult::MAV_MISSION_ACCEPTED
+    );
+    let acks = |c: &Client, from| {
+        c.collect(from, |m| match m {
+            MavMessage::MISSION_ACK(a) => Some((a.mavtype, a.mission_type, a.target_component)),
+            _ => None,
+        })
+    };
+    // a fence upload and a fence clear are refused in their type; the
+    // flight mission stays
+    let from = c.log.len();
+    c.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
+        count: 4,
+        target_system: 1,
+        target_component: 1,
+        mission_type: MavMissionType::MAV_MISSION_TYPE_FENCE,
+        ..MISSION_COUNT_DATA::DEFAULT
+    }));
+    c.send(&MavMessage::MISSION_CLEAR_ALL(MISSION_CLEAR_ALL_DATA {
+        target_system: 1,
+        target_component: 1,
+        mission_type: MavMissionType::MAV_MISSION_TYPE_FENCE,
+    }));
+    c.send(&MavMessage::MISSION_REQUEST_LIST(
+        MISSION_REQUEST_LIST_DATA {
+            target_system: 1,
+            target_component: 1,
+            mission_type: MavMissionType::MAV_MISSION_TYPE_MISSION,
+        },
+    ));
+    // the legacy MISSION_REQUEST is answered with a MISSION_ITEM
+    c.send(&MavMessage::MISSION_REQUEST(MISSION_REQUEST_DATA {
+        seq: 1,
+        target_system: 1,
+        target_component: 1,
+        mission_type: MavMissionType::MAV_MISSION_TYPE_MISSION,
+    }));
+    let item1 = c.wait(from, Duration::from_secs(3), |m| {
+        matches!(m, MavMessage::MISSION_ITEM(_))
+    });
+    let Some(MavMessage::MISSION_ITEM(it)) = item1 else {
+        panic!("no MISSION_ITEM");
+    };
+    assert_eq!(it.seq, 1);
+    assert!((f64::from(it.x) - 57.0147).abs() < 1e-5, "{}", it.x);
+    let fence = MavMissionType::MAV_MISSION_TYPE_FENCE;
+    assert_eq!(
+        acks(&c, from),
+        vec![
+            (MavMissionResult::MAV_MISSION_UNSUPPORTED, fence, 190),
+            (MavMissionResult::MAV_MISSION_UNSUPPORTED, fence, 190)
+        ]
+    );
+    let counts = c.collect(from, |m| match m {
+        MavMessage::MISSION_COUNT(n) => Some(n.count),
+        _ => None,
+    });
+    assert_eq!(counts, vec![2]);
+
+    // an upload whose items never come: requested again every 1.5 s, then
+    // cancelled after five repeats
+    let from = c.log.len();
+    c.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
+        count: 2,
+        target_system: 1,
+        target_component: 1,
+        ..MISSION_COUNT_DATA::DEFAULT
+    }));
+    std::thread::sleep(Duration::from_millis(50));
+    fly_time(&mut c, &mut v, &h, (0.1, 12.0), NavMode::Idle);
+    let requests = c.collect(from, |m| match m {
+        MavMessage::MISSION_REQUEST_INT(r) => Some((r.seq, r.target_system, r.target_component)),
+        _ => None,
+    });
+    assert_eq!(requests, vec![(0, 255, 190); 6]);
+    assert_eq!(
+        acks(&c, from),
+        vec![(
+            MavMissionResult::MAV_MISSION_OPERATION_CANCELLED,
+            MavMissionType::MAV_MISSION_TYPE_MISSION,
+            190
+        )]
+    );
+    assert!(
+        c.texts()
+            .iter()
+            .any(|t| t == "mission upload cancelled: no item 0")
+    );
+    h.stop();
 }

@@ -280,10 +280,11 @@ fn heartbeat_params_mission_flown_and_landed_rates_as_requested() {
         );
     }
 
-    // takeoff refused while disarmed; arm; start
+    // a start while disarmed on the ground is PX4's (and QGC's start
+    // mission): accepted, flown at the arming; arm; start
     assert_eq!(
         c.command(MavCmd::MAV_CMD_MISSION_START, [0.0; 7]),
-        Some(MavResult::MAV_RESULT_DENIED)
+        Some(MavResult::MAV_RESULT_ACCEPTED)
     );
     assert_eq!(
         c.command(
@@ -360,10 +361,13 @@ fn heartbeat_params_mission_flown_and_landed_rates_as_requested() {
             "no STATUSTEXT {want}: {texts:?}"
         );
     }
-    let currents = c.collect(0, |m| match m {
+    // MISSION_CURRENT is streamed (1 Hz) and sent on each new item: the
+    // items in order, none skipped
+    let mut currents = c.collect(0, |m| match m {
         MavMessage::MISSION_CURRENT(x) => Some(x.seq),
         _ => None,
     });
+    currents.dedup();
     assert_eq!(currents, vec![0, 2, 3, 4, 5, 6]);
 
     // the rates, per simulated second, against those asked for
@@ -436,7 +440,8 @@ fn guided_velocity_followed_then_link_loss_returns_and_lands() {
     assert_eq!(
         c.command(
             MavCmd::MAV_CMD_NAV_TAKEOFF,
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0]
+            // PX4's param7: AMSL, home at 20 m: 5 m above it
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 25.0]
         ),
         Some(MavResult::MAV_RESULT_ACCEPTED)
     );
@@ -609,7 +614,8 @@ fn a_guided_flight_out_of_the_fence_returns_and_lands() {
     assert_eq!(
         c.command(
             MavCmd::MAV_CMD_NAV_TAKEOFF,
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0]
+            // PX4's param7: AMSL, home at 20 m: 5 m above it
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 25.0]
         ),
         Some(MavResult::MAV_RESULT_ACCEPTED)
     );
@@ -708,7 +714,8 @@ fn with_signing_unsigned_heartbeats_do_not_hold_off_the_link_loss_failsafe() {
     assert_eq!(
         good.command(
             MavCmd::MAV_CMD_NAV_TAKEOFF,
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 5.0]
+            // PX4's param7: AMSL, home at 20 m: 5 m above it
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 25.0]
         ),
         Some(MavResult::MAV_RESULT_ACCEPTED)
     );

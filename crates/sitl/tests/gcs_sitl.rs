@@ -234,7 +234,8 @@ fn climb(attack: bool) {
         std::thread::sleep(Duration::from_millis(1));
     }
     assert_eq!(
-        command(&conn, MavCmd::MAV_CMD_NAV_TAKEOFF, 5.0),
+        // PX4's param7: AMSL (home at helicon_sitl::HOME's 20 m): 5 m up
+        command(&conn, MavCmd::MAV_CMD_NAV_TAKEOFF, 25.0),
         Some(MavResult::MAV_RESULT_ACCEPTED)
     );
     // keep the link alive until the flight ends: lock-step SITL runs tens
