@@ -327,7 +327,7 @@ fn flight(seed: u64, again: bool) -> (f64, f64, f64) {
         );
         assert!(c.until(2.0, |c| c.armed == Some(true)));
         assert_eq!(
-            c.command(MavCmd::MAV_CMD_NAV_TAKEOFF, 0.0, 4.0),
+            c.command(MavCmd::MAV_CMD_NAV_TAKEOFF, 0.0, f32::NAN),
             MavResult::MAV_RESULT_ACCEPTED
         );
         assert!(
