@@ -14,7 +14,8 @@ run), and that the program still runs; then stops it with SIGINT (exit
 
     python3 tools/ground_to_ground.py --helicon target/release/helicon --seed 1 [--seed 2 …]
 
-Seeds fly in parallel (one SITL each, its own port). Exit status 0 when
+Seeds fly in parallel (one SITL each, its own port; SCHED_FIFO as on
+board, so that three on two cores keep their deadlines). Exit status 0 when
 every flight passed; one line per flight with its figures.
 """
 import argparse
@@ -124,7 +125,7 @@ def fly(helicon: str, scenario: str, seed: int, out_root: str) -> str:
     port = free_port()
     out = os.path.join(out_root, f"seed{seed}")
     proc = subprocess.Popen(
-        [helicon, "sitl", scenario, "--speed", "realtime", "--no-sched-fifo",
+        [helicon, "sitl", scenario, "--speed", "realtime",
          "--gcs", f"udpin:127.0.0.1:{port}", "--out", out],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     try:
@@ -180,6 +181,15 @@ def fly(helicon: str, scenario: str, seed: int, out_root: str) -> str:
         return (f"seed {seed}: waited {wait_s:.1f} s, in the air {liftoff_s:.1f} s after arming, "
                 f"landed {true_m:.2f} m from home (estimate {est_m:.2f} m), tilt {tilt:.3f} rad, "
                 f"exit {rc} on SIGINT")
+    except AssertionError as e:
+        # the program's own account (termination, final mode, timing)
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+        try:
+            tail = proc.communicate(timeout=30)[0].strip().splitlines()[-4:]
+        except subprocess.TimeoutExpired:
+            tail = ["(no answer to SIGINT)"]
+        raise AssertionError(f"{e}; the program said: {' | '.join(tail)}") from None
     finally:
         if proc.poll() is None:
             proc.kill()
