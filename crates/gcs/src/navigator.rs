@@ -346,7 +346,8 @@ impl NavMode {
         }
     }
 
-    /// A code (0..=6 in declaration order; the custom mode of HEARTBEAT).
+    /// A code (0..=6 in declaration order): helicon's own number of the mode
+    /// (the HEARTBEAT reports PX4's custom modes instead: `crate::modes`).
     pub fn code(self) -> u32 {
         self as u32
     }
