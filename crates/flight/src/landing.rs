@@ -370,7 +370,8 @@ impl Landing {
             (SpoolState::TakingOff, _) => LandedState::Takeoff,
             (SpoolState::Flying, LandStage::Air) => LandedState::InAir,
             (SpoolState::Flying, _) => LandedState::Landing,
-            (SpoolState::SpoolingDown, LandStage::Air) => LandedState::InAir,
+            // disarmed in the air (the kill), until still on the ground
+            (SpoolState::SpoolingDown | SpoolState::Disarmed, LandStage::Air) => LandedState::InAir,
             _ => LandedState::OnGround,
         };
         let rotor = match self.state {
@@ -514,10 +515,7 @@ impl Landing {
             return;
         }
         let c = self.config;
-        let still = vel
-            .is_some_and(|v| v.z.abs() < c.z_vel_max_m_s && v.xy().norm() < c.xy_vel_max_m_s)
-            && i.gyro_body_rad_s
-                .is_some_and(|w| w.iter().all(|r| r.abs().to_degrees() < c.rot_max_deg_s));
+        let still = self.not_moving(vel) && !self.rotating(i.gyro_body_rad_s);
         if !still {
             self.set_stage(LandStage::Air, now);
         } else if self.stage == LandStage::Air {
@@ -525,6 +523,18 @@ impl Landing {
         } else if now - self.stage_since_s >= c.trigger_s - 1e-9 {
             self.set_stage(LandStage::Landed, now);
         }
+    }
+
+    /// No vertical and no horizontal movement (an unknown velocity moves).
+    fn not_moving(&self, vel: Option<Vector3<f64>>) -> bool {
+        let c = &self.config;
+        vel.is_some_and(|v| v.z.abs() < c.z_vel_max_m_s && v.xy().norm() < c.xy_vel_max_m_s)
+    }
+
+    /// A body rate at or above `rot_max_deg_s` (unknown rates rotate).
+    fn rotating(&self, gyro_body_rad_s: Option<Vector3<f64>>) -> bool {
+        let max = self.config.rot_max_deg_s;
+        gyro_body_rad_s.is_none_or(|w| w.iter().any(|r| r.abs().to_degrees() >= max))
     }
 
     /// The land detector in flight, and the blend it drives.
@@ -545,8 +555,7 @@ impl Landing {
                 (col - self.idle[0]) / span
             }
         };
-        let still =
-            vel.is_some_and(|v| v.z.abs() < c.z_vel_max_m_s && v.xy().norm() < c.xy_vel_max_m_s);
+        let still = self.not_moving(vel);
         // a descent asked for (faster than "no vertical movement", PX4's
         // 1.1·LNDMC_Z_VEL_MAX) for the whole trigger time that does not
         // happen: the ground stops it (a descent just begun has not yet
@@ -561,9 +570,7 @@ impl Landing {
             .is_some_and(|t| now - t >= c.trigger_s - 1e-9);
         let low = way(self.last_collective) < c.low_collective;
         let contact = still && (low || descent_asked);
-        let rotating = i
-            .gyro_body_rad_s
-            .is_none_or(|w| w.iter().any(|r| r.abs().to_degrees() >= c.rot_max_deg_s));
+        let rotating = self.rotating(i.gyro_body_rad_s);
         let minimal = way(self.last_collective) <= 0.1;
         self.flags = DetectorFlags {
             low_collective: low,
@@ -583,16 +590,13 @@ impl Landing {
             LandStage::MaybeLanded if held => LandStage::Landed,
             s => s,
         };
-        // entering ground contact restarts its clock; the command blends
-        // down once contact has held a third of the trigger time
-        if next == LandStage::GroundContact && self.stage == LandStage::Air {
-            self.set_stage(LandStage::GroundContact, now);
-        } else {
-            self.set_stage(next, now);
-        }
+        // a new stage restarts its clock; the command blends down once
+        // ground contact has held a third of the trigger time
+        self.set_stage(next, now);
+        let contact_held = now - self.stage_since_s >= third;
         match self.stage {
             LandStage::Air => self.blend = (self.blend + ramp).min(1.0),
-            LandStage::GroundContact if !held => {}
+            LandStage::GroundContact if !contact_held => {}
             _ => self.blend = (self.blend - ramp).max(0.0),
         }
         if self.stage == LandStage::Landed {
@@ -774,6 +778,52 @@ mod tests {
             assert_eq!(l.state(), SpoolState::Flying, "t = {t}");
         }
         assert_eq!(l.blend(), 1.0);
+    }
+
+    /// Ground contact holds a third of the trigger time before the command
+    /// blends down (a touch that does not last leaves the law flying); a
+    /// kill in the air is reported in the air until still on the ground.
+    #[test]
+    fn contact_holds_before_the_blend_and_a_kill_in_the_air_is_in_the_air() {
+        let c = LandingConfig::default();
+        let mut l = Landing::new(c, TS, &trim(), 0.0);
+        l.state = SpoolState::Flying;
+        l.stage = LandStage::Air;
+        l.blend = 1.0;
+        let hover = Reference::default();
+        let still = (Vector3::zeros(), Vector3::zeros());
+        let low = Input::new(0.02, 0.0, 0.0, 0.05);
+        let sinking = (Vector3::zeros(), Vector3::new(0.0, 0.0, 0.5));
+        let mut t = 0.0;
+        let mut first_drop = None;
+        // a second in the air, then still with a low collective
+        for k in 0..800 {
+            t += TS;
+            l.servo(&low, false);
+            let pv = if k < 400 { sinking } else { still };
+            l.update(&input(t, true, &hover, pv, Vector3::zeros()));
+            if l.blend() < 1.0 && first_drop.is_none() {
+                first_drop = Some(t);
+            }
+        }
+        let t0 = 401.0 * TS; // the first still sample
+        let drop = first_drop.expect("the blend went down") - t0;
+        assert!((drop - c.trigger_s / 3.0).abs() < 2.0 * TS, "{drop}");
+        // a kill in the air: in the air, then on the ground once still
+        let mut l = Landing::new(c, TS, &trim(), 0.0);
+        l.state = SpoolState::Flying;
+        l.stage = LandStage::Air;
+        let falling = (Vector3::zeros(), Vector3::new(0.0, 0.0, 3.0));
+        l.update(&input(1.0, false, &hover, falling, Vector3::zeros()));
+        assert_eq!(l.ground_state().landed, LandedState::InAir);
+        assert!(!l.on_ground());
+        let mut t = 1.0;
+        while t < 1.0 + c.trigger_s + 0.1 {
+            t += TS;
+            l.update(&input(t, false, &hover, still, Vector3::zeros()));
+        }
+        assert!(l.on_ground());
+        assert_eq!(l.ground_state().landed, LandedState::OnGround);
     }
 
     /// A climb withdrawn before lift-off goes back to ready; no lift-off

@@ -598,12 +598,7 @@ pub const GROUND_START_DOWN_M: f64 = 5.0;
 /// is. The simulator's take-off plan of `[ground]` is not used by SITL: the
 /// on-board ground logic flies the take-off and the landing.
 pub fn ground_start(scenario: &Scenario) -> Result<(Scenario, helicon_model::Params), SitlError> {
-    let mut params = match &scenario.params {
-        Some(p) => {
-            helicon_model::Params::from_file(&scenario.resolve(p)).map_err(ClosedLoopError::from)?
-        }
-        None => helicon_model::Params::bergen_twin(),
-    };
+    let mut params = helicon_sim::closed_loop::scenario_params(scenario)?;
     let mut s = scenario.clone();
     if s.ground.is_some_and(|g| g.on_ground) {
         return Ok((s, params));

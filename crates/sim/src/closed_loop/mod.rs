@@ -202,13 +202,18 @@ pub fn gyro_design_config(
     Ok(c)
 }
 
-/// Trim, linearize, discretize and design (or load) the gains for a scenario.
-pub fn prepare(scenario: &Scenario) -> Result<Prepared, ClosedLoopError> {
-    let params = match &scenario.params {
+/// The parameters a scenario flies: its `params` file (relative to the
+/// scenario), or the Bergen Twin.
+pub fn scenario_params(scenario: &Scenario) -> Result<Params, ClosedLoopError> {
+    Ok(match &scenario.params {
         Some(p) => Params::from_file(&scenario.resolve(p))?,
         None => Params::bergen_twin(),
-    };
-    prepare_with_params(scenario, params)
+    })
+}
+
+/// Trim, linearize, discretize and design (or load) the gains for a scenario.
+pub fn prepare(scenario: &Scenario) -> Result<Prepared, ClosedLoopError> {
+    prepare_with_params(scenario, scenario_params(scenario)?)
 }
 
 /// As [`prepare`] with explicit parameters (Monte Carlo dispersions).
