@@ -6,6 +6,7 @@ GLOBAL_POSITION_INT), never on a fixed time; each check has an overall
 deadline (`Deadline`), at most 90 s.
 """
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -71,8 +72,12 @@ class Sitl:
     def __enter__(self):
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, exc_type, exc, tb):
         self.stop()
+        # a passed check leaves nothing behind; a failed one keeps its folder
+        # (the SITL's log and flight) for a look
+        if exc_type is None and not os.environ.get("HELICON_KEEP_SCRATCH"):
+            shutil.rmtree(self.out, ignore_errors=True)
 
 
 def connect(port, source_system=255, source_component=190):

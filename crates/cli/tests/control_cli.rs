@@ -4,7 +4,7 @@
 
 mod common;
 use common::{helicon, tmpdir};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
@@ -471,7 +471,7 @@ const CORPUS: &[Case] = &[
 
 /// The corpus files in a folder of their own for each test (`name`): the
 /// tests run in parallel and a fresh folder is emptied first.
-fn corpus_dir(name: &str) -> PathBuf {
+fn corpus_dir(name: &str) -> helicon_test_support::Scratch {
     let d = tmpdir(name);
     for (name, text) in FILES {
         write(&d, name, text);

@@ -5,6 +5,7 @@
 //! divergence time in the Appendix F scenario's comment.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
+use helicon_test_support::tmpdir;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -14,13 +15,6 @@ fn root() -> PathBuf {
 
 fn read(rel: &str) -> String {
     std::fs::read_to_string(root().join(rel)).unwrap_or_else(|e| panic!("{rel}: {e}"))
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("helicon_docs_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn helicon(dir: &Path, args: &[&str]) -> Output {

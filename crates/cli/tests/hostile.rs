@@ -13,20 +13,14 @@
 //! command must exit 0 quietly and still write all its files.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
+use helicon_test_support::tmpdir;
 use std::io::{BufRead, BufReader, Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 /// Longest a single case may run.
 const LIMIT: Duration = Duration::from_secs(20);
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("helicon_hostile_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// What a finished child did.
 struct Run {
@@ -971,7 +965,7 @@ const CORPUS: &[Case] = &[
 
 /// Write the corpus folder; generate a real gains file and sensor log and
 /// their edits.
-fn corpus() -> PathBuf {
+fn corpus() -> helicon_test_support::Scratch {
     let d = tmpdir("corpus");
     for (name, text) in FILES {
         std::fs::write(d.join(name), text).unwrap();

@@ -3,7 +3,8 @@
 //! billion runs refused at once (never a panic, the file or option named).
 #![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
 
-use std::path::{Path, PathBuf};
+use helicon_test_support::tmpdir;
+use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
@@ -13,13 +14,6 @@ fn helicon_in(dir: &Path, args: &[&str]) -> Output {
         .args(args)
         .output()
         .unwrap()
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("helicon_mc_cli_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn text(b: &[u8]) -> String {
@@ -53,7 +47,7 @@ kind = "relative"
 sigma = 0.02
 "#;
 
-fn setup(name: &str) -> PathBuf {
+fn setup(name: &str) -> helicon_test_support::Scratch {
     let d = tmpdir(name);
     std::fs::write(d.join("c.toml"), CAMPAIGN).unwrap();
     std::fs::write(d.join("heavy.toml"), "[body]\nmass_kg = 15.0\n").unwrap();

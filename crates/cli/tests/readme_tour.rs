@@ -115,8 +115,7 @@ fn readme_tour_runs_as_written() {
     let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
     let lines = tour_commands(&readme);
     assert!(lines.len() >= 25, "the tour has {} lines", lines.len());
-    let dir = std::env::temp_dir().join(format!("helicon_readme_tour_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = helicon_test_support::tmpdir("tour");
     for sub in ["scenarios", "campaigns", "examples", "params"] {
         copy_dir(&root().join(sub), &dir.join(sub));
     }

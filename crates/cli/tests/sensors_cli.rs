@@ -3,7 +3,7 @@
 #![allow(clippy::too_many_lines, clippy::panic, clippy::cast_possible_wrap)] // tests: long scenarios, panics are failures
 #![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
 
-use std::path::PathBuf;
+use helicon_test_support::tmpdir;
 use std::process::{Command, Output};
 
 fn helicon(args: &[&str]) -> Output {
@@ -11,13 +11,6 @@ fn helicon(args: &[&str]) -> Output {
         .args(args)
         .output()
         .unwrap()
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("helicon_cli_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn no_panic(o: &Output) {

@@ -3,7 +3,8 @@
 //! scenarios (non-zero exit, the file and the field named, never a panic).
 #![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
 
-use std::path::{Path, PathBuf};
+use helicon_test_support::tmpdir;
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn helicon_in(dir: &Path, args: &[&str]) -> Output {
@@ -12,13 +13,6 @@ fn helicon_in(dir: &Path, args: &[&str]) -> Output {
         .args(args)
         .output()
         .unwrap()
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("helicon_sim_cli_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn text(b: &[u8]) -> String {

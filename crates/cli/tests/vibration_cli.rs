@@ -2,7 +2,8 @@
 //! vibration off: bit for bit what it was before the vibration chain.
 #![allow(clippy::unwrap_used, clippy::panic)] // tests: a failed unwrap is a failed test
 
-use std::path::{Path, PathBuf};
+use helicon_test_support::tmpdir;
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn helicon(args: &[&str]) -> Output {
@@ -10,13 +11,6 @@ fn helicon(args: &[&str]) -> Output {
         .args(args)
         .output()
         .unwrap()
-}
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("helicon_vib_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 fn no_panic(o: &Output) {

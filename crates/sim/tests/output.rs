@@ -10,14 +10,8 @@ use helicon_model::state::{INPUT_NAMES, STATE_NAMES, ix};
 use helicon_sim::closed_loop::{Outcome, fly, prepare};
 use helicon_sim::output::{LOG_COLUMNS, MEASURED_NAMES, log_header, write_run};
 use helicon_sim::scenario::Scenario;
+use helicon_test_support::tmpdir;
 use std::path::PathBuf;
-
-fn tmpdir(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("output_{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// A short flight with a step, wind and a decimated log.
 const SHORT: &str = r#"

@@ -78,7 +78,7 @@ fn fly(tag: &str, fault: Fault, at_s: f64, extra: &str, duration_s: f64) -> Run 
     let _turn = ONE_AT_A_TIME
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let dir = std::env::temp_dir().join(format!("helicon_devfault_{tag}_{}", std::process::id()));
+    let dir = helicon_test_support::process_scratch().join(tag);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let s = Scenario::from_toml_str("name = \"hover\"\nduration_s = 1.0\n", "s.toml").unwrap();

@@ -32,8 +32,7 @@ fn fly(
     std::path::PathBuf,
     std::path::PathBuf,
 ) {
-    let dir =
-        std::env::temp_dir().join(format!("helicon_onboard_prog_{tag}_{}", std::process::id()));
+    let dir = helicon_test_support::process_scratch().join(tag);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     // gains designed at hover for the Bergen Twin

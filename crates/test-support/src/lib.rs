@@ -25,12 +25,14 @@
 //!   // ... read the input ...
 //!   assert!(helicon_test_support::peak_bytes() - before < 16 << 20);
 //!   ```
-//! - [`tmpdir`], a fresh scratch folder per test.
+//! - [`tmpdir`], a fresh scratch folder per test, removed when the test
+//!   passes ([`Scratch`]); [`process_scratch`], one per test process,
+//!   removed when it exits.
 #![allow(unsafe_code)] // GlobalAlloc is an unsafe trait; Counting only forwards to System
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A global allocator that forwards to the system allocator and counts
 /// each thread's allocations ([`allocations`]) and the bytes it holds
@@ -99,20 +101,111 @@ pub fn reset_peak() {
     PEAK.with(|p| p.set(live_bytes()));
 }
 
+/// A scratch folder for one test, removed with everything in it when the
+/// value is dropped, so a test run leaves nothing behind in the system's
+/// temporary folder. When the test fails (the thread is panicking), the
+/// folder is kept and its path printed, for a look at what the test wrote.
+///
+/// It dereferences to a [`Path`], so `dir.join("log.csv")`, `&dir` where a
+/// `&Path` is wanted and `dir.display()` work as on a path.
+#[derive(Debug)]
+pub struct Scratch {
+    path: PathBuf,
+}
+
+impl Scratch {
+    /// The folder's path, owned (for a struct that keeps it).
+    #[must_use]
+    pub fn to_path_buf(&self) -> PathBuf {
+        self.path.clone()
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.path.as_os_str()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            eprintln!("scratch folder kept: {}", self.path.display());
+        } else {
+            let _ = std::fs::remove_dir_all(&self.path);
+        }
+    }
+}
+
 /// A fresh scratch folder for one test: named after the test binary, the
 /// process and `name` under the system's temporary folder, emptied if a
-/// previous run left it.
+/// previous run left it, and removed when the returned [`Scratch`] is
+/// dropped (kept when the test fails).
 ///
 /// # Panics
 /// When the folder cannot be created (a test helper: the test fails).
 #[allow(clippy::expect_used)] // a test helper: a failure is the test's
-pub fn tmpdir(name: &str) -> PathBuf {
-    let binary = std::env::current_exe()
+pub fn tmpdir(name: &str) -> Scratch {
+    let path = std::env::temp_dir().join(format!(
+        "helicon_{}_{}_{name}",
+        binary_name(),
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&path);
+    std::fs::create_dir_all(&path).expect("scratch folder");
+    Scratch { path }
+}
+
+/// The folder of this test process's scratch files that are not one
+/// test's own [`Scratch`] (output folders kept in an options struct, say):
+/// `helicon_<binary>_<pid>` under the system's temporary folder, created on
+/// first use and removed with everything in it when the process exits,
+/// unless `HELICON_KEEP_SCRATCH` is set (to look at what a failed run
+/// wrote).
+///
+/// # Panics
+/// When the folder cannot be created (a test helper: the test fails).
+#[allow(clippy::expect_used)] // a test helper: a failure is the test's
+pub fn process_scratch() -> &'static Path {
+    static ROOT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    ROOT.get_or_init(|| {
+        let path =
+            std::env::temp_dir().join(format!("helicon_{}_{}", binary_name(), std::process::id()));
+        let _ = std::fs::remove_dir_all(&path);
+        std::fs::create_dir_all(&path).expect("scratch folder");
+        extern "C" fn remove_at_exit() {
+            if std::env::var_os("HELICON_KEEP_SCRATCH").is_none() {
+                if let Some(root) = ROOT.get() {
+                    let _ = std::fs::remove_dir_all(root);
+                }
+            }
+        }
+        unsafe extern "C" {
+            fn atexit(callback: extern "C" fn()) -> std::ffi::c_int;
+        }
+        // SAFETY: `atexit` is the C library's; the callback is a plain
+        // `extern "C" fn` that only removes a folder.
+        let _ = unsafe { atexit(remove_at_exit) };
+        path
+    })
+}
+
+fn binary_name() -> String {
+    std::env::current_exe()
         .ok()
         .and_then(|e| e.file_stem().map(|s| s.to_string_lossy().into_owned()))
-        .unwrap_or_else(|| "test".into());
-    let d = std::env::temp_dir().join(format!("helicon_{binary}_{}_{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch folder");
-    d
+        .unwrap_or_else(|| "test".into())
 }

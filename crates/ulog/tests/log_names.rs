@@ -141,7 +141,7 @@ fn racing_loggers_in_one_folder_get_distinct_files() {
     let dir = helicon_test_support::tmpdir("ulog-race");
     let threads: Vec<_> = (0..6)
         .map(|i| {
-            let dir = dir.clone();
+            let dir = dir.to_path_buf();
             std::thread::spawn(move || {
                 (0..15)
                     .map(|j| flight(&dir, 0, &format!("{i}.{j}")))

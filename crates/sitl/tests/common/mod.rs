@@ -21,8 +21,7 @@ pub fn scenario(name: &str, duration_s: f64) -> Scenario {
 }
 
 pub fn options(tag: &str) -> SitlOptions {
-    let out_dir: PathBuf =
-        std::env::temp_dir().join(format!("helicon_sitl_{tag}_{}", std::process::id()));
+    let out_dir: PathBuf = helicon_test_support::process_scratch().join(tag);
     let _ = std::fs::remove_dir_all(&out_dir);
     SitlOptions {
         speed: Speed::Max,
