@@ -392,12 +392,32 @@ fn log_csv_round_trips_extreme_numbers_bit_for_bit() {
     }
 }
 
-/// Write `text` to a file of this test's folder; returns its path.
-fn bad_file(test: &str, text: &str) -> PathBuf {
+/// A file written in a test's own scratch folder; the folder goes when
+/// the value does. It dereferences to the file's path.
+struct BadFile {
+    _dir: helicon_test_support::Scratch,
+    path: PathBuf,
+}
+
+impl std::ops::Deref for BadFile {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl AsRef<Path> for BadFile {
+    fn as_ref(&self) -> &Path {
+        &self.path
+    }
+}
+
+/// Write `text` to `bad.csv` in a folder of this test's own.
+fn bad_file(test: &str, text: &str) -> BadFile {
     let dir = tmpdir(test);
     let path = dir.join("bad.csv");
     std::fs::write(&path, text).unwrap();
-    path
+    BadFile { _dir: dir, path }
 }
 
 fn read_err(path: &Path) -> LogCsvError {
