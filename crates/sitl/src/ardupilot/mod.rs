@@ -413,7 +413,17 @@ impl ArduPilotServer {
         };
         let (frame_rate_hz, session_frames, model_time_s, final_state, rotor, summary, rows) =
             match session {
-                Some(s) => {
+                Some(mut s) => {
+                    let why = match &ending {
+                        Ending::Stopped => Some("stopped on request"),
+                        Ending::Silent => Some("the autopilot went silent"),
+                        Ending::FrameLimit => Some("the frame limit was reached"),
+                        Ending::Simulation(..) => None,
+                    };
+                    if let Some(why) = why {
+                        let t = s.frames as f64 / f64::from(s.rate_hz);
+                        s.hw.abort(Termination::Stopped, format!("{why} at t = {t:.3} s"));
+                    }
                     let rows = match s.writer {
                         Some(w) => w.finish()?,
                         None => 0,
