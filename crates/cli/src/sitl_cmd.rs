@@ -4,7 +4,9 @@
 //! drivers. Writes the on-board `flight.ulg`, the truth `log.csv`,
 //! `timing.json`, and the run folder of `helicon sim` (summary, gains,
 //! scenario, plots, report). With `--gcs` the ground station's navigator
-//! flies instead of the scenario's references.
+//! flies instead of the scenario's references. With `--ardupilot-json [ADDR]`
+//! it is ArduPilot's JSON physics backend instead (`helicon_sitl::ardupilot`):
+//! ArduPilot's SITL flies the model; `timing.json` and the run folder.
 
 use crate::console::Console;
 use crate::signals::{Stop, mark_stopped};
