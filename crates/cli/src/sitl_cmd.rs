@@ -357,9 +357,14 @@ fn run_ardupilot(a: &SitlArgs, address: &str) -> Result<()> {
 
 /// Run `helicon sitl`.
 pub fn run(a: &SitlArgs) -> Result<()> {
-    if let Some(address) = &a.ardupilot_json {
-        return run_ardupilot(a, address);
+    match &a.ardupilot_json {
+        Some(address) => run_ardupilot(a, address),
+        None => run_onboard(a),
     }
+}
+
+/// `helicon sitl` flying helicon's on-board program.
+fn run_onboard(a: &SitlArgs) -> Result<()> {
     check_time("--gps-loss-at", a.gps_loss_at)?;
     check_time("--manual-at", a.manual_at)?;
     check_time("--manual-until", a.manual_until)?;

@@ -235,6 +235,8 @@ impl ArduPilotMap {
         params: &Params,
         file: &str,
     ) -> Result<Self, ConfigError> {
+        check_outputs(&section, file)?;
+        check_numbers(&section, file)?;
         let s = &section;
         let bad = |field: &str, v: f64, rule: &str| {
             Err(ConfigError::invalid(
@@ -244,131 +246,6 @@ impl ArduPilotMap {
                 rule,
             ))
         };
-        let outputs = [
-            ("swash1", &s.swash1),
-            ("swash2", &s.swash2),
-            ("swash3", &s.swash3),
-            ("tail", &s.tail),
-            ("throttle", &s.throttle),
-        ];
-        for (i, (name, o)) in outputs.iter().enumerate() {
-            if !(1..=32).contains(&o.channel) {
-                return bad(
-                    &format!("{name}.channel"),
-                    f64::from(o.channel),
-                    "an output number in 1 ..= 32 (SERVO1 … SERVO32)",
-                );
-            }
-            for (other, p) in &outputs[..i] {
-                if p.channel == o.channel {
-                    return bad(
-                        &format!("{name}.channel"),
-                        f64::from(o.channel),
-                        &format!("already the channel of `ardupilot.{other}`"),
-                    );
-                }
-            }
-            let swash = name.starts_with("swash");
-            if swash && (o.min_us != 1000 || o.max_us != 2000) {
-                let (f, v) = if o.min_us != 1000 {
-                    ("min_us", o.min_us)
-                } else {
-                    ("max_us", o.max_us)
-                };
-                return bad(
-                    &format!("{name}.{f}"),
-                    f64::from(v),
-                    "1000 / 2000: ArduPilot forces a swash servo's endpoints to 1000 … 2000 µs (AP_MotorsHeli_Swash::add_servo_raw)",
-                );
-            }
-            if !(500..=2500).contains(&o.min_us) {
-                return bad(
-                    &format!("{name}.min_us"),
-                    f64::from(o.min_us),
-                    "in 500 ..= 2500 µs",
-                );
-            }
-            if !(500..=2500).contains(&o.max_us) || o.max_us <= o.min_us {
-                return bad(
-                    &format!("{name}.max_us"),
-                    f64::from(o.max_us),
-                    "in 500 ..= 2500 µs and above min_us",
-                );
-            }
-            if *name != "throttle" && !(o.min_us < o.trim_us && o.trim_us < o.max_us) {
-                return bad(
-                    &format!("{name}.trim_us"),
-                    f64::from(o.trim_us),
-                    "strictly between min_us and max_us",
-                );
-            }
-        }
-        if !(1000..=2000).contains(&s.collective_min_us) {
-            return bad(
-                "collective_min_us",
-                f64::from(s.collective_min_us),
-                "in 1000 ..= 2000 µs (H_COL_MIN)",
-            );
-        }
-        if !(1000..=2000).contains(&s.collective_max_us)
-            || s.collective_max_us <= s.collective_min_us
-        {
-            return bad(
-                "collective_max_us",
-                f64::from(s.collective_max_us),
-                "in 1000 ..= 2000 µs and above collective_min_us (H_COL_MAX)",
-            );
-        }
-        for (f, v) in [
-            ("collective_pitch_min_deg", s.collective_pitch_min_deg),
-            ("collective_pitch_max_deg", s.collective_pitch_max_deg),
-            ("tail_pitch_at_yaw_min_deg", s.tail_pitch_at_yaw_min_deg),
-            ("tail_pitch_at_yaw_max_deg", s.tail_pitch_at_yaw_max_deg),
-        ] {
-            if !(v.is_finite() && v.abs() <= 45.0) {
-                return bad(f, v, "a blade pitch in −45 … 45 deg");
-            }
-        }
-        if s.collective_pitch_max_deg <= s.collective_pitch_min_deg {
-            return bad(
-                "collective_pitch_max_deg",
-                s.collective_pitch_max_deg,
-                "above collective_pitch_min_deg",
-            );
-        }
-        if s.tail_pitch_at_yaw_max_deg == s.tail_pitch_at_yaw_min_deg {
-            return bad(
-                "tail_pitch_at_yaw_max_deg",
-                s.tail_pitch_at_yaw_max_deg,
-                "different from tail_pitch_at_yaw_min_deg",
-            );
-        }
-        if !(s.cyclic_scale.is_finite() && s.cyclic_scale > 0.0 && s.cyclic_scale <= 10.0) {
-            return bad("cyclic_scale", s.cyclic_scale, "in (0, 10]");
-        }
-        if !(s.engine_on_above.is_finite() && s.engine_on_above > 0.0 && s.engine_on_above < 1.0) {
-            return bad(
-                "engine_on_above",
-                s.engine_on_above,
-                "in (0, 1): a fraction of the throttle output's range",
-            );
-        }
-        for (i, v) in s.h3_servo_positions_deg.iter().enumerate() {
-            if !(v.is_finite() && v.abs() <= 180.0) {
-                return bad(
-                    &format!("h3_servo_positions_deg[{i}]"),
-                    *v,
-                    "in −180 … 180 deg (H_SW_H3_SVn_POS)",
-                );
-            }
-        }
-        if !(s.h3_phase_angle_deg.is_finite() && s.h3_phase_angle_deg.abs() <= 30.0) {
-            return bad(
-                "h3_phase_angle_deg",
-                s.h3_phase_angle_deg,
-                "in −30 … 30 deg (H_SW_H3_PHANG, ArduPilot's arming check)",
-            );
-        }
         let angle = |pos_deg: f64| {
             let a = pos_deg.to_radians();
             // AP_MotorsHeli_Swash::add_servo_angle
@@ -576,4 +453,149 @@ impl ArduPilotMap {
             [self.offset[0], self.offset[1], self.offset[2]],
         )
     }
+}
+
+/// An out-of-range field of the section.
+fn invalid(file: &str, field: &str, v: f64, rule: &str) -> Result<(), ConfigError> {
+    Err(ConfigError::invalid(
+        file,
+        format!("ardupilot.{field}"),
+        v,
+        rule,
+    ))
+}
+
+/// The five servo outputs: channels distinct and in range, endpoints and trims.
+fn check_outputs(s: &ArduPilotSection, file: &str) -> Result<(), ConfigError> {
+    let bad = |field: &str, v: f64, rule: &str| invalid(file, field, v, rule);
+    let outputs = [
+        ("swash1", &s.swash1),
+        ("swash2", &s.swash2),
+        ("swash3", &s.swash3),
+        ("tail", &s.tail),
+        ("throttle", &s.throttle),
+    ];
+    for (i, (name, o)) in outputs.iter().enumerate() {
+        if !(1..=32).contains(&o.channel) {
+            return bad(
+                &format!("{name}.channel"),
+                f64::from(o.channel),
+                "an output number in 1 ..= 32 (SERVO1 … SERVO32)",
+            );
+        }
+        for (other, p) in &outputs[..i] {
+            if p.channel == o.channel {
+                return bad(
+                    &format!("{name}.channel"),
+                    f64::from(o.channel),
+                    &format!("already the channel of `ardupilot.{other}`"),
+                );
+            }
+        }
+        let swash = name.starts_with("swash");
+        if swash && (o.min_us != 1000 || o.max_us != 2000) {
+            let (f, v) = if o.min_us != 1000 {
+                ("min_us", o.min_us)
+            } else {
+                ("max_us", o.max_us)
+            };
+            return bad(
+                &format!("{name}.{f}"),
+                f64::from(v),
+                "1000 / 2000: ArduPilot forces a swash servo's endpoints to 1000 … 2000 µs (AP_MotorsHeli_Swash::add_servo_raw)",
+            );
+        }
+        if !(500..=2500).contains(&o.min_us) {
+            return bad(
+                &format!("{name}.min_us"),
+                f64::from(o.min_us),
+                "in 500 ..= 2500 µs",
+            );
+        }
+        if !(500..=2500).contains(&o.max_us) || o.max_us <= o.min_us {
+            return bad(
+                &format!("{name}.max_us"),
+                f64::from(o.max_us),
+                "in 500 ..= 2500 µs and above min_us",
+            );
+        }
+        if *name != "throttle" && !(o.min_us < o.trim_us && o.trim_us < o.max_us) {
+            return bad(
+                &format!("{name}.trim_us"),
+                f64::from(o.trim_us),
+                "strictly between min_us and max_us",
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The collective, tail, engine and H3 numbers.
+fn check_numbers(s: &ArduPilotSection, file: &str) -> Result<(), ConfigError> {
+    let bad = |field: &str, v: f64, rule: &str| invalid(file, field, v, rule);
+    if !(1000..=2000).contains(&s.collective_min_us) {
+        return bad(
+            "collective_min_us",
+            f64::from(s.collective_min_us),
+            "in 1000 ..= 2000 µs (H_COL_MIN)",
+        );
+    }
+    if !(1000..=2000).contains(&s.collective_max_us) || s.collective_max_us <= s.collective_min_us {
+        return bad(
+            "collective_max_us",
+            f64::from(s.collective_max_us),
+            "in 1000 ..= 2000 µs and above collective_min_us (H_COL_MAX)",
+        );
+    }
+    for (f, v) in [
+        ("collective_pitch_min_deg", s.collective_pitch_min_deg),
+        ("collective_pitch_max_deg", s.collective_pitch_max_deg),
+        ("tail_pitch_at_yaw_min_deg", s.tail_pitch_at_yaw_min_deg),
+        ("tail_pitch_at_yaw_max_deg", s.tail_pitch_at_yaw_max_deg),
+    ] {
+        if !(v.is_finite() && v.abs() <= 45.0) {
+            return bad(f, v, "a blade pitch in −45 … 45 deg");
+        }
+    }
+    if s.collective_pitch_max_deg <= s.collective_pitch_min_deg {
+        return bad(
+            "collective_pitch_max_deg",
+            s.collective_pitch_max_deg,
+            "above collective_pitch_min_deg",
+        );
+    }
+    if s.tail_pitch_at_yaw_max_deg == s.tail_pitch_at_yaw_min_deg {
+        return bad(
+            "tail_pitch_at_yaw_max_deg",
+            s.tail_pitch_at_yaw_max_deg,
+            "different from tail_pitch_at_yaw_min_deg",
+        );
+    }
+    if !(s.cyclic_scale.is_finite() && s.cyclic_scale > 0.0 && s.cyclic_scale <= 10.0) {
+        return bad("cyclic_scale", s.cyclic_scale, "in (0, 10]");
+    }
+    if !(s.engine_on_above.is_finite() && s.engine_on_above > 0.0 && s.engine_on_above < 1.0) {
+        return bad(
+            "engine_on_above",
+            s.engine_on_above,
+            "in (0, 1): a fraction of the throttle output's range",
+        );
+    }
+    for (i, v) in s.h3_servo_positions_deg.iter().enumerate() {
+        if !(v.is_finite() && v.abs() <= 180.0) {
+            return bad(
+                &format!("h3_servo_positions_deg[{i}]"),
+                *v,
+                "in −180 … 180 deg (H_SW_H3_SVn_POS)",
+            );
+        }
+    }
+    if !(s.h3_phase_angle_deg.is_finite() && s.h3_phase_angle_deg.abs() <= 30.0) {
+        return bad(
+            "h3_phase_angle_deg",
+            s.h3_phase_angle_deg,
+            "in −30 … 30 deg (H_SW_H3_PHANG, ArduPilot's arming check)",
+        );
+    }
+    Ok(())
 }
