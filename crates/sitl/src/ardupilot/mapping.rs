@@ -599,3 +599,148 @@ fn check_numbers(s: &ArduPilotSection, file: &str) -> Result<(), ConfigError> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with(edit: &str, replace: &str) -> Result<ArduPilotMap, ConfigError> {
+        assert!(BERGEN_TWIN_TOML.contains(edit), "{edit}");
+        let text = BERGEN_TWIN_TOML.replacen(edit, replace, 1);
+        let s = ArduPilotSection::from_toml_str(&text, "h.toml")?;
+        ArduPilotMap::new(s, &Params::bergen_twin(), "h.toml")
+    }
+
+    fn field_of(e: &ConfigError) -> String {
+        match e {
+            ConfigError::Invalid { file, field, .. } => {
+                assert_eq!(file, "h.toml");
+                field.clone()
+            }
+            other => panic!("{other}"),
+        }
+    }
+
+    #[test]
+    fn the_example_is_valid() {
+        assert!(with("channel = 1", "channel = 1").is_ok());
+    }
+
+    #[test]
+    fn errors_name_the_file_and_the_field() {
+        let cases = [
+            ("channel = 2", "channel = 1", "ardupilot.swash2.channel"),
+            ("channel = 8", "channel = 33", "ardupilot.throttle.channel"),
+            (
+                "channel = 1\n",
+                "channel = 1\nmin_us = 900\n",
+                "ardupilot.swash1.min_us",
+            ),
+            (
+                "trim_us = 1500                   # SERVO4_TRIM",
+                "trim_us = 2100",
+                "ardupilot.tail.trim_us",
+            ),
+            (
+                "collective_max_us = 1750",
+                "collective_max_us = 1200",
+                "ardupilot.collective_max_us",
+            ),
+            (
+                "collective_pitch_max_deg = 12.0",
+                "collective_pitch_max_deg = -5.0",
+                "ardupilot.collective_pitch_max_deg",
+            ),
+            (
+                "tail_pitch_at_yaw_max_deg = 14.4",
+                "tail_pitch_at_yaw_max_deg = 90.0",
+                "ardupilot.tail_pitch_at_yaw_max_deg",
+            ),
+            (
+                "engine_on_above = 0.1",
+                "engine_on_above = 1.0",
+                "ardupilot.engine_on_above",
+            ),
+            (
+                "h3_phase_angle_deg = 0.0",
+                "h3_phase_angle_deg = 45.0",
+                "ardupilot.h3_phase_angle_deg",
+            ),
+            (
+                "cyclic_scale = 1.0",
+                "cyclic_scale = 0.0",
+                "ardupilot.cyclic_scale",
+            ),
+        ];
+        for (edit, replace, field) in cases {
+            let e = with(edit, replace).unwrap_err();
+            assert_eq!(field_of(&e), field, "{e}");
+            assert!(e.to_string().starts_with("h.toml: "), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_singular_h3_mixer_and_unknown_fields_are_refused() {
+        let e = with(
+            "swash_type = \"h3_120\"",
+            "swash_type = \"h3\"\nh3_servo_positions_deg = [0.0, 0.0, 0.0]",
+        );
+        // (the default positions line follows: a duplicate key is a parse error)
+        assert!(e.is_err());
+        let text = BERGEN_TWIN_TOML
+            .replacen("swash_type = \"h3_120\"", "swash_type = \"h3\"", 1)
+            .replacen("[-60.0, 60.0, 180.0]", "[10.0, 10.0, 10.0]", 1);
+        let s = ArduPilotSection::from_toml_str(&text, "h.toml").unwrap();
+        let e = ArduPilotMap::new(s, &Params::bergen_twin(), "h.toml").unwrap_err();
+        assert_eq!(field_of(&e), "ardupilot.h3_servo_positions_deg");
+        let e = with("cyclic_scale = 1.0", "cyclic_scale = 1.0\nswash_typo = 1").unwrap_err();
+        assert!(
+            matches!(&e, ConfigError::Parse { file, message } if file == "h.toml" && message.contains("swash_typo")),
+            "{e}"
+        );
+        let e = with("\"h3_120\"", "\"h4_90\"").unwrap_err();
+        assert!(matches!(e, ConfigError::Parse { .. }), "{e}");
+    }
+
+    #[test]
+    fn the_generic_h3_at_the_h3_120_positions_is_the_h3_120() {
+        let text = BERGEN_TWIN_TOML.replacen("swash_type = \"h3_120\"", "swash_type = \"h3\"", 1);
+        let s = ArduPilotSection::from_toml_str(&text, "h.toml").unwrap();
+        let generic = ArduPilotMap::new(s, &Params::bergen_twin(), "h.toml").unwrap();
+        let s = ArduPilotSection::from_toml_str(BERGEN_TWIN_TOML, "h.toml").unwrap();
+        let h3_120 = ArduPilotMap::new(s, &Params::bergen_twin(), "h.toml").unwrap();
+        let (a, _) = generic.mixer();
+        let (b, _) = h3_120.mixer();
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((a[i][j] - b[i][j]).abs() < 1e-12);
+            }
+        }
+        // ArduPilot's factors: left servo +0.3897 roll, +0.225 pitch; rear −0.45 pitch
+        assert!((b[0][0] - 0.45 * 0.866_025_403_784_438_6).abs() < 1e-12);
+        assert!((b[0][1] - 0.225).abs() < 1e-12);
+        assert!((b[2][1] + 0.45).abs() < 1e-12 && b[2][0].abs() < 1e-12);
+    }
+
+    #[test]
+    fn h1_and_h3_140_invert_their_mixers() {
+        for kind in ["h1", "h3_140"] {
+            let text = BERGEN_TWIN_TOML.replacen("\"h3_120\"", &format!("\"{kind}\""), 1);
+            let s = ArduPilotSection::from_toml_str(&text, "h.toml").unwrap();
+            let m = ArduPilotMap::new(s, &Params::bergen_twin(), "h.toml").unwrap();
+            let (rows, off) = m.mixer();
+            let (roll, pitch, c) = (0.2, -0.3, 0.6);
+            let mut pwm = [0u16; 16];
+            for i in 0..3 {
+                let o = rows[i][0] * roll + rows[i][1] * pitch + rows[i][2] * c + off[i];
+                pwm[i] = (1500.0 + 500.0 * (2.0 * o - 1.0)) as u16;
+            }
+            pwm[3] = 1500;
+            pwm[7] = 1000;
+            let d = m.decode(&pwm).outputs;
+            assert!((d.roll - roll).abs() < 3e-3, "{kind}: {d:?}");
+            assert!((d.pitch - pitch).abs() < 3e-3, "{kind}: {d:?}");
+            assert!((d.collective - c).abs() < 2e-3, "{kind}: {d:?}");
+        }
+    }
+}
