@@ -52,6 +52,18 @@ fn vec3(v: &serde_json::Value) -> [f64; 3] {
     ]
 }
 
+/// Every second of the flight's trace (time, NED position, attitude).
+type Trace = [(f64, [f64; 3], [f64; 3])];
+
+fn print_trace(trace: &Trace) {
+    for (t, pos, att) in trace.iter().step_by(10) {
+        eprintln!(
+            "t {t:5.1} s  NED [{:7.3} {:7.3} {:7.3}] m  att [{:6.3} {:6.3} {:6.3}] rad",
+            pos[0], pos[1], pos[2], att[0], att[1], att[2]
+        );
+    }
+}
+
 #[test]
 fn arm_spool_up_take_off_hover_land_through_the_protocol() {
     let air = Scenario::from_toml_str(
@@ -158,12 +170,7 @@ fn arm_spool_up_take_off_hover_land_through_the_protocol() {
         let r = h.join().unwrap();
         (r, trace)
     });
-    for (t, pos, att) in trace.iter().step_by(10) {
-        eprintln!(
-            "t {t:5.1} s  NED [{:7.3} {:7.3} {:7.3}] m  att [{:6.3} {:6.3} {:6.3}] rad",
-            pos[0], pos[1], pos[2], att[0], att[1], att[2]
-        );
-    }
+    print_trace(&trace);
     let at = |time: f64| {
         trace
             .iter()
