@@ -536,3 +536,26 @@ fn the_decoder_inverts_ardupilots_mixer() {
         );
     }
 }
+
+/// ArduPilot's pitch output +0.1 (nose up) from the trim: θ and `gyro.y`
+/// positive within 0.3 s.
+#[test]
+fn a_pitch_command_pitches_nose_up() {
+    let (s, p) = air();
+    let mut o = map(&p).outputs_for(&p.trim.u, 0.7);
+    o.pitch += 0.1;
+    let pwm = ardupilot_pwm(&o);
+    let (_, (v0, v)) = serve(&s, &p, ArduPilotOptions::default(), |addr| {
+        let mut ap = Autopilot::new(addr, 400);
+        let v0 = ap.frame(&pwm);
+        let mut v = v0.clone();
+        for _ in 1..120 {
+            v = ap.frame(&pwm);
+        }
+        (v0, v)
+    });
+    let q = vec3(&v["imu"]["gyro"])[1];
+    let dtheta = vec3(&v["attitude"])[1] - vec3(&v0["attitude"])[1];
+    eprintln!("pitch +0.1 for 0.3 s: gyro.y = {q:.4} rad/s, θ change {dtheta:.4} rad");
+    assert!(q > 0.0 && dtheta > 0.0, "{q} {dtheta}");
+}

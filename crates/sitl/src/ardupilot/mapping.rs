@@ -29,7 +29,8 @@
 //! `450 µs·(H_COL_ANG_MAX − H_COL_ANG_MIN)/(H_COL_MAX − H_COL_MIN)` of
 //! cyclic blade pitch (times `cyclic_scale`). The model's swashplate
 //! angles are `A1 = K_A·S_lat`, `B1 = K_B·S_lon` with A1 > 0 rolling left
-//! and B1 > 0 pitching nose down (docs: MODEL.md §2), so ArduPilot's roll
+//! and B1 > 0 pitching nose down (the thesis's Table 4.1: A1 > 0 moves the
+//! helicopter left, B1 > 0 forward; the tests check the signs), so ArduPilot's roll
 //! right and pitch up are negative A1 and B1.
 
 use helicon_config::ConfigError;
@@ -397,7 +398,7 @@ impl ArduPilotMap {
                 / f64::from(s.collective_max_us - s.collective_min_us)
                 * (s.collective_pitch_max_deg - s.collective_pitch_min_deg);
         let cyc = self.cyclic_per_unit_deg();
-        // roll right: A1 < 0; pitch up: B1 < 0 (MODEL.md §2)
+        // roll right: A1 < 0; pitch up: B1 < 0 (thesis Table 4.1)
         let a1_deg = -cyc * o.roll;
         let b1_deg = -cyc * o.pitch;
         let mid = 0.5 * (s.tail_pitch_at_yaw_max_deg + s.tail_pitch_at_yaw_min_deg);
