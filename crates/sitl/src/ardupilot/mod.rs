@@ -176,6 +176,15 @@ pub enum ArduPilotError {
         #[source]
         source: std::io::Error,
     },
+    /// The output folder could not be created.
+    #[error("{path}: cannot create: {source}")]
+    Folder {
+        /// The folder.
+        path: String,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
     /// Building the hardware.
     #[error(transparent)]
     Prepare(#[from] ClosedLoopError),
@@ -249,8 +258,8 @@ impl ArduPilotServer {
         };
         let log_csv = options.out_dir.as_ref().map(|d| d.join("log.csv"));
         if let Some(d) = &options.out_dir {
-            std::fs::create_dir_all(d).map_err(|e| ArduPilotError::Socket {
-                address: d.display().to_string(),
+            std::fs::create_dir_all(d).map_err(|e| ArduPilotError::Folder {
+                path: d.display().to_string(),
                 source: e,
             })?;
         }
