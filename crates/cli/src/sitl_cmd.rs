@@ -310,11 +310,13 @@ fn run_ardupilot(a: &SitlArgs, address: &str) -> Result<()> {
         .with_context(|| format!("scenario `{}`: ArduPilot JSON physics", case.name))?;
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     sitl::write_timing(&out, &helicon_sitl::ardupilot::timing_json(&r))?;
-    if let Some(summary) = &r.summary {
-        if r.log_rows > 0 {
-            finish_run(&out, &case, &prepared, summary, r.log_rows)
-                .with_context(|| format!("writing the run outputs to {}", out.display()))?;
-        }
+    if let Some(summary) = &r.summary
+        && r.log_rows > 0
+    {
+        let mut summary = summary.clone();
+        mark_stopped(&stop, &mut summary);
+        finish_run(&out, &case, &prepared, &summary, r.log_rows)
+            .with_context(|| format!("writing the run outputs to {}", out.display()))?;
     }
     let c = &r.counts;
     writeln!(
@@ -351,6 +353,14 @@ fn run_ardupilot(a: &SitlArgs, address: &str) -> Result<()> {
         },
         out.display()
     );
+    // a signal ends the run as in the other modes: its files complete, exit 130/143
+    if let Some(e) = stop.stopped(format!(
+        "timing.json and the run folder of {} are complete",
+        out.display()
+    )) {
+        let _ = con.finish();
+        return Err(e.into());
+    }
     con.finish()?;
     Ok(())
 }
