@@ -89,7 +89,11 @@ fn a_run_serves_frames_and_sigint_writes_its_files() {
     }
     let v: serde_json::Value = serde_json::from_str(last.trim()).unwrap();
     assert_eq!(v["timestamp"].as_f64().unwrap(), 2.0);
-    kill(Pid::from_raw(child.id() as i32), Signal::SIGINT).unwrap();
+    kill(
+        Pid::from_raw(i32::try_from(child.id()).unwrap()),
+        Signal::SIGINT,
+    )
+    .unwrap();
     let status = child.wait().unwrap();
     assert_eq!(
         status.code(),
