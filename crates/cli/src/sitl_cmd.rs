@@ -4,7 +4,9 @@
 //! drivers. Writes the on-board `flight.ulg`, the truth `log.csv`,
 //! `timing.json`, and the run folder of `helicon sim` (summary, gains,
 //! scenario, plots, report). With `--gcs` the ground station's navigator
-//! flies instead of the scenario's references.
+//! flies instead of the scenario's references. With `--ardupilot-json [ADDR]`
+//! it is ArduPilot's JSON physics backend instead (`helicon_sitl::ardupilot`):
+//! ArduPilot's SITL flies the model; `timing.json` and the run folder.
 
 use crate::console::Console;
 use crate::signals::{Stop, mark_stopped};
@@ -88,6 +90,26 @@ pub struct SitlArgs {
     /// on-board log — unless `--duration` is given.
     #[arg(long, value_name = "ADDRESS", conflicts_with_all = ["manual_at", "rc_failsafe_at", "rc_silent_at"])]
     pub gcs: Option<String>,
+    /// Be ArduPilot's JSON physics backend instead of flying helicon's
+    /// on-board program: listen for ArduPilot SITL's servo packets on UDP
+    /// `ADDR` (default 127.0.0.1:9002; start ArduPilot with `--model
+    /// JSON:HOST`), step the model one frame per new frame count, answer
+    /// its state. The helicopter starts on the ground, rotor stopped
+    /// (landing gear, drivetrain, ground effect on), the engine from the
+    /// throttle output; the run lasts until stopped (Ctrl-C), at most
+    /// `--duration` (default 3600 s). See docs/ardupilot-px4.md.
+    #[arg(
+        long,
+        value_name = "ADDR",
+        num_args = 0..=1,
+        default_missing_value = helicon_sitl::ardupilot::DEFAULT_ADDRESS,
+        conflicts_with_all = ["gcs", "speed", "gps_loss_at", "manual_at", "rc_failsafe_at", "rc_silent_at", "no_sched_fifo"]
+    )]
+    pub ardupilot_json: Option<String>,
+    /// The `[ardupilot]` mapping of ArduPilot's servo outputs (TOML; default
+    /// the Bergen Twin's, `examples/ardupilot/bergen_twin.toml`).
+    #[arg(long, value_name = "FILE", requires = "ardupilot_json")]
+    pub ardupilot_config: Option<PathBuf>,
     #[command(flatten)]
     pub log: LogArgs,
 }
@@ -224,8 +246,135 @@ fn gcs_duration_s(
     (0.99 * by_log.min(by_work)).max(ts)
 }
 
+/// `helicon sitl --ardupilot-json`: helicon as ArduPilot's physics.
+fn run_ardupilot(a: &SitlArgs, address: &str) -> Result<()> {
+    use helicon_sitl::ardupilot::{
+        ArduPilotMap, ArduPilotOptions, ArduPilotSection, ArduPilotServer, BERGEN_TWIN_TOML, Ending,
+    };
+    let duration = a.duration.or(Some(3600.0));
+    let o = overrides_from(None, None, duration)?;
+    let source = format!("{}{}", a.scenario.display(), overrides_label(&o));
+    let base = Scenario::from_file(&a.scenario)?.with_overrides(&o, &source)?;
+    let cases = base.cases();
+    if cases.len() > 1 {
+        anyhow::bail!(
+            "{source}: {} cases; ArduPilot flies one helicopter at a time (give a scenario without [[case]])",
+            cases.len()
+        );
+    }
+    let mut case = base.clone();
+    let out = a.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out").join(format!("ardupilot-{}", folder_name(&case.name)))
+    });
+    let mut con = Console::stdout();
+    let (grounded, params) = sitl::ground_start(&case)
+        .with_context(|| format!("scenario `{}`: putting it on the ground", case.name))?;
+    let prepared = helicon_sim::closed_loop::prepare_with_params(&grounded, params)
+        .with_context(|| format!("scenario `{}`: preparing the design point", grounded.name))?;
+    case = grounded;
+    let (section, file) = match &a.ardupilot_config {
+        Some(path) => (
+            ArduPilotSection::from_file(path)?,
+            path.display().to_string(),
+        ),
+        None => (
+            ArduPilotSection::from_toml_str(
+                BERGEN_TWIN_TOML,
+                "examples/ardupilot/bergen_twin.toml",
+            )?,
+            "examples/ardupilot/bergen_twin.toml".to_string(),
+        ),
+    };
+    let map = ArduPilotMap::new(section, prepared.model.params(), &file)?;
+    let log_stride = plan_log(&case, &prepared, &a.log)?;
+    let server = ArduPilotServer::bind(address)?;
+    let stop = Stop::install()?;
+    writeln!(
+        con,
+        "{}: ArduPilot JSON physics on udp {} ({}), on the ground, rotor stopped; waiting for ArduPilot's SITL (sim_vehicle.py -v ArduCopter -f heli --model JSON:{}); Ctrl-C ends, at most {:.0} s of model time",
+        case.name,
+        server.local_addr(),
+        file,
+        server.local_addr().ip(),
+        case.duration_s
+    );
+    let options = ArduPilotOptions {
+        out_dir: Some(out.clone()),
+        log_stride,
+        stop: Some(stop.flag().clone()),
+        silence_timeout: None,
+        max_frames: None,
+    };
+    let r = server
+        .run(&case, &prepared, &map, &options)
+        .with_context(|| format!("scenario `{}`: ArduPilot JSON physics", case.name))?;
+    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    sitl::write_timing(&out, &helicon_sitl::ardupilot::timing_json(&r))?;
+    if let Some(summary) = &r.summary
+        && r.log_rows > 0
+    {
+        let mut summary = summary.clone();
+        mark_stopped(&stop, &mut summary);
+        finish_run(&out, &case, &prepared, &summary, r.log_rows)
+            .with_context(|| format!("writing the run outputs to {}", out.display()))?;
+    }
+    let c = &r.counts;
+    writeln!(
+        con,
+        "{}: {}; {} frames at {} Hz ({:.3} s of model time in the last session), {:.0} frames/s, {:.1}x real time; {} repeats, {} restarts, {} gaps, {} malformed packets, {} frames at another rate",
+        case.name,
+        match &r.ending {
+            Ending::Stopped => "stopped".to_string(),
+            Ending::Silent => "the autopilot went silent".to_string(),
+            Ending::FrameLimit => "frame limit".to_string(),
+            Ending::Simulation(t, why) => format!(
+                "{t}{}",
+                why.as_deref().map_or(String::new(), |w| format!(" ({w})"))
+            ),
+        },
+        c.frames,
+        r.frame_rate_hz.map_or("-".to_string(), |f| f.to_string()),
+        r.model_time_s,
+        r.frames_per_s,
+        r.speed_x,
+        c.repeats,
+        c.restarts,
+        c.gaps,
+        c.malformed(),
+        c.rate_mismatches
+    );
+    writeln!(
+        con,
+        "  wrote timing.json{} to {}",
+        if r.log_rows > 0 {
+            ", log.csv, summary.json, plots"
+        } else {
+            ""
+        },
+        out.display()
+    );
+    // a signal ends the run as in the other modes: its files complete, exit 130/143
+    if let Some(e) = stop.stopped(format!(
+        "timing.json and the run folder of {} are complete",
+        out.display()
+    )) {
+        let _ = con.finish();
+        return Err(e.into());
+    }
+    con.finish()?;
+    Ok(())
+}
+
 /// Run `helicon sitl`.
 pub fn run(a: &SitlArgs) -> Result<()> {
+    match &a.ardupilot_json {
+        Some(address) => run_ardupilot(a, address),
+        None => run_onboard(a),
+    }
+}
+
+/// `helicon sitl` flying helicon's on-board program.
+fn run_onboard(a: &SitlArgs) -> Result<()> {
     check_time("--gps-loss-at", a.gps_loss_at)?;
     check_time("--manual-at", a.manual_at)?;
     check_time("--manual-until", a.manual_until)?;

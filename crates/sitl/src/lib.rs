@@ -24,6 +24,8 @@
 //! state (as `helicon sim` aligns its navigation), armed, and flies the
 //! scenario's references (the ground station's mission uplink).
 
+pub mod ardupilot;
+
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;
 use helicon_devices::avionics::{AvionicsMessage, RcInput as RcFrame};

@@ -64,9 +64,20 @@ pub struct Hardware<'a> {
 }
 
 impl<'a> Hardware<'a> {
-    /// The hardware of a prepared scenario, at its initial state.
+    /// The hardware of a prepared scenario, at its initial state, stepped at
+    /// the flight software's control period (the gains' sample time).
     pub fn new(scenario: &'a Scenario, prepared: &'a Prepared) -> Result<Self, ClosedLoopError> {
-        let ts = prepared.gains.set.sample_time_s;
+        Self::new_at(scenario, prepared, prepared.gains.set.sample_time_s)
+    }
+
+    /// The same hardware stepped at the period `ts` (s) of an outside
+    /// autopilot (ArduPilot's frame rate, say) instead of the gains' one: the
+    /// plant's step, the sensor models and the wind are all sampled at `ts`.
+    pub fn new_at(
+        scenario: &'a Scenario,
+        prepared: &'a Prepared,
+        ts: f64,
+    ) -> Result<Self, ClosedLoopError> {
         let (n, _) = sample_counts(scenario, ts);
         let p = prepared.model.params();
         let g = p.environment.g_m_s2;
