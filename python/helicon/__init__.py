@@ -303,7 +303,8 @@ def sim(
     list of SimResult
         One per ``[[case]]`` of the scenario (one when it has none).
 
-    Ctrl-C stops the call between cases (a case, once started, flies to its end).
+    Ctrl-C stops the flight being flown at its next controller sample and raises
+    ``KeyboardInterrupt``.
     """
     raw = _helicon.sim(
         _fspath(scenario),

@@ -843,9 +843,12 @@ fn sim<'py>(
         } else {
             format!("{label}, case `{case_label}`")
         };
-        let r = py
-            .detach(|| logs::fly_case(&case_label, &case, &opts.params, &src))
-            .map_err(err)?;
+        // Ctrl-C stops the flight at its next controller sample
+        let stop = AtomicBool::new(false);
+        let r = interruptible(py, &stop, "the flight", || {
+            logs::fly_case(&case_label, &case, &opts.params, &src, &stop)
+        })?
+        .map_err(err)?;
         let log = PyDict::new(py);
         for (name, col) in names.iter().zip(r.columns) {
             log.set_item(*name, PyArray1::from_vec(py, col))?;
@@ -861,6 +864,42 @@ fn sim<'py>(
         py.check_signals()?;
     }
     Ok(out)
+}
+
+/// Run `work` on a worker thread with the GIL released while this thread
+/// checks for Python signals every 50 ms: on one (Ctrl-C) it sets `stop`,
+/// which `work` polls, waits for `work` to end and raises the signal's
+/// exception. `what` names the work in the message of a worker panic.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    stop: &AtomicBool,
+    what: &str,
+    work: impl FnOnce() -> T + Send,
+) -> Res<T> {
+    let (result, interrupt) = py.detach(|| {
+        std::thread::scope(|s| {
+            let h = s.spawn(work);
+            let mut interrupt: Option<PyErr> = None;
+            while !h.is_finished() {
+                std::thread::sleep(Duration::from_millis(50));
+                if interrupt.is_none()
+                    && let Err(e) = Python::attach(|py| py.check_signals())
+                {
+                    stop.store(true, Ordering::Relaxed);
+                    interrupt = Some(e);
+                }
+            }
+            (h.join(), interrupt)
+        })
+    });
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    result.map_err(|_| {
+        herr(format!(
+            "internal error: the worker thread of {what} panicked"
+        ))
+    })
 }
 
 // ---------------------------------------------------------------- mc
@@ -890,36 +929,17 @@ fn mc<'py>(
     let c = load_campaign(&campaign, seed, duration, params).map_err(err)?;
     let stop = AtomicBool::new(false);
     let done = AtomicUsize::new(0);
-    // the campaign on a worker thread; this thread checks for Ctrl-C and
-    // stops the campaign between runs
-    let (result, interrupt) = py.detach(|| {
-        std::thread::scope(|s| {
-            let h = s.spawn(|| run_campaign(&c, runs, threads, &stop, &done));
-            let mut interrupt: Option<PyErr> = None;
-            while !h.is_finished() {
-                std::thread::sleep(Duration::from_millis(50));
-                if interrupt.is_none()
-                    && let Err(e) = Python::attach(|py| py.check_signals())
-                {
-                    stop.store(true, Ordering::Relaxed);
-                    interrupt = Some(e);
-                }
-            }
-            (h.join(), interrupt)
-        })
-    });
-    if let Some(e) = interrupt {
-        return Err(e);
-    }
-    let run = result
-        .map_err(|_| herr("internal error: the campaign's worker thread panicked"))?
-        .map_err(|e| {
-            if e.message() == INTERRUPTED {
-                herr("the campaign was interrupted")
-            } else {
-                err(e)
-            }
-        })?;
+    // stopped between runs on Ctrl-C
+    let run = interruptible(py, &stop, "the campaign", || {
+        run_campaign(&c, runs, threads, &stop, &done)
+    })?
+    .map_err(|e| {
+        if e.message() == INTERRUPTED {
+            herr("the campaign was interrupted")
+        } else {
+            err(e)
+        }
+    })?;
     let cols = PyDict::new(py);
     let rec = |f: &dyn Fn(&helicon_sim::mc::RunRecord) -> f64| -> Vec<f64> {
         run.runs.iter().map(|o| f(&o.record)).collect()

@@ -7,11 +7,12 @@
 
 use crate::error::{Error, Result};
 use helicon_model::Params;
-use helicon_sim::closed_loop::{Flight, LogRow, fly, prepare, prepare_with_params};
+use helicon_sim::closed_loop::{Flight, LogRow, fly_until, prepare, prepare_with_params};
 use helicon_sim::log_csv::LOG_SCHEMA;
 use helicon_sim::scenario::{Scenario, ScenarioOverrides, num};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 
 /// The plant parameters of a flight.
 #[derive(Debug, Clone, Default)]
@@ -134,12 +135,15 @@ pub fn cases(scenario: &Scenario) -> Vec<(String, Scenario)> {
 }
 
 /// Prepare and fly one case (`source` names it in errors), keeping the log
-/// in memory. A divergence is an outcome, not an error.
+/// in memory. A divergence is an outcome, not an error. Once `stop` is set
+/// (from another thread) the flight ends after the sample being flown, with
+/// the outcome `stopped`.
 pub fn fly_case(
     label: &str,
     case: &Scenario,
     params: &ParamsSource,
     source: &str,
+    stop: &AtomicBool,
 ) -> Result<CaseResult> {
     let prepared = match params {
         ParamsSource::Value(p) => prepare_with_params(case, **p),
@@ -152,7 +156,7 @@ pub fn fly_case(
         ))
     })?;
     case.check_work(source, prepared.gains.set.sample_time_s)?;
-    let flight: Flight = fly(case, &prepared, None).map_err(|e| {
+    let flight: Flight = fly_until(case, &prepared, None, stop).map_err(|e| {
         Error::from(e).context(&format!("scenario `{}`: setting up the flight", case.name))
     })?;
     let summary = serde_json::to_value(&flight.summary)
@@ -189,7 +193,14 @@ mod tests {
         assert_eq!(label, "test.toml (with seed=3)");
         let cs = cases(&s);
         assert_eq!(cs.len(), 1);
-        let r = fly_case(&cs[0].0, &cs[0].1, &ParamsSource::Scenario, &label).unwrap();
+        let r = fly_case(
+            &cs[0].0,
+            &cs[0].1,
+            &ParamsSource::Scenario,
+            &label,
+            &AtomicBool::new(false),
+        )
+        .unwrap();
         assert_eq!(r.columns.len(), column_names().len());
         assert_eq!(r.outcome, "completed");
         assert_eq!(r.summary["wind_seed"], serde_json::json!(3));

@@ -1,4 +1,4 @@
-"""The GIL is released during long calls, and Ctrl-C stops a campaign between runs."""
+"""The GIL is released during long calls, and Ctrl-C stops a campaign between runs and a flight within its run."""
 
 from __future__ import annotations
 
@@ -76,6 +76,48 @@ def test_ctrl_c_stops_a_campaign_between_runs(tmp_path):
     except subprocess.TimeoutExpired:
         p.kill()
         raise AssertionError("the campaign did not stop on SIGINT")
+    assert p.returncode == 3, (out, err)
+    assert "interrupted" in out
+    assert time.monotonic() - t0 < 10
+
+
+def test_ctrl_c_stops_one_long_flight(tmp_path):
+    # ten hours of flight (about a minute of work): without a stop inside the
+    # flight, Ctrl-C would wait for its end
+    scen = tmp_path / "long.toml"
+    scen.write_text(
+        textwrap.dedent(
+            """
+            name = "ten hours"
+            duration_s = 36000.0
+            [log]
+            decimation = 1000
+            """
+        )
+    )
+    code = textwrap.dedent(
+        f"""
+        import sys, helicon
+        print("started", flush=True)
+        try:
+            helicon.sim({str(scen)!r})
+        except KeyboardInterrupt:
+            print("interrupted", flush=True)
+            sys.exit(3)
+        print("finished", flush=True)
+        """
+    )
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert p.stdout is not None
+    assert p.stdout.readline().strip() == "started"
+    time.sleep(1.5)
+    t0 = time.monotonic()
+    os.kill(p.pid, signal.SIGINT)
+    try:
+        out, err = p.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        raise AssertionError("the flight did not stop on SIGINT")
     assert p.returncode == 3, (out, err)
     assert "interrupted" in out
     assert time.monotonic() - t0 < 10

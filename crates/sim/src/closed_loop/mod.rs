@@ -444,6 +444,19 @@ pub fn fly(
     fly_with(scenario, prepared, None, progress, None)
 }
 
+/// As [`fly`] (the log in memory), checking `stop` once per controller
+/// sample: once it is set the flight ends after the sample being flown, as
+/// [`Termination::Stopped`]. For a caller that stops a flight from another
+/// thread (the Python package's Ctrl-C).
+pub fn fly_until(
+    scenario: &Scenario,
+    prepared: &Prepared,
+    progress: Option<Progress<'_>>,
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<Flight, ClosedLoopError> {
+    fly_with(scenario, prepared, None, progress, Some(stop))
+}
+
 /// As [`fly`], writing each kept log row to `log` as it is flown (memory
 /// independent of the duration; [`Flight::log`] stays empty).
 pub fn fly_to(
