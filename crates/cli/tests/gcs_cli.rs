@@ -1,6 +1,10 @@
 //! `helicon gcs` against the ground-station server (fed a vehicle status by
 //! the test): it hears the helicopter and prints its state; a bad address
-//! or duration is an error naming it.
+//! or duration is an error naming it. And flying: `helicon sitl --gcs`
+//! (lock-step) flown by a `helicon gcs` script piped to its stdin — arm,
+//! takeoff, mission upload and download, parameters, land; a refused
+//! command and a bad mission file fail the script; `tcp:` against a
+//! listener in the test; vehicles kept apart by system id.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 use helicon_core::Reference;
@@ -10,7 +14,13 @@ use helicon_gcs::link::{Downlink, FlightMode, VehicleEvent, VehicleStatus, chann
 use helicon_gcs::navigator::{NavEvent, NavMode, NavigatorConfig};
 use helicon_gcs::server::{self, ServerConfig, default_rates_hz};
 use nalgebra::Vector3;
-use std::process::Command;
+use helicon_gcs::mavlink::dialects::common::{
+    HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType,
+};
+use helicon_gcs::mavlink::{MavHeader, write_v2_msg};
+use std::io::Write;
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
 
 fn status(t_s: f64) -> VehicleStatus {
     VehicleStatus {
@@ -67,6 +77,7 @@ fn gcs_monitor_hears_the_helicopter() {
             "--duration-s",
             "2.5",
         ])
+        .stdin(std::process::Stdio::null())
         .stdout(std::process::Stdio::piped())
         .spawn()
         .unwrap();
@@ -100,10 +111,14 @@ fn gcs_monitor_hears_the_helicopter() {
 #[test]
 fn gcs_monitor_bad_input_named() {
     for (args, want) in [
-        (vec!["gcs", "tcp:1.2.3.4:5"], "address `tcp:1.2.3.4:5`"),
+        (vec!["gcs", "tcpin:1.2.3.4:5"], "address `tcpin:1.2.3.4:5`"),
         (
             vec!["gcs", "udpin:127.0.0.1:0", "--duration-s", "nan"],
-            "--duration-s NaN",
+            "--duration NaN",
+        ),
+        (
+            vec!["gcs", "udpin:127.0.0.1:0", "--timeout", "0"],
+            "--timeout 0",
         ),
         (
             vec!["gcs", "udpin:nohost:x", "--duration-s", "1"],
@@ -112,10 +127,255 @@ fn gcs_monitor_bad_input_named() {
     ] {
         let o = Command::new(env!("CARGO_BIN_EXE_helicon"))
             .args(&args)
+            .stdin(std::process::Stdio::null())
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{args:?}");
         assert!(err.contains(want), "{args:?}: {err}");
     }
+}
+
+fn free_udp_port() -> u16 {
+    std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+fn repo(path: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(path)
+        .display()
+        .to_string()
+}
+
+/// `helicon sitl` of the demo scenario flown from the ground (lock-step,
+/// at most 300 simulated s) with its server sending to `port`.
+fn sitl(port: u16, out: &Path) -> std::process::Child {
+    Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .args([
+            "sitl",
+            &repo("scenarios/demo.toml"),
+            "--out",
+            &out.display().to_string(),
+            "--gcs",
+            &format!("udpout:127.0.0.1:{port}"),
+            "--duration",
+            "300",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap()
+}
+
+/// `helicon gcs udpin:127.0.0.1:PORT` with `script` on its stdin.
+fn gcs(port: u16, script: &str, extra: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .args(["gcs", &format!("udpin:127.0.0.1:{port}")])
+        .args(extra)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(script.as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
+/// Stop a SITL run (SIGINT: it ends as after Ctrl-C) and wait for it.
+fn stop(mut child: std::process::Child) {
+    let _ = nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(child.id() as i32),
+        nix::sys::signal::Signal::SIGINT,
+    );
+    let _ = child.wait();
+}
+
+#[test]
+fn gcs_script_flies_the_sitl() {
+    let dir = helicon_test_support::tmpdir("gcs_script");
+    let dir_path = dir.to_path_buf();
+    let port = free_udp_port();
+    let back = dir_path.join("back.waypoints");
+    let mission = repo("examples/gcs/square.waypoints");
+    let script = format!(
+        "# a first flight\n\
+         param get NAV_TKOFF_ALT\n\
+         arm\n\
+         wait armed\n\
+         takeoff 3\n\
+         wait mode HOLD\n\
+         \n\
+         mission upload {mission}\n\
+         mission download {}\n\
+         param set NAV_TKOFF_ALT 4\n\
+         param get NAV_TKOFF_ALT\n\
+         land\n\
+         wait landed\n\
+         quit\n",
+        back.display()
+    );
+    let vehicle = sitl(port, &dir_path.join("out"));
+    let out = gcs(port, &script, &["--timeout", "30"]);
+    stop(vehicle);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{text}\n{err}");
+    for want in [
+        "param get NAV_TKOFF_ALT: NAV_TKOFF_ALT = 5",
+        "arm: MAV_RESULT_ACCEPTED",
+        "wait armed: done",
+        "takeoff 3: MAV_RESULT_ACCEPTED",
+        "wait mode HOLD: done",
+        "MAV_MISSION_ACCEPTED (4 items)",
+        ": 4 items",
+        "param set NAV_TKOFF_ALT 4: NAV_TKOFF_ALT = 4",
+        "param get NAV_TKOFF_ALT: NAV_TKOFF_ALT = 4",
+        "land: MAV_RESULT_ACCEPTED",
+        "wait landed: done",
+    ] {
+        assert!(text.contains(want), "no `{want}` in\n{text}\n{err}");
+    }
+    // the mission downloaded is the file uploaded, byte for byte
+    assert_eq!(
+        std::fs::read_to_string(&back).unwrap(),
+        std::fs::read_to_string(&mission).unwrap()
+    );
+}
+
+#[test]
+fn gcs_refusal_and_bad_mission_fail_the_script() {
+    let dir = helicon_test_support::tmpdir("gcs_refusal");
+    let dir_path = dir.to_path_buf();
+    let bad = dir_path.join("bad.waypoints");
+    std::fs::write(
+        &bad,
+        "QGC WPL 110\n0\t1\t3\t22\t0\t0\t0\t0\t0\t0\t3\t1\n1\t0\t3\t16\t0\t0\t0\t0\t57.01\tnan\t3\t1\n",
+    )
+    .unwrap();
+    let port = free_udp_port();
+    let vehicle = sitl(port, &dir_path.join("out"));
+    // land while disarmed: refused; then a mission file with a NaN
+    let script = format!(
+        "land\nmission upload {}\nmode ACRO\nparam get NO_SUCH_PARAM\n",
+        bad.display()
+    );
+    let out = gcs(port, &script, &["--timeout", "10"]);
+    stop(vehicle);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{text}\n{err}");
+    assert!(err.contains("error: land: refused: MAV_RESULT_DENIED"), "{err}");
+    assert!(
+        err.contains(&format!("{}:3: y (longitude) `nan`: not finite", bad.display())),
+        "{err}"
+    );
+    assert!(err.contains("mode `ACRO`"), "{err}");
+    assert!(err.contains("4 command(s) failed"), "{err}");
+}
+
+fn heartbeat_frame(sysid: u8, seq: u8, armed: bool) -> Vec<u8> {
+    let mut b = Vec::new();
+    write_v2_msg(
+        &mut b,
+        MavHeader {
+            system_id: sysid,
+            component_id: 1,
+            sequence: seq,
+        },
+        &MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            custom_mode: helicon_gcs::modes::custom_mode(4, 3),
+            mavtype: MavType::MAV_TYPE_HELICOPTER,
+            autopilot: MavAutopilot::MAV_AUTOPILOT_PX4,
+            base_mode: if armed {
+                MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED
+                    | MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+            } else {
+                MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED
+            },
+            system_status: MavState::MAV_STATE_ACTIVE,
+            mavlink_version: 3,
+        }),
+    )
+    .unwrap();
+    b
+}
+
+#[test]
+fn gcs_tcp_client_hears_a_vehicle() {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let server = std::thread::spawn(move || {
+        let (mut s, _) = listener.accept().unwrap();
+        for k in 0..12u8 {
+            // split a frame across writes: the client reassembles it (the
+            // client may have ended: a failed write ends the stream)
+            let f = heartbeat_frame(7, k, true);
+            let (a, b) = f.split_at(5);
+            if s.write_all(a).is_err() {
+                return;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            if s.write_all(b).is_err() {
+                return;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(80));
+        }
+    });
+    let out = Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .args(["gcs", &format!("tcp:127.0.0.1:{port}"), "--duration", "1.5"])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    server.join().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("vehicle 7: MAV_TYPE_HELICOPTER ARMED    HOLD"),
+        "{text}"
+    );
+}
+
+#[test]
+fn gcs_keeps_vehicles_apart_and_tells_a_quiet_one() {
+    let port = free_udp_port();
+    let child = Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .args(["gcs", &format!("udpin:127.0.0.1:{port}"), "--duration", "5.5"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let a = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let b = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let to = format!("127.0.0.1:{port}");
+    // vehicle 2 speaks for the first second only; vehicle 3 throughout
+    for k in 0..50u8 {
+        if k < 10 {
+            a.send_to(&heartbeat_frame(2, k, true), &to).unwrap();
+        }
+        b.send_to(&heartbeat_frame(3, k, false), &to).unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    let out = child.wait_with_output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("vehicle 2: MAV_TYPE_HELICOPTER ARMED"), "{text}");
+    assert!(text.contains("vehicle 3: MAV_TYPE_HELICOPTER disarmed"), "{text}");
+    assert!(text.contains("vehicle 2: no heartbeat for"), "{text}");
+    // the last lines: vehicle 2 quiet, not its last state repeated
+    let last2 = text
+        .lines()
+        .filter(|l| l.starts_with("vehicle 2:"))
+        .last()
+        .unwrap();
+    assert!(last2.contains("no heartbeat for"), "{last2}");
 }
