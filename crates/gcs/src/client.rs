@@ -719,3 +719,268 @@ pub fn gcs_heartbeat() -> MavMessage {
         mavlink_version: 3,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header(sysid: u8) -> MavHeader {
+        MavHeader {
+            system_id: sysid,
+            component_id: 1,
+            sequence: 0,
+        }
+    }
+
+    /// A fleet that has heard vehicle 1 (home 20 m AMSL).
+    fn fleet() -> Fleet {
+        let mut f = Fleet::default();
+        let hb = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            mavtype: MavType::MAV_TYPE_HELICOPTER,
+            ..HEARTBEAT_DATA::DEFAULT
+        });
+        f.on_message(&header(1), &hb, 0.0);
+        let home = MavMessage::HOME_POSITION(HOME_POSITION_DATA {
+            altitude: 20_000,
+            ..HOME_POSITION_DATA::DEFAULT
+        });
+        f.on_message(&header(1), &home, 0.0);
+        f
+    }
+
+    fn ack(command: MavCmd, result: MavResult) -> MavMessage {
+        MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+            command,
+            result,
+            target_system: GCS_SYSTEM_ID,
+            ..COMMAND_ACK_DATA::DEFAULT
+        })
+    }
+
+    #[test]
+    fn a_command_is_resent_with_confirmation_until_acknowledged() {
+        let f = fleet();
+        let arm = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
+        let mut params = [0.0; 7];
+        params[0] = 1.0;
+        let mut op = Operation::new(
+            Request::Command {
+                command: arm,
+                params,
+            },
+            1,
+            0.0,
+            10.0,
+        )
+        .unwrap();
+        let s = op.poll(&f, 0.0);
+        let conf = |s: &Step| match &s.send[..] {
+            [MavMessage::COMMAND_LONG(c)] => (c.command, c.confirmation, c.param1),
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(conf(&s), (arm, 0, 1.0));
+        assert!(op.poll(&f, 0.5).send.is_empty());
+        assert_eq!(conf(&op.poll(&f, 1.1)), (arm, 1, 1.0));
+        // another vehicle's ack, another command's ack: not this one's
+        assert_eq!(
+            op.on_message(2, &ack(arm, MavResult::MAV_RESULT_ACCEPTED), 1.2)
+                .done,
+            None
+        );
+        let land = ack(MavCmd::MAV_CMD_NAV_LAND, MavResult::MAV_RESULT_ACCEPTED);
+        assert_eq!(op.on_message(1, &land, 1.2).done, None);
+        let inprog = ack(arm, MavResult::MAV_RESULT_IN_PROGRESS);
+        assert_eq!(op.on_message(1, &inprog, 1.3).done, None);
+        let done = op
+            .on_message(1, &ack(arm, MavResult::MAV_RESULT_DENIED), 1.4)
+            .done;
+        assert_eq!(
+            done,
+            Some(Err(ClientError::Refused("MAV_RESULT_DENIED".into())))
+        );
+    }
+
+    #[test]
+    fn a_command_times_out_after_its_sends() {
+        let f = fleet();
+        let mut op = Operation::new(Request::Takeoff(Some(3.0)), 1, 0.0, 100.0).unwrap();
+        let s = op.poll(&f, 0.0);
+        // param7 AMSL: home 20 m + 3 m
+        assert!(matches!(&s.send[..], [MavMessage::COMMAND_LONG(c)] if c.param7 == 23.0));
+        let mut sends = 1;
+        let mut t = 0.0;
+        loop {
+            t += 0.25;
+            let s = op.poll(&f, t);
+            sends += s.send.len();
+            if let Some(d) = s.done {
+                assert!(matches!(d, Err(ClientError::Timeout { .. })), "{d:?}");
+                break;
+            }
+            assert!(t < 20.0);
+        }
+        assert_eq!(sends, usize::from(MAX_SENDS));
+    }
+
+    #[test]
+    fn nothing_is_sent_before_the_vehicle_is_heard() {
+        let mut op = Operation::new(Request::Download, 9, 0.0, 2.0).unwrap();
+        assert!(op.poll(&fleet(), 0.0).send.is_empty());
+        let e = op.poll(&fleet(), 2.0).done.unwrap().unwrap_err();
+        assert!(e.to_string().contains("vehicle 9's heartbeat"), "{e}");
+    }
+
+    fn items(n: u16) -> Vec<MISSION_ITEM_INT_DATA> {
+        (0..n)
+            .map(|seq| MISSION_ITEM_INT_DATA {
+                seq,
+                x: 570_146_000 + i32::from(seq),
+                command: MavCmd::MAV_CMD_NAV_WAYPOINT,
+                ..MISSION_ITEM_INT_DATA::DEFAULT
+            })
+            .collect()
+    }
+
+    #[test]
+    fn an_upload_answers_the_vehicles_requests() {
+        let f = fleet();
+        let mut op = Operation::new(Request::Upload(items(3)), 1, 0.0, 10.0).unwrap();
+        let s = op.poll(&f, 0.0);
+        assert!(matches!(&s.send[..], [MavMessage::MISSION_COUNT(c)] if c.count == 3));
+        // no request yet: the count again
+        assert!(matches!(
+            &op.poll(&f, 1.1).send[..],
+            [MavMessage::MISSION_COUNT(_)]
+        ));
+        let req = |seq| {
+            MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
+                seq,
+                target_system: GCS_SYSTEM_ID,
+                ..MISSION_REQUEST_INT_DATA::DEFAULT
+            })
+        };
+        for seq in [0, 1, 1, 2] {
+            let s = op.on_message(1, &req(seq), 1.2);
+            assert!(
+                matches!(&s.send[..], [MavMessage::MISSION_ITEM_INT(i)] if i.seq == seq && i.target_system == 1)
+            );
+        }
+        // the vehicle drives now: no count repeated
+        assert!(op.poll(&f, 5.0).send.is_empty());
+        let a = MavMessage::MISSION_ACK(MISSION_ACK_DATA {
+            mavtype: MavMissionResult::MAV_MISSION_ACCEPTED,
+            target_system: GCS_SYSTEM_ID,
+            ..MISSION_ACK_DATA::DEFAULT
+        });
+        assert_eq!(
+            op.on_message(1, &a, 5.1).done,
+            Some(Ok(Outcome::Uploaded(
+                MavMissionResult::MAV_MISSION_ACCEPTED,
+                3
+            )))
+        );
+    }
+
+    #[test]
+    fn a_download_requests_each_item_and_retries() {
+        let f = fleet();
+        let want = items(2);
+        let mut op = Operation::new(Request::Download, 1, 0.0, 10.0).unwrap();
+        assert!(matches!(
+            &op.poll(&f, 0.0).send[..],
+            [MavMessage::MISSION_REQUEST_LIST(_)]
+        ));
+        let count = MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
+            count: 2,
+            target_system: GCS_SYSTEM_ID,
+            ..MISSION_COUNT_DATA::DEFAULT
+        });
+        let s = op.on_message(1, &count, 0.1);
+        assert!(matches!(&s.send[..], [MavMessage::MISSION_REQUEST_INT(r)] if r.seq == 0));
+        // item 0 lost: requested again after the item timeout
+        assert!(op.poll(&f, 1.0).send.is_empty());
+        let s = op.poll(&f, 0.1 + MISSION_RETRY_S);
+        assert!(matches!(&s.send[..], [MavMessage::MISSION_REQUEST_INT(r)] if r.seq == 0));
+        let item = |i: usize| {
+            MavMessage::MISSION_ITEM_INT(MISSION_ITEM_INT_DATA {
+                target_system: GCS_SYSTEM_ID,
+                ..want[i].clone()
+            })
+        };
+        let s = op.on_message(1, &item(0), 2.0);
+        assert!(matches!(&s.send[..], [MavMessage::MISSION_REQUEST_INT(r)] if r.seq == 1));
+        // a repeat of item 0 is not taken twice
+        assert!(op.on_message(1, &item(0), 2.1).done.is_none());
+        let s = op.on_message(1, &item(1), 2.2);
+        assert!(
+            matches!(&s.send[..], [MavMessage::MISSION_ACK(a)] if a.mavtype == MavMissionResult::MAV_MISSION_ACCEPTED)
+        );
+        assert_eq!(s.done, Some(Ok(Outcome::Downloaded(want))));
+    }
+
+    #[test]
+    fn a_parameter_set_to_another_value_is_a_refusal() {
+        let f = fleet();
+        let mut op = Operation::new(
+            Request::ParamSet("NAV_TKOFF_ALT".into(), 900.0),
+            1,
+            0.0,
+            10.0,
+        )
+        .unwrap();
+        assert!(
+            matches!(&op.poll(&f, 0.0).send[..], [MavMessage::PARAM_SET(p)] if p.param_value == 900.0)
+        );
+        let v = MavMessage::PARAM_VALUE(PARAM_VALUE_DATA {
+            param_value: 5.0,
+            param_id: "NAV_TKOFF_ALT".into(),
+            ..PARAM_VALUE_DATA::DEFAULT
+        });
+        assert_eq!(
+            op.on_message(1, &v, 0.1).done,
+            Some(Err(ClientError::ParamRefused {
+                name: "NAV_TKOFF_ALT".into(),
+                value: 5.0
+            }))
+        );
+        assert!(
+            Operation::new(
+                Request::ParamGet("A_NAME_LONGER_THAN_16".into()),
+                1,
+                0.0,
+                1.0
+            )
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn a_quiet_vehicle_is_told_and_yaw_is_wrapped() {
+        let mut f = Fleet::default();
+        let hb = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+            mavtype: MavType::MAV_TYPE_HELICOPTER,
+            ..HEARTBEAT_DATA::DEFAULT
+        });
+        let att = MavMessage::ATTITUDE(ATTITUDE_DATA {
+            yaw: 3.5,
+            ..ATTITUDE_DATA::DEFAULT
+        });
+        let h = |sequence| MavHeader {
+            sequence,
+            ..header(1)
+        };
+        f.on_message(&h(0), &hb, 0.0);
+        f.on_message(&h(1), &att, 0.5);
+        let l = f.lines(1.0).remove(0);
+        assert!(l.contains("ψ -159.5°"), "{l}");
+        assert!(l.contains("link 100 % (2 msgs)"), "{l}");
+        // two lost
+        f.on_message(&h(4), &att, 0.6);
+        assert!(f.lines(1.0)[0].contains("link 60 % (3 msgs)"));
+        let l = f.lines(10.0).remove(0);
+        assert_eq!(l, "vehicle 1: no heartbeat for 10 s");
+        assert_eq!(wrap_deg(std::f64::consts::PI), 180.0);
+        assert!((wrap_deg(-std::f64::consts::PI) - 180.0).abs() < 1e-9);
+        assert!((wrap_deg(7.0_f64.to_radians() + 4.0 * std::f64::consts::PI) - 7.0).abs() < 1e-9);
+    }
+}
