@@ -7,8 +7,7 @@
 
 use anyhow::{Context, Result, bail};
 use helicon_gcs::client::{
-    self, ClientError, Fleet, GCS_COMPONENT_ID, GCS_SYSTEM_ID, Operation, Outcome, Request,
-    WaitFor,
+    self, Fleet, GCS_COMPONENT_ID, GCS_SYSTEM_ID, Operation, Outcome, Request, WaitFor,
 };
 use helicon_gcs::mavlink::dialects::common::*;
 use helicon_gcs::mavlink::{MavHeader, MavlinkReader};
@@ -59,7 +58,9 @@ impl Link {
             .split_once(':')
             .filter(|(s, _)| matches!(*s, "udpin" | "udpout" | "tcp"))
             .ok_or_else(|| {
-                anyhow::anyhow!(named("expected udpin:HOST:PORT, udpout:HOST:PORT or tcp:HOST:PORT"))
+                anyhow::anyhow!(named(
+                    "expected udpin:HOST:PORT, udpout:HOST:PORT or tcp:HOST:PORT"
+                ))
             })?;
         let addr = host
             .to_socket_addrs()
@@ -68,9 +69,8 @@ impl Link {
             .ok_or_else(|| anyhow::anyhow!(named("resolves to no address")))?;
         match scheme {
             "tcp" => {
-                let stream =
-                    TcpStream::connect_timeout(&addr, Duration::from_secs_f64(timeout_s))
-                        .with_context(|| named("connecting"))?;
+                let stream = TcpStream::connect_timeout(&addr, Duration::from_secs_f64(timeout_s))
+                    .with_context(|| named("connecting"))?;
                 stream
                     .set_read_timeout(Some(Duration::from_millis(20)))
                     .with_context(|| named("socket"))?;
@@ -223,7 +223,9 @@ fn parse_line(line: &str, timeout_s: f64) -> Result<Line> {
     let words: Vec<&str> = line.split_whitespace().collect();
     let number = |w: Option<&&str>, what: &str| -> Result<f64> {
         let w = w.with_context(|| format!("expected {what}"))?;
-        let v: f64 = w.parse().with_context(|| format!("{what} `{w}`: not a number"))?;
+        let v: f64 = w
+            .parse()
+            .with_context(|| format!("{what} `{w}`: not a number"))?;
         if !v.is_finite() {
             bail!("{what} `{w}`: not finite");
         }
@@ -316,7 +318,10 @@ fn answer(line: &str, outcome: Outcome) -> Result<String> {
         Outcome::Command(r) => format!("{line}: {r:?}"),
         Outcome::Uploaded(r, n) => format!("{line}: {r:?} ({n} items)"),
         Outcome::Downloaded(items) => {
-            let file = line.split_whitespace().nth(2).unwrap_or("mission.waypoints");
+            let file = line
+                .split_whitespace()
+                .nth(2)
+                .unwrap_or("mission.waypoints");
             wpl::write(&PathBuf::from(file), &items)?;
             format!("{line}: {} items", items.len())
         }
@@ -334,7 +339,10 @@ pub fn run(args: &GcsArgs) -> Result<()> {
         bail!("--duration {d}: must be a positive number of seconds");
     }
     if !(args.timeout.is_finite() && args.timeout > 0.0) {
-        bail!("--timeout {}: must be a positive number of seconds", args.timeout);
+        bail!(
+            "--timeout {}: must be a positive number of seconds",
+            args.timeout
+        );
     }
     let mut link = Link::open(&args.address, args.timeout)?;
     let (tx, rx) = mpsc::channel::<Option<String>>();
@@ -388,7 +396,10 @@ pub fn run(args: &GcsArgs) -> Result<()> {
             match &m {
                 MavMessage::STATUSTEXT(x) => {
                     let text = x.text.to_str().unwrap_or("?").trim_end_matches('\0');
-                    println!("[{now:8.1} s] vehicle {}: {:?}: {text}", h.system_id, x.severity);
+                    println!(
+                        "[{now:8.1} s] vehicle {}: {:?}: {text}",
+                        h.system_id, x.severity
+                    );
                 }
                 MavMessage::MISSION_ITEM_REACHED(x) => {
                     println!(
@@ -428,7 +439,10 @@ pub fn run(args: &GcsArgs) -> Result<()> {
         if let Some(done) = finished
             && let Some((line, _)) = op.take()
         {
-            match done.map_err(anyhow::Error::from).and_then(|o| answer(&line, o)) {
+            match done
+                .map_err(anyhow::Error::from)
+                .and_then(|o| answer(&line, o))
+            {
                 Ok(text) => println!("{text}"),
                 Err(e) => {
                     failed += 1;
@@ -458,7 +472,7 @@ pub fn run(args: &GcsArgs) -> Result<()> {
                 }
                 Ok(Line::Op(r)) => match Operation::new(r, target, now, args.timeout) {
                     Ok(o) => op = Some((line, o)),
-                    Err(e @ ClientError::ParamName(_)) | Err(e) => {
+                    Err(e) => {
                         failed += 1;
                         eprintln!("error: {line}: {e}");
                     }

@@ -11,13 +11,13 @@ use helicon_core::Reference;
 use helicon_core::state::Input;
 use helicon_devices::Geodetic;
 use helicon_gcs::link::{Downlink, FlightMode, VehicleEvent, VehicleStatus, channel};
-use helicon_gcs::navigator::{NavEvent, NavMode, NavigatorConfig};
-use helicon_gcs::server::{self, ServerConfig, default_rates_hz};
-use nalgebra::Vector3;
 use helicon_gcs::mavlink::dialects::common::{
     HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType,
 };
 use helicon_gcs::mavlink::{MavHeader, write_v2_msg};
+use helicon_gcs::navigator::{NavEvent, NavMode, NavigatorConfig};
+use helicon_gcs::server::{self, ServerConfig, default_rates_hz};
+use nalgebra::Vector3;
 use std::io::Write;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
@@ -194,7 +194,7 @@ fn gcs(port: u16, script: &str, extra: &[&str]) -> Output {
 /// Stop a SITL run (SIGINT: it ends as after Ctrl-C) and wait for it.
 fn stop(mut child: std::process::Child) {
     let _ = nix::sys::signal::kill(
-        nix::unistd::Pid::from_raw(child.id() as i32),
+        nix::unistd::Pid::from_raw(i32::try_from(child.id()).unwrap()),
         nix::sys::signal::Signal::SIGINT,
     );
     let _ = child.wait();
@@ -274,9 +274,15 @@ fn gcs_refusal_and_bad_mission_fail_the_script() {
     let text = String::from_utf8_lossy(&out.stdout);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{text}\n{err}");
-    assert!(err.contains("error: land: refused: MAV_RESULT_DENIED"), "{err}");
     assert!(
-        err.contains(&format!("{}:3: y (longitude) `nan`: not finite", bad.display())),
+        err.contains("error: land: refused: MAV_RESULT_DENIED"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!(
+            "{}:3: y (longitude) `nan`: not finite",
+            bad.display()
+        )),
         "{err}"
     );
     assert!(err.contains("mode `ACRO`"), "{err}");
@@ -349,7 +355,12 @@ fn gcs_tcp_client_hears_a_vehicle() {
 fn gcs_keeps_vehicles_apart_and_tells_a_quiet_one() {
     let port = free_udp_port();
     let child = Command::new(env!("CARGO_BIN_EXE_helicon"))
-        .args(["gcs", &format!("udpin:127.0.0.1:{port}"), "--duration", "5.5"])
+        .args([
+            "gcs",
+            &format!("udpin:127.0.0.1:{port}"),
+            "--duration",
+            "5.5",
+        ])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .spawn()
@@ -368,14 +379,16 @@ fn gcs_keeps_vehicles_apart_and_tells_a_quiet_one() {
     let out = child.wait_with_output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}");
-    assert!(text.contains("vehicle 2: MAV_TYPE_HELICOPTER ARMED"), "{text}");
-    assert!(text.contains("vehicle 3: MAV_TYPE_HELICOPTER disarmed"), "{text}");
+    assert!(
+        text.contains("vehicle 2: MAV_TYPE_HELICOPTER ARMED"),
+        "{text}"
+    );
+    assert!(
+        text.contains("vehicle 3: MAV_TYPE_HELICOPTER disarmed"),
+        "{text}"
+    );
     assert!(text.contains("vehicle 2: no heartbeat for"), "{text}");
     // the last lines: vehicle 2 quiet, not its last state repeated
-    let last2 = text
-        .lines()
-        .filter(|l| l.starts_with("vehicle 2:"))
-        .last()
-        .unwrap();
+    let last2 = text.lines().rfind(|l| l.starts_with("vehicle 2:")).unwrap();
     assert!(last2.contains("no heartbeat for"), "{last2}");
 }
