@@ -172,9 +172,11 @@ fn sitl(port: u16, out: &Path) -> std::process::Child {
         .unwrap()
 }
 
-/// `helicon gcs udpin:127.0.0.1:PORT` with `script` on its stdin.
-fn gcs(port: u16, script: &str, extra: &[&str]) -> Output {
+/// `helicon gcs udpin:127.0.0.1:PORT` with `script` on its stdin, run in
+/// `cwd`.
+fn gcs(port: u16, script: &str, extra: &[&str], cwd: &Path) -> Output {
     let mut child = Command::new(env!("CARGO_BIN_EXE_helicon"))
+        .current_dir(cwd)
         .args(["gcs", &format!("udpin:127.0.0.1:{port}")])
         .args(extra)
         .stdin(Stdio::piped())
@@ -202,30 +204,19 @@ fn stop(mut child: std::process::Child) {
 
 #[test]
 fn gcs_script_flies_the_sitl() {
+    // the documented script (docs/gcs.md), run as there: from a folder
+    // holding examples/gcs/
     let dir = helicon_test_support::tmpdir("gcs_script");
     let dir_path = dir.to_path_buf();
+    let examples = dir_path.join("examples/gcs");
+    std::fs::create_dir_all(&examples).unwrap();
+    for f in ["square.waypoints", "first_flight.gcs"] {
+        std::fs::copy(repo(&format!("examples/gcs/{f}")), examples.join(f)).unwrap();
+    }
+    let script = std::fs::read_to_string(examples.join("first_flight.gcs")).unwrap();
     let port = free_udp_port();
-    let back = dir_path.join("back.waypoints");
-    let mission = repo("examples/gcs/square.waypoints");
-    let script = format!(
-        "# a first flight\n\
-         param get NAV_TKOFF_ALT\n\
-         arm\n\
-         wait armed\n\
-         takeoff 3\n\
-         wait mode HOLD\n\
-         \n\
-         mission upload {mission}\n\
-         mission download {}\n\
-         param set NAV_TKOFF_ALT 4\n\
-         param get NAV_TKOFF_ALT\n\
-         land\n\
-         wait landed\n\
-         quit\n",
-        back.display()
-    );
     let vehicle = sitl(port, &dir_path.join("out"));
-    let out = gcs(port, &script, &["--timeout", "30"]);
+    let out = gcs(port, &script, &["--timeout", "30"], &dir_path);
     stop(vehicle);
     let text = String::from_utf8_lossy(&out.stdout);
     let err = String::from_utf8_lossy(&out.stderr);
@@ -236,19 +227,21 @@ fn gcs_script_flies_the_sitl() {
         "wait armed: done",
         "takeoff 3: MAV_RESULT_ACCEPTED",
         "wait mode HOLD: done",
-        "MAV_MISSION_ACCEPTED (4 items)",
-        ": 4 items",
-        "param set NAV_TKOFF_ALT 4: NAV_TKOFF_ALT = 4",
-        "param get NAV_TKOFF_ALT: NAV_TKOFF_ALT = 4",
-        "land: MAV_RESULT_ACCEPTED",
+        "mission upload examples/gcs/square.waypoints: MAV_MISSION_ACCEPTED (4 items)",
+        "mission download square-back.waypoints: 4 items",
+        "param set NAV_MAX_SPD 4: NAV_MAX_SPD = 4",
+        "mission start: MAV_RESULT_ACCEPTED",
+        "reached mission item 3",
+        "wait mission done: done",
         "wait landed: done",
+        "wait disarmed: done",
     ] {
         assert!(text.contains(want), "no `{want}` in\n{text}\n{err}");
     }
     // the mission downloaded is the file uploaded, byte for byte
     assert_eq!(
-        std::fs::read_to_string(&back).unwrap(),
-        std::fs::read_to_string(&mission).unwrap()
+        std::fs::read_to_string(dir_path.join("square-back.waypoints")).unwrap(),
+        std::fs::read_to_string(examples.join("square.waypoints")).unwrap()
     );
 }
 
@@ -269,7 +262,7 @@ fn gcs_refusal_and_bad_mission_fail_the_script() {
         "land\nmission upload {}\nmode ACRO\nparam get NO_SUCH_PARAM\n",
         bad.display()
     );
-    let out = gcs(port, &script, &["--timeout", "10"]);
+    let out = gcs(port, &script, &["--timeout", "10"], &dir_path);
     stop(vehicle);
     let text = String::from_utf8_lossy(&out.stdout);
     let err = String::from_utf8_lossy(&out.stderr);
