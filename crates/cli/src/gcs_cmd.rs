@@ -491,11 +491,12 @@ pub fn run(args: &GcsArgs) -> Result<()> {
         }
         let now = start.elapsed().as_secs_f64();
         if now >= next_print {
-            for l in fleet.lines(now) {
-                println!("{l}");
-            }
-            if fleet.vehicles.is_empty() {
+            let lines = fleet.lines(now);
+            if lines.is_empty() {
                 println!("waiting for a vehicle…");
+            }
+            for l in lines {
+                println!("{l}");
             }
             next_print += 1.0;
         }

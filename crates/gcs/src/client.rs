@@ -221,10 +221,12 @@ impl Fleet {
         }
     }
 
-    /// One status line per vehicle heard.
+    /// One status line per vehicle that sent a heartbeat (another system
+    /// without one, e.g. a second ground station, is not a vehicle).
     pub fn lines(&self, now_s: f64) -> Vec<String> {
         self.vehicles
             .iter()
+            .filter(|(_, v)| v.heartbeat.is_some())
             .map(|(id, v)| v.line(*id, now_s))
             .collect()
     }
