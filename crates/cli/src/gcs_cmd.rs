@@ -369,10 +369,10 @@ pub fn run(args: &GcsArgs) -> Result<()> {
     let mut fleet = Fleet::default();
     let mut next_print = 1.0;
     let mut last_beat: Option<f64> = None;
-    // the vehicles' clock (ATTITUDE's time_boot_ms) at the last heartbeat:
-    // a lock-step SITL runs faster than the wall clock, and its link-loss
-    // failsafe counts its own seconds
-    let mut beat_boot_ms: Option<u32> = None;
+    // each vehicle's clock (ATTITUDE's time_boot_ms) at the last heartbeat
+    // on its account: a lock-step SITL runs faster than the wall clock, and
+    // its link-loss failsafe counts its own seconds
+    let mut beat_boot_ms: BTreeMap<u8, u32> = BTreeMap::new();
     let mut queue: VecDeque<String> = VecDeque::new();
     let mut eof = false;
     let mut read_any = false;
@@ -408,11 +408,12 @@ pub fn run(args: &GcsArgs) -> Result<()> {
                     );
                 }
                 MavMessage::ATTITUDE(a) if h.system_id != GCS_SYSTEM_ID => {
-                    if beat_boot_ms.is_none_or(|b| a.time_boot_ms < b) {
-                        beat_boot_ms = Some(a.time_boot_ms);
-                    } else if beat_boot_ms.is_some_and(|b| a.time_boot_ms - b >= 1000) {
-                        link.send(header(), &client::gcs_heartbeat(), None);
-                        beat_boot_ms = Some(a.time_boot_ms);
+                    let b = beat_boot_ms.entry(h.system_id).or_insert(a.time_boot_ms);
+                    if a.time_boot_ms < *b {
+                        *b = a.time_boot_ms; // rebooted
+                    } else if a.time_boot_ms - *b >= 1000 {
+                        *b = a.time_boot_ms;
+                        link.send(header(), &client::gcs_heartbeat(), Some(h.system_id));
                     }
                 }
                 _ => {}
