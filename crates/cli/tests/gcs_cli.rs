@@ -385,3 +385,78 @@ fn gcs_keeps_vehicles_apart_and_tells_a_quiet_one() {
     let last2 = text.lines().rfind(|l| l.starts_with("vehicle 2:")).unwrap();
     assert!(last2.contains("no heartbeat for"), "{last2}");
 }
+
+/// A fake vehicle `sysid` on its own socket: heartbeats every 50 ms for
+/// `for_s`, a `PARAM_REQUEST_READ` addressed to it answered with 7.5;
+/// returns the parameter requests it received.
+fn fake_vehicle(sysid: u8, to: String, for_s: f64) -> std::thread::JoinHandle<usize> {
+    use helicon_gcs::mavlink::dialects::common::PARAM_VALUE_DATA;
+    std::thread::spawn(move || {
+        let s = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+        s.set_read_timeout(Some(std::time::Duration::from_millis(50)))
+            .unwrap();
+        let t0 = std::time::Instant::now();
+        let mut requests = 0;
+        let mut k = 0u8;
+        let mut buf = [0u8; 2048];
+        while t0.elapsed().as_secs_f64() < for_s {
+            s.send_to(&heartbeat_frame(sysid, k, false), &to).unwrap();
+            k = k.wrapping_add(1);
+            let Ok(n) = s.recv(&mut buf) else { continue };
+            let mut r = helicon_gcs::mavlink::MavlinkReader::new(&buf[..n]);
+            while let Ok((_, m)) = r.read_any_message::<MavMessage>() {
+                if let MavMessage::PARAM_REQUEST_READ(p) = m {
+                    requests += 1;
+                    if p.target_system == sysid {
+                        let mut out = Vec::new();
+                        write_v2_msg(
+                            &mut out,
+                            MavHeader {
+                                system_id: sysid,
+                                component_id: 1,
+                                sequence: k,
+                            },
+                            &MavMessage::PARAM_VALUE(PARAM_VALUE_DATA {
+                                param_value: 7.5,
+                                param_id: p.param_id,
+                                ..PARAM_VALUE_DATA::DEFAULT
+                            }),
+                        )
+                        .unwrap();
+                        s.send_to(&out, &to).unwrap();
+                    }
+                }
+            }
+        }
+        requests
+    })
+}
+
+#[test]
+fn gcs_commands_go_to_the_vehicle_chosen() {
+    let dir = helicon_test_support::tmpdir("gcs_vehicle");
+    let port = free_udp_port();
+    let to = format!("127.0.0.1:{port}");
+    let two = fake_vehicle(2, to.clone(), 3.0);
+    let three = fake_vehicle(3, to, 3.0);
+    let out = gcs(
+        port,
+        "vehicle 3\nparam get NAV_TKOFF_ALT\n",
+        &["--timeout", "2"],
+        &dir.to_path_buf(),
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{text}\n{err}");
+    assert!(
+        text.contains("vehicle 3: commands go to vehicle 3"),
+        "{text}"
+    );
+    assert!(
+        text.contains("param get NAV_TKOFF_ALT: NAV_TKOFF_ALT = 7.5"),
+        "{text}"
+    );
+    // vehicle 2 (another address on the same port) was sent nothing of it
+    assert_eq!(two.join().unwrap(), 0);
+    assert!(three.join().unwrap() >= 1);
+}
