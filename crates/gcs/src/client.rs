@@ -324,6 +324,7 @@ pub struct Operation {
     started_s: f64,
     timeout_s: f64,
     last_sent_s: f64,
+    home_asked: bool,
     phase: Phase,
 }
 
@@ -362,6 +363,7 @@ impl Operation {
             started_s: now_s,
             timeout_s,
             last_sent_s: now_s,
+            home_asked: false,
             phase: Phase::Start,
         })
     }
@@ -517,7 +519,8 @@ impl Operation {
                     }
                     None => {
                         // a takeoff height without home yet: ask for it
-                        if since >= COMMAND_RETRY_S || elapsed == 0.0 {
+                        if since >= COMMAND_RETRY_S || !self.home_asked {
+                            self.home_asked = true;
                             let mut p = [0.0; 7];
                             p[0] = HOME_POSITION_DATA::ID as f32;
                             step.send.push(self.command_long(
@@ -822,6 +825,30 @@ mod tests {
             assert!(t < 20.0);
         }
         assert_eq!(sends, usize::from(MAX_SENDS));
+    }
+
+    #[test]
+    fn a_takeoff_height_asks_for_home_first() {
+        let mut f = Fleet::default();
+        let hb = MavMessage::HEARTBEAT(HEARTBEAT_DATA::DEFAULT);
+        f.on_message(&header(1), &hb, 0.0);
+        let mut op = Operation::new(Request::Takeoff(Some(2.0)), 1, 0.0, 10.0).unwrap();
+        let s = op.poll(&f, 0.01);
+        assert!(
+            matches!(&s.send[..], [MavMessage::COMMAND_LONG(c)] if c.command == MavCmd::MAV_CMD_REQUEST_MESSAGE && c.param1 == 242.0),
+            "{s:?}"
+        );
+        assert!(op.poll(&f, 0.5).send.is_empty());
+        let home = MavMessage::HOME_POSITION(HOME_POSITION_DATA {
+            altitude: 30_000,
+            ..HOME_POSITION_DATA::DEFAULT
+        });
+        f.on_message(&header(1), &home, 0.6);
+        let s = op.poll(&f, 0.7);
+        assert!(
+            matches!(&s.send[..], [MavMessage::COMMAND_LONG(c)] if c.command == MavCmd::MAV_CMD_NAV_TAKEOFF && c.param7 == 32.0),
+            "{s:?}"
+        );
     }
 
     #[test]
