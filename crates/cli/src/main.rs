@@ -68,7 +68,7 @@ enum Command {
     Onboard(onboard_cmd::OnboardArgs),
     /// Frequency-domain system identification: frequency responses from logs, transfer-function fits.
     Ident(ident_cmd::IdentArgs),
-    /// A terminal ground station: a vehicle's MAVLink state once a second, its messages as they come.
+    /// A terminal ground station: vehicles' MAVLink state once a second, and commands from stdin (arm, takeoff, missions, parameters, waits).
     Gcs(gcs_cmd::GcsArgs),
     /// Print a shell completion script for SHELL (bash, zsh, fish, elvish, powershell), made from this command line's definition.
     Completions {

@@ -18,7 +18,12 @@
 //! - [`params`]: the parameter table (typed, validated).
 //! - [`server`]: the MAVLink 2 server (common dialect, UDP) on its own thread.
 //! - [`config`]: the `[gcs]` section of the on-board configuration.
+//! - [`client`]: the ground-station side (`helicon gcs`): the vehicles
+//!   heard, and the command, mission and parameter microservices as state
+//!   machines fed messages and time.
+//! - [`wpl`]: mission files in the QGC WPL 110 format.
 
+pub mod client;
 pub mod config;
 pub mod fence;
 pub mod geo;
@@ -27,6 +32,7 @@ pub mod modes;
 pub mod navigator;
 pub mod params;
 pub mod server;
+pub mod wpl;
 
 pub use mavlink;
 pub use navigator::{NavMode, Navigator, NavigatorConfig};

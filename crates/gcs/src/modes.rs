@@ -124,6 +124,38 @@ pub fn qgc_name(main: u8, sub: u8) -> &'static str {
     }
 }
 
+/// The PX4 main and sub mode of a mode's name, any case: the navigator's
+/// (`IDLE`, `TAKEOFF`, `HOLD`, `MISSION`, `RETURN`, `LAND`, `GUIDED`) or
+/// the name QGroundControl shows ([`qgc_name`]: `Ready`, `Hold`, `Return`,
+/// `Offboard`, `Manual`, …). `None`: no such mode.
+pub fn parse_name(name: &str) -> Option<(u8, u8)> {
+    const ALL: [NavMode; 7] = [
+        NavMode::Idle,
+        NavMode::Takeoff,
+        NavMode::Hold,
+        NavMode::Mission,
+        NavMode::Return,
+        NavMode::Land,
+        NavMode::Guided,
+    ];
+    if let Some(m) = ALL.iter().find(|m| m.as_str().eq_ignore_ascii_case(name)) {
+        return Some(px4_of(*m));
+    }
+    [
+        (MAIN_MANUAL, 0),
+        (MAIN_POSCTL, 0),
+        (MAIN_OFFBOARD, 0),
+        (MAIN_AUTO, SUB_READY),
+        (MAIN_AUTO, SUB_TAKEOFF),
+        (MAIN_AUTO, SUB_LOITER),
+        (MAIN_AUTO, SUB_MISSION),
+        (MAIN_AUTO, SUB_RTL),
+        (MAIN_AUTO, SUB_LAND),
+    ]
+    .into_iter()
+    .find(|(main, sub)| qgc_name(*main, *sub).eq_ignore_ascii_case(name))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -149,5 +181,17 @@ mod tests {
         assert_eq!(nav_of(MAIN_MANUAL, 0), None);
         assert_eq!(reported(NavMode::Mission, "manual"), (MAIN_MANUAL, 0));
         assert_eq!(reported(NavMode::Mission, "descent"), (MAIN_AUTO, SUB_LAND));
+    }
+
+    #[test]
+    fn names_parse_in_any_case() {
+        assert_eq!(parse_name("HOLD"), Some((MAIN_AUTO, SUB_LOITER)));
+        assert_eq!(parse_name("hold"), Some((MAIN_AUTO, SUB_LOITER)));
+        assert_eq!(parse_name("Return"), Some((MAIN_AUTO, SUB_RTL)));
+        assert_eq!(parse_name("mission"), Some((MAIN_AUTO, SUB_MISSION)));
+        assert_eq!(parse_name("Manual"), Some((MAIN_MANUAL, 0)));
+        assert_eq!(parse_name("guided"), Some((MAIN_OFFBOARD, 0)));
+        assert_eq!(parse_name("Unknown"), None);
+        assert_eq!(parse_name("ACRO"), None);
     }
 }
