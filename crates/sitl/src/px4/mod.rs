@@ -323,6 +323,12 @@ impl Px4Server {
         }
         let step_us = u64::from(options.step_us);
         let steps_per_s = 1e6 / step_us as f64;
+        // the hardware's own sensor models (not sent: PX4 gets the truth)
+        // sample at the step: the magnetometer's rate a divisor of it
+        let mut adjusted = scenario.clone();
+        let mag = &mut adjusted.sensors.mag.rate_hz;
+        *mag = steps_per_s / (steps_per_s / *mag).ceil().max(1.0);
+        let scenario = &adjusted;
         let sec = &map.section;
         let sensing = Sensing {
             g: prepared.model.params().environment.g_m_s2,
