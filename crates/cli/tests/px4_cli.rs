@@ -11,7 +11,7 @@ use helicon_gcs::mavlink::{MavHeader, MavlinkReader, write_v2_msg};
 use helicon_test_support::tmpdir;
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Write};
 use std::net::TcpStream;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -73,18 +73,24 @@ fn a_px4_run_serves_steps_and_sigint_writes_its_files() {
         .unwrap();
     let mut reader = MavlinkReader::new(stream.try_clone().unwrap());
     let mut header = MavHeader::default();
-    write_v2_msg(
-        &mut stream,
-        header,
-        &MavMessage::HEARTBEAT(HEARTBEAT_DATA::default()),
-    )
-    .unwrap();
     let controls = MavMessage::HIL_ACTUATOR_CONTROLS(HIL_ACTUATOR_CONTROLS_DATA {
         time_usec: 0,
         flags: HilActuatorControlsFlags::HIL_ACTUATOR_CONTROLS_FLAGS_LOCKSTEP,
         controls: [0.0; 16],
         mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
     });
+    // the hello and the first answer in one write: lock-step from the
+    // first contact (no free-running step can come between them)
+    let mut hello = Vec::new();
+    write_v2_msg(
+        &mut hello,
+        header,
+        &MavMessage::HEARTBEAT(HEARTBEAT_DATA::default()),
+    )
+    .unwrap();
+    header.sequence = 1;
+    write_v2_msg(&mut hello, header, &controls).unwrap();
+    stream.write_all(&hello).unwrap();
     let mut last = 0;
     for k in 0..=500u64 {
         loop {
@@ -95,7 +101,7 @@ fn a_px4_run_serves_steps_and_sigint_writes_its_files() {
                 break;
             }
         }
-        if k < 500 {
+        if k > 0 && k < 500 {
             header.sequence = header.sequence.wrapping_add(1);
             write_v2_msg(&mut stream, header, &controls).unwrap();
         }

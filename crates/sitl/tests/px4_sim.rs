@@ -156,10 +156,13 @@ fn serve<T: Send>(
     })
 }
 
+/// Lock-step from the first contact on (no free-running before the first
+/// actuator message: the counts are exact whatever the machine's load).
 fn bounded(max_steps: u64) -> Px4Options {
     Px4Options {
         max_steps: Some(max_steps),
         silence_timeout: Some(Duration::from_secs(20)),
+        free_run_until_first_actuator: false,
         ..Px4Options::default()
     }
 }
@@ -384,6 +387,7 @@ fn silence_advances_nothing() {
     let (s, p) = ground();
     let options = Px4Options {
         silence_timeout: Some(Duration::from_millis(300)),
+        free_run_until_first_actuator: false,
         ..Px4Options::default()
     };
     let (r, px4) = serve(&s, &p, options, |to| {
@@ -434,4 +438,43 @@ fn a_reconnection_resets_the_vehicle() {
     );
     assert_eq!(first_b.time_usec, 0);
     assert_eq!(first_b, first_a);
+}
+
+/// Before PX4's first actuator message the model free-runs on the wall
+/// clock (the default), one sensor step per period, disarmed; from the
+/// first actuator message on it is lock-step: each answer one step, and
+/// silence stops the clock.
+#[test]
+fn free_running_until_the_first_actuator_message_then_lock_step() {
+    let (s, p) = ground();
+    let options = Px4Options {
+        silence_timeout: Some(Duration::from_millis(300)),
+        ..Px4Options::default()
+    };
+    let (r, (times, _open)) = serve(&s, &p, options, |to| {
+        let mut px4 = Px4::connect(to);
+        // no answer: the sensors keep coming, 4000 µs apart
+        let mut times = Vec::new();
+        for _ in 0..4 {
+            times.push(px4.sensor().0.time_usec);
+        }
+        // answering: the next steps follow, one per answer
+        for _ in 0..5 {
+            px4.controls([0.0; CHANNELS], false);
+            times.push(px4.sensor().0.time_usec);
+        }
+        (times, px4) // kept open, silent, until the run ended
+    });
+    // every sensor step read in order, 4000 µs apart, free or answered
+    for w in times.windows(2) {
+        assert_eq!(w[1] - w[0], 4000, "{times:?}");
+    }
+    assert_eq!(r.ending, Ending::Silent);
+    assert!(r.counts.free_steps >= 3, "{:?}", r.counts);
+    assert_eq!(r.counts.steps, r.counts.free_steps + 5, "{:?}", r.counts);
+    // the last read: the last step, or the one before it when a free step
+    // was in flight as the first answer went out (its answer then unread)
+    let last = times[times.len() - 1];
+    let n = r.counts.steps;
+    assert!(last == n * 4000 || last == (n - 1) * 4000, "{times:?} {n}");
 }

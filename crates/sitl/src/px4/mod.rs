@@ -13,6 +13,10 @@
 //! - first contact: helicon's first valid frame from PX4 makes it send the
 //!   sensors at t = 0 (`HIL_SENSOR`, `HIL_GPS`, `HIL_STATE_QUATERNION`,
 //!   `HEARTBEAT`);
+//! - until the connection's first `HIL_ACTUATOR_CONTROLS`, the model
+//!   free-runs on the wall clock: one step (disarmed, controls 0) and its
+//!   sensors per sensor period, as PX4's other simulators do before the
+//!   first actuator message ([`Px4Options::free_run_until_first_actuator`]);
 //! - PX4 runs its modules up to that time and answers
 //!   `HIL_ACTUATOR_CONTROLS` (`controls[n-1]` the output `PWM_MAIN_FUNCn`,
 //!   motors 0 … 1, servos −1 … 1, all 0 while disarmed; `mode` with
@@ -102,6 +106,12 @@ pub struct Px4Options {
     pub gps_rate_hz: f64,
     /// Send `HIL_STATE_QUATERNION` (PX4's ground truth) every step.
     pub ground_truth: bool,
+    /// Before a connection's first `HIL_ACTUATOR_CONTROLS`, step (disarmed,
+    /// controls 0) and send the sensors once per sensor period of wall
+    /// time, as PX4's other simulators do until the first actuator message
+    /// (PX4 sends none before its modules published outputs, and they run
+    /// on the sensors' time); lock-step from the first actuator message on.
+    pub free_run_until_first_actuator: bool,
 }
 
 impl Default for Px4Options {
@@ -115,6 +125,7 @@ impl Default for Px4Options {
             step_us: DEFAULT_STEP_US,
             gps_rate_hz: 10.0,
             ground_truth: true,
+            free_run_until_first_actuator: true,
         }
     }
 }
@@ -122,8 +133,11 @@ impl Default for Px4Options {
 /// What the run counted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub struct Counts {
-    /// Steps flown (actuator messages answered), all connections.
+    /// Steps flown (actuator messages answered, and free-running steps),
+    /// all connections.
     pub steps: u64,
+    /// Of those, free-running before a connection's first actuator message.
+    pub free_steps: u64,
     /// Connections accepted (the first, then PX4's restarts).
     pub connections: u64,
     /// `HIL_ACTUATOR_CONTROLS` received.
@@ -274,6 +288,9 @@ struct Link {
     framer: Framer,
     out: Outbox,
     contact: bool,
+    /// The first actuator message came: lock-step.
+    lockstep: bool,
+    last_send: Instant,
 }
 
 impl Px4Server {
@@ -358,6 +375,14 @@ impl Px4Server {
         let mut last_valid = Instant::now();
         let mut model_time_all = 0.0;
         let step_s = step_us as f64 * 1e-6;
+        let period = Duration::from_micros(step_us);
+        // the wait for bytes: short enough to free-run at the sensor period
+        let wait = if options.free_run_until_first_actuator {
+            period.clamp(Duration::from_millis(1), POLL)
+        } else {
+            POLL
+        };
+        let idle = [0f32; CHANNELS];
         let stop = || crate::lockstep::stopped(options.stop.as_ref());
         let ending = 'run: loop {
             if stop() {
@@ -374,7 +399,7 @@ impl Px4Server {
                 Ok((stream, from)) => {
                     stream.set_nonblocking(false).map_err(sock_err)?;
                     stream.set_nodelay(true).map_err(sock_err)?;
-                    stream.set_read_timeout(Some(POLL)).map_err(sock_err)?;
+                    stream.set_read_timeout(Some(wait)).map_err(sock_err)?;
                     counts.connections += 1;
                     peer = Some(from);
                     if let Some(s) = session.take() {
@@ -385,6 +410,8 @@ impl Px4Server {
                         framer: Framer::new(),
                         out: Outbox::new(SIM_SYSTEM_ID, SIM_COMPONENT_ID),
                         contact: false,
+                        lockstep: false,
+                        last_send: Instant::now(),
                     });
                 }
                 Err(e)
@@ -398,6 +425,35 @@ impl Px4Server {
                 std::thread::sleep(POLL);
                 continue;
             };
+            if options.free_run_until_first_actuator
+                && l.contact
+                && !l.lockstep
+                && l.last_send.elapsed() >= period
+                && let Some(s) = session.as_mut()
+            {
+                // PX4 has not answered yet: the clock runs on the wall's
+                let d = map.decode(&idle, false);
+                let end = s.step(&d.input, d.engine_on)?;
+                counts.steps += 1;
+                counts.free_steps += 1;
+                l.out.clear();
+                if let Some(h) = push_sensors(&mut l.out, s, &sensing, &mut counts) {
+                    last_sensor = Some(h);
+                }
+                let sent = send(&mut l.stream, &mut l.out);
+                l.last_send = Instant::now();
+                last_sent_at = Some(l.last_send);
+                if let Some((kind, why)) = end {
+                    break 'run Ending::Simulation(kind, why);
+                }
+                if options.max_steps.is_some_and(|m| counts.steps >= m) {
+                    break 'run Ending::FrameLimit;
+                }
+                if sent.is_err() {
+                    link = None;
+                    continue;
+                }
+            }
             let n = match l.stream.read(l.framer.spare()) {
                 Ok(0) => {
                     // PX4 closed: wait for it to come back
@@ -450,13 +506,15 @@ impl Px4Server {
                         link = None;
                         continue 'run;
                     }
-                    last_sent_at = Some(Instant::now());
+                    l.last_send = Instant::now();
+                    last_sent_at = Some(l.last_send);
                 }
                 let MavMessage::HIL_ACTUATOR_CONTROLS(c) = &msg else {
                     counts.other_messages += 1;
                     continue;
                 };
                 counts.actuator_messages += 1;
+                l.lockstep = true;
                 let armed = c.mode.contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED);
                 if armed {
                     counts.armed_messages += 1;
@@ -472,7 +530,8 @@ impl Px4Server {
                     last_sensor = Some(h);
                 }
                 let sent = send(&mut l.stream, &mut l.out);
-                last_sent_at = Some(Instant::now());
+                l.last_send = Instant::now();
+                last_sent_at = Some(l.last_send);
                 if let Some((kind, why)) = end {
                     break 'run Ending::Simulation(kind, why);
                 }
