@@ -6,7 +6,9 @@
 //! scenario, plots, report). With `--gcs` the ground station's navigator
 //! flies instead of the scenario's references. With `--ardupilot-json [ADDR]`
 //! it is ArduPilot's JSON physics backend instead (`helicon_sitl::ardupilot`):
-//! ArduPilot's SITL flies the model; `timing.json` and the run folder.
+//! ArduPilot's SITL flies the model; `timing.json` and the run folder. With
+//! `--px4 [ADDR]` it is PX4's simulator instead (`helicon_sitl::px4`): PX4's
+//! SITL connects over TCP and flies the model lock-stepped.
 
 use crate::console::Console;
 use crate::signals::{Stop, mark_stopped};
@@ -110,6 +112,26 @@ pub struct SitlArgs {
     /// the Bergen Twin's, `examples/ardupilot/bergen_twin.toml`).
     #[arg(long, value_name = "FILE", requires = "ardupilot_json")]
     pub ardupilot_config: Option<PathBuf>,
+    /// Be PX4's simulator instead of flying helicon's on-board program:
+    /// listen on TCP `ADDR` (default 127.0.0.1:4560) for PX4 SITL's
+    /// `simulator_mavlink`, send HIL_SENSOR/HIL_GPS/HIL_STATE_QUATERNION,
+    /// step the model one 4 ms sensor period per HIL_ACTUATOR_CONTROLS. The
+    /// helicopter starts on the ground, rotor stopped; a reconnection (PX4
+    /// restarted) starts it there again; the run lasts until stopped
+    /// (Ctrl-C), at most `--duration` (default 3600 s). See
+    /// docs/ardupilot-px4.md.
+    #[arg(
+        long,
+        value_name = "ADDR",
+        num_args = 0..=1,
+        default_missing_value = helicon_sitl::px4::DEFAULT_ADDRESS,
+        conflicts_with_all = ["ardupilot_json", "gcs", "speed", "gps_loss_at", "manual_at", "rc_failsafe_at", "rc_silent_at", "no_sched_fifo"]
+    )]
+    pub px4: Option<String>,
+    /// The `[px4]` mapping of PX4's actuator outputs (TOML; default the
+    /// Bergen Twin's, `examples/px4/bergen_twin.toml`).
+    #[arg(long, value_name = "FILE", requires = "px4")]
+    pub px4_config: Option<PathBuf>,
     #[command(flatten)]
     pub log: LogArgs,
 }
@@ -246,11 +268,18 @@ fn gcs_duration_s(
     (0.99 * by_log.min(by_work)).max(ts)
 }
 
-/// `helicon sitl --ardupilot-json`: helicon as ArduPilot's physics.
-fn run_ardupilot(a: &SitlArgs, address: &str) -> Result<()> {
-    use helicon_sitl::ardupilot::{
-        ArduPilotMap, ArduPilotOptions, ArduPilotSection, ArduPilotServer, BERGEN_TWIN_TOML, Ending,
-    };
+/// An autopilot backend's run, prepared: the one case on the ground, its
+/// design point, the output folder and the log stride.
+struct Backend {
+    case: Scenario,
+    prepared: helicon_sim::closed_loop::Prepared,
+    out: PathBuf,
+    log_stride: usize,
+}
+
+/// Prepare an autopilot backend's run of `a` (`what`: the autopilot, for
+/// messages; `prefix`: of the default output folder).
+fn prepare_backend(a: &SitlArgs, what: &str, prefix: &str) -> Result<Backend> {
     let duration = a.duration.or(Some(3600.0));
     let o = overrides_from(None, None, duration)?;
     let source = format!("{}{}", a.scenario.display(), overrides_label(&o));
@@ -258,95 +287,71 @@ fn run_ardupilot(a: &SitlArgs, address: &str) -> Result<()> {
     let cases = base.cases();
     if cases.len() > 1 {
         anyhow::bail!(
-            "{source}: {} cases; ArduPilot flies one helicopter at a time (give a scenario without [[case]])",
+            "{source}: {} cases; {what} flies one helicopter at a time (give a scenario without [[case]])",
             cases.len()
         );
     }
-    let mut case = base.clone();
     let out = a.out.clone().unwrap_or_else(|| {
-        PathBuf::from("out").join(format!("ardupilot-{}", folder_name(&case.name)))
+        PathBuf::from("out").join(format!("{prefix}-{}", folder_name(&base.name)))
     });
-    let mut con = Console::stdout();
-    let (grounded, params) = sitl::ground_start(&case)
-        .with_context(|| format!("scenario `{}`: putting it on the ground", case.name))?;
-    let prepared = helicon_sim::closed_loop::prepare_with_params(&grounded, params)
-        .with_context(|| format!("scenario `{}`: preparing the design point", grounded.name))?;
-    case = grounded;
-    let (section, file) = match &a.ardupilot_config {
-        Some(path) => (
-            ArduPilotSection::from_file(path)?,
-            path.display().to_string(),
-        ),
-        None => (
-            ArduPilotSection::from_toml_str(
-                BERGEN_TWIN_TOML,
-                "examples/ardupilot/bergen_twin.toml",
-            )?,
-            "examples/ardupilot/bergen_twin.toml".to_string(),
-        ),
-    };
-    let map = ArduPilotMap::new(section, prepared.model.params(), &file)?;
+    let (case, params) = sitl::ground_start(&base)
+        .with_context(|| format!("scenario `{}`: putting it on the ground", base.name))?;
+    let prepared = helicon_sim::closed_loop::prepare_with_params(&case, params)
+        .with_context(|| format!("scenario `{}`: preparing the design point", case.name))?;
     let log_stride = plan_log(&case, &prepared, &a.log)?;
-    let server = ArduPilotServer::bind(address)?;
-    let stop = Stop::install()?;
-    writeln!(
-        con,
-        "{}: ArduPilot JSON physics on udp {} ({}), on the ground, rotor stopped; waiting for ArduPilot's SITL (sim_vehicle.py -v ArduCopter -f heli --model JSON:{}); Ctrl-C ends, at most {:.0} s of model time",
-        case.name,
-        server.local_addr(),
-        file,
-        server.local_addr().ip(),
-        case.duration_s
-    );
-    let options = ArduPilotOptions {
-        out_dir: Some(out.clone()),
+    Ok(Backend {
+        case,
+        prepared,
+        out,
         log_stride,
-        stop: Some(stop.flag().clone()),
-        silence_timeout: None,
-        max_frames: None,
-    };
-    let r = server
-        .run(&case, &prepared, &map, &options)
-        .with_context(|| format!("scenario `{}`: ArduPilot JSON physics", case.name))?;
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-    sitl::write_timing(&out, &helicon_sitl::ardupilot::timing_json(&r))?;
-    if let Some(summary) = &r.summary
-        && r.log_rows > 0
+    })
+}
+
+/// A mapping file: `path`, or the shipped `default_text` named `default_name`.
+fn mapping_source<T, E: std::error::Error + Send + Sync + 'static>(
+    path: Option<&PathBuf>,
+    default_text: &str,
+    default_name: &str,
+    from_file: impl Fn(&std::path::Path) -> Result<T, E>,
+    from_str: impl Fn(&str, &str) -> Result<T, E>,
+) -> Result<(T, String)> {
+    Ok(match path {
+        Some(path) => (from_file(path)?, path.display().to_string()),
+        None => (
+            from_str(default_text, default_name)?,
+            default_name.to_string(),
+        ),
+    })
+}
+
+/// Finish an autopilot backend's run: `timing.json`, the run folder of the
+/// last session (when it logged), the closing lines, and the exit of a
+/// signal.
+fn finish_backend(
+    b: &Backend,
+    mut con: Console,
+    stop: &Stop,
+    timing: &serde_json::Value,
+    summary: Option<&helicon_sim::closed_loop::Summary>,
+    log_rows: usize,
+    line: String,
+) -> Result<()> {
+    let out = &b.out;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    sitl::write_timing(out, timing)?;
+    if let Some(summary) = summary
+        && log_rows > 0
     {
         let mut summary = summary.clone();
-        mark_stopped(&stop, &mut summary);
-        finish_run(&out, &case, &prepared, &summary, r.log_rows)
+        mark_stopped(stop, &mut summary);
+        finish_run(out, &b.case, &b.prepared, &summary, log_rows)
             .with_context(|| format!("writing the run outputs to {}", out.display()))?;
     }
-    let c = &r.counts;
-    writeln!(
-        con,
-        "{}: {}; {} frames at {} Hz ({:.3} s of model time in the last session), {:.0} frames/s, {:.1}x real time; {} repeats, {} restarts, {} gaps, {} malformed packets, {} frames at another rate",
-        case.name,
-        match &r.ending {
-            Ending::Stopped => "stopped".to_string(),
-            Ending::Silent => "the autopilot went silent".to_string(),
-            Ending::FrameLimit => "frame limit".to_string(),
-            Ending::Simulation(t, why) => format!(
-                "{t}{}",
-                why.as_deref().map_or(String::new(), |w| format!(" ({w})"))
-            ),
-        },
-        c.frames,
-        r.frame_rate_hz.map_or("-".to_string(), |f| f.to_string()),
-        r.model_time_s,
-        r.frames_per_s,
-        r.speed_x,
-        c.repeats,
-        c.restarts,
-        c.gaps,
-        c.malformed(),
-        c.rate_mismatches
-    );
+    writeln!(con, "{}: {line}", b.case.name);
     writeln!(
         con,
         "  wrote timing.json{} to {}",
-        if r.log_rows > 0 {
+        if log_rows > 0 {
             ", log.csv, summary.json, plots"
         } else {
             ""
@@ -365,11 +370,131 @@ fn run_ardupilot(a: &SitlArgs, address: &str) -> Result<()> {
     Ok(())
 }
 
+/// `helicon sitl --ardupilot-json`: helicon as ArduPilot's physics.
+fn run_ardupilot(a: &SitlArgs, address: &str) -> Result<()> {
+    use helicon_sitl::ardupilot::{
+        ArduPilotMap, ArduPilotOptions, ArduPilotSection, ArduPilotServer, BERGEN_TWIN_TOML,
+    };
+    let b = prepare_backend(a, "ArduPilot", "ardupilot")?;
+    let mut con = Console::stdout();
+    let (section, file) = mapping_source(
+        a.ardupilot_config.as_ref(),
+        BERGEN_TWIN_TOML,
+        "examples/ardupilot/bergen_twin.toml",
+        ArduPilotSection::from_file,
+        ArduPilotSection::from_toml_str,
+    )?;
+    let map = ArduPilotMap::new(section, b.prepared.model.params(), &file)?;
+    let server = ArduPilotServer::bind(address)?;
+    let stop = Stop::install()?;
+    writeln!(
+        con,
+        "{}: ArduPilot JSON physics on udp {} ({}), on the ground, rotor stopped; waiting for ArduPilot's SITL (sim_vehicle.py -v ArduCopter -f heli --model JSON:{}); Ctrl-C ends, at most {:.0} s of model time",
+        b.case.name,
+        server.local_addr(),
+        file,
+        server.local_addr().ip(),
+        b.case.duration_s
+    );
+    let options = ArduPilotOptions {
+        out_dir: Some(b.out.clone()),
+        log_stride: b.log_stride,
+        stop: Some(stop.flag().clone()),
+        silence_timeout: None,
+        max_frames: None,
+    };
+    let r = server
+        .run(&b.case, &b.prepared, &map, &options)
+        .with_context(|| format!("scenario `{}`: ArduPilot JSON physics", b.case.name))?;
+    let c = &r.counts;
+    let line = format!(
+        "{}; {} frames at {} Hz ({:.3} s of model time in the last session), {:.0} frames/s, {:.1}x real time; {} repeats, {} restarts, {} gaps, {} malformed packets, {} frames at another rate",
+        r.ending.describe(),
+        c.frames,
+        r.frame_rate_hz.map_or("-".to_string(), |f| f.to_string()),
+        r.model_time_s,
+        r.frames_per_s,
+        r.speed_x,
+        c.repeats,
+        c.restarts,
+        c.gaps,
+        c.malformed(),
+        c.rate_mismatches
+    );
+    finish_backend(
+        &b,
+        con,
+        &stop,
+        &helicon_sitl::ardupilot::timing_json(&r),
+        r.summary.as_ref(),
+        r.log_rows,
+        line,
+    )
+}
+
+/// `helicon sitl --px4`: helicon as PX4's simulator.
+fn run_px4(a: &SitlArgs, address: &str) -> Result<()> {
+    use helicon_sitl::px4::{BERGEN_TWIN_TOML, Px4Map, Px4Options, Px4Section, Px4Server};
+    let b = prepare_backend(a, "PX4", "px4")?;
+    let mut con = Console::stdout();
+    let (section, file) = mapping_source(
+        a.px4_config.as_ref(),
+        BERGEN_TWIN_TOML,
+        "examples/px4/bergen_twin.toml",
+        Px4Section::from_file,
+        Px4Section::from_toml_str,
+    )?;
+    let map = Px4Map::new(section, b.prepared.model.params(), &file)?;
+    let server = Px4Server::bind(address)?;
+    let stop = Stop::install()?;
+    writeln!(
+        con,
+        "{}: PX4 simulator on tcp {} ({}), on the ground, rotor stopped; waiting for PX4's SITL to connect (PX4_SIMULATOR=none make px4_sitl none, airframe examples/px4/bergen_twin.params); Ctrl-C ends, at most {:.0} s of model time",
+        b.case.name,
+        server.local_addr(),
+        file,
+        b.case.duration_s
+    );
+    let options = Px4Options {
+        out_dir: Some(b.out.clone()),
+        log_stride: b.log_stride,
+        stop: Some(stop.flag().clone()),
+        ..Px4Options::default()
+    };
+    let r = server
+        .run(&b.case, &b.prepared, &map, &options)
+        .with_context(|| format!("scenario `{}`: PX4 simulator", b.case.name))?;
+    let c = &r.counts;
+    let line = format!(
+        "{}; {} steps of {} µs ({:.3} s of model time in the last connection), {:.0} steps/s, {:.1}x real time; {} connections, {} armed steps, {} malformed frames, {} junk bytes",
+        r.ending.describe(),
+        c.steps,
+        r.step_us,
+        r.model_time_s,
+        r.steps_per_s,
+        r.speed_x,
+        c.connections,
+        c.armed_messages,
+        c.malformed(),
+        c.junk_bytes
+    );
+    finish_backend(
+        &b,
+        con,
+        &stop,
+        &helicon_sitl::px4::timing_json(&r),
+        r.summary.as_ref(),
+        r.log_rows,
+        line,
+    )
+}
+
 /// Run `helicon sitl`.
 pub fn run(a: &SitlArgs) -> Result<()> {
-    match &a.ardupilot_json {
-        Some(address) => run_ardupilot(a, address),
-        None => run_onboard(a),
+    match (&a.ardupilot_json, &a.px4) {
+        (Some(address), _) => run_ardupilot(a, address),
+        (None, Some(address)) => run_px4(a, address),
+        (None, None) => run_onboard(a),
     }
 }
 

@@ -25,6 +25,9 @@
 //! scenario's references (the ground station's mission uplink).
 
 pub mod ardupilot;
+pub mod lockstep;
+pub mod px4;
+pub(crate) mod swash;
 
 use helicon_core::SensorFrame;
 use helicon_core::state::Input;

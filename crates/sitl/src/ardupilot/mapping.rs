@@ -33,6 +33,7 @@
 //! helicopter left, B1 > 0 forward; the tests check the signs), so ArduPilot's roll
 //! right and pitch up are negative A1 and B1.
 
+use crate::swash::{ModelServos, invert, linear_deg};
 use helicon_config::ConfigError;
 use helicon_core::state::Input;
 use helicon_model::Params;
@@ -193,11 +194,8 @@ pub struct ArduPilotMap {
     unmix: Matrix3<f64>,
     /// H1's constant 0.5 on servos 1 and 2.
     offset: Vector3<f64>,
-    /// Servo commands per radian of collective, cyclic A1, B1, tail pitch.
-    k_rad: [f64; 4],
-    /// The model's command limits.
-    s_min: [f64; 4],
-    s_max: [f64; 4],
+    /// The model's servo gains and command limits.
+    servos: ModelServos,
 }
 
 /// What one servo packet drives.
@@ -268,9 +266,9 @@ impl ArduPilotMap {
         } else {
             Vector3::zeros()
         };
-        let unmix = match mix.try_inverse() {
-            Some(m) if mix.determinant().abs() > 1e-3 => m,
-            _ => {
+        let unmix = match invert(&mix) {
+            Some(m) => m,
+            None => {
                 return bad(
                     "h3_servo_positions_deg",
                     s.h3_servo_positions_deg[0],
@@ -278,30 +276,13 @@ impl ArduPilotMap {
                 );
             }
         };
-        let k_rad = [
-            params.servos[0].gain_rad,
-            params.servos[1].gain_rad,
-            params.servos[2].gain_rad,
-            params.servos[3].gain_rad,
-        ];
-        for (i, k) in k_rad.iter().enumerate() {
-            if !(k.is_finite() && k.abs() > 1e-9) {
-                return bad(
-                    &format!("(model) servos[{i}].gain_rad"),
-                    *k,
-                    "a non-zero servo gain: the model's inputs cannot be found from blade pitch",
-                );
-            }
-        }
-        let lim = params.servo_limits();
+        let servos = ModelServos::new(params, file, "ardupilot")?;
         Ok(ArduPilotMap {
             section,
             mix,
             unmix,
             offset,
-            k_rad,
-            s_min: [lim.min[0], lim.min[1], lim.min[2], lim.min[3]],
-            s_max: [lim.max[0], lim.max[1], lim.max[2], lim.max[3]],
+            servos,
         })
     }
 
@@ -319,7 +300,7 @@ impl ArduPilotMap {
 
     /// The largest lateral cyclic command (model units) ArduPilot's roll of ±1 makes.
     pub fn lateral_per_roll(&self) -> f64 {
-        self.cyclic_per_unit_deg().to_radians() / self.k_rad[1]
+        self.cyclic_per_unit_deg().to_radians() * self.servos.per_rad(1)
     }
 
     /// Decode one packet's PWM (`pwm[n-1]` is `SERVOn`; a channel beyond the
@@ -393,10 +374,13 @@ impl ArduPilotMap {
     pub fn input_from(&self, o: &AutopilotOutputs) -> Input {
         let s = &self.section;
         let c_us = 1000.0 + 1000.0 * o.collective;
-        let theta0_deg = s.collective_pitch_min_deg
-            + (c_us - f64::from(s.collective_min_us))
-                / f64::from(s.collective_max_us - s.collective_min_us)
-                * (s.collective_pitch_max_deg - s.collective_pitch_min_deg);
+        let theta0_deg = linear_deg(
+            c_us,
+            f64::from(s.collective_min_us),
+            f64::from(s.collective_max_us),
+            s.collective_pitch_min_deg,
+            s.collective_pitch_max_deg,
+        );
         let cyc = self.cyclic_per_unit_deg();
         // roll right: A1 < 0; pitch up: B1 < 0 (thesis Table 4.1)
         let a1_deg = -cyc * o.roll;
@@ -404,10 +388,8 @@ impl ArduPilotMap {
         let mid = 0.5 * (s.tail_pitch_at_yaw_max_deg + s.tail_pitch_at_yaw_min_deg);
         let half = 0.5 * (s.tail_pitch_at_yaw_max_deg - s.tail_pitch_at_yaw_min_deg);
         let tail_deg = mid + half * o.yaw.clamp(-1.0, 1.0);
-        let deg = [theta0_deg, a1_deg, b1_deg, tail_deg];
-        Input::from_fn(|i, _| {
-            (deg[i].to_radians() / self.k_rad[i]).clamp(self.s_min[i], self.s_max[i])
-        })
+        self.servos
+            .input_from_deg(&[theta0_deg, a1_deg, b1_deg, tail_deg])
     }
 
     /// ArduPilot's normalized commands that make the model's inputs `u`
@@ -415,7 +397,8 @@ impl ArduPilotMap {
     /// what ArduPilot must output to fly `u`, e.g. the trim.
     pub fn outputs_for(&self, u: &Input, throttle: f64) -> AutopilotOutputs {
         let s = &self.section;
-        let deg = |i: usize| (u[i] * self.k_rad[i]).to_degrees();
+        let d = self.servos.deg_of(u);
+        let deg = |i: usize| d[i];
         let c_us = f64::from(s.collective_min_us)
             + (deg(0) - s.collective_pitch_min_deg)
                 / (s.collective_pitch_max_deg - s.collective_pitch_min_deg)

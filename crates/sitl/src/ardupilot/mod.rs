@@ -38,15 +38,16 @@ pub use mapping::{
 };
 pub use protocol::{PacketError, PhysicsState, ServoPacket, parse_servo_packet};
 
-use helicon_sim::closed_loop::{
-    ClosedLoopError, Hardware, HardwareSample, Prepared, Summary, Termination,
-};
-use helicon_sim::log_csv::{LogCsvError, LogWriter};
+pub use crate::lockstep::Ending;
+
+use crate::lockstep::{Session, SessionError};
+use helicon_sim::closed_loop::{ClosedLoopError, Prepared, Summary};
+use helicon_sim::log_csv::LogCsvError;
 use helicon_sim::scenario::Scenario;
 use std::net::{SocketAddr, UdpSocket};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// The address ArduPilot's SITL sends its servo packets to.
@@ -112,20 +113,6 @@ impl Counts {
             PacketError::Pwm { .. } => self.bad_pwm += 1,
         }
     }
-}
-
-/// Why the run ended.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Ending {
-    /// The stop flag.
-    Stopped,
-    /// No valid packet within the silence timeout.
-    Silent,
-    /// [`ArduPilotOptions::max_frames`] were stepped.
-    FrameLimit,
-    /// The simulation ended: the scenario's duration flown, a model
-    /// failure or an envelope limit (the summary says which).
-    Simulation(Termination, Option<String>),
 }
 
 /// What an ArduPilot JSON run did.
@@ -196,23 +183,21 @@ pub enum ArduPilotError {
     Config(#[from] helicon_config::ConfigError),
 }
 
+impl From<SessionError> for ArduPilotError {
+    fn from(e: SessionError) -> Self {
+        match e {
+            SessionError::Prepare(e) => ArduPilotError::Prepare(e),
+            SessionError::Csv(e) => ArduPilotError::Csv(e),
+        }
+    }
+}
+
 /// The physics side's UDP socket, bound before the run so that its address
 /// (an OS-chosen port) can be told to the autopilot.
 #[derive(Debug)]
 pub struct ArduPilotServer {
     socket: UdpSocket,
     address: SocketAddr,
-}
-
-/// One simulation from its initial state, at one frame rate.
-struct Session<'a> {
-    hw: Hardware<'a>,
-    rate_hz: u16,
-    frames: u64,
-    /// The sample of the state now (sensed, not yet actuated).
-    now: Option<HardwareSample>,
-    writer: Option<LogWriter>,
-    rows: usize,
 }
 
 impl ArduPilotServer {
@@ -248,23 +233,18 @@ impl ArduPilotServer {
             address: self.address.to_string(),
             source,
         };
-        let p = prepared.model.params();
-        let g = p.environment.g_m_s2;
+        let g = prepared.model.params().environment.g_m_s2;
         // home on the ground below the simulator's origin (the design point)
-        let ground_down_m = if p.landing_gear.is_enabled() {
-            p.landing_gear.ground_down_m
-        } else {
-            0.0
-        };
-        let log_csv = options.out_dir.as_ref().map(|d| d.join("log.csv"));
-        if let Some(d) = &options.out_dir {
-            std::fs::create_dir_all(d).map_err(|e| ArduPilotError::Folder {
+        let ground_down_m = crate::lockstep::ground_down_m(prepared);
+        let log_csv = crate::lockstep::log_path(options.out_dir.as_deref()).map_err(|(d, e)| {
+            ArduPilotError::Folder {
                 path: d.display().to_string(),
                 source: e,
-            })?;
-        }
+            }
+        })?;
         let mut counts = Counts::default();
         let mut session: Option<Session<'_>> = None;
+        let mut rate_hz: u16 = 0;
         let mut last_count: Option<u32> = None;
         let mut last_state: Option<PhysicsState> = None;
         let mut reply = String::with_capacity(512);
@@ -274,12 +254,7 @@ impl ArduPilotServer {
         let mut last_reply_at: Option<Instant> = None;
         let mut last_valid = Instant::now();
         let mut model_time_all = 0.0;
-        let stop = || {
-            options
-                .stop
-                .as_ref()
-                .is_some_and(|f| f.load(Ordering::Relaxed))
-        };
+        let stop = || crate::lockstep::stopped(options.stop.as_ref());
         let ending = loop {
             if stop() {
                 break Ending::Stopped;
@@ -322,11 +297,8 @@ impl ArduPilotServer {
             if restart {
                 counts.restarts += 1;
                 if let Some(s) = session.take() {
-                    model_time_all += s.frames as f64 / f64::from(s.rate_hz);
-                    if let Some(w) = s.writer {
-                        // the log starts afresh with the new session
-                        w.finish()?;
-                    }
+                    // the log starts afresh with the new session
+                    model_time_all += s.restart()?;
                 }
             }
             if !repeat {
@@ -334,10 +306,11 @@ impl ArduPilotServer {
                     counts.gaps += 1;
                 }
                 if session.is_none() {
-                    session = Some(new_session(
+                    rate_hz = pkt.frame_rate_hz;
+                    session = Some(Session::new(
                         scenario,
                         prepared,
-                        pkt.frame_rate_hz,
+                        1.0 / f64::from(rate_hz),
                         log_csv.as_deref(),
                         options.log_stride,
                     )?);
@@ -345,27 +318,12 @@ impl ArduPilotServer {
                 let Some(s) = session.as_mut() else {
                     continue;
                 };
-                if pkt.frame_rate_hz != s.rate_hz {
+                if pkt.frame_rate_hz != rate_hz {
                     counts.rate_mismatches += 1;
                 }
                 let d = map.decode(pkt.pwm());
-                s.hw.set_throttle_hold(!d.engine_on);
-                let mut end = None;
-                if let Some(step) = s.hw.actuate(&d.input, None) {
-                    if step.kept
-                        && let Some(w) = s.writer.as_mut()
-                    {
-                        w.write(&step.row)?;
-                        s.rows += 1;
-                    }
-                    end = step.end;
-                }
-                s.frames += 1;
+                let end = s.step(&d.input, d.engine_on)?;
                 counts.frames += 1;
-                s.now = if end.is_none() { s.hw.sense() } else { None };
-                if s.now.is_none() && end.is_none() {
-                    end = Some((Termination::Completed, None));
-                }
                 last_count = Some(c);
                 let mut state = state_of(s, g, ground_down_m);
                 if s.now.is_none() {
@@ -422,30 +380,16 @@ impl ArduPilotServer {
         };
         let (frame_rate_hz, session_frames, model_time_s, final_state, rotor, summary, rows) =
             match session {
-                Some(mut s) => {
-                    let why = match &ending {
-                        Ending::Stopped => Some("stopped on request"),
-                        Ending::Silent => Some("the autopilot went silent"),
-                        Ending::FrameLimit => Some("the frame limit was reached"),
-                        Ending::Simulation(..) => None,
-                    };
-                    if let Some(why) = why {
-                        let t = s.frames as f64 / f64::from(s.rate_hz);
-                        s.hw.abort(Termination::Stopped, format!("{why} at t = {t:.3} s"));
-                    }
-                    let rows = match s.writer {
-                        Some(w) => w.finish()?,
-                        None => 0,
-                    };
-                    let t = s.frames as f64 / f64::from(s.rate_hz);
+                Some(s) => {
+                    let c = s.close(ending.abort_reason())?;
                     (
-                        Some(s.rate_hz),
-                        s.frames,
-                        t,
-                        Some(*s.hw.state()),
-                        Some(s.hw.rotor_speed_rad_s()),
-                        Some(s.hw.summary()),
-                        rows,
+                        Some(rate_hz),
+                        c.frames,
+                        c.model_time_s,
+                        Some(c.final_state),
+                        Some(c.rotor_speed_rad_s),
+                        Some(c.summary),
+                        c.rows,
                     )
                 }
                 None => (None, 0, 0.0, None, None, None, 0),
@@ -495,35 +439,10 @@ pub fn timing_json(r: &ArduPilotReport) -> serde_json::Value {
     })
 }
 
-/// A simulation from the initial state at `rate_hz`, sensed at t = 0.
-fn new_session<'a>(
-    scenario: &'a Scenario,
-    prepared: &'a Prepared,
-    rate_hz: u16,
-    log_csv: Option<&Path>,
-    stride: usize,
-) -> Result<Session<'a>, ArduPilotError> {
-    let mut hw =
-        Hardware::new_at(scenario, prepared, 1.0 / f64::from(rate_hz))?.without_heading_check();
-    let now = hw.sense();
-    let writer = match log_csv {
-        Some(path) => Some(LogWriter::create(path)?.with_stride(stride.max(1))),
-        None => None,
-    };
-    Ok(Session {
-        hw,
-        rate_hz,
-        frames: 0,
-        now,
-        writer,
-        rows: 0,
-    })
-}
-
 /// The state ArduPilot reads of `s` now (`g` gravity, the home
 /// `ground_down_m` below the simulator's origin).
 fn state_of(s: &Session<'_>, g: f64, ground_down_m: f64) -> PhysicsState {
-    let t = s.frames as f64 / f64::from(s.rate_hz);
+    let t = s.time_s();
     match &s.now {
         Some(now) => {
             let tr = &now.truth;
