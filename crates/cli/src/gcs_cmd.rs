@@ -10,10 +10,11 @@ use helicon_gcs::client::{
     self, Fleet, GCS_COMPONENT_ID, GCS_SYSTEM_ID, Operation, Outcome, Request, WaitFor,
 };
 use helicon_gcs::mavlink::dialects::common::*;
+use helicon_gcs::mavlink::error::MessageReadError;
 use helicon_gcs::mavlink::{MavHeader, MavlinkReader};
 use helicon_gcs::{modes, wpl};
 use std::collections::{BTreeMap, VecDeque};
-use std::io::{BufRead, IsTerminal, Read, Write};
+use std::io::{BufRead, ErrorKind, IsTerminal, Write};
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs, UdpSocket};
 use std::path::PathBuf;
 use std::sync::mpsc;
@@ -47,8 +48,9 @@ enum Link {
         peers: BTreeMap<u8, SocketAddr>,
         buffer: Vec<u8>,
     },
-    /// A TCP connection and the bytes read not yet a whole frame.
-    Tcp(TcpStream, Vec<u8>),
+    /// A TCP connection, read through the mavlink crate's incremental
+    /// reader (it keeps a partial frame between reads).
+    Tcp(Box<MavlinkReader<TcpStream>>),
 }
 
 impl Link {
@@ -74,7 +76,7 @@ impl Link {
                 stream
                     .set_read_timeout(Some(Duration::from_millis(20)))
                     .with_context(|| named("socket"))?;
-                Ok(Link::Tcp(stream, Vec::new()))
+                Ok(Link::Tcp(Box::new(MavlinkReader::new(stream))))
             }
             _ => {
                 let listen = scheme == "udpin";
@@ -103,10 +105,10 @@ impl Link {
     /// `udpout:` destination). Nothing to send to yet is not an error.
     fn send(&mut self, header: MavHeader, msg: &MavMessage, to: Option<u8>) {
         match self {
-            Link::Tcp(stream, _) => {
+            Link::Tcp(reader) => {
                 let mut frame = Vec::new();
                 if helicon_gcs::mavlink::write_v2_msg(&mut frame, header, msg).is_ok() {
-                    let _ = stream.write_all(&frame);
+                    let _ = reader.get_mut().write_all(&frame);
                 }
             }
             Link::Udp {
@@ -139,16 +141,28 @@ impl Link {
     /// The messages that arrive within the read timeout.
     fn recv(&mut self) -> Vec<(MavHeader, MavMessage)> {
         match self {
-            Link::Tcp(stream, pending) => {
-                let mut b = [0u8; 4096];
-                match stream.read(&mut b) {
-                    Ok(0) | Err(_) => {
-                        // closed, or nothing within the read timeout
-                        std::thread::sleep(Duration::from_millis(5));
+            Link::Tcp(reader) => {
+                // the frames already whole, then one wait of the read
+                // timeout; a frame failing its CRC is skipped by the reader
+                let mut out = Vec::new();
+                for _ in 0..256 {
+                    match reader.read_any_message::<MavMessage>() {
+                        Ok(m) => out.push(m),
+                        Err(MessageReadError::Io(e))
+                            if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) =>
+                        {
+                            break;
+                        }
+                        Err(MessageReadError::Io(_)) => {
+                            // closed: nothing more will come
+                            std::thread::sleep(Duration::from_millis(5));
+                            break;
+                        }
+                        // a frame of no known message: skipped
+                        Err(_) => {}
                     }
-                    Ok(n) => pending.extend_from_slice(&b[..n]),
                 }
-                tcp_frames(pending)
+                out
             }
             Link::Udp {
                 socket,
@@ -174,37 +188,6 @@ impl Link {
                 }
                 out
             }
-        }
-    }
-}
-
-/// The whole frames at the front of a TCP byte stream, taken out of it
-/// (bytes before a frame's start marker are dropped; a frame that fails
-/// its CRC is skipped).
-fn tcp_frames(pending: &mut Vec<u8>) -> Vec<(MavHeader, MavMessage)> {
-    let mut out = Vec::new();
-    loop {
-        let Some(start) = pending.iter().position(|b| *b == 0xFD || *b == 0xFE) else {
-            pending.clear();
-            return out;
-        };
-        pending.drain(..start);
-        if pending.len() < 3 {
-            return out;
-        }
-        let len = usize::from(pending[1]);
-        let total = if pending[0] == 0xFD {
-            // MAVLink 2: 10 header bytes, 2 of CRC, 13 of a signature
-            12 + len + if pending[2] & 0x01 != 0 { 13 } else { 0 }
-        } else {
-            8 + len
-        };
-        if pending.len() < total {
-            return out;
-        }
-        let frame: Vec<u8> = pending.drain(..total).collect();
-        if let Ok(m) = MavlinkReader::new(&frame[..]).read_any_message::<MavMessage>() {
-            out.push(m);
         }
     }
 }
