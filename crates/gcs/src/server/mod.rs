@@ -1,5 +1,5 @@
-//! The ground-station server: MAVLink 2 (common dialect) over UDP on its own
-//! thread. It reads the vehicle's status and events from the downlink ring
+//! The ground-station server: MAVLink 2 (common dialect) over UDP and TCP
+//! on its own thread. It reads the vehicle's status and events from the downlink ring
 //! and writes commands to the uplink ring; the control task never waits for
 //! it.
 //!
@@ -15,6 +15,14 @@
 //! [`PEER_SILENCE_S`], so that a station whose uplink failed still sees the
 //! failsafe; the link-loss failsafe acts when no trusted peer's
 //! ground-station heartbeat arrived within `FS_LINK_TO`.
+//!
+//! **Transports.** The address is one endpoint or a comma-separated list
+//! (`udpin:127.0.0.1:14550,tcpin:127.0.0.1:5760`): every socket is polled
+//! in the one loop. A TCP client ([`tcp`]) is a peer from its connection
+//! on (sent the heartbeat like a `udpout:` destination, never evicted) and
+//! is forgotten when it closes or is dropped; replies go over the
+//! connection the request came on, streams and texts to every live peer of
+//! every transport.
 //!
 //! **Addressing.** Every message with a target (COMMAND_LONG/INT, SET_MODE,
 //! PARAM_*, MISSION_*, SET_POSITION_TARGET_*, REQUEST_DATA_STREAM, …) is
@@ -55,11 +63,14 @@ use crate::params::{PARAMS, ParamError, ParamTable};
 use helicon_devices::{Geodetic, LocalNed};
 use mavlink::dialects::common::*;
 use mavlink::{
-    ConnectionAddress, MAVLinkMessageRaw, MavHeader, MavlinkReader, MavlinkVersion, Message,
-    MessageData, SigningConfig, SigningData,
+    MAVLinkMessageRaw, MavHeader, MavlinkReader, MavlinkVersion, Message, MessageData,
+    SigningConfig, SigningData,
 };
 use nalgebra::Vector3;
 use std::net::{SocketAddr, ToSocketAddrs, UdpSocket};
+use tcp::Tcp;
+
+pub mod tcp;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
@@ -161,8 +172,23 @@ pub struct ServerReport {
     pub peers_evicted: u64,
     /// The most peers held at once (at most [`MAX_PEERS`]).
     pub peers_max: usize,
-    /// Send errors (a ground station not listening is one per message).
+    /// Send errors (a ground station not listening is one per message; a
+    /// frame not queued to a TCP client is one).
     pub send_errors: u64,
+    /// CRC-valid frames read from TCP clients.
+    pub received_tcp_frames: u64,
+    /// TCP clients accepted and served.
+    pub tcp_accepted: u64,
+    /// TCP clients closed at once ([`tcp::MAX_TCP_CLIENTS`] were served).
+    pub tcp_refused: u64,
+    /// TCP clients dropped because their send buffer filled or stalled.
+    pub tcp_dropped_slow: u64,
+    /// TCP clients dropped for sending garbage.
+    pub tcp_dropped_garbage: u64,
+    /// Bytes read from TCP clients.
+    pub tcp_bytes_in: u64,
+    /// Bytes written to TCP clients.
+    pub tcp_bytes_out: u64,
 }
 
 /// The running server.
@@ -185,55 +211,116 @@ impl ServerHandle {
     }
 }
 
-/// Parse and check an address (only UDP is offered).
-pub fn parse_address(address: &str) -> Result<ConnectionAddress, GcsError> {
-    let bad = |message: String| GcsError::Address {
-        address: address.to_string(),
-        message,
-    };
-    if !(address.starts_with("udpin:") || address.starts_with("udpout:")) {
-        return Err(bad("expected udpin:HOST:PORT or udpout:HOST:PORT".into()));
-    }
-    ConnectionAddress::parse_address(address).map_err(|e| bad(e.to_string()))
+/// One endpoint of the `--gcs` / `[gcs] address` list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Endpoint {
+    /// `udpin:HOST:PORT`: listen; every ground station that speaks is a peer.
+    UdpIn(SocketAddr),
+    /// `udpout:HOST:PORT`: send to this ground station from the start.
+    UdpOut(SocketAddr),
+    /// `tcpin:HOST:PORT`: accept TCP clients (at most
+    /// [`tcp::MAX_TCP_CLIENTS`]); each is a peer from its connection on.
+    TcpIn(SocketAddr),
 }
 
-/// The socket of an address, and the `udpout:` destination.
-fn bind(address: &str) -> Result<(UdpSocket, Option<SocketAddr>), GcsError> {
-    parse_address(address)?;
+/// The most endpoints one address list may name.
+pub const MAX_ENDPOINTS: usize = 4;
+
+/// Parse and check an address: `udpin:`, `udpout:` or `tcpin:` HOST:PORT,
+/// or a comma-separated list of them (at most [`MAX_ENDPOINTS`]), each
+/// resolved to its first address.
+pub fn parse_address(address: &str) -> Result<Vec<Endpoint>, GcsError> {
     let bad = |message: String| GcsError::Address {
         address: address.to_string(),
         message,
     };
-    let (listen, host) = match address.split_once(':') {
-        Some(("udpin", h)) => (true, h),
-        Some((_, h)) => (false, h),
-        None => return Err(bad("expected udpin:HOST:PORT or udpout:HOST:PORT".into())),
-    };
-    let addr = host
-        .to_socket_addrs()
-        .map_err(|e| bad(e.to_string()))?
-        .next()
-        .ok_or_else(|| bad("resolves to no address".into()))?;
-    let (socket, dest) = if listen {
-        (UdpSocket::bind(addr), None)
-    } else {
-        let any: SocketAddr = if addr.is_ipv4() {
-            ([0, 0, 0, 0], 0).into()
-        } else {
-            ([0u16; 8], 0).into()
+    const EXPECTED: &str =
+        "expected udpin:HOST:PORT, udpout:HOST:PORT or tcpin:HOST:PORT (or a comma-separated list)";
+    let mut out = Vec::new();
+    for part in address.split(',') {
+        let part = part.trim();
+        let Some((kind, host)) = part.split_once(':') else {
+            return Err(bad(EXPECTED.into()));
         };
-        (UdpSocket::bind(any), Some(addr))
+        let make: fn(SocketAddr) -> Endpoint = match kind {
+            "udpin" => Endpoint::UdpIn,
+            "udpout" => Endpoint::UdpOut,
+            "tcpin" => Endpoint::TcpIn,
+            _ => return Err(bad(EXPECTED.into())),
+        };
+        let addr = host
+            .to_socket_addrs()
+            .map_err(|e| bad(format!("`{part}`: {e}")))?
+            .next()
+            .ok_or_else(|| bad(format!("`{part}` resolves to no address")))?;
+        let e = make(addr);
+        if out.contains(&e) {
+            return Err(bad(format!("`{part}` given twice")));
+        }
+        out.push(e);
+    }
+    if out.len() > MAX_ENDPOINTS {
+        return Err(bad(format!("at most {MAX_ENDPOINTS} endpoints")));
+    }
+    Ok(out)
+}
+
+/// Where a peer is reached.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Dest {
+    /// A datagram address on the UDP socket of that index.
+    Udp(usize, SocketAddr),
+    /// The TCP client of that serial.
+    Tcp(u32),
+}
+
+/// A UDP socket and its `udpout:` destination.
+type UdpEnd = (UdpSocket, Option<SocketAddr>);
+
+/// The sockets of an address list: the UDP sockets with their `udpout:`
+/// destinations, and the TCP listeners.
+fn bind(address: &str) -> Result<(Vec<UdpEnd>, Tcp), GcsError> {
+    let bad = |message: String| GcsError::Address {
+        address: address.to_string(),
+        message,
     };
-    let socket = socket.map_err(|e| bad(e.to_string()))?;
-    socket
-        .set_read_timeout(Some(Duration::from_millis(2)))
+    let mut udp = Vec::new();
+    let mut tcp = Tcp::new();
+    for e in parse_address(address)? {
+        match e {
+            Endpoint::UdpIn(addr) => {
+                udp.push((UdpSocket::bind(addr).map_err(|e| bad(e.to_string()))?, None))
+            }
+            Endpoint::UdpOut(addr) => {
+                let any: SocketAddr = if addr.is_ipv4() {
+                    ([0, 0, 0, 0], 0).into()
+                } else {
+                    ([0u16; 8], 0).into()
+                };
+                udp.push((
+                    UdpSocket::bind(any).map_err(|e| bad(e.to_string()))?,
+                    Some(addr),
+                ))
+            }
+            Endpoint::TcpIn(addr) => tcp.listen(addr).map_err(|e| bad(e.to_string()))?,
+        }
+    }
+    // the first UDP socket paces the loop (its read waits up to 2 ms); the
+    // others, and the TCP sockets, never wait
+    for (i, (socket, _)) in udp.iter().enumerate() {
+        if i == 0 {
+            socket.set_read_timeout(Some(Duration::from_millis(2)))
+        } else {
+            socket.set_nonblocking(true)
+        }
         .map_err(|e| bad(e.to_string()))?;
-    Ok((socket, dest))
+    }
+    Ok((udp, tcp))
 }
 
 /// Start the server on its own thread.
 pub fn spawn(config: ServerConfig, end: ServerEnd) -> Result<ServerHandle, GcsError> {
-    let (socket, dest) = bind(&config.address)?;
+    let (udp, tcp) = bind(&config.address)?;
     let stop = Arc::new(AtomicBool::new(false));
     let stop2 = stop.clone();
     let processed = Arc::new(AtomicU64::new(0));
@@ -241,12 +328,13 @@ pub fn spawn(config: ServerConfig, end: ServerEnd) -> Result<ServerHandle, GcsEr
     let thread = std::thread::Builder::new()
         .name("gcs".into())
         .spawn(move || {
-            let mut s = Server::new(config, end, socket, dest);
+            let mut s = Server::new(config, end, udp, tcp);
             while !stop2.load(Ordering::Relaxed) {
                 let n = s.poll();
                 processed2.fetch_add(n, Ordering::Release);
             }
-            s.report
+            s.tcp.flush();
+            s.report()
         })
         .map_err(|e| GcsError::Thread(e.to_string()))?;
     Ok(ServerHandle {
@@ -260,7 +348,7 @@ enum Upload {
     Idle,
     Receiving {
         /// The peer uploading (its address).
-        from: SocketAddr,
+        from: Dest,
         /// Its system and component (the requests are addressed to them).
         requester: (u8, u8),
         /// On-board time of its last message (s).
@@ -299,7 +387,7 @@ const UPLOAD_IDLE_S: f64 = 5.0;
 
 /// One ground station.
 struct Peer {
-    addr: SocketAddr,
+    addr: Dest,
     /// The `udpout:` destination: sent to before it speaks, never evicted.
     configured: bool,
     /// Has sent a frame that passed signing (every peer when signing is off).
@@ -316,7 +404,10 @@ struct Peer {
 struct Server {
     config: ServerConfig,
     end: ServerEnd,
-    socket: UdpSocket,
+    /// The UDP sockets (`udpin:`/`udpout:`), in the order given.
+    udp: Vec<UdpSocket>,
+    /// The TCP listeners and clients (`tcpin:`).
+    tcp: Tcp,
     /// The datagram buffer (allocated once).
     buffer: Vec<u8>,
     home: LocalNed,
@@ -345,7 +436,7 @@ struct Server {
     arm_requested: Option<bool>,
     /// The last refusal text to an unsigned sender (address, on-board s):
     /// at most one a second to the same address.
-    last_refusal: Option<(SocketAddr, f64)>,
+    last_refusal: Option<(Dest, f64)>,
     report: ServerReport,
 }
 
@@ -383,8 +474,8 @@ impl Server {
     fn new(
         config: ServerConfig,
         end: ServerEnd,
-        socket: UdpSocket,
-        dest: Option<SocketAddr>,
+        udp: Vec<UdpEnd>,
+        tcp: Tcp,
     ) -> Self {
         let signing = config
             .signing_key
@@ -410,13 +501,17 @@ impl Server {
             signing,
             config,
             end,
-            socket,
+            udp: Vec::with_capacity(udp.len()),
+            tcp,
         };
-        if let Some(addr) = dest {
-            let mut p = s.new_peer(addr);
-            p.configured = true;
-            s.peers.push(p);
-            s.report.peers_max = 1;
+        for (i, (socket, dest)) in udp.into_iter().enumerate() {
+            if let Some(addr) = dest {
+                let mut p = s.new_peer(Dest::Udp(i, addr));
+                p.configured = true;
+                s.peers.push(p);
+                s.report.peers_max = s.peers.len();
+            }
+            s.udp.push(socket);
         }
         s
     }
@@ -429,7 +524,7 @@ impl Server {
         &self.params.config().fence
     }
 
-    fn new_peer(&self, addr: SocketAddr) -> Peer {
+    fn new_peer(&self, addr: Dest) -> Peer {
         Peer {
             addr,
             configured: false,
@@ -443,7 +538,7 @@ impl Server {
 
     /// The peer of an address that has just sent a valid frame: found, or
     /// added (replacing the one heard longest ago when the table is full).
-    fn peer_of(&mut self, addr: SocketAddr) -> usize {
+    fn peer_of(&mut self, addr: Dest) -> usize {
         let now = self.now_s();
         let i = if let Some(i) = self.peers.iter().position(|p| p.addr == addr) {
             i
@@ -495,10 +590,28 @@ impl Server {
         h
     }
 
-    fn send_bytes(&mut self, bytes: &[u8], to: SocketAddr) {
-        match self.socket.send_to(bytes, to) {
-            Ok(_) => self.report.sent += 1,
-            Err(_) => self.report.send_errors += 1,
+    fn send_bytes(&mut self, bytes: &[u8], to: Dest) {
+        let ok = match to {
+            Dest::Udp(i, addr) => self.udp[i].send_to(bytes, addr).is_ok(),
+            Dest::Tcp(serial) => self.tcp.send(serial, bytes),
+        };
+        if ok {
+            self.report.sent += 1;
+        } else {
+            self.report.send_errors += 1;
+        }
+    }
+
+    /// The report with the TCP transport's counters.
+    fn report(&self) -> ServerReport {
+        ServerReport {
+            tcp_accepted: self.tcp.accepted,
+            tcp_refused: self.tcp.refused,
+            tcp_dropped_slow: self.tcp.dropped_slow,
+            tcp_dropped_garbage: self.tcp.dropped_garbage,
+            tcp_bytes_in: self.tcp.bytes_in,
+            tcp_bytes_out: self.tcp.bytes_out,
+            ..self.report.clone()
         }
     }
 
@@ -510,7 +623,7 @@ impl Server {
 
     /// Send to `to`, or (`None`) to every live peer, each in the MAVLink
     /// version it speaks.
-    fn send_to(&mut self, msg: &MavMessage, to: Option<SocketAddr>) {
+    fn send_to(&mut self, msg: &MavMessage, to: Option<Dest>) {
         let header = self.header();
         self.send_frames(to, msg.message_id(), |version, w| match version {
             MavlinkVersion::V2 => mavlink::write_v2_msg(w, header, msg).ok(),
@@ -524,7 +637,7 @@ impl Server {
     /// an id MAVLink 1 cannot carry.
     fn send_frames(
         &mut self,
-        to: Option<SocketAddr>,
+        to: Option<Dest>,
         id: u32,
         mut write: impl FnMut(MavlinkVersion, &mut &mut [u8]) -> Option<usize>,
     ) {
@@ -577,7 +690,7 @@ impl Server {
     /// A status text; one longer than a STATUSTEXT's 50 bytes goes out in
     /// chunks of 50 with one `id` and `chunk_seq` 0, 1, … (common.xml: the
     /// last chunk shorter than 50 bytes, or followed by an empty one).
-    fn text_to(&mut self, severity: MavSeverity, text: &str, to: Option<SocketAddr>) {
+    fn text_to(&mut self, severity: MavSeverity, text: &str, to: Option<Dest>) {
         let bytes = text.as_bytes();
         let chunks = bytes.len() / 50 + 1;
         let id = if bytes.len() < 50 {
@@ -610,10 +723,23 @@ impl Server {
     /// statuses and events out.
     /// Returns the statuses and events handled.
     fn poll(&mut self) -> u64 {
-        for _ in 0..32 {
-            match self.socket.recv_from(&mut self.buffer) {
-                Ok((n, from)) => self.datagram(n, from),
-                Err(_) => break,
+        let mut input = false;
+        for u in 0..self.udp.len() {
+            for _ in 0..32 {
+                match self.udp[u].recv_from(&mut self.buffer) {
+                    Ok((n, from)) => {
+                        input = true;
+                        self.datagram(n, Dest::Udp(u, from));
+                    }
+                    Err(_) => break,
+                }
+            }
+        }
+        if !self.tcp.is_empty() {
+            input |= self.poll_tcp();
+            if !input && self.udp.is_empty() {
+                // nothing waits on a read: pace the loop
+                std::thread::sleep(Duration::from_millis(1));
             }
         }
         let mut n = 0;
@@ -629,7 +755,7 @@ impl Server {
 
     /// The frames of one datagram (the first `n` bytes of the buffer), all
     /// of them its sender's.
-    fn datagram(&mut self, n: usize, from: SocketAddr) {
+    fn datagram(&mut self, n: usize, from: Dest) {
         self.report.datagrams += 1;
         let bytes = std::mem::take(&mut self.buffer);
         let mut reader = MavlinkReader::with_capacity(n.min(bytes.len()), &bytes[..n]);
@@ -648,6 +774,64 @@ impl Server {
             self.report.garbage_datagrams += 1;
         }
         self.buffer = bytes;
+    }
+
+    /// The TCP turn: new clients become peers (sent the heartbeat from the
+    /// start, like a `udpout:` destination), each client's frames are
+    /// received, and the pending bytes written; the peers of closed or
+    /// dropped clients are removed. Returns whether a frame came in.
+    fn poll_tcp(&mut self) -> bool {
+        for serial in self.tcp.accept().into_iter().flatten() {
+            let now = self.now_s();
+            let mut p = self.new_peer(Dest::Tcp(serial));
+            p.configured = true;
+            p.next_due_s = [now; STREAMS.len()];
+            if self.peers.len() >= MAX_PEERS {
+                // the table's oldest station heard (never a connected one)
+                if let Some(i) = (0..self.peers.len())
+                    .filter(|&i| !self.peers[i].configured)
+                    .min_by(|&a, &b| {
+                        let t = |p: &Peer| p.heard_s.unwrap_or(f64::NEG_INFINITY);
+                        t(&self.peers[a]).total_cmp(&t(&self.peers[b]))
+                    })
+                {
+                    self.peers[i] = p;
+                    self.report.peers_evicted += 1;
+                }
+            } else {
+                self.peers.push(p);
+                self.report.peers_max = self.report.peers_max.max(self.peers.len());
+            }
+        }
+        let mut input = false;
+        for serial in self.tcp.serials().into_iter().flatten() {
+            // a bounded number of frames per client and turn
+            for _ in 0..64 {
+                let Some(raw) = self.tcp.next_frame(serial) else {
+                    break;
+                };
+                input = true;
+                self.report.received_tcp_frames += 1;
+                self.receive(&raw, Dest::Tcp(serial));
+            }
+        }
+        self.tcp.flush();
+        let tcp = &self.tcp;
+        let before = self.peers.len();
+        self.peers.retain(|p| match p.addr {
+            Dest::Tcp(serial) => tcp.alive(serial),
+            Dest::Udp(..) => true,
+        });
+        if self.peers.len() != before
+            && let Upload::Receiving {
+                from: Dest::Tcp(serial),
+                ..
+            } = self.upload
+            && !self.tcp.alive(serial)
+        {
+            self.upload = Upload::Idle;
+        }
+        input
     }
 
     fn on_status(&mut self, s: &VehicleStatus) {
@@ -1004,7 +1188,7 @@ impl Server {
     }
 
     /// One CRC-valid frame from `from`.
-    fn receive(&mut self, raw: &MAVLinkMessageRaw, from: SocketAddr) {
+    fn receive(&mut self, raw: &MAVLinkMessageRaw, from: Dest) {
         if raw.system_id() == self.config.system_id {
             return; // our own echo
         }
@@ -1097,7 +1281,7 @@ impl Server {
 
     /// Answer a command that failed signing (to its sender only; the text at
     /// most once a second per address).
-    fn refuse_unsigned(&mut self, msg: &MavMessage, from: SocketAddr) {
+    fn refuse_unsigned(&mut self, msg: &MavMessage, from: Dest) {
         let now = self.now_s();
         if self
             .last_refusal
@@ -1127,7 +1311,7 @@ impl Server {
         }
     }
 
-    fn dispatch(&mut self, msg: &MavMessage, from: SocketAddr, sys: u8, comp: u8) {
+    fn dispatch(&mut self, msg: &MavMessage, from: Dest, sys: u8, comp: u8) {
         match msg {
             MavMessage::COMMAND_LONG(c) => {
                 let p = [
@@ -1623,7 +1807,7 @@ impl Server {
         self.param_value_to(i, self.current.map(|p| self.peers[p].addr));
     }
 
-    fn param_value_to(&mut self, i: usize, to: Option<SocketAddr>) {
+    fn param_value_to(&mut self, i: usize, to: Option<Dest>) {
         let Some((name, value)) = self.params.get(i) else {
             return;
         };
@@ -1762,7 +1946,7 @@ impl Server {
         false
     }
 
-    fn mission_count(&mut self, c: &MISSION_COUNT_DATA, from: SocketAddr) {
+    fn mission_count(&mut self, c: &MISSION_COUNT_DATA, from: Dest) {
         if !self.mission_type_ok(c.mission_type) {
             return;
         }
@@ -1808,7 +1992,7 @@ impl Server {
         self.request_item(0);
     }
 
-    fn mission_item(&mut self, it: &MISSION_ITEM_INT_DATA, from: SocketAddr) {
+    fn mission_item(&mut self, it: &MISSION_ITEM_INT_DATA, from: Dest) {
         if it.mission_type != MavMissionType::MAV_MISSION_TYPE_MISSION {
             return; // no upload of another type is ever started
         }
