@@ -54,7 +54,7 @@
 // and the *_INT mission frames: they are understood
 #![allow(deprecated)]
 
-use crate::fence::Fence;
+use crate::fence::{Fence, MAX_FENCE_ITEMS, ZoneError, Zones};
 use crate::geo::{MissionError, global_position_ned_m, plan_of};
 use crate::link::{Downlink, LandedState, ServerEnd, Uplink, VehicleEvent, VehicleStatus};
 use crate::modes;
@@ -357,6 +357,8 @@ enum Upload {
         requested_s: f64,
         /// Requests repeated for the item expected.
         retries: u8,
+        /// The flight mission or the fence.
+        mission_type: MavMissionType,
         count: u16,
         items: Vec<MISSION_ITEM_INT_DATA>,
     },
@@ -429,6 +431,11 @@ struct Server {
     sequence: u8,
     status: Option<VehicleStatus>,
     mission: Vec<MISSION_ITEM_INT_DATA>,
+    /// The fence items as uploaded (downloads return them).
+    fence_items: Vec<MISSION_ITEM_INT_DATA>,
+    /// The zones of the fence upload (the server's target checks; the
+    /// navigator holds a copy for its own and the breach monitor).
+    zones: Zones,
     upload: Upload,
     last_flight_mode: &'static str,
     /// An arm/disarm sent on and not yet seen in a status: the commands
@@ -471,12 +478,7 @@ fn addressed_to(msg: &MavMessage, system_id: u8) -> bool {
 }
 
 impl Server {
-    fn new(
-        config: ServerConfig,
-        end: ServerEnd,
-        udp: Vec<UdpEnd>,
-        tcp: Tcp,
-    ) -> Self {
+    fn new(config: ServerConfig, end: ServerEnd, udp: Vec<UdpEnd>, tcp: Tcp) -> Self {
         let signing = config
             .signing_key
             .map(|k| SigningData::from_config(SigningConfig::new(k, 0, false, false)));
@@ -492,6 +494,8 @@ impl Server {
             sequence: 0,
             status: None,
             mission: Vec::new(),
+            fence_items: Vec::new(),
+            zones: Zones::default(),
             upload: Upload::Idle,
             last_flight_mode: "",
             arm_requested: None,
@@ -1369,7 +1373,7 @@ impl Server {
             MavMessage::MISSION_ITEM_INT(it) => self.mission_item(it, from),
             MavMessage::MISSION_ITEM(it) => self.mission_item(&item_int(it), from),
             MavMessage::MISSION_REQUEST_LIST(r) if self.mission_type_ok(r.mission_type) => {
-                let count = self.mission.len() as u16;
+                let count = self.items_of(r.mission_type).len() as u16;
                 self.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
                     count,
                     target_system: sys,
@@ -1420,7 +1424,7 @@ impl Server {
 
     /// A takeoff height (m above home) the fence allows, or the refusal.
     fn takeoff_height(&mut self, h: f64) -> Result<f64, MavResult> {
-        match self.fence().check_height(h) {
+        match self.fence().check_height_in(&self.zones, h) {
             Ok(()) if h > 0.0 => Ok(h),
             Ok(()) => {
                 self.text(
@@ -1637,7 +1641,7 @@ impl Server {
             );
             return MavResult::MAV_RESULT_DENIED;
         };
-        if let Err(v) = self.fence().check_target(&p) {
+        if let Err(v) = self.fence().check_target_in(&self.zones, &p) {
             self.text(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 &format!("goto refused: {v}"),
@@ -1872,6 +1876,7 @@ impl Server {
             from,
             requester,
             requested_s,
+            mission_type,
             ..
         } = &mut self.upload
         else {
@@ -1879,12 +1884,13 @@ impl Server {
         };
         *requested_s = now;
         let (to, (target_system, target_component)) = (*from, *requester);
+        let mission_type = *mission_type;
         self.send_to(
             &MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
                 seq,
                 target_system,
                 target_component,
-                mission_type: MavMissionType::MAV_MISSION_TYPE_MISSION,
+                mission_type,
             }),
             Some(to),
         );
@@ -1901,11 +1907,13 @@ impl Server {
             requested_s,
             retries,
             items,
+            mission_type,
             ..
         } = &mut self.upload
         else {
             return;
         };
+        let mission_type = *mission_type;
         if now - *requested_s < MISSION_ITEM_TIMEOUT_S {
             return;
         }
@@ -1927,30 +1935,49 @@ impl Server {
                 target_system,
                 target_component,
                 mavtype: MavMissionResult::MAV_MISSION_OPERATION_CANCELLED,
-                mission_type: MavMissionType::MAV_MISSION_TYPE_MISSION,
+                mission_type,
                 ..MISSION_ACK_DATA::DEFAULT
             }),
             Some(to),
         );
     }
 
-    /// A mission type other than the flight mission is refused
-    /// (`MAV_MISSION_UNSUPPORTED`, answered in that type): the fence is the
-    /// cylinder of the `GF_*` parameters, and there are no rally points.
-    /// `true`: the flight mission's.
+    /// The flight mission and the fence are offered; another type (rally
+    /// points, ALL outside a clear) is refused (`MAV_MISSION_UNSUPPORTED`,
+    /// answered in that type). `true`: one offered.
     fn mission_type_ok(&mut self, mission_type: MavMissionType) -> bool {
-        if mission_type == MavMissionType::MAV_MISSION_TYPE_MISSION {
+        if matches!(
+            mission_type,
+            MavMissionType::MAV_MISSION_TYPE_MISSION | MavMissionType::MAV_MISSION_TYPE_FENCE
+        ) {
             return true;
         }
         self.mission_ack(MavMissionResult::MAV_MISSION_UNSUPPORTED, mission_type);
         false
     }
 
+    /// The items uploaded of a type (the mission's or the fence's).
+    fn items_of(&self, mission_type: MavMissionType) -> &[MISSION_ITEM_INT_DATA] {
+        if mission_type == MavMissionType::MAV_MISSION_TYPE_FENCE {
+            &self.fence_items
+        } else {
+            &self.mission
+        }
+    }
+
+    /// Clear the fence's zones (the cylinder stays).
+    fn clear_fence(&mut self) {
+        self.fence_items.clear();
+        self.zones = Zones::default();
+        self.uplink(Uplink::Zones(Box::default()));
+    }
+
     fn mission_count(&mut self, c: &MISSION_COUNT_DATA, from: Dest) {
         if !self.mission_type_ok(c.mission_type) {
             return;
         }
-        let mission = MavMissionType::MAV_MISSION_TYPE_MISSION;
+        let mission = c.mission_type;
+        let fence = mission == MavMissionType::MAV_MISSION_TYPE_FENCE;
         let now = self.now_s();
         if let Upload::Receiving {
             from: owner,
@@ -1968,8 +1995,19 @@ impl Server {
             self.mission_ack(MavMissionResult::MAV_MISSION_DENIED, mission);
             return;
         }
-        if usize::from(c.count) > crate::navigator::MAX_MISSION_ITEMS * 2 {
+        let room = if fence {
+            MAX_FENCE_ITEMS
+        } else {
+            crate::navigator::MAX_MISSION_ITEMS * 2
+        };
+        if usize::from(c.count) > room {
             self.mission_ack(MavMissionResult::MAV_MISSION_NO_SPACE, mission);
+            return;
+        }
+        if c.count == 0 && fence {
+            self.upload = Upload::Idle;
+            self.clear_fence();
+            self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
             return;
         }
         if c.count == 0 {
@@ -1986,6 +2024,7 @@ impl Server {
             last_s: now,
             requested_s: now,
             retries: 0,
+            mission_type: mission,
             count: c.count,
             items: Vec::with_capacity(usize::from(c.count)),
         };
@@ -1993,9 +2032,6 @@ impl Server {
     }
 
     fn mission_item(&mut self, it: &MISSION_ITEM_INT_DATA, from: Dest) {
-        if it.mission_type != MavMissionType::MAV_MISSION_TYPE_MISSION {
-            return; // no upload of another type is ever started
-        }
         let now = self.now_s();
         let Upload::Receiving {
             from: owner,
@@ -2003,14 +2039,16 @@ impl Server {
             retries,
             count,
             items,
+            mission_type,
             ..
         } = &mut self.upload
         else {
             return;
         };
-        if *owner != from {
-            return; // not the uploading ground station's
+        if *owner != from || it.mission_type != *mission_type {
+            return; // not the uploading ground station's, or not its type
         }
+        let mission = *mission_type;
         *last_s = now;
         let expected = items.len() as u16;
         if it.seq < expected {
@@ -2030,9 +2068,26 @@ impl Server {
         }
         let items = std::mem::take(items);
         self.upload = Upload::Idle;
+        if mission == MavMissionType::MAV_MISSION_TYPE_FENCE {
+            match Zones::from_items(&self.home, &items) {
+                Ok(zones) => {
+                    self.fence_items = items;
+                    self.zones = zones;
+                    self.uplink(Uplink::Zones(Box::new(zones)));
+                    self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
+                }
+                Err(ZoneError { seq, rule, result }) => {
+                    self.text(
+                        MavSeverity::MAV_SEVERITY_WARNING,
+                        &format!("fence refused: item {seq}: {rule}"),
+                    );
+                    self.mission_ack(result, mission);
+                }
+            }
+            return;
+        }
         let fence = *self.fence();
-        let mission = MavMissionType::MAV_MISSION_TYPE_MISSION;
-        match plan_of(&self.home, &fence, &items) {
+        match plan_of(&self.home, &fence, &self.zones, &items) {
             Ok(plan) => {
                 self.mission = items;
                 self.mission_complete = false;
@@ -2055,7 +2110,7 @@ impl Server {
         if !self.mission_type_ok(mission_type) {
             return;
         }
-        let Some(it) = self.mission.get(usize::from(seq)).cloned() else {
+        let Some(it) = self.items_of(mission_type).get(usize::from(seq)).cloned() else {
             self.mission_ack(MavMissionResult::MAV_MISSION_INVALID_SEQUENCE, mission_type);
             return;
         };
@@ -2074,15 +2129,20 @@ impl Server {
     }
 
     fn clear_all(&mut self, mission_type: MavMissionType) {
-        // "all" clears the flight mission, the only one there is
-        if mission_type != MavMissionType::MAV_MISSION_TYPE_ALL
-            && !self.mission_type_ok(mission_type)
-        {
+        // "all" clears the flight mission and the fence's zones; each type
+        // clears its own only
+        let all = mission_type == MavMissionType::MAV_MISSION_TYPE_ALL;
+        if !all && !self.mission_type_ok(mission_type) {
             return;
         }
-        self.mission.clear();
-        self.mission_complete = false;
-        self.uplink(Uplink::Plan(Box::default()));
+        if all || mission_type == MavMissionType::MAV_MISSION_TYPE_FENCE {
+            self.clear_fence();
+        }
+        if all || mission_type == MavMissionType::MAV_MISSION_TYPE_MISSION {
+            self.mission.clear();
+            self.mission_complete = false;
+            self.uplink(Uplink::Plan(Box::default()));
+        }
         self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission_type);
     }
 
@@ -2105,7 +2165,7 @@ impl Server {
             return;
         }
         let refusal = match target {
-            GuidedTarget::Position(p, y) => match self.fence().check_target(&p) {
+            GuidedTarget::Position(p, y) => match self.fence().check_target_in(&self.zones, &p) {
                 Err(v) => Some(v.to_string()),
                 Ok(()) if y.is_some_and(|y| !y.is_finite()) => Some("yaw not finite".into()),
                 Ok(()) => None,
@@ -2222,6 +2282,7 @@ fn autopilot_version() -> AUTOPILOT_VERSION_DATA {
     AUTOPILOT_VERSION_DATA {
         capabilities: MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_INT
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_COMMAND_INT
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
