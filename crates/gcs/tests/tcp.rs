@@ -9,6 +9,7 @@ mod common;
 
 use common::client::Client;
 use common::vehicle::*;
+use helicon_gcs::link::Uplink;
 use helicon_gcs::mavlink::dialects::common::*;
 use helicon_gcs::mavlink::{MAVLinkMessageRaw, MavHeader, MavlinkReader, Message, MessageData};
 use helicon_gcs::server::tcp::{MAX_TCP_CLIENTS, TCP_GARBAGE_BYTES};
@@ -320,4 +321,195 @@ fn a_client_that_does_not_read_is_dropped() {
     // the slow client's connection was closed: reading it ends
     let mut slow = slow;
     assert!(slow.wait_closed_within(Duration::from_secs(10)));
+}
+
+/// Upload `items` of `mission_type` from `c` (answering its item requests);
+/// the MISSION_ACK's result, and the requests' (target_system,
+/// target_component).
+fn upload_over(
+    c: &mut TcpClient,
+    veh: &mut Vehicle,
+    mission_type: MavMissionType,
+    items: &[MISSION_ITEM_INT_DATA],
+) -> (Option<MavMissionResult>, Vec<(u8, u8)>) {
+    let mut from = c.log.len();
+    c.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
+        count: items.len() as u16,
+        target_system: 1,
+        target_component: 1,
+        mission_type,
+        ..MISSION_COUNT_DATA::DEFAULT
+    }));
+    let mut targets = Vec::new();
+    loop {
+        veh.status(0.02);
+        match c.wait(from, |m| {
+            matches!(
+                m,
+                MavMessage::MISSION_REQUEST_INT(_) | MavMessage::MISSION_ACK(_)
+            )
+        }) {
+            Some((_, MavMessage::MISSION_REQUEST_INT(r))) => {
+                from = c.log.len();
+                targets.push((r.target_system, r.target_component));
+                assert_eq!(r.mission_type, mission_type);
+                c.send(&MavMessage::MISSION_ITEM_INT(
+                    items[usize::from(r.seq)].clone(),
+                ));
+            }
+            Some((_, MavMessage::MISSION_ACK(a))) => {
+                assert_eq!(a.mission_type, mission_type);
+                return (Some(a.mavtype), targets);
+            }
+            _ => return (None, targets),
+        }
+    }
+}
+
+/// Download the items of `mission_type`.
+fn download_over(
+    c: &mut TcpClient,
+    veh: &mut Vehicle,
+    mission_type: MavMissionType,
+) -> Vec<MISSION_ITEM_INT_DATA> {
+    let from = c.log.len();
+    c.send(&MavMessage::MISSION_REQUEST_LIST(
+        MISSION_REQUEST_LIST_DATA {
+            target_system: 1,
+            target_component: 1,
+            mission_type,
+        },
+    ));
+    veh.status(0.02);
+    let Some((_, MavMessage::MISSION_COUNT(n))) =
+        c.wait(from, |m| matches!(m, MavMessage::MISSION_COUNT(_)))
+    else {
+        panic!("no MISSION_COUNT");
+    };
+    assert_eq!(n.mission_type, mission_type);
+    let mut out = Vec::new();
+    for seq in 0..n.count {
+        let from = c.log.len();
+        c.send(&MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA {
+            seq,
+            target_system: 1,
+            target_component: 1,
+            mission_type,
+        }));
+        veh.status(0.02);
+        let Some((_, MavMessage::MISSION_ITEM_INT(it))) =
+            c.wait(from, |m| matches!(m, MavMessage::MISSION_ITEM_INT(_)))
+        else {
+            panic!("no item {seq}");
+        };
+        out.push(it);
+    }
+    out
+}
+
+fn fence_item(
+    seq: u16,
+    command: MavCmd,
+    param1: f32,
+    lat_e7: i32,
+    lon_e7: i32,
+) -> MISSION_ITEM_INT_DATA {
+    MISSION_ITEM_INT_DATA {
+        param1,
+        x: lat_e7,
+        y: lon_e7,
+        seq,
+        command,
+        target_system: 1,
+        target_component: 1,
+        frame: MavFrame::MAV_FRAME_GLOBAL,
+        mission_type: MavMissionType::MAV_MISSION_TYPE_FENCE,
+        ..MISSION_ITEM_INT_DATA::DEFAULT
+    }
+}
+
+#[test]
+fn a_fence_uploaded_over_tcp_checks_targets_and_clears_alone() {
+    let mut veh = Vehicle::start_on(None, true);
+    let mut a = TcpClient::connect(veh.tcp_port, 255);
+    veh.status(0.2);
+    let fence = MavMissionType::MAV_MISSION_TYPE_FENCE;
+    // home is 57.0146 N 9.9869 E: a 40 m inclusion circle about it
+    let circle = vec![fence_item(
+        0,
+        MavCmd::MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION,
+        40.0,
+        570_146_000,
+        99_869_000,
+    )];
+    let (r, targets) = upload_over(&mut a, &mut veh, fence, &circle);
+    assert_eq!(r, Some(MavMissionResult::MAV_MISSION_ACCEPTED));
+    assert_eq!(targets, vec![(255, 190)]);
+    assert_eq!(
+        veh.uplinks()
+            .iter()
+            .filter(|u| matches!(u, Uplink::Zones(_)))
+            .count(),
+        1
+    );
+    let back = download_over(&mut a, &mut veh, fence);
+    assert_eq!(back.len(), 1);
+    assert_eq!(
+        (back[0].command, back[0].param1, back[0].x, back[0].y),
+        (circle[0].command, 40.0, circle[0].x, circle[0].y)
+    );
+    assert_eq!(
+        (back[0].target_system, back[0].target_component),
+        (255, 190)
+    );
+    // a mission: a waypoint 20 m north is inside, 60 m north outside
+    let wp = |seq, dlat| {
+        let mut it = common::client::item(
+            seq,
+            MavCmd::MAV_CMD_NAV_WAYPOINT,
+            570_146_000 + dlat,
+            99_869_000,
+            10.0,
+        );
+        it.target_component = 1;
+        it
+    };
+    let mission = MavMissionType::MAV_MISSION_TYPE_MISSION;
+    let takeoff = common::client::item(0, MavCmd::MAV_CMD_NAV_TAKEOFF, 0, 0, 10.0);
+    let (r, _) = upload_over(&mut a, &mut veh, mission, &[takeoff.clone(), wp(1, 1_798)]);
+    assert_eq!(r, Some(MavMissionResult::MAV_MISSION_ACCEPTED));
+    let (r, _) = upload_over(&mut a, &mut veh, mission, &[takeoff.clone(), wp(1, 5_395)]);
+    assert_eq!(r, Some(MavMissionResult::MAV_MISSION_DENIED));
+    // the mission kept is the first
+    assert_eq!(download_over(&mut a, &mut veh, mission).len(), 2);
+    // a bad fence is refused and the old one kept
+    let (r, _) = upload_over(
+        &mut a,
+        &mut veh,
+        fence,
+        &[fence_item(
+            0,
+            MavCmd::MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION,
+            -1.0,
+            570_146_000,
+            99_869_000,
+        )],
+    );
+    assert_eq!(r, Some(MavMissionResult::MAV_MISSION_INVALID_PARAM1));
+    assert_eq!(download_over(&mut a, &mut veh, fence).len(), 1);
+    // clearing the fence leaves the mission
+    let from = a.log.len();
+    a.send(&MavMessage::MISSION_CLEAR_ALL(MISSION_CLEAR_ALL_DATA {
+        target_system: 1,
+        target_component: 1,
+        mission_type: fence,
+    }));
+    veh.status(0.05);
+    assert!(a.wait(from, |m| matches!(m, MavMessage::MISSION_ACK(k) if k.mission_type == fence && k.mavtype == MavMissionResult::MAV_MISSION_ACCEPTED)).is_some());
+    assert!(download_over(&mut a, &mut veh, fence).is_empty());
+    assert_eq!(download_over(&mut a, &mut veh, mission).len(), 2);
+    // and the far waypoint is now accepted
+    let (r, _) = upload_over(&mut a, &mut veh, mission, &[takeoff, wp(1, 5_395)]);
+    assert_eq!(r, Some(MavMissionResult::MAV_MISSION_ACCEPTED));
+    veh.stop();
 }
