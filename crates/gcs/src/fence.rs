@@ -342,6 +342,52 @@ fn in_polygon(p: [f64; 2], vertices: &[[f64; 2]]) -> bool {
     inside
 }
 
+/// The point of a fence item (NED about home, m; on home's level: the
+/// altitude is not used): a global frame, latitude and longitude in range.
+fn fence_point_ned_m(
+    home: &LocalNed,
+    it: &MISSION_ITEM_INT_DATA,
+) -> Result<Vector3<f64>, ZoneError> {
+    let fail = |rule: &'static str, result: MavMissionResult| ZoneError {
+        seq: it.seq,
+        rule,
+        result,
+    };
+    if !matches!(
+        it.frame,
+        MavFrame::MAV_FRAME_GLOBAL
+            | MavFrame::MAV_FRAME_GLOBAL_INT
+            | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT
+            | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+    ) {
+        return Err(fail(
+            "unsupported frame (a global one is needed)",
+            MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME,
+        ));
+    }
+    if it.x.unsigned_abs() > 900_000_000 {
+        return Err(fail(
+            "latitude out of range",
+            MavMissionResult::MAV_MISSION_INVALID_PARAM5_X,
+        ));
+    }
+    if it.y.unsigned_abs() > 1_800_000_000 {
+        return Err(fail(
+            "longitude out of range",
+            MavMissionResult::MAV_MISSION_INVALID_PARAM6_Y,
+        ));
+    }
+    // the altitude is not used: the point on home's level
+    global_position_ned_m(
+        home,
+        MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+        it.x,
+        it.y,
+        0.0,
+    )
+    .map_err(|(rule, result)| fail(rule, result))
+}
+
 impl Zones {
     /// No zone and no return point.
     pub fn is_empty(&self) -> bool {
@@ -410,18 +456,6 @@ impl Zones {
                 rule,
                 result,
             };
-            if !matches!(
-                it.frame,
-                MavFrame::MAV_FRAME_GLOBAL
-                    | MavFrame::MAV_FRAME_GLOBAL_INT
-                    | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT
-                    | MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
-            ) {
-                return Err(fail(
-                    "unsupported frame (a global one is needed)",
-                    MavMissionResult::MAV_MISSION_UNSUPPORTED_FRAME,
-                ));
-            }
             let polygon = matches!(
                 it.command,
                 MavCmd::MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
@@ -446,27 +480,7 @@ impl Zones {
                     MavMissionResult::MAV_MISSION_INVALID_PARAM1,
                 ));
             }
-            if it.x.unsigned_abs() > 900_000_000 {
-                return Err(fail(
-                    "latitude out of range",
-                    MavMissionResult::MAV_MISSION_INVALID_PARAM5_X,
-                ));
-            }
-            if it.y.unsigned_abs() > 1_800_000_000 {
-                return Err(fail(
-                    "longitude out of range",
-                    MavMissionResult::MAV_MISSION_INVALID_PARAM6_Y,
-                ));
-            }
-            // the altitude is not used: the point on home's level
-            let ned = global_position_ned_m(
-                home,
-                MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-                it.x,
-                it.y,
-                0.0,
-            )
-            .map_err(|(rule, result)| fail(rule, result))?;
+            let ned = fence_point_ned_m(home, it)?;
             let ne = [ned.x, ned.y];
             if polygon {
                 let (cmd, count, read) = match open {
