@@ -35,16 +35,28 @@ pub const TCP_STALL_S: f64 = 30.0;
 /// MAVLink frame is dropped.
 pub const TCP_GARBAGE_BYTES: u64 = 8 * 1024;
 
-/// The bytes read from a stream, counted (for the garbage rule).
+/// Bytes read from one client per frame asked for, at most: a client that
+/// sends faster than the loop parses cannot hold it, and the garbage rule
+/// is judged at least this often.
+const READ_BUDGET_BYTES: usize = 4096;
+
+/// The bytes read from a stream, counted (for the garbage rule), at most
+/// `budget` before it reports `WouldBlock`.
 struct Counted {
     stream: TcpStream,
     read: u64,
+    budget: usize,
 }
 
 impl Read for Counted {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        let n = self.stream.read(buf)?;
+        if self.budget == 0 {
+            return Err(ErrorKind::WouldBlock.into());
+        }
+        let room = buf.len().min(self.budget);
+        let n = self.stream.read(&mut buf[..room])?;
         self.read += n as u64;
+        self.budget -= n;
         Ok(n)
     }
 }
@@ -138,7 +150,11 @@ impl Tcp {
                     serial,
                     reader: MavlinkReader::with_capacity(
                         mavlink::consts::MAX_FRAME_SIZE,
-                        Counted { stream, read: 0 },
+                        Counted {
+                            stream,
+                            read: 0,
+                            budget: 0,
+                        },
                     ),
                     frame_bytes: 0,
                     out: Vec::with_capacity(TCP_SEND_BUFFER_BYTES),
@@ -176,6 +192,7 @@ impl Tcp {
             .iter_mut()
             .find(|c| c.serial == serial && !c.dead)?;
         let before = c.reader.get_ref().read;
+        c.reader.get_mut().budget = READ_BUDGET_BYTES;
         let r = c.reader.read_any_raw_message::<MavMessage>();
         self.bytes_in += c.reader.get_ref().read - before;
         match r {
