@@ -29,7 +29,7 @@ ME = (255, 190)
 def check(udp_port, tcp_port):
     gcs = f"udpin:127.0.0.1:{udp_port},tcpin:127.0.0.1:{tcp_port}"
     with Sitl(udp_port, gcs=gcs) as sitl:
-        d = Deadline(120)
+        d = Deadline(90)
         try:
             return fly(udp_port, tcp_port, d)
         except Exception:
@@ -147,7 +147,7 @@ def fly(udp_port, tcp_port, d):
     recv(u, "HEARTBEAT", d, "u still hears the vehicle", lambda m: m.get_srcSystem() == 1)
     left = d.left()
     return (f"2 TCP + 1 UDP stations; fence and mission up and down over TCP, the far waypoint refused; "
-            f"flown and landed; {120 - left:.0f} s of 120")
+            f"flown and landed; {90 - left:.0f} s of 90")
 
 
 if __name__ == "__main__":
