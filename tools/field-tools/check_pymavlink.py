@@ -4,8 +4,8 @@
 Two ground stations at once (system 255 and 254 on their own ports): the
 HEARTBEAT names PX4's autopilot and modes as pymavlink decodes them;
 AUTOPILOT_VERSION's capabilities; a command id the common dialect does not
-define (ArduPilot's 42424) answered MAV_RESULT_UNSUPPORTED; a fence upload
-refused MAV_MISSION_UNSUPPORTED in its own type; each station's answers to
+define (ArduPilot's 42424) answered MAV_RESULT_UNSUPPORTED; a rally-point
+upload refused MAV_MISSION_UNSUPPORTED in its own type; each station's answers to
 it alone; arm, takeoff (NaN: the default height), the mode LAND set by name
 (pymavlink's px4_map) and the disarm at touchdown.
 
@@ -62,10 +62,10 @@ def fly(port, d):
                          condition="COMMAND_ACK.command==42424")
     expect(stray is None, "B's answer reached A")
 
-    # a fence upload: refused in its own type, the mission untouched
-    b.mav.mission_count_send(1, 1, 3, M.MAV_MISSION_TYPE_FENCE)
-    ack = recv(b, "MISSION_ACK", d, "fence MISSION_ACK")
-    expect(ack.type == M.MAV_MISSION_UNSUPPORTED and ack.mission_type == M.MAV_MISSION_TYPE_FENCE, f"{ack}")
+    # a rally-point upload: refused in its own type, the mission untouched
+    b.mav.mission_count_send(1, 1, 3, M.MAV_MISSION_TYPE_RALLY)
+    ack = recv(b, "MISSION_ACK", d, "rally MISSION_ACK")
+    expect(ack.type == M.MAV_MISSION_UNSUPPORTED and ack.mission_type == M.MAV_MISSION_TYPE_RALLY, f"{ack}")
 
     # fly from A: arm, take off to the default height, land by mode name
     a.mav.command_long_send(1, 1, M.MAV_CMD_COMPONENT_ARM_DISARM, 0, 1, 0, 0, 0, 0, 0, 0)
@@ -91,7 +91,7 @@ def fly(port, d):
          and not m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED)
     seen = [x for i, x in enumerate(modes) if i == 0 or modes[i - 1] != x]
     expect("TAKEOFF" in seen and "LAND" in seen, f"modes {seen}")
-    return f"PX4 modes {' → '.join(seen)}; unknown command and fence refused; two stations"
+    return f"PX4 modes {' → '.join(seen)}; unknown command and rally points refused; two stations"
 
 
 if __name__ == "__main__":

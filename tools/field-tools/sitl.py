@@ -44,15 +44,16 @@ class Deadline:
 class Sitl:
     """`helicon sitl SCENARIO --speed realtime --gcs udpin:127.0.0.1:PORT`
     (the scenario's duration lengthened: the run ends when the check stops
-    it)."""
+    it); `gcs`: another `--gcs` address (a list, TCP)."""
 
-    def __init__(self, port, duration_s=300):
+    def __init__(self, port, duration_s=300, gcs=None):
         self.port = port
+        gcs = gcs or f"udpin:127.0.0.1:{port}"
         self.out = tempfile.mkdtemp(prefix="helicon-field-tools-")
         self.log = open(os.path.join(self.out, "sitl.log"), "w")
         self.proc = subprocess.Popen(
             [HELICON, "sitl", SCENARIO, "--speed", "realtime", "--duration", str(duration_s),
-             "--out", os.path.join(self.out, "run"), "--gcs", f"udpin:127.0.0.1:{port}"],
+             "--out", os.path.join(self.out, "run"), "--gcs", gcs],
             stdout=self.log, stderr=subprocess.STDOUT, start_new_session=True)
 
     def stop(self):

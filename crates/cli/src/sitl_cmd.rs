@@ -81,10 +81,12 @@ pub struct SitlArgs {
     )]
     pub rc_silent_until: Option<f64>,
     /// Fly with a ground station: start the MAVLink 2 server at
-    /// `udpout:HOST:PORT` (it sends to the ground station listening there) or
-    /// `udpin:HOST:PORT` (it listens). The helicopter then starts disarmed,
-    /// the simulated receiver is silent, and the navigator flies what the
-    /// operator commands (arm, takeoff, missions): the scenario's
+    /// `udpout:HOST:PORT` (it sends to the ground station listening there),
+    /// `udpin:HOST:PORT` (it listens) or `tcpin:HOST:PORT` (it accepts up to
+    /// 4 TCP clients, the convention is port 5760), or at a comma-separated
+    /// list of them (`udpin:127.0.0.1:14550,tcpin:127.0.0.1:5760`). The
+    /// helicopter then starts disarmed, the simulated receiver is silent,
+    /// and the navigator flies what the operator commands (arm, takeoff, missions): the scenario's
     /// `[[reference]]` are ignored. The helicopter starts on the ground
     /// (landing gear, drivetrain and ground effect on when the scenario has
     /// no `[ground]`), disarmed, rotor stopped, and the run lasts until

@@ -29,7 +29,8 @@ use serde::Deserialize;
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GcsSection {
-    /// `udpout:HOST:PORT` or `udpin:HOST:PORT`.
+    /// `udpout:HOST:PORT`, `udpin:HOST:PORT`, `tcpin:HOST:PORT`, or a
+    /// comma-separated list of them.
     pub address: String,
     /// The vehicle's MAVLink system id (1..=254).
     pub system_id: u8,
@@ -88,7 +89,7 @@ impl GcsSection {
             invalid(
                 "address",
                 self.address.clone(),
-                "udpin:HOST:PORT or udpout:HOST:PORT",
+                "udpin:, udpout: or tcpin:HOST:PORT, or a comma-separated list",
             )
         })?;
         if self.system_id == 0 || self.system_id == 255 {

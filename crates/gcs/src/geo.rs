@@ -18,7 +18,7 @@
 // and the *_INT mission frames: they are understood
 #![allow(deprecated)]
 
-use crate::fence::{Fence, FenceViolation};
+use crate::fence::{Fence, Zones};
 use crate::navigator::{Item, ItemKind, Plan};
 use helicon_devices::{Geodetic, LocalNed};
 use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavCmd, MavFrame, MavMissionResult};
@@ -99,10 +99,12 @@ pub fn global_position_ned_m(
 
 /// The navigator's plan of a mission as uploaded (items in sequence order).
 /// Every takeoff height, waypoint and landing point must lie inside the
-/// fence (refused `MAV_MISSION_DENIED` otherwise, the limit named).
+/// fence, its uploaded zones included (refused `MAV_MISSION_DENIED`
+/// otherwise, the limit named).
 pub fn plan_of(
     home: &LocalNed,
     fence: &Fence,
+    zones: &Zones,
     items: &[MISSION_ITEM_INT_DATA],
 ) -> Result<Plan, MissionError> {
     let mut plan = Plan::default();
@@ -155,15 +157,10 @@ pub fn plan_of(
             ItemKind::Return => Vector3::zeros(),
             _ => item_position_ned_m(home, it)?,
         };
-        if let Err(v) = fence.check_target(&position) {
+        if let Err(v) = fence.check_target_in(zones, &position) {
             return Err(MissionError {
                 seq,
-                rule: match v {
-                    FenceViolation::NotFinite => "position not finite",
-                    FenceViolation::Horizontal { .. } => "beyond GF_MAX_HOR_DIST",
-                    FenceViolation::Vertical { .. } => "above GF_MAX_VER_DIST",
-                    FenceViolation::BelowHome { .. } => "below home",
-                },
+                rule: v.rule(),
                 result: MavMissionResult::MAV_MISSION_DENIED,
             });
         }

@@ -16,7 +16,7 @@
 //! - [`modes`]: the navigator's modes as PX4's custom modes (what ground
 //!   stations name, set and fly).
 //! - [`params`]: the parameter table (typed, validated).
-//! - [`server`]: the MAVLink 2 server (common dialect, UDP) on its own thread.
+//! - [`server`]: the MAVLink 2 server (common dialect, UDP and TCP) on its own thread.
 //! - [`config`]: the `[gcs]` section of the on-board configuration.
 //! - [`client`]: the ground-station side (`helicon gcs`): the vehicles
 //!   heard, and the command, mission and parameter microservices as state

@@ -32,6 +32,9 @@ pub enum Uplink {
     Plan(Box<Plan>),
     /// New navigator tuning (validated by the server).
     Config(NavigatorConfig),
+    /// New fence zones (an upload of `MAV_MISSION_TYPE_FENCE`, checked by
+    /// the server; boxed like a plan).
+    Zones(Box<crate::fence::Zones>),
     /// A guided target.
     Guided(GuidedTarget),
 }
@@ -349,6 +352,7 @@ impl Vehicle {
                 self.nav.start_mission(&at, events);
             }
             Uplink::Plan(p) => self.nav.set_plan(*p),
+            Uplink::Zones(z) => self.nav.set_zones(*z),
             Uplink::Config(c) => {
                 // validated by the server; a refusal here keeps the old one
                 let before = *self.nav.config();

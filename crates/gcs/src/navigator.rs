@@ -20,7 +20,7 @@
 //! frame is the home position's (the GPS receiver's origin); the ground is
 //! `d = 0`. Allocation-free: a mission is a fixed-capacity [`Plan`].
 
-use crate::fence::{Fence, FenceAction};
+use crate::fence::{Fence, FenceAction, Zones};
 use helicon_core::Reference;
 use helicon_core::frames::wrap_pi;
 use nalgebra::Vector3;
@@ -431,6 +431,8 @@ pub struct Navigator {
     last_t_s: Option<f64>,
     /// A breach was acted on and the estimate has not come back inside.
     fence_breached: bool,
+    /// The zones uploaded into the fence (none: the cylinder alone).
+    zones: Zones,
 }
 
 impl Navigator {
@@ -453,6 +455,7 @@ impl Navigator {
             link_lost_at_s: None,
             last_t_s: None,
             fence_breached: false,
+            zones: Zones::default(),
         })
     }
 
@@ -500,6 +503,16 @@ impl Navigator {
         self.current = 0;
     }
 
+    /// Replace the fence's uploaded zones (checked by the server).
+    pub fn set_zones(&mut self, zones: Zones) {
+        self.zones = zones;
+    }
+
+    /// The fence's uploaded zones.
+    pub fn zones(&self) -> &Zones {
+        &self.zones
+    }
+
     fn enter(&mut self, mode: NavMode, events: &mut Events) {
         if self.mode != mode {
             self.mode = mode;
@@ -514,7 +527,11 @@ impl Navigator {
     pub fn takeoff(&mut self, at: &NavInput, height_m: f64, events: &mut Events) -> bool {
         if !height_m.is_finite()
             || height_m <= 0.0
-            || self.config.fence.check_height(height_m).is_err()
+            || self
+                .config
+                .fence
+                .check_height_in(&self.zones, height_m)
+                .is_err()
         {
             return false;
         }
@@ -584,7 +601,8 @@ impl Navigator {
             // the fence is checked here too: the server refuses such targets,
             // the navigator never flies one
             GuidedTarget::Position(p, y) => {
-                self.config.fence.check_target(&p).is_ok() && y.is_none_or(f64::is_finite)
+                self.config.fence.check_target_in(&self.zones, &p).is_ok()
+                    && y.is_none_or(f64::is_finite)
             }
         };
         if !ok {
@@ -682,7 +700,11 @@ impl Navigator {
     /// land, or a warning only); it is armed again when the estimate is
     /// back inside. A landing or a return already under way goes on.
     pub fn fence(&mut self, at: &NavInput, events: &mut Events) {
-        let Some(v) = self.config.fence.outside(&at.position_ned_m) else {
+        let Some(v) = self
+            .config
+            .fence
+            .outside_in(&self.zones, &at.position_ned_m)
+        else {
             self.fence_breached = false;
             return;
         };

@@ -541,3 +541,50 @@ fn fence_breach_acts_as_gf_action_says() {
         assert_eq!(s.nav.mode(), NavMode::Guided);
     }
 }
+
+/// An uploaded zone is the fence too: the breach monitor acts at an
+/// exclusion circle's edge, and a position target inside it is refused.
+#[test]
+fn an_uploaded_exclusion_zone_is_breached_at_its_edge() {
+    use helicon_devices::{Geodetic, LocalNed};
+    use helicon_gcs::fence::Zones;
+    use helicon_gcs::mavlink::dialects::common::*;
+    let home = LocalNed::new(Geodetic::new(57.0146, 9.9869, 20.0).unwrap());
+    // a 5 m exclusion circle 15 m north of home (15 m ≈ 1349 × 10⁻⁷ deg)
+    let circle = MISSION_ITEM_INT_DATA {
+        param1: 5.0,
+        x: 570_146_000 + 1_349,
+        y: 99_869_000,
+        command: MavCmd::MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION,
+        frame: MavFrame::MAV_FRAME_GLOBAL,
+        mission_type: MavMissionType::MAV_MISSION_TYPE_FENCE,
+        ..MISSION_ITEM_INT_DATA::DEFAULT
+    };
+    let zones = Zones::from_items(&home, &[circle]).unwrap();
+    let config = NavigatorConfig {
+        guided_timeout_s: 10.0,
+        fence: Fence {
+            action: FenceAction::Hold,
+            ..Fence::default()
+        },
+        ..NavigatorConfig::default()
+    };
+    let mut s = Sim::new(config);
+    s.nav.set_zones(zones);
+    s.p = Vector3::new(0.0, 0.0, -5.0);
+    let mut ev = Events::default();
+    let inside = GuidedTarget::Position(Vector3::new(15.0, 0.0, -5.0), None);
+    assert!(
+        !s.nav.guided(&s.at(), inside, &mut ev),
+        "a target in the zone flown"
+    );
+    let north = GuidedTarget::Velocity(Vector3::new(2.0, 0.0, 0.0), None);
+    assert!(s.nav.guided(&s.at(), north, &mut ev));
+    s.record(&ev);
+    s.run(10.0, no_link);
+    let (_, p) = s.has(NavEvent::FenceBreach(true)).expect("a breach");
+    // at the circle's edge, 10 m north, within a step's travel
+    assert!((p.x - 10.0).abs() < 0.05, "{p}");
+    assert_eq!(s.nav.mode(), NavMode::Hold);
+    assert!(s.p.x < 15.0, "flew into the zone: {}", s.p);
+}

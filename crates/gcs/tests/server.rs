@@ -419,7 +419,8 @@ fn what_the_field_tools_ask_for_is_answered() {
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_COMMAND_INT
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2
     ));
-    assert!(!caps.contains(MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FENCE));
+    // fence uploads are offered (QGC then uploads its geofence)
+    assert!(caps.contains(MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FENCE));
     // no battery monitor: BATTERY_STATUS refused
     p[0] = BATTERY_STATUS_DATA::ID as f32;
     assert_eq!(
@@ -539,14 +540,14 @@ fn mission_types_and_the_upload_timeout_follow_the_microservice() {
             _ => None,
         })
     };
-    // a fence upload and a fence clear are refused in their type; the
-    // flight mission stays
+    // a rally upload is refused in its type, a fence clear accepted in
+    // its; the flight mission stays
     let from = c.log.len();
     c.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
         count: 4,
         target_system: 1,
         target_component: 1,
-        mission_type: MavMissionType::MAV_MISSION_TYPE_FENCE,
+        mission_type: MavMissionType::MAV_MISSION_TYPE_RALLY,
         ..MISSION_COUNT_DATA::DEFAULT
     }));
     c.send(&MavMessage::MISSION_CLEAR_ALL(MISSION_CLEAR_ALL_DATA {
@@ -577,11 +578,12 @@ fn mission_types_and_the_upload_timeout_follow_the_microservice() {
     assert_eq!(it.seq, 1);
     assert!((f64::from(it.x) - 57.0147).abs() < 1e-5, "{}", it.x);
     let fence = MavMissionType::MAV_MISSION_TYPE_FENCE;
+    let rally = MavMissionType::MAV_MISSION_TYPE_RALLY;
     assert_eq!(
         acks(&c, from),
         vec![
-            (MavMissionResult::MAV_MISSION_UNSUPPORTED, fence, 190),
-            (MavMissionResult::MAV_MISSION_UNSUPPORTED, fence, 190)
+            (MavMissionResult::MAV_MISSION_UNSUPPORTED, rally, 190),
+            (MavMissionResult::MAV_MISSION_ACCEPTED, fence, 190)
         ]
     );
     let counts = c.collect(from, |m| match m {

@@ -53,6 +53,8 @@ pub fn status(t_s: f64, armed: bool, nav_mode: NavMode) -> VehicleStatus {
 pub struct Vehicle {
     /// The port the server listens on.
     pub port: u16,
+    /// The TCP port it also listens on (`tcpin:`; 0: none).
+    pub tcp_port: u16,
     v: VehicleEnd,
     h: Option<ServerHandle>,
     pushed: u64,
@@ -63,15 +65,34 @@ pub struct Vehicle {
 
 impl Vehicle {
     pub fn start(key: Option<[u8; 32]>) -> Vehicle {
+        Self::start_on(key, false)
+    }
+
+    /// As [`Vehicle::start`], also listening on TCP (`tcpin:`, a free port)
+    /// when `tcp`.
+    pub fn start_on(key: Option<[u8; 32]>, tcp: bool) -> Vehicle {
         let port = UdpSocket::bind("127.0.0.1:0")
             .unwrap()
             .local_addr()
             .unwrap()
             .port();
+        let tcp_port = if tcp {
+            std::net::TcpListener::bind("127.0.0.1:0")
+                .unwrap()
+                .local_addr()
+                .unwrap()
+                .port()
+        } else {
+            0
+        };
+        let mut address = format!("udpin:127.0.0.1:{port}");
+        if tcp {
+            address += &format!(",tcpin:127.0.0.1:{tcp_port}");
+        }
         let (v, s) = channel(4096);
         let h = server::spawn(
             ServerConfig {
-                address: format!("udpin:127.0.0.1:{port}"),
+                address,
                 system_id: 1,
                 home: Geodetic::new(57.0146, 9.9869, 20.0).unwrap(),
                 navigator: NavigatorConfig::default(),
@@ -83,6 +104,7 @@ impl Vehicle {
         .unwrap();
         let mut me = Vehicle {
             port,
+            tcp_port,
             v,
             h: Some(h),
             pushed: 0,
