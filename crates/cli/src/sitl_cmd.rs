@@ -8,7 +8,7 @@
 //! it is ArduPilot's JSON physics backend instead (`helicon_sitl::ardupilot`):
 //! ArduPilot's SITL flies the model; `timing.json` and the run folder.
 
-use crate::console::Console;
+use crate::console::{Console, SimStatus};
 use crate::signals::{Stop, mark_stopped};
 use crate::sim_cmd::{
     LogArgs, folder_name, human_bytes, overrides_from, overrides_label, plan_log, prepare_step,
@@ -407,6 +407,7 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
         };
         case.check_work(&source, prepared.gains.set.sample_time_s)?;
         let log_stride = plan_logs(&case, &prepared, a)?;
+        let clock = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
         let options = SitlOptions {
             speed: match a.speed {
                 SpeedArg::Max => Speed::Max,
@@ -436,8 +437,12 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
             gcs: a.gcs.clone(),
             log_stride,
             stop: Some(stop.flag().clone()),
+            clock: Some(clock.clone()),
         };
-        let mut r = sitl::run(&case, &prepared, &options)
+        let status = (a.speed == SpeedArg::Realtime).then(|| SimStatus::start(clock, case.duration_s));
+        let r = sitl::run(&case, &prepared, &options);
+        drop(status);
+        let mut r = r
             .with_context(|| format!("scenario `{}`: software in the loop", case.name))?;
         for w in &r.onboard.realtime.warnings {
             eprintln!("warning: {w}");
