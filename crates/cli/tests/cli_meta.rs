@@ -52,3 +52,45 @@ fn sensors_simulate_takes_duration_and_its_old_spelling() {
         std::fs::read(d.join("b.csv")).unwrap()
     );
 }
+
+#[test]
+fn c2d_takes_dt_and_its_old_spelling() {
+    let d = tmpdir("c2d-dt");
+    let a = d.join("A.csv");
+    let b = d.join("B.csv");
+    std::fs::write(&a, "0,1\n0,0\n").unwrap();
+    std::fs::write(&b, "0\n1\n").unwrap();
+    let run = |flag: &str| {
+        let (ok, out, err) = helicon(&[
+            "control",
+            "c2d",
+            "--a",
+            a.to_str().unwrap(),
+            "--b",
+            b.to_str().unwrap(),
+            flag,
+            "0.1",
+        ]);
+        assert!(ok, "{flag}: {err}");
+        out
+    };
+    assert_eq!(run("--dt"), run("--ts"));
+    // the help names the one spelling
+    let (_, help, _) = helicon(&["control", "c2d", "--help"]);
+    assert!(help.contains("--dt") && !help.contains("--ts"), "{help}");
+}
+
+#[test]
+fn shaker_takes_duration_and_its_old_spelling() {
+    let (_, help, _) = helicon(&["sensors", "shaker", "--help"]);
+    assert!(
+        help.contains("--duration <") && !help.contains("--duration-s"),
+        "{help}"
+    );
+    // both spellings are the one option: a value that is not a number is
+    // refused as that option's, not as an unknown argument
+    for flag in ["--duration", "--duration-s"] {
+        let (ok, _, err) = helicon(&["sensors", "shaker", flag, "five"]);
+        assert!(!ok && err.contains("invalid value 'five' for '--duration"), "{flag}: {err}");
+    }
+}
