@@ -91,6 +91,46 @@ fn shaker_takes_duration_and_its_old_spelling() {
     // refused as that option's, not as an unknown argument
     for flag in ["--duration", "--duration-s"] {
         let (ok, _, err) = helicon(&["sensors", "shaker", flag, "five"]);
-        assert!(!ok && err.contains("invalid value 'five' for '--duration"), "{flag}: {err}");
+        assert!(
+            !ok && err.contains("invalid value 'five' for '--duration"),
+            "{flag}: {err}"
+        );
     }
+}
+
+/// A misspelt key in a scenario, a parameter file and an on-board
+/// configuration: the error names the file and the key, and the nearest
+/// valid key.
+#[test]
+fn unknown_keys_get_the_nearest_valid_one() {
+    let d = tmpdir("did-you-mean");
+    let scenario = d.join("s.toml");
+    std::fs::write(&scenario, "name = \"x\"\nduraton_s = 2\n").unwrap();
+    let (ok, _, err) = helicon(&[
+        "sim",
+        scenario.to_str().unwrap(),
+        "--out",
+        d.join("o").to_str().unwrap(),
+    ]);
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("s.toml")
+            && err.contains("unknown field `duraton_s`")
+            && err.contains("did you mean `duration_s`?"),
+        "{err}"
+    );
+    let params = d.join("p.toml");
+    std::fs::write(&params, "[main_rotor]\nradus_m = 0.9\n").unwrap();
+    let (ok, _, err) = helicon(&["trim", "--params", params.to_str().unwrap()]);
+    assert!(!ok, "{err}");
+    assert!(
+        err.contains("p.toml") && err.contains("did you mean `main_rotor.radius_m`?"),
+        "{err}"
+    );
+    // clap's own suggestions for flags are on
+    let (ok, _, err) = helicon(&["trim", "--paramz", "x"]);
+    assert!(
+        !ok && err.contains("similar argument exists: '--params'"),
+        "{err}"
+    );
 }
