@@ -439,11 +439,11 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
             stop: Some(stop.flag().clone()),
             clock: Some(clock.clone()),
         };
-        let status = (a.speed == SpeedArg::Realtime).then(|| SimStatus::start(clock, case.duration_s));
+        let status =
+            (a.speed == SpeedArg::Realtime).then(|| SimStatus::start(clock, case.duration_s));
         let r = sitl::run(&case, &prepared, &options);
         drop(status);
-        let mut r = r
-            .with_context(|| format!("scenario `{}`: software in the loop", case.name))?;
+        let mut r = r.with_context(|| format!("scenario `{}`: software in the loop", case.name))?;
         for w in &r.onboard.realtime.warnings {
             eprintln!("warning: {w}");
         }

@@ -33,6 +33,26 @@ fn man_page_is_roff_of_the_cli() {
 }
 
 #[test]
+fn man_out_writes_a_page_per_subcommand() {
+    let d = tmpdir("man");
+    let dir = d.join("man");
+    let (ok, _, err) = helicon(&["man", "--out", dir.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(err.contains("manual pages to"), "{err}");
+    for page in [
+        "helicon",
+        "helicon-sim",
+        "helicon-ident-frf",
+        "helicon-control-c2d",
+    ] {
+        let text = std::fs::read_to_string(dir.join(format!("{page}.1"))).unwrap();
+        assert!(text.contains(".TH"), "{page}: {text}");
+    }
+    let sim = std::fs::read_to_string(dir.join("helicon-sim.1")).unwrap();
+    assert!(sim.contains("duration"), "{sim}");
+}
+
+#[test]
 fn sensors_simulate_takes_duration_and_its_old_spelling() {
     let d = tmpdir("duration");
     for (flag, file) in [("--duration", "a.csv"), ("--duration-s", "b.csv")] {
