@@ -449,11 +449,13 @@ pub fn print_run(con: &mut Console, report: &RunReport) {
     let f = &report.files;
     writeln!(
         con,
-        "wrote {} ({} rows), summary.json, gains.json, scenario.toml, report.md and {} plots to {}",
+        "wrote {} ({} rows, {}), summary.json, gains.json, scenario.toml, report.md and {} plots to {}",
         f.log
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
         f.log_rows,
+        std::fs::metadata(&f.log)
+            .map_or_else(|_| "size unknown".to_string(), |m| human_bytes(m.len())),
         f.plots.len(),
         f.dir.display()
     );
