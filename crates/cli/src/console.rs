@@ -88,29 +88,35 @@ impl Console {
 }
 
 /// A status line on stderr for a flight on the wall clock: once a second
-/// the simulated time read from `clock` (s, as `f64::to_bits`, set by the
-/// flight), of `duration_s`, and the real-time factor since the line
-/// started; removed when dropped. Nothing when stderr is not a terminal.
+/// the simulated time read from [`SimStatus::clock`] (s, as `f64::to_bits`,
+/// set by the flight), of `duration_s`, and the real-time factor since the
+/// line started; removed when dropped. Nothing when not `shown` or when
+/// stderr is not a terminal.
 pub struct SimStatus {
+    clock: std::sync::Arc<std::sync::atomic::AtomicU64>,
     stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
     thread: Option<std::thread::JoinHandle<()>>,
 }
 
 impl SimStatus {
-    /// Start the status line of a flight of `duration_s` whose simulated
-    /// time `clock` holds.
-    pub fn start(clock: std::sync::Arc<std::sync::atomic::AtomicU64>, duration_s: f64) -> Self {
+    /// Start the status line of a flight of `duration_s` (if `shown`).
+    pub fn start(shown: bool, duration_s: f64) -> Self {
         use std::io::IsTerminal;
-        use std::sync::atomic::{AtomicBool, Ordering};
+        use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+        let clock = std::sync::Arc::new(AtomicU64::new(0));
         let stop = std::sync::Arc::new(AtomicBool::new(false));
-        if !io::stderr().is_terminal() {
-            return SimStatus { stop, thread: None };
+        if !(shown && io::stderr().is_terminal()) {
+            return SimStatus {
+                clock,
+                stop,
+                thread: None,
+            };
         }
-        let done = stop.clone();
+        let (done, time) = (stop.clone(), clock.clone());
         let thread = std::thread::spawn(move || {
             let line = spinner("flying");
             let wall0 = std::time::Instant::now();
-            let sim0 = f64::from_bits(clock.load(Ordering::Relaxed));
+            let sim0 = f64::from_bits(time.load(Ordering::Relaxed));
             let mut next_s = 1.0;
             while !done.load(Ordering::Relaxed) {
                 std::thread::sleep(Duration::from_millis(100));
@@ -119,7 +125,7 @@ impl SimStatus {
                     continue;
                 }
                 next_s += 1.0;
-                let t_s = f64::from_bits(clock.load(Ordering::Relaxed));
+                let t_s = f64::from_bits(time.load(Ordering::Relaxed));
                 line.set_message(format!(
                     "flying: t = {t_s:.1} s of {duration_s} s, {:.2}x real time",
                     (t_s - sim0) / wall_s
@@ -128,9 +134,20 @@ impl SimStatus {
             line.finish_and_clear();
         });
         SimStatus {
+            clock,
             stop,
             thread: Some(thread),
         }
+    }
+
+    /// The simulated time the flight sets (its `f64::to_bits`).
+    pub fn clock(&self) -> std::sync::Arc<std::sync::atomic::AtomicU64> {
+        self.clock.clone()
+    }
+
+    /// Run `flight`, then remove the line.
+    pub fn during<R>(self, flight: impl FnOnce() -> R) -> R {
+        flight()
     }
 }
 

@@ -374,6 +374,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
 }
 
 /// `helicon sitl` flying helicon's on-board program.
+#[allow(clippy::too_many_lines)] // one case after another: prepare, fly, write, print
 fn run_onboard(a: &SitlArgs) -> Result<()> {
     check_time("--gps-loss-at", a.gps_loss_at)?;
     check_time("--manual-at", a.manual_at)?;
@@ -407,7 +408,7 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
         };
         case.check_work(&source, prepared.gains.set.sample_time_s)?;
         let log_stride = plan_logs(&case, &prepared, a)?;
-        let clock = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let status = SimStatus::start(a.speed == SpeedArg::Realtime, case.duration_s);
         let options = SitlOptions {
             speed: match a.speed {
                 SpeedArg::Max => Speed::Max,
@@ -437,13 +438,11 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
             gcs: a.gcs.clone(),
             log_stride,
             stop: Some(stop.flag().clone()),
-            clock: Some(clock.clone()),
+            clock: Some(status.clock()),
         };
-        let status =
-            (a.speed == SpeedArg::Realtime).then(|| SimStatus::start(clock, case.duration_s));
-        let r = sitl::run(&case, &prepared, &options);
-        drop(status);
-        let mut r = r.with_context(|| format!("scenario `{}`: software in the loop", case.name))?;
+        let mut r = status
+            .during(|| sitl::run(&case, &prepared, &options))
+            .with_context(|| format!("scenario `{}`: software in the loop", case.name))?;
         for w in &r.onboard.realtime.warnings {
             eprintln!("warning: {w}");
         }
