@@ -99,8 +99,8 @@ struct C2dArgs {
     #[arg(long)]
     b: PathBuf,
     /// Sample time in seconds.
-    #[arg(long)]
-    ts: f64,
+    #[arg(long, alias = "ts")] // `--ts`: the old spelling
+    dt: f64,
 }
 
 /// Runs a `helicon control` subcommand, printing JSON to stdout.
@@ -569,10 +569,10 @@ fn c2d(args: &C2dArgs) -> Result<Value> {
     let names = [
         ("A", Src::File(&a)),
         ("B", Src::File(&b)),
-        ("sample time Ts", Src::Opt("--ts")),
+        ("sample time Ts", Src::Opt("--dt")),
     ];
     let (phi, gamma) =
-        helicon_lti::c2d(&a.m, &b.m, args.ts).map_err(|e| explain(e, "c2d", &names))?;
+        helicon_lti::c2d(&a.m, &b.m, args.dt).map_err(|e| explain(e, "c2d", &names))?;
     Ok(json!({ "Phi": rows_json("Phi", &phi)?, "Gamma": rows_json("Gamma", &gamma)? }))
 }
 

@@ -53,7 +53,10 @@ pub struct DemoArgs {
 pub fn run_fit(a: &FitArgs) -> Result<()> {
     let cfg = IdentConfig::from_file(&a.ident)?;
     let t0 = std::time::Instant::now();
-    let id = run(&cfg)?;
+    let spinner = crate::console::spinner("identifying the parameters");
+    let id = run(&cfg);
+    spinner.finish_and_clear();
+    let id = id?;
     finish(&id, &a.out, t0.elapsed().as_secs_f64())
 }
 
@@ -80,7 +83,13 @@ pub fn run_demo_cmd(a: &DemoArgs) -> Result<()> {
         ..DemoOptions::default()
     };
     let t0 = std::time::Instant::now();
-    let id = run_demo(&truth, &a.out, &opts)?;
+    let spinner = crate::console::spinner(format!(
+        "identifying from simulated flights ({})",
+        a.flights.join(", ")
+    ));
+    let id = run_demo(&truth, &a.out, &opts);
+    spinner.finish_and_clear();
+    let id = id?;
     finish(&id, &a.out, t0.elapsed().as_secs_f64())?;
     print_demo(&id, &truth)
 }

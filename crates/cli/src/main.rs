@@ -76,7 +76,11 @@ enum Command {
         shell: clap_complete::Shell,
     },
     /// Print the manual page (roff) of helicon, made from this command line's definition: `helicon man > helicon.1; man ./helicon.1`.
-    Man,
+    Man {
+        /// Write helicon.1 and a page per subcommand (helicon-sim.1, …) into DIR instead.
+        #[arg(long, value_name = "DIR")]
+        out: Option<std::path::PathBuf>,
+    },
 }
 
 /// Exit status 130 or 143 for a run stopped by SIGINT or SIGTERM (its files
@@ -167,13 +171,49 @@ fn run() -> anyhow::Result<()> {
             std::io::Write::flush(&mut out)?;
             Ok(())
         }
-        Command::Man => {
+        Command::Man { out: None } => {
             let mut out = std::io::stdout().lock();
             clap_mangen::Man::new(Cli::command()).render(&mut out)?;
             std::io::Write::flush(&mut out)?;
             Ok(())
         }
+        Command::Man { out: Some(dir) } => write_man_pages(&dir),
     }
+}
+
+/// `helicon man --out DIR`: `helicon.1` and one page per subcommand, its
+/// own subcommands included (`helicon-ident-frf.1`), and a one-line summary.
+fn write_man_pages(dir: &std::path::Path) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    fn pages(
+        cmd: clap::Command,
+        name: String,
+        dir: &std::path::Path,
+        n: &mut usize,
+    ) -> anyhow::Result<()> {
+        let path = dir.join(format!("{name}.1"));
+        let mut text = Vec::new();
+        clap_mangen::Man::new(cmd.clone())
+            .title(name.clone())
+            .render(&mut text)?;
+        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+        *n += 1;
+        for sub in cmd.get_subcommands().filter(|s| s.get_name() != "help") {
+            pages(sub.clone(), format!("{name}-{}", sub.get_name()), dir, n)?;
+        }
+        Ok(())
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut cmd = Cli::command();
+    cmd.build();
+    let mut n = 0;
+    pages(cmd, "helicon".to_string(), dir, &mut n)?;
+    console::note!(
+        "wrote {n} manual pages to {} (man {}/helicon.1)",
+        dir.display(),
+        dir.display()
+    );
+    Ok(())
 }
 
 #[cfg(test)]

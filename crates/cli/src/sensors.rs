@@ -240,6 +240,13 @@ pub fn run_simulate(args: &SimulateArgs) -> Result<()> {
             cfg.seed, cfg.imu.rate_hz, cfg.gps.rate_hz, cfg.gps.latency_s
         ),
     )?;
+    let bar = crate::console::bar(
+        n as u64 + 1,
+        format!(
+            "simulating {} s of sensors",
+            helicon_sim::scenario::num(args.duration_s)
+        ),
+    );
     for k in 0..=n {
         let t = k as f64 / cfg.imu.rate_hz;
         let mut truth = traj.truth(t);
@@ -249,7 +256,11 @@ pub fn run_simulate(args: &SimulateArgs) -> Result<()> {
             frame,
             truth: LoggedTruth::from(&truth),
         })?;
+        if k % 1024 == 0 {
+            bar.set_position(k as u64);
+        }
     }
+    bar.finish_and_clear();
     w.finish()?;
     // a one-line summary (none when the log itself is on stdout)
     if let Some(path) = &args.out {

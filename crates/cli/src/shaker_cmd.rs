@@ -50,7 +50,13 @@ pub struct ShakerArgs {
     #[arg(long)]
     pub params: Option<PathBuf>,
     /// Duration of the run (s); the first 0.5 s settle the filters.
-    #[arg(long, default_value_t = 5.0)]
+    // `--duration-s`: the old spelling
+    #[arg(
+        long = "duration",
+        alias = "duration-s",
+        value_name = "S",
+        default_value_t = 5.0
+    )]
     pub duration_s: f64,
     /// Output samples shown in the figure (the thesis's figures show 500).
     #[arg(long, default_value_t = 500)]

@@ -15,10 +15,9 @@ use helicon_sim::closed_loop::{
 };
 use helicon_sim::output::{CaseRun, RunFiles, finish_run, start_run, write_cases_index};
 use helicon_sim::scenario::{OUTPUTS, Scenario, ScenarioOverrides, num};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// `helicon sim`.
 #[derive(Args, Debug)]
@@ -235,9 +234,7 @@ pub fn prepare_step(scenario: &Scenario) -> Result<(Prepared, f64)> {
         )),
         None => None,
     };
-    let spinner = ProgressBar::new_spinner();
-    spinner.set_message("trim, linearize, design");
-    spinner.enable_steady_tick(Duration::from_millis(100));
+    let spinner = crate::console::spinner("trim, linearize, design");
     let t0 = Instant::now();
     let (prepared, with) = match params {
         Some((p, path)) => (
@@ -327,15 +324,7 @@ pub fn fly_and_write_with(
     let mut log = start_run(out)
         .with_context(|| format!("writing the run outputs to {}", out.display()))?
         .with_stride(stride);
-    let bar = ProgressBar::new(1000);
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{msg} [{bar:40.cyan/blue}] {percent:>3}% {elapsed_precise} (eta {eta})",
-        )
-        .context("progress bar template")?
-        .progress_chars("=> "),
-    );
-    bar.set_message(format!("flying {} s", num(scenario.duration_s)));
+    let bar = crate::console::bar(1000, format!("flying {} s", num(scenario.duration_s)));
     let t1 = Instant::now();
     let mut cb = |f: f64| bar.set_position((f.clamp(0.0, 1.0) * 1000.0).round() as u64);
     let never = AtomicBool::new(false);
@@ -460,11 +449,13 @@ pub fn print_run(con: &mut Console, report: &RunReport) {
     let f = &report.files;
     writeln!(
         con,
-        "wrote {} ({} rows), summary.json, gains.json, scenario.toml, report.md and {} plots to {}",
+        "wrote {} ({} rows, {}), summary.json, gains.json, scenario.toml, report.md and {} plots to {}",
         f.log
             .file_name()
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
         f.log_rows,
+        std::fs::metadata(&f.log)
+            .map_or_else(|_| "size unknown".to_string(), |m| human_bytes(m.len())),
         f.plots.len(),
         f.dir.display()
     );

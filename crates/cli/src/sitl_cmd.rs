@@ -10,7 +10,7 @@
 //! `--px4 [ADDR]` it is PX4's simulator instead (`helicon_sitl::px4`): PX4's
 //! SITL connects over TCP and flies the model lock-stepped.
 
-use crate::console::Console;
+use crate::console::{Console, SimStatus};
 use crate::signals::{Stop, mark_stopped};
 use crate::sim_cmd::{
     LogArgs, folder_name, human_bytes, overrides_from, overrides_label, plan_log, prepare_step,
@@ -501,6 +501,7 @@ pub fn run(a: &SitlArgs) -> Result<()> {
 }
 
 /// `helicon sitl` flying helicon's on-board program.
+#[allow(clippy::too_many_lines)] // one case after another: prepare, fly, write, print
 fn run_onboard(a: &SitlArgs) -> Result<()> {
     check_time("--gps-loss-at", a.gps_loss_at)?;
     check_time("--manual-at", a.manual_at)?;
@@ -534,6 +535,7 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
         };
         case.check_work(&source, prepared.gains.set.sample_time_s)?;
         let log_stride = plan_logs(&case, &prepared, a)?;
+        let status = SimStatus::start(a.speed == SpeedArg::Realtime, case.duration_s);
         let options = SitlOptions {
             speed: match a.speed {
                 SpeedArg::Max => Speed::Max,
@@ -563,8 +565,10 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
             gcs: a.gcs.clone(),
             log_stride,
             stop: Some(stop.flag().clone()),
+            clock: Some(status.clock()),
         };
-        let mut r = sitl::run(&case, &prepared, &options)
+        let mut r = status
+            .during(|| sitl::run(&case, &prepared, &options))
             .with_context(|| format!("scenario `{}`: software in the loop", case.name))?;
         for w in &r.onboard.realtime.warnings {
             eprintln!("warning: {w}");

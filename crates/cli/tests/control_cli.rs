@@ -67,7 +67,7 @@ fn c2d_and_kalman() {
     // Double integrator with a header row and row names (reference-file layout).
     let a = write(&d, "A.csv", "row,x,v\nx,0,1\nv,0,0\n");
     let b = write(&d, "B.csv", "0\n1\n");
-    let (ok, out, err) = helicon(&["control", "c2d", "--a", &a, "--b", &b, "--ts", "0.1"]);
+    let (ok, out, err) = helicon(&["control", "c2d", "--a", &a, "--b", &b, "--dt", "0.1"]);
     assert!(ok, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     let phi = matrix(&v["Phi"]);
@@ -130,7 +130,7 @@ fn bad_input_is_a_clear_error() {
     );
 
     let missing = d.join("nope.csv").display().to_string();
-    let (ok, _, err) = helicon(&["control", "c2d", "--a", &missing, "--b", &b, "--ts", "0.1"]);
+    let (ok, _, err) = helicon(&["control", "c2d", "--a", &missing, "--b", &b, "--dt", "0.1"]);
     assert!(!ok && err.contains("nope.csv"), "{err}");
 
     // Not stabilizable: typed library error surfaces in the message.
@@ -262,11 +262,11 @@ const CORPUS: &[Case] = &[
         &["cannot read matrix file"],
     ),
     case(
-        "c2d --a @semicolon.csv --b @B.csv --ts 0.1",
+        "c2d --a @semicolon.csv --b @B.csv --dt 0.1",
         &["semicolon.csv: line 2, column 1: cannot parse \"3;4\""],
     ),
     case(
-        "c2d --a @hex.csv --b @B.csv --ts 0.1",
+        "c2d --a @hex.csv --b @B.csv --dt 0.1",
         &["hex.csv: line 1, column 1: cannot parse \"0x10\""],
     ),
     case(
@@ -311,7 +311,7 @@ const CORPUS: &[Case] = &[
         &["Qn.csv", "Qn is 2x2, expected 1x1"],
     ),
     case(
-        "c2d --a @A.csv --b @B3.csv --ts 0.1",
+        "c2d --a @A.csv --b @B3.csv --dt 0.1",
         &["B3.csv", "3x1, expected 2x1"],
     ),
     // --- hostile numbers reaching the library: the file, line and column are named ---
@@ -344,11 +344,11 @@ const CORPUS: &[Case] = &[
         &["A1e308.csv: line 2, column 2"],
     ),
     case(
-        "c2d --a @A1e308.csv --b @B.csv --ts 0.1",
+        "c2d --a @A1e308.csv --b @B.csv --dt 0.1",
         &["A1e308.csv: line 2, column 2"],
     ),
     case(
-        "c2d --a @A.csv --b @B1e200.csv --ts 0.1",
+        "c2d --a @A.csv --b @B1e200.csv --dt 0.1",
         &["B1e200.csv: line 2, column 1"],
     ),
     // --- options ---
@@ -369,16 +369,16 @@ const CORPUS: &[Case] = &[
         &["--alpha", "inf"],
     ),
     case(
-        "c2d --a @Aexp.csv --b @Bexp.csv --ts 1e6",
-        &["--ts", "below about 7.098e2 s"],
+        "c2d --a @Aexp.csv --b @Bexp.csv --dt 1e6",
+        &["--dt", "below about 7.098e2 s"],
     ),
-    case("c2d --a @A.csv --b @B.csv --ts 0", &["--ts", "> 0"]),
-    case("c2d --a @A.csv --b @B.csv --ts=-1", &["--ts", "> 0"]),
-    case("c2d --a @A.csv --b @B.csv --ts -1", &["'-1'"]),
-    case("c2d --a @A.csv --b @B.csv --ts NaN", &["--ts", "NaN"]),
-    case("c2d --a @A.csv --b @B.csv --ts inf", &["--ts", "inf"]),
-    case("c2d --a @A.csv --b @B.csv --ts 1e200", &["--ts", "at most"]),
-    case("c2d --a @A.csv --b @B.csv --ts abc", &["--ts", "abc"]),
+    case("c2d --a @A.csv --b @B.csv --dt 0", &["--dt", "> 0"]),
+    case("c2d --a @A.csv --b @B.csv --dt=-1", &["--dt", "> 0"]),
+    case("c2d --a @A.csv --b @B.csv --dt -1", &["'-1'"]),
+    case("c2d --a @A.csv --b @B.csv --dt NaN", &["--dt", "NaN"]),
+    case("c2d --a @A.csv --b @B.csv --dt inf", &["--dt", "inf"]),
+    case("c2d --a @A.csv --b @B.csv --dt 1e200", &["--dt", "at most"]),
+    case("c2d --a @A.csv --b @B.csv --dt abc", &["--dt", "abc"]),
     // --- weights and structure: the matrix file (or the files of the pair) is named ---
     case(
         "dare --a @A.csv --b @B.csv --q @Q.csv --r @Rzero.csv",
@@ -558,7 +558,7 @@ fn extreme_but_legal_inputs_print_finite_json() {
     write(&d, "Qs.csv", "1e90,0\n0,3e-90\n");
     let runs = [
         "dare --a @A.csv --b @B.csv --q @Qtiny.csv --r @R.csv",
-        "c2d --a @Astable.csv --b @B.csv --ts 1e6",
+        "c2d --a @Astable.csv --b @B.csv --dt 1e6",
         "dlqr --a @As.csv --b @Bs.csv --q @Qs.csv --r @R.csv",
         "dlqr --a @sys.json#Phi --b @sys.json#Gamma --q @Q.csv --r @R.csv --alpha 1.01",
         "kalman --a @Phi.csv --c @C.csv --qn @Qn1.csv --rn @Rn.csv --g @G.csv",
@@ -622,7 +622,7 @@ fn regress_closed_stdout_pipe_is_quiet() {
     let a = write(&d, "A.csv", &a);
     let b = write(&d, "B.csv", &"1\n".repeat(n));
     let mut child = Command::new(env!("CARGO_BIN_EXE_helicon"))
-        .args(["control", "c2d", "--a", &a, "--b", &b, "--ts", "0.01"])
+        .args(["control", "c2d", "--a", &a, "--b", &b, "--dt", "0.01"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()

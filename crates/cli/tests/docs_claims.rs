@@ -2,7 +2,8 @@
 //! binary: the project stands alone (no citation of files outside the
 //! repository), `--params` where the README says, the demo printout of
 //! docs/closed-loop.md, the plot files docs/sensors.md names, the
-//! divergence time in the Appendix F scenario's comment.
+//! divergence time in the Appendix F scenario's comment, the Figure 14.5
+//! figures of docs/closed-loop-results.md.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 use helicon_test_support::tmpdir;
@@ -102,6 +103,81 @@ fn mask_times(line: &str) -> String {
         }
         _ => line.to_string(),
     }
+}
+
+/// docs/closed-loop-results.md's Figure 14.5 figures are what
+/// `helicon sim scenarios/thesis-fig14-5.toml` computes: each case's
+/// settling time and overshoot of the stepped output, the coupled outputs'
+/// settling times (case (a)'s horizontal velocities, the largest of the
+/// others) and the vertical dip of the half turn.
+#[test]
+fn closed_loop_results_fig14_5_figures_are_computed() {
+    let doc = read("docs/closed-loop-results.md");
+    let section = &doc[doc.find("## Figure 14.5").expect("the Figure 14.5 section")..];
+    let section = &section[..section[3..].find("\n## ").map_or(section.len(), |i| i + 3)];
+    let d = tmpdir("fig14-5");
+    helicon(
+        &d,
+        &[
+            "sim",
+            root()
+                .join("scenarios/thesis-fig14-5.toml")
+                .to_str()
+                .unwrap(),
+            "--out",
+            "o",
+        ],
+    );
+    let metrics = |case: &str| -> serde_json::Value {
+        let text = std::fs::read_to_string(d.join("o").join(case).join("summary.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()["metrics"].clone()
+    };
+    let outputs = ["vn", "ve", "vd", "psi"];
+    let mut coupled_other: f64 = 0.0;
+    for (case, stepped, label) in [
+        ("a", "psi", "| (a) ψ = π | ψ |"),
+        ("b", "vn", "| (b) vn = 2 m/s | vn |"),
+        ("c", "ve", "| (c) ve = 2 m/s | ve |"),
+        ("d", "vd", "| (d) vd = 2 m/s | vd |"),
+    ] {
+        let m = metrics(case);
+        let row = format!(
+            "{label} {:.2} s | {:.1} % |",
+            m[stepped]["settling_time_s"].as_f64().unwrap(),
+            m[stepped]["overshoot_pct"].as_f64().unwrap()
+        );
+        assert!(
+            section.contains(&row),
+            "docs/closed-loop-results.md lacks the row `{row}`"
+        );
+        if case != "a" {
+            for o in outputs.iter().filter(|o| **o != stepped) {
+                coupled_other = coupled_other.max(m[*o]["settling_time_s"].as_f64().unwrap());
+            }
+        }
+    }
+    let a = metrics("a");
+    let settle = |o: &str| a[o]["settling_time_s"].as_f64().unwrap();
+    let (lo, hi) = (
+        settle("vn").min(settle("ve")),
+        settle("vn").max(settle("ve")),
+    );
+    assert!(
+        settle("vd") <= hi,
+        "case (a): vd settles after the horizontal velocities"
+    );
+    let claim = format!(
+        "The coupled outputs settle within {:.1} s: the horizontal velocities of case (a) at {:.1}–{:.1} s,\nevery other within {:.2} s; the largest coupling is the {:.3} m/s vertical dip",
+        hi.max(coupled_other),
+        lo,
+        hi,
+        coupled_other.max(settle("vd")),
+        a["vd"]["max_abs_error"].as_f64().unwrap()
+    );
+    assert!(
+        section.contains(&claim),
+        "docs/closed-loop-results.md: the coupled outputs' sentence should read:\n{claim}"
+    );
 }
 
 /// The demo printout quoted in docs/closed-loop.md is what

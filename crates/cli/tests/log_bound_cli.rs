@@ -204,3 +204,33 @@ fn sitl_estimates_its_onboard_log_and_thins_its_truth_log() {
     );
     assert!(!out(&d, "day").join("flight.ulg").exists());
 }
+
+/// The run's one-line summary says the size of the `log.csv` it wrote,
+/// and a lower `--log-rate` writes a smaller one.
+#[test]
+fn the_summary_says_the_log_size() {
+    let d = common::tmpdir("log_size");
+    let size_said = |name: &str, extra: &[&str]| {
+        let o = out(&d, name);
+        let mut args = vec!["sim", "--duration", "4", "--out", o.to_str().unwrap()];
+        let scenario = demo();
+        args.insert(1, &scenario);
+        args.extend_from_slice(extra);
+        let (ok, text, err) = common::helicon(&args);
+        assert!(ok, "{err}");
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("wrote log.csv ("))
+            .unwrap_or_else(|| panic!("no summary line: {text}"));
+        let bytes = std::fs::metadata(o.join("log.csv")).unwrap().len();
+        let kb = format!("{:.0} kB", bytes as f64 / 1e3);
+        assert!(
+            line.contains(&format!(" rows, {kb}), ")),
+            "{line} (file: {bytes} bytes)"
+        );
+        bytes
+    };
+    let full = size_said("full", &[]);
+    let thin = size_said("thin", &["--log-rate", "10"]);
+    assert!(thin * 5 < full, "{thin} vs {full}");
+}

@@ -14,12 +14,14 @@
 //! [`escape_control`], and made safe as a CSV cell, [`csv_cell`]).
 
 pub mod files;
+pub mod suggest;
 pub mod text;
 
 pub use files::{
     Bounded, FileRefusal, LineBounded, MAX_DATA_BYTES, MAX_LINE_BYTES, MAX_TEXT_BYTES,
     open_bounded, open_lines_bounded, open_regular, read_text_bounded,
 };
+pub use suggest::{nearest, with_suggestion};
 pub use text::{csv_cell, escape_control};
 
 /// An error reading or checking a configuration.
@@ -37,8 +39,9 @@ pub enum ConfigError {
         source: std::io::Error,
     },
     /// Not valid TOML, an unknown field or a field of the wrong type (the
-    /// parser's message names the field and its position).
-    #[error("{file}: {message}")]
+    /// parser's message names the field and its position; an unknown field
+    /// is shown with the nearest valid one, [`with_suggestion`]).
+    #[error("{file}: {}", with_suggestion(.message))]
     Parse {
         /// File.
         file: String,

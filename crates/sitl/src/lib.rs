@@ -123,6 +123,9 @@ pub struct SitlOptions {
     /// being flown, its files written as at a normal end and its summary
     /// [`Termination::Stopped`] (a signal handler's flag).
     pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
+    /// Set to the simulated time of each sample as it is flown (s, stored
+    /// as `f64::to_bits`): what a status line shows of a running flight.
+    pub clock: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
 }
 
 /// The home of the local NED frame (the GPS receiver's WGS-84 position of
@@ -391,6 +394,9 @@ pub fn run(
     let mut failure = None;
     while let Some(s) = hw.sense() {
         let t = s.t_s;
+        if let Some(c) = &options.clock {
+            c.store(t.to_bits(), std::sync::atomic::Ordering::Relaxed);
+        }
         // the receiver at 50 Hz (silent when the ground station flies)
         let silent = options
             .pilot

@@ -21,6 +21,22 @@ pub use descriptors::{
 use std::fmt::Write as _;
 use std::path::Path;
 
+/// ``; did you mean `section.key`?`` for the parameter key nearest to an
+/// unknown `key` (dotted, as the error names it), or nothing.
+fn did_you_mean(key: &str) -> String {
+    let names: Vec<String> = descriptors::descriptors()
+        .map(|d| {
+            if d.section.is_empty() {
+                d.key.to_string()
+            } else {
+                format!("{}.{}", d.section, d.key)
+            }
+        })
+        .collect();
+    helicon_config::nearest(key, names.iter().map(String::as_str))
+        .map_or_else(String::new, |n| format!("; did you mean `{n}`?"))
+}
+
 /// The shipped Bergen Industrial Twin parameter file.
 pub const BERGEN_TWIN_TOML: &str = include_str!("../../../../params/bergen_twin.toml");
 
@@ -47,7 +63,7 @@ pub enum ParamError {
         message: String,
     },
     /// A key that is not a model parameter.
-    #[error("{}: unknown key `{key}` (run `helicon params` for the list of keys)", At(file, *line))]
+    #[error("{}: unknown key `{key}`{} (run `helicon params` for the list of keys)", At(file, *line), did_you_mean(key))]
     UnknownKey {
         /// File name.
         file: String,
@@ -964,6 +980,19 @@ mod tests {
         let e = Params::from_toml_str("[body]\nmas_kg = 1.0\n", "heli.toml").unwrap_err();
         assert!(matches!(e, ParamError::UnknownKey { .. }), "{e}");
         assert!(e.to_string().contains("body.mas_kg"));
+        assert!(
+            e.to_string()
+                .contains("unknown key `body.mas_kg`; did you mean `body.mass_kg`?"),
+            "{e}"
+        );
+        let e = Params::from_toml_str(
+            "[body]
+zzz = 1.0
+",
+            "heli.toml",
+        )
+        .unwrap_err();
+        assert!(!e.to_string().contains("did you mean"), "{e}");
 
         let e = Params::from_toml_str("[body]\nmass_kg = \"heavy\"\n", "h.toml").unwrap_err();
         assert!(matches!(e, ParamError::WrongType { .. }), "{e}");

@@ -35,6 +35,7 @@ pub fn options(tag: &str) -> SitlOptions {
         gcs: None,
         log_stride: 1,
         stop: None,
+        clock: None,
     }
 }
 
