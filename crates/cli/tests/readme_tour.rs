@@ -9,8 +9,8 @@
 //!
 //! The exceptions are the ones the README states below the block: `mc` runs
 //! `--runs 10` instead of 1000, `onboard` (real serial devices), `gcs`
-//! (waits for a vehicle until stopped) and `sitl --ardupilot-json` (waits
-//! for ArduPilot) are not run.
+//! (waits for a vehicle until stopped), `sitl --ardupilot-json` and `sitl
+//! --px4` (wait for the autopilot) are not run.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers: a failed unwrap is a failed test
 
 use std::path::{Path, PathBuf};
@@ -68,6 +68,9 @@ fn plan(line: &str) -> Plan {
     }
     if line.contains("--ardupilot-json") {
         return Plan::NotRun("waits for ArduPilot's SITL until stopped");
+    }
+    if line.contains("--px4") {
+        return Plan::NotRun("waits for PX4's SITL until stopped");
     }
     if line.starts_with("helicon onboard") {
         return Plan::NotRun("needs the helicopter's serial devices");
@@ -164,7 +167,7 @@ fn readme_tour_runs_as_written() {
         ran += 1;
     }
     // the two not run are the two the README names
-    assert_eq!(skipped.len(), 3, "{skipped:?}");
+    assert_eq!(skipped.len(), 4, "{skipped:?}");
     assert!(ran >= 25, "{ran} tour lines ran");
     // every plot the tour makes was rendered: a PNG with a picture in it
     let mut pngs = Vec::new();

@@ -111,7 +111,8 @@ pub struct SitlOptions {
     /// Keep every sensor frame the hardware sent ([`SitlResult::sent`]).
     pub keep_frames: bool,
     /// Fly with the ground station: the MAVLink server at this address
-    /// (`udpout:HOST:PORT` or `udpin:HOST:PORT`). The on-board side then
+    /// (`udpout:HOST:PORT`, `udpin:HOST:PORT`, `tcpin:HOST:PORT`, or several
+    /// comma-separated). The on-board side then
     /// starts disarmed, the simulated receiver stays silent (the ground
     /// station is the only link) and the navigator gives the references:
     /// the scenario's `[[reference]]` are not flown.
