@@ -7,7 +7,7 @@
 use crate::control::ControlTask;
 use crate::safety::Mode;
 use helicon_core::{Reference, Telemetry};
-use helicon_gcs::link::{FlightMode, Vehicle, VehicleEvent};
+use helicon_gcs::link::{FlightMode, OperatorTexts, Vehicle, VehicleEvent};
 use helicon_gcs::navigator::{Events, NavigatorConfig};
 use helicon_setup::excitation::Excitations;
 use helicon_setup::plan::ReferenceSchedule;
@@ -62,6 +62,9 @@ pub struct NavigatorNews {
     pub events: Events,
     /// The tuning set, before and after.
     pub config_change: Option<(NavigatorConfig, NavigatorConfig)>,
+    /// The ground-station server's own texts to the operator (replies,
+    /// refusals).
+    pub texts: OperatorTexts,
 }
 
 /// What the control task did last step, as the ground station's navigator
@@ -157,10 +160,14 @@ impl Mission {
                 {
                     v.notify(t_s, VehicleEvent::Warning("arm refused: not on the ground"));
                 }
-                if out.events.iter().next().is_some() || out.config_change.is_some() {
+                if out.events.iter().next().is_some()
+                    || out.config_change.is_some()
+                    || !out.texts.is_empty()
+                {
                     self.news = Some(NavigatorNews {
                         events: out.events,
                         config_change: out.config_change,
+                        texts: out.texts,
                     });
                 }
                 out.reference

@@ -394,6 +394,12 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
     }
 }
 
+/// ULog's level of a MAVLink `MAV_SEVERITY` (the same syslog scale,
+/// 0 emergency … 7 debug).
+fn level_of_severity(severity: u8) -> LogLevel {
+    LogLevel::from_byte(severity.min(7)).unwrap_or(LogLevel::Info)
+}
+
 /// PX4's navigation state of a navigator mode.
 pub fn nav_state(m: NavMode) -> u8 {
     match m {
@@ -452,6 +458,27 @@ fn write_navigator<W: Write>(
                 "navigator",
             )?,
         }
+    }
+    for t in news.texts.iter() {
+        log_fmt(
+            log,
+            level_of_severity(t.severity),
+            ts,
+            format_args!("gcs: {}", t.as_str()),
+            "gcs",
+        )?;
+    }
+    if news.texts.dropped > 0 {
+        log_fmt(
+            log,
+            LogLevel::Warning,
+            ts,
+            format_args!(
+                "gcs: {} more texts at t = {t_s:.4} s not logged",
+                news.texts.dropped
+            ),
+            "gcs",
+        )?;
     }
     if let Some((before, after)) = &news.config_change {
         let (old, new) = (ParamTable::new(*before), ParamTable::new(*after));
@@ -620,9 +647,15 @@ mod tests {
         let before = NavigatorConfig::default();
         let mut table = ParamTable::new(before);
         table.set("NAV_CRUISE_SPD", 1.25).expect("a valid speed");
+        let mut texts = helicon_gcs::link::OperatorTexts::default();
+        texts.push(helicon_gcs::link::OperatorText::new(
+            4,
+            "refused: not armed",
+        ));
         let news = NavigatorNews {
             events,
             config_change: Some((before, *table.config())),
+            texts,
         };
         write_record(&mut log, &FlightRecord::Navigator { t_s: 1.0, news }).expect("news");
         let bytes = log.finish().expect("finish");
@@ -653,6 +686,11 @@ mod tests {
         };
         assert!(
             has(LogLevel::Info, "navigator: mode RETURN at t = 1.0000 s"),
+            "{texts:?}"
+        );
+        // the server's own text, at its severity (MAV_SEVERITY_WARNING)
+        assert!(
+            has(LogLevel::Warning, "gcs: refused: not armed"),
             "{texts:?}"
         );
         assert!(

@@ -37,6 +37,88 @@ pub enum Uplink {
     Zones(Box<crate::fence::Zones>),
     /// A guided target.
     Guided(GuidedTarget),
+    /// A status text the server told the operator of its own accord (a
+    /// refusal, a reply): for the flight log.
+    Text(OperatorText),
+}
+
+/// The longest operator text the flight log keeps (bytes; a longer one is
+/// cut at a character boundary).
+pub const OPERATOR_TEXT_BYTES: usize = 120;
+
+/// A status text of the ground-station server, fixed-size (it crosses the
+/// uplink ring without allocation).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct OperatorText {
+    /// MAVLink's `MAV_SEVERITY` (0 emergency … 7 debug, as syslog and
+    /// ULog's levels).
+    pub severity: u8,
+    len: u8,
+    bytes: [u8; OPERATOR_TEXT_BYTES],
+}
+
+impl std::fmt::Debug for OperatorText {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "OperatorText({}, {:?})", self.severity, self.as_str())
+    }
+}
+
+impl OperatorText {
+    /// `text` at `severity` (clamped to 0..=7), cut to
+    /// [`OPERATOR_TEXT_BYTES`] at a character boundary.
+    pub fn new(severity: u8, text: &str) -> Self {
+        let mut end = text.len().min(OPERATOR_TEXT_BYTES);
+        while !text.is_char_boundary(end) {
+            end -= 1;
+        }
+        let mut bytes = [0u8; OPERATOR_TEXT_BYTES];
+        bytes[..end].copy_from_slice(&text.as_bytes()[..end]);
+        OperatorText {
+            severity: severity.min(7),
+            len: u8::try_from(end).unwrap_or(u8::MAX),
+            bytes,
+        }
+    }
+
+    /// The text.
+    pub fn as_str(&self) -> &str {
+        std::str::from_utf8(&self.bytes[..usize::from(self.len)]).unwrap_or("")
+    }
+}
+
+/// The most operator texts one control sample carries to the flight log;
+/// more are counted in [`OperatorTexts::dropped`].
+pub const OPERATOR_TEXTS_PER_SAMPLE: usize = 4;
+
+/// The operator texts that arrived in one control sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct OperatorTexts {
+    items: [Option<OperatorText>; OPERATOR_TEXTS_PER_SAMPLE],
+    len: usize,
+    /// Texts beyond [`OPERATOR_TEXTS_PER_SAMPLE`] in this sample, not kept.
+    pub dropped: u32,
+}
+
+impl OperatorTexts {
+    /// Keep `t` (or count it dropped when full).
+    pub fn push(&mut self, t: OperatorText) {
+        if self.len < OPERATOR_TEXTS_PER_SAMPLE {
+            self.items[self.len] = Some(t);
+            self.len += 1;
+        } else {
+            self.dropped = self.dropped.saturating_add(1);
+        }
+    }
+
+    /// The texts kept, in arrival order.
+    pub fn iter(&self) -> impl Iterator<Item = &OperatorText> {
+        self.items[..self.len].iter().flatten()
+    }
+
+    /// No text kept and none dropped.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0 && self.dropped == 0
+    }
 }
 
 /// The flight software's mode as the ground station is told it.
@@ -225,6 +307,9 @@ pub struct VehicleOutput {
     /// The tuning the operator set this sample, before and after (the
     /// parameter table's values): for the flight log.
     pub config_change: Option<(NavigatorConfig, NavigatorConfig)>,
+    /// The server's own texts to the operator this sample: for the flight
+    /// log.
+    pub texts: OperatorTexts,
 }
 
 /// The vehicle-side half: the navigator fed by the uplink, its status on
@@ -243,6 +328,7 @@ pub struct Vehicle {
     sent: u64,
     ground: GroundState,
     config_change: Option<(NavigatorConfig, NavigatorConfig)>,
+    texts: OperatorTexts,
 }
 
 impl Vehicle {
@@ -268,6 +354,7 @@ impl Vehicle {
             sent: 0,
             ground: GroundState::default(),
             config_change: None,
+            texts: OperatorTexts::default(),
         }
     }
 
@@ -363,6 +450,7 @@ impl Vehicle {
             Uplink::Guided(g) if flying => {
                 self.nav.guided(&at, g, events);
             }
+            Uplink::Text(t) => self.texts.push(t),
             _ => {}
         }
         None
@@ -431,6 +519,7 @@ impl Vehicle {
             arm,
             events,
             config_change: self.config_change.take(),
+            texts: std::mem::take(&mut self.texts),
         }
     }
 

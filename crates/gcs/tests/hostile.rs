@@ -16,9 +16,10 @@ use helicon_gcs::link::Uplink;
 use helicon_gcs::mavlink::dialects::common::*;
 use helicon_gcs::mavlink::{Message, MessageData};
 use helicon_gcs::navigator::{GuidedTarget, NavMode};
+use helicon_gcs::server::{TEXT_LOG_BURST, TEXT_LOG_RATE_HZ};
 use nalgebra::Vector3;
 use std::net::UdpSocket;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 #[test]
 fn a_stray_datagram_does_not_steal_the_telemetry() {
@@ -290,6 +291,14 @@ fn with_signing_nothing_unsigned_or_replayed_changes_anything() {
         // nothing reached the vehicle, not even a heartbeat (the link-loss
         // failsafe is not held off)
         assert_eq!(veh.uplinks(), vec![], "{who}");
+        // only the refusal, for the flight log
+        assert!(
+            veh.logged_texts
+                .iter()
+                .all(|t| t == "refused: command not signed with the vehicle's key"),
+            "{who}: {:?}",
+            veh.logged_texts
+        );
         // the signed station's streams go on
         let n = count(&mut good, from, ATTITUDE_DATA::ID);
         assert!(n >= 9, "{who}: {n} ATTITUDE");
@@ -565,4 +574,48 @@ fn targets_gotos_and_missions_outside_the_fence_are_refused() {
         None
     ))));
     veh.stop();
+}
+
+/// The server's own replies reach the flight log, but a ground station
+/// repeating a refused command cannot flood it: at most the burst of
+/// `TEXT_LOG_BURST` (plus what `TEXT_LOG_RATE_HZ` adds while they arrive),
+/// while refusals beyond the log's limit are still told on the link.
+#[test]
+fn refusals_are_logged_at_a_bounded_rate() {
+    let mut veh = Vehicle::start(None);
+    let mut gcs = Client::to_port(veh.port, None);
+    gcs.heartbeat();
+    veh.status(0.5);
+    let t0 = Instant::now();
+    for _ in 0..200 {
+        // disarmed: each is refused with a text
+        gcs.send(&long(MavCmd::MAV_CMD_NAV_LAND, 1, 1, [0.0; 7]));
+    }
+    veh.status(1.0);
+    let elapsed_s = t0.elapsed().as_secs_f64();
+    gcs.drain();
+    let told = gcs
+        .texts()
+        .into_iter()
+        .filter(|t| t == "refused: not armed")
+        .count();
+    assert_eq!(veh.commands(), vec![]);
+    let logged = veh.logged_texts.len();
+    let bound = TEXT_LOG_BURST + TEXT_LOG_RATE_HZ * elapsed_s + 1.0;
+    assert!(
+        logged >= 20 && (logged as f64) <= bound,
+        "{logged} logged, bound {bound:.1}"
+    );
+    assert!(
+        veh.logged_texts.iter().all(|t| t == "refused: not armed"),
+        "{:?}",
+        veh.logged_texts
+    );
+    let r = veh.stop();
+    assert_eq!(r.texts_logged as usize, logged, "{r:?}");
+    assert_eq!(r.texts_logged + r.texts_not_logged, 200, "{r:?}");
+    assert!(
+        told as f64 > bound,
+        "{told} refusals told on the link, {logged} logged"
+    );
 }

@@ -78,11 +78,14 @@ fn settle(h: &ServerHandle, n: u64) {
     }
 }
 
+/// The uplinks but the server's texts for the flight log.
 fn uplinks(v: &mut VehicleEnd) -> Vec<Uplink> {
     std::thread::sleep(Duration::from_millis(20));
     let mut out = Vec::new();
     while let Ok(u) = v.uplink.pop() {
-        out.push(u);
+        if !matches!(u, Uplink::Text(_)) {
+            out.push(u);
+        }
     }
     out
 }

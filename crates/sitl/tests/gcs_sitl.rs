@@ -206,6 +206,11 @@ fn climb(attack: bool) {
         !hb.base_mode
             .contains(MavModeFlag::MAV_MODE_FLAG_SAFETY_ARMED)
     );
+    // a land while disarmed: refused, and the refusal is in the flight log
+    assert_eq!(
+        command(&conn, MavCmd::MAV_CMD_NAV_LAND, 0.0),
+        Some(MavResult::MAV_RESULT_DENIED)
+    );
     // the server refuses to arm before a status with a navigation solution
     // (its first status precedes the first control step's telemetry; on a
     // loaded machine the client can be that early): ask again until then
@@ -312,5 +317,18 @@ fn climb(attack: bool) {
         -z_gcs,
         -z_end
     );
+    // the server's own refusal reached the flight log, as PX4 logs a
+    // status text: a logging message at its severity
+    let mut ulog = helicon_ulog::reader::UlogReader::open(&r.ulog).unwrap();
+    let mut refusals = 0;
+    while let Some(m) = ulog.next_message().unwrap() {
+        if let helicon_ulog::reader::Message::Logging { level, text, .. } = m
+            && text == "gcs: refused: not armed"
+        {
+            assert_eq!(level, Some(helicon_ulog::LogLevel::Warning));
+            refusals += 1;
+        }
+    }
+    assert!(refusals >= 1, "the refusal is not in the flight log");
     let _ = std::fs::remove_dir_all(out_dir);
 }

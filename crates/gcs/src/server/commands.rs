@@ -43,7 +43,7 @@ impl Server {
         match self.fence().check_height_in(&self.zones, h) {
             Ok(()) if h > 0.0 => Ok(h),
             Ok(()) => {
-                self.text(
+                self.say(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     &format!(
                         "takeoff refused: {:.1} m AMSL is not above home ({:.1} m AMSL)",
@@ -54,7 +54,7 @@ impl Server {
                 Err(MavResult::MAV_RESULT_DENIED)
             }
             Err(v) => {
-                self.text(
+                self.say(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     &format!("takeoff refused: {v}"),
                 );
@@ -88,7 +88,7 @@ impl Server {
             return self.accepted(u);
         }
         if !self.on_ground() {
-            self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
+            self.say(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
             return MavResult::MAV_RESULT_DENIED;
         }
         self.pending = Some(p);
@@ -104,7 +104,7 @@ impl Server {
                 | MavCmd::MAV_CMD_DO_PAUSE_CONTINUE
         );
         if needs_armed && !self.armed() {
-            self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
+            self.say(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
             return MavResult::MAV_RESULT_DENIED;
         }
         match command {
@@ -126,7 +126,7 @@ impl Server {
             MavCmd::MAV_CMD_DO_PAUSE_CONTINUE if p[0] == 0.0 => self.accepted(Uplink::Hold),
             MavCmd::MAV_CMD_DO_PAUSE_CONTINUE => {
                 // the navigator restarts a mission, it does not resume one
-                self.text(
+                self.say(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     "continue not offered: MISSION_START flies the mission again",
                 );
@@ -160,7 +160,7 @@ impl Server {
 
     pub(super) fn start_mission(&mut self) -> MavResult {
         if self.mission.is_empty() {
-            self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: no mission");
+            self.say(MavSeverity::MAV_SEVERITY_WARNING, "refused: no mission");
             return MavResult::MAV_RESULT_DENIED;
         }
         self.flying_or_pending(Uplink::StartMission, Pending::Mission)
@@ -228,7 +228,7 @@ impl Server {
         z: f32,
     ) -> MavResult {
         if !self.armed() {
-            self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
+            self.say(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
             return MavResult::MAV_RESULT_DENIED;
         }
         let keep_xy = x == i32::MAX || y == i32::MAX;
@@ -236,7 +236,7 @@ impl Server {
             return self.accepted(Uplink::Hold);
         }
         if let Some(mode) = self.returning_or_landing() {
-            self.text(
+            self.say(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 &format!("goto refused: mode {} (set HOLD first)", mode.as_str()),
             );
@@ -258,14 +258,14 @@ impl Server {
             })
         };
         let Ok(p) = target else {
-            self.text(
+            self.say(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 "goto refused: position or frame not valid",
             );
             return MavResult::MAV_RESULT_DENIED;
         };
         if let Err(v) = self.fence().check_target_in(&self.zones, &p) {
-            self.text(
+            self.say(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 &format!("goto refused: {v}"),
             );
@@ -280,14 +280,14 @@ impl Server {
         };
         if arm == 1.0 {
             if !s.navigation_ok {
-                self.text(
+                self.say(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     "refused: no navigation solution",
                 );
                 return MavResult::MAV_RESULT_DENIED;
             }
             if !s.armed && s.ground.on_ground() == Some(false) {
-                self.text(
+                self.say(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     "refused: arm off the ground",
                 );
@@ -311,7 +311,7 @@ impl Server {
         } else if arm == 0.0 {
             // disarming in the air stops the law: only on the ground, or forced
             if !self.on_ground() && force != 21196.0 {
-                self.text(
+                self.say(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     "refused: disarm in flight (force with 21196)",
                 );
@@ -334,7 +334,7 @@ impl Server {
     /// denied.
     pub(super) fn set_mode(&mut self, main: u8, sub: u8) -> MavResult {
         let Some(mode) = modes::nav_of(main, sub) else {
-            self.text(
+            self.say(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 &format!("mode refused: PX4 mode {main}/{sub} is not flown"),
             );
@@ -349,7 +349,7 @@ impl Server {
                 MavResult::MAV_RESULT_ACCEPTED
             }
             _ if !armed => {
-                self.text(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
+                self.say(MavSeverity::MAV_SEVERITY_WARNING, "refused: not armed");
                 MavResult::MAV_RESULT_DENIED
             }
             NavMode::Hold => self.accepted(Uplink::Hold),
@@ -359,7 +359,7 @@ impl Server {
                 MavResult::MAV_RESULT_ACCEPTED
             }
             NavMode::Guided => {
-                self.text(
+                self.say(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     "OFFBOARD: entered by a SET_POSITION_TARGET_* target",
                 );
@@ -464,13 +464,13 @@ impl Server {
                 self.param_value_to(i, None);
             }
             Err(ParamError::Unknown(_)) => {
-                self.text(
+                self.say(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     &format!("no parameter {name}"),
                 );
             }
             Err(e @ ParamError::Rejected { .. }) => {
-                self.text(MavSeverity::MAV_SEVERITY_WARNING, &format!("refused {e}"));
+                self.say(MavSeverity::MAV_SEVERITY_WARNING, &format!("refused {e}"));
                 // the answer is the unchanged value
                 if let Some(i) = self.params.index_of(&name) {
                     self.param_value(i);
@@ -485,14 +485,14 @@ impl Server {
     /// (SET_POSITION_TARGET_* has no acknowledgement).
     pub(super) fn guided_target(&mut self, target: GuidedTarget) {
         if !self.armed() {
-            self.text(
+            self.say(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 "guided refused: not armed",
             );
             return;
         }
         if let Some(mode) = self.returning_or_landing() {
-            self.text(
+            self.say(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 &format!("guided refused: mode {} (set HOLD first)", mode.as_str()),
             );
@@ -515,7 +515,7 @@ impl Server {
             }
         };
         if let Some(why) = refusal {
-            self.text(
+            self.say(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 &format!("guided refused: {why}"),
             );
@@ -526,7 +526,7 @@ impl Server {
 
     pub(super) fn guided(&mut self, t: &SET_POSITION_TARGET_LOCAL_NED_DATA) {
         if t.coordinate_frame != MavFrame::MAV_FRAME_LOCAL_NED {
-            self.text(
+            self.say(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 "guided: only MAV_FRAME_LOCAL_NED",
             );
@@ -558,7 +558,7 @@ impl Server {
             match global_position_ned_m(&self.home, frame, t.lat_int, t.lon_int, t.alt) {
                 Ok(p) => p,
                 Err(_) => {
-                    self.text(
+                    self.say(
                         MavSeverity::MAV_SEVERITY_WARNING,
                         "guided refused: position or frame not valid",
                     );

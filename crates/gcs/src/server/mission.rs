@@ -81,7 +81,7 @@ impl Server {
         }
         let (to, (target_system, target_component)) = (*from, *requester);
         self.upload = Upload::Idle;
-        self.text_to(
+        self.say_to(
             MavSeverity::MAV_SEVERITY_WARNING,
             &format!("mission upload cancelled: no item {expected}"),
             Some(to),
@@ -144,7 +144,7 @@ impl Server {
             && now - *last_s < UPLOAD_IDLE_S
         {
             // another ground station is uploading
-            self.text(
+            self.say(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 "mission refused: another upload in progress",
             );
@@ -233,7 +233,7 @@ impl Server {
                     self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
                 }
                 Err(ZoneError { seq, rule, result }) => {
-                    self.text(
+                    self.say(
                         MavSeverity::MAV_SEVERITY_WARNING,
                         &format!("fence refused: item {seq}: {rule}"),
                     );
@@ -251,7 +251,7 @@ impl Server {
                 self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
             }
             Err(MissionError { seq, rule, result }) => {
-                self.text(
+                self.say(
                     MavSeverity::MAV_SEVERITY_WARNING,
                     &format!("mission refused: item {seq}: {rule}"),
                 );

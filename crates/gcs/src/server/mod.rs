@@ -192,7 +192,20 @@ pub struct ServerReport {
     pub tcp_bytes_in: u64,
     /// Bytes written to TCP clients.
     pub tcp_bytes_out: u64,
+    /// The server's own status texts sent to the flight log.
+    pub texts_logged: u64,
+    /// The server's own status texts not logged: beyond the log's rate
+    /// ([`TEXT_LOG_RATE_HZ`], bursts of [`TEXT_LOG_BURST`]) or a full ring.
+    pub texts_not_logged: u64,
 }
+
+/// The server's own status texts (replies, refusals) reach the flight log
+/// at most this often on average…
+pub const TEXT_LOG_RATE_HZ: f64 = 10.0;
+
+/// …with bursts of up to this many: a ground station that repeats a
+/// refused command cannot fill the log.
+pub const TEXT_LOG_BURST: f64 = 20.0;
 
 /// The running server.
 pub struct ServerHandle {
@@ -428,6 +441,9 @@ struct Server {
     pending: Option<Pending>,
     /// The id of the last chunked status text.
     text_id: u16,
+    /// The log's token bucket for the server's own texts (tokens, and the
+    /// time they were counted).
+    text_tokens: (f64, f64),
     /// The mission's last item was reached (MISSION_CURRENT's state
     /// COMPLETE until the mission is flown again or replaced).
     mission_complete: bool,
@@ -493,6 +509,7 @@ impl Server {
             src: (0, 0),
             pending: None,
             text_id: 0,
+            text_tokens: (TEXT_LOG_BURST, 0.0),
             mission_complete: false,
             sequence: 0,
             status: None,
@@ -686,6 +703,35 @@ impl Server {
             if let Some((buf, n)) = frames[slot] {
                 self.send_bytes(&buf[..n], addr);
             }
+        }
+    }
+
+    /// A status text of the server's own (a reply, a refusal) to the
+    /// requester, also sent to the flight log, rate-limited. Texts that
+    /// tell the vehicle's own events use [`Self::text`]: the vehicle logs
+    /// those itself.
+    fn say(&mut self, severity: MavSeverity, text: &str) {
+        let to = self.current.map(|i| self.peers[i].addr);
+        self.say_to(severity, text, to);
+    }
+
+    /// [`Self::say`] to `to`.
+    fn say_to(&mut self, severity: MavSeverity, text: &str, to: Option<Dest>) {
+        self.text_to(severity, text, to);
+        let now = self.now_s();
+        let (tokens, at) = self.text_tokens;
+        let tokens = (tokens + (now - at).max(0.0) * TEXT_LOG_RATE_HZ).min(TEXT_LOG_BURST);
+        if tokens >= 1.0
+            && self.uplink(Uplink::Text(crate::link::OperatorText::new(
+                severity as u8,
+                text,
+            )))
+        {
+            self.text_tokens = (tokens - 1.0, now);
+            self.report.texts_logged += 1;
+        } else {
+            self.text_tokens = (tokens, now);
+            self.report.texts_not_logged += 1;
         }
     }
 
@@ -959,7 +1005,7 @@ impl Server {
             .is_none_or(|(a, t)| a != from || now - t >= 1.0)
         {
             self.last_refusal = Some((from, now));
-            self.text_to(
+            self.say_to(
                 MavSeverity::MAV_SEVERITY_WARNING,
                 "refused: command not signed with the vehicle's key",
                 Some(from),

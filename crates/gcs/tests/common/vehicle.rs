@@ -61,6 +61,9 @@ pub struct Vehicle {
     t_s: f64,
     /// The statuses say armed (holding).
     pub armed: bool,
+    /// The server's own texts sent to the flight log (`Uplink::Text`),
+    /// taken out of the uplinks as they are read.
+    pub logged_texts: Vec<String>,
 }
 
 impl Vehicle {
@@ -110,6 +113,7 @@ impl Vehicle {
             pushed: 0,
             t_s: 0.0,
             armed: false,
+            logged_texts: Vec::new(),
         };
         me.status(0.0);
         me
@@ -148,7 +152,10 @@ impl Vehicle {
         std::thread::sleep(Duration::from_millis(50));
         let mut out = Vec::new();
         while let Ok(u) = self.v.uplink.pop() {
-            out.push(u);
+            match u {
+                Uplink::Text(t) => self.logged_texts.push(t.as_str().to_string()),
+                u => out.push(u),
+            }
         }
         out
     }
