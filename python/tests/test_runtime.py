@@ -35,6 +35,37 @@ def test_the_batch_derivative_releases_the_gil():
     assert ticks > 5
 
 
+def _interrupted(call: str, what: str) -> None:
+    """Run `call` in a child interpreter, send it SIGINT 1.5 s into the call
+    and check it raised KeyboardInterrupt within 10 s of the signal."""
+    code = textwrap.dedent(
+        f"""
+        import sys, helicon
+        print("started", flush=True)
+        try:
+            {call}
+        except KeyboardInterrupt:
+            print("interrupted", flush=True)
+            sys.exit(3)
+        print("finished", flush=True)
+        """
+    )
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert p.stdout is not None
+    assert p.stdout.readline().strip() == "started"
+    time.sleep(1.5)
+    t0 = time.monotonic()
+    os.kill(p.pid, signal.SIGINT)
+    try:
+        out, err = p.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        raise AssertionError(f"{what} did not stop on SIGINT")
+    assert p.returncode == 3, (out, err)
+    assert "interrupted" in out
+    assert time.monotonic() - t0 < 10
+
+
 def test_ctrl_c_stops_a_campaign_between_runs(tmp_path):
     camp = tmp_path / "long.toml"
     camp.write_text(
@@ -53,32 +84,7 @@ def test_ctrl_c_stops_a_campaign_between_runs(tmp_path):
             """
         )
     )
-    code = textwrap.dedent(
-        f"""
-        import sys, helicon
-        print("started", flush=True)
-        try:
-            helicon.mc({str(camp)!r})
-        except KeyboardInterrupt:
-            print("interrupted", flush=True)
-            sys.exit(3)
-        print("finished", flush=True)
-        """
-    )
-    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert p.stdout is not None
-    assert p.stdout.readline().strip() == "started"
-    time.sleep(1.5)
-    t0 = time.monotonic()
-    os.kill(p.pid, signal.SIGINT)
-    try:
-        out, err = p.communicate(timeout=30)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        raise AssertionError("the campaign did not stop on SIGINT")
-    assert p.returncode == 3, (out, err)
-    assert "interrupted" in out
-    assert time.monotonic() - t0 < 10
+    _interrupted(f"helicon.mc({str(camp)!r})", "the campaign")
 
 
 def test_ctrl_c_stops_one_long_flight(tmp_path):
@@ -95,29 +101,4 @@ def test_ctrl_c_stops_one_long_flight(tmp_path):
             """
         )
     )
-    code = textwrap.dedent(
-        f"""
-        import sys, helicon
-        print("started", flush=True)
-        try:
-            helicon.sim({str(scen)!r})
-        except KeyboardInterrupt:
-            print("interrupted", flush=True)
-            sys.exit(3)
-        print("finished", flush=True)
-        """
-    )
-    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert p.stdout is not None
-    assert p.stdout.readline().strip() == "started"
-    time.sleep(1.5)
-    t0 = time.monotonic()
-    os.kill(p.pid, signal.SIGINT)
-    try:
-        out, err = p.communicate(timeout=30)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        raise AssertionError("the flight did not stop on SIGINT")
-    assert p.returncode == 3, (out, err)
-    assert "interrupted" in out
-    assert time.monotonic() - t0 < 10
+    _interrupted(f"helicon.sim({str(scen)!r})", "the flight")
