@@ -356,9 +356,12 @@ fn read_csv(path: &Path, names: &[&str], optional: &[&str]) -> Result<(Table, Ve
         match found.as_slice() {
             [i] => idx.push(*i),
             [] => bail!(
-                "{file}: no column `{}` (columns: {})",
+                "{file}: no column `{}` (columns: {}){}",
                 esc(n),
-                esc(&header.iter().collect::<Vec<_>>().join(", "))
+                esc(&header.iter().collect::<Vec<_>>().join(", ")),
+                helicon_config::nearest(n, header.iter())
+                    .map(|c| format!("; did you mean `{}`?", esc(c)))
+                    .unwrap_or_default()
             ),
             _ => bail!("{file}: column `{n}` appears {} times", found.len()),
         }

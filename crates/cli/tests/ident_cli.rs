@@ -231,6 +231,14 @@ fn bad_logs_are_refused_with_file_column_and_line() {
         "ident", "frf", &ps, "--input", "servo", "--output", "pitch", "--out", &out,
     ]);
     assert!(!ok && se.contains("no column `pitch`"), "{se}");
+    // a misspelt column: the nearest one suggested
+    let (ok, _, se) = helicon(&[
+        "ident", "frf", &ps, "--input", "servo", "--output", "rte", "--out", &out,
+    ]);
+    assert!(
+        !ok && se.contains("no column `rte`") && se.contains("did you mean `rate`?"),
+        "{se}"
+    );
     // NaN and a time gap.
     let nan = text.replace("abc", "NaN");
     std::fs::write(&p, nan).unwrap();

@@ -510,6 +510,18 @@ fn hostile_model_files_name_the_file_and_field() {
             "{field}: {e}"
         );
     }
+    // a misspelt key: the nearest valid one suggested
+    let e = SsSpec::from_toml_str(
+        &good.replacen("frf = \"frf.csv\"", "frff = \"frf.csv\"", 1),
+        "model.toml",
+        Path::new(""),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("model.toml") && e.contains("did you mean `frf`?"),
+        "{e}"
+    );
     // an unused parameter, a response band upside down
     let e = SsSpec::from_toml_str(
         &(good.clone() + "[[parameter]]\nname = \"Z_w\"\nstart = -1.0\n"),

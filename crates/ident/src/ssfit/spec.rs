@@ -102,7 +102,8 @@ impl SsSpec {
     pub fn from_toml_str(text: &str, file: &str, base: &Path) -> Result<SsSpec> {
         let raw: RawSpec = toml::from_str(text).map_err(|e| IdentError::Parse {
             file: file.to_string(),
-            message: e.to_string().trim_end().to_string(),
+            // a misspelt key shown with the nearest valid one
+            message: helicon_config::with_suggestion(e.to_string().trim_end()),
         })?;
         let model = model_from_raw(&raw, file)?;
         let err = |field: String, rule: String| IdentError::file(file, field, rule);
