@@ -57,6 +57,26 @@ pub struct PortError {
     pub message: String,
 }
 
+/// A superseded arrival's measurements that the newer one lacks, moved
+/// onto it: a control task that fell behind keeps the newest IMU sample,
+/// and with it the GPS fix (and its quality), the magnetometer sample and
+/// the receiver frame that came with an older one, so that a late step
+/// never loses a fix (each is still checked for plausibility when used).
+fn carry_over(old: Arrival, new: &mut Arrival) {
+    if let (Some(o), Some(n)) = (old.frame, new.frame.as_mut()) {
+        if n.gps.is_none() && o.gps.is_some() {
+            n.gps = o.gps;
+            new.gps_quality = old.gps_quality;
+        }
+        if n.mag_body.is_none() {
+            n.mag_body = o.mag_body;
+        }
+    }
+    if new.rc.is_none() {
+        new.rc = old.rc;
+    }
+}
+
 /// One IMU message as the sensor server assembled it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Arrival {
@@ -138,7 +158,8 @@ pub struct RunReport {
     /// Steps whose deadline was missed (clock pacing).
     pub deadline_misses: u64,
     /// IMU frames that arrived while an earlier one was still unused
-    /// (clock pacing: the older one is dropped from control, kept in the log).
+    /// (clock pacing: the older IMU sample is dropped; its GPS fix,
+    /// magnetometer sample and receiver frame move onto the newer one).
     pub frames_superseded: u64,
     /// Steps without a fresh IMU sample.
     pub steps_without_imu: u64,
@@ -666,8 +687,10 @@ fn control_loop(
                     if a.frame.is_none() && newest.is_some_and(|n| n.frame.is_some()) {
                         continue;
                     }
-                    if newest.is_some() {
+                    let mut a = a;
+                    if let Some(old) = newest {
                         superseded += 1;
+                        carry_over(old, &mut a);
                     }
                     newest = Some(a);
                 }
@@ -1040,8 +1063,54 @@ fn logger_loop<W: Write>(
 
 #[cfg(test)]
 mod tests {
-    use super::DropLog;
+    use super::{Arrival, DropLog, carry_over};
     use crate::records::FlightRecord;
+    use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame};
+    use nalgebra::Vector3;
+
+    fn arrival(t_s: f64, gps: bool, mag: bool) -> Arrival {
+        let imu = ImuSample {
+            specific_force_body_m_s2: Vector3::new(0.0, 0.0, -9.81),
+            gyro_body_rad_s: Vector3::zeros(),
+        };
+        let mut frame = SensorFrame::imu_only(t_s, imu);
+        if gps {
+            frame.gps = Some(GpsFix {
+                epoch_s: t_s,
+                fix: GpsFixType::Fix3d,
+                position_ned_m: Vector3::new(t_s, 0.0, 0.0),
+                velocity_ned_m_s: None,
+            });
+        }
+        if mag {
+            frame.mag_body = Some(Vector3::new(t_s, 0.0, 0.0));
+        }
+        Arrival {
+            frame: Some(frame),
+            arrived_ns: 0,
+            rc: None,
+            gps_quality: None,
+            device: None,
+        }
+    }
+
+    /// A late control step keeps the newest IMU sample and the GPS fix and
+    /// magnetometer sample of the frames it superseded; the newer frame's
+    /// own measurements win.
+    #[test]
+    fn a_superseded_frame_gives_its_fix_to_the_newer_one() {
+        let mut newer = arrival(0.0025, false, false);
+        carry_over(arrival(0.0, true, true), &mut newer);
+        let f = newer.frame.unwrap();
+        assert_eq!(f.t_s, 0.0025);
+        assert_eq!(f.gps.unwrap().position_ned_m.x, 0.0);
+        assert_eq!(f.mag_body.unwrap().x, 0.0);
+        let mut own = arrival(0.005, true, true);
+        carry_over(arrival(0.0, true, true), &mut own);
+        let f = own.frame.unwrap();
+        assert_eq!(f.gps.unwrap().position_ned_m.x, 0.005);
+        assert_eq!(f.mag_body.unwrap().x, 0.005);
+    }
 
     /// Servo drops are logged at the first and at each doubling (the powers
     /// of two up to 40), stamped with the time given.
