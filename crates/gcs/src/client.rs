@@ -24,6 +24,7 @@
 // the superseded MISSION_REQUEST is still answered
 #![allow(deprecated)]
 
+use crate::mission_item::item_float;
 use crate::modes;
 use mavlink::dialects::common::*;
 use mavlink::{MavHeader, MessageData};
@@ -683,33 +684,6 @@ fn ack_result(r: MavResult) -> Option<Result<Outcome, ClientError>> {
         MavResult::MAV_RESULT_ACCEPTED => Some(Ok(Outcome::Command(r))),
         MavResult::MAV_RESULT_IN_PROGRESS => None,
         _ => Some(Err(ClientError::Refused(format!("{r:?}")))),
-    }
-}
-
-/// The legacy float item of an integer one (a vehicle that asks with
-/// `MISSION_REQUEST`).
-fn item_float(it: &MISSION_ITEM_INT_DATA) -> MISSION_ITEM_DATA {
-    let local = matches!(
-        it.frame,
-        MavFrame::MAV_FRAME_LOCAL_NED | MavFrame::MAV_FRAME_LOCAL_ENU
-    );
-    let k = if local { 1e-4 } else { 1e-7 };
-    MISSION_ITEM_DATA {
-        param1: it.param1,
-        param2: it.param2,
-        param3: it.param3,
-        param4: it.param4,
-        x: (f64::from(it.x) * k) as f32,
-        y: (f64::from(it.y) * k) as f32,
-        z: it.z,
-        seq: it.seq,
-        command: it.command,
-        target_system: it.target_system,
-        target_component: it.target_component,
-        frame: it.frame,
-        current: it.current,
-        autocontinue: it.autocontinue,
-        mission_type: it.mission_type,
     }
 }
 

@@ -28,6 +28,7 @@ pub mod config;
 pub mod fence;
 pub mod geo;
 pub mod link;
+pub mod mission_item;
 pub mod modes;
 pub mod navigator;
 pub mod params;

@@ -24,6 +24,7 @@
 // the *_INT mission frames are understood though superseded
 #![allow(deprecated)]
 
+use crate::mission_item::int_scale;
 use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavCmd, MavFrame, MavMissionType};
 use num_traits::{FromPrimitive, ToPrimitive};
 use std::path::Path;
@@ -61,26 +62,6 @@ const NAMES: [&str; COLUMNS] = [
     "z (altitude)",
     "autocontinue",
 ];
-
-/// Whether x and y of `frame` are latitude and longitude (else metres).
-fn is_global(frame: MavFrame) -> bool {
-    !matches!(
-        frame,
-        MavFrame::MAV_FRAME_LOCAL_NED
-            | MavFrame::MAV_FRAME_LOCAL_ENU
-            | MavFrame::MAV_FRAME_LOCAL_OFFSET_NED
-            | MavFrame::MAV_FRAME_BODY_NED
-            | MavFrame::MAV_FRAME_BODY_OFFSET_NED
-            | MavFrame::MAV_FRAME_BODY_FRD
-            | MavFrame::MAV_FRAME_LOCAL_FRD
-            | MavFrame::MAV_FRAME_LOCAL_FLU
-    )
-}
-
-/// The scale of x and y in `MISSION_ITEM_INT` for `frame`.
-fn scale(frame: MavFrame) -> f64 {
-    if is_global(frame) { 1e7 } else { 1e4 }
-}
 
 /// Parse the text of a QGC WPL 110 file (`file` names it in errors).
 pub fn parse(text: &str, file: &str) -> Result<Vec<MISSION_ITEM_INT_DATA>, WplError> {
@@ -157,7 +138,7 @@ pub fn parse(text: &str, file: &str) -> Result<Vec<MISSION_ITEM_INT_DATA>, WplEr
             .ok_or_else(|| err(n, format!("command {command_n}: not a MAV_CMD")))?;
         let autocontinue = whole(11, 1.0)? as u8;
         let int = |k: usize| -> Result<i32, WplError> {
-            let x = (v[k] * scale(frame)).round();
+            let x = (v[k] * int_scale(frame)).round();
             if x.abs() <= f64::from(i32::MAX) {
                 Ok(x as i32)
             } else {
@@ -223,7 +204,7 @@ pub fn to_text(items: &[MISSION_ITEM_INT_DATA], file: &str) -> Result<String, Wp
                 ),
             });
         }
-        let k = scale(it.frame);
+        let k = int_scale(it.frame);
         s += &format!(
             "{i}\t{}\t{}\t{}\t{:.8}\t{:.8}\t{:.8}\t{:.8}\t{:.8}\t{:.8}\t{:.6}\t{}\n",
             it.current,

@@ -4,12 +4,11 @@
 // ground stations still send the superseded *_INT mission frames
 #![allow(deprecated)]
 
-use super::{
-    Dest, MISSION_ITEM_RETRIES, MISSION_ITEM_TIMEOUT_S, Server, UPLOAD_IDLE_S, Upload, item_float,
-};
+use super::{Dest, MISSION_ITEM_RETRIES, MISSION_ITEM_TIMEOUT_S, Server, UPLOAD_IDLE_S, Upload};
 use crate::fence::{MAX_FENCE_ITEMS, ZoneError, Zones};
 use crate::geo::{MissionError, plan_of};
 use crate::link::Uplink;
+use crate::mission_item::item_float;
 use mavlink::dialects::common::*;
 
 impl Server {

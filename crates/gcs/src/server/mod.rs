@@ -57,6 +57,7 @@
 use crate::fence::{Fence, Zones};
 use crate::geo::global_position_ned_m;
 use crate::link::{Downlink, LandedState, ServerEnd, Uplink, VehicleEvent, VehicleStatus};
+use crate::mission_item::item_int;
 use crate::modes;
 use crate::navigator::{GuidedTarget, NavEvent, NavMode, NavigatorConfig};
 use crate::params::{PARAMS, ParamError, ParamTable};
@@ -1157,71 +1158,6 @@ fn autopilot_version() -> AUTOPILOT_VERSION_DATA {
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MAVLINK2,
         flight_sw_version,
         ..AUTOPILOT_VERSION_DATA::DEFAULT
-    }
-}
-
-/// The scale of a mission item's x and y in `MISSION_ITEM_INT`: degrees ×
-/// 10⁷ in the global frames, metres × 10⁴ in the local ones (common.xml).
-fn int_scale(frame: MavFrame) -> f64 {
-    match frame {
-        MavFrame::MAV_FRAME_LOCAL_NED
-        | MavFrame::MAV_FRAME_LOCAL_ENU
-        | MavFrame::MAV_FRAME_LOCAL_OFFSET_NED
-        | MavFrame::MAV_FRAME_BODY_NED
-        | MavFrame::MAV_FRAME_BODY_OFFSET_NED
-        | MavFrame::MAV_FRAME_BODY_FRD
-        | MavFrame::MAV_FRAME_LOCAL_FRD
-        | MavFrame::MAV_FRAME_LOCAL_FLU => 1e4,
-        _ => 1e7,
-    }
-}
-
-/// The legacy `MISSION_ITEM` (x, y as floats) of an item.
-fn item_float(it: &MISSION_ITEM_INT_DATA) -> MISSION_ITEM_DATA {
-    let k = int_scale(it.frame);
-    MISSION_ITEM_DATA {
-        param1: it.param1,
-        param2: it.param2,
-        param3: it.param3,
-        param4: it.param4,
-        x: (f64::from(it.x) / k) as f32,
-        y: (f64::from(it.y) / k) as f32,
-        z: it.z,
-        seq: it.seq,
-        command: it.command,
-        target_system: it.target_system,
-        target_component: it.target_component,
-        frame: it.frame,
-        current: it.current,
-        autocontinue: it.autocontinue,
-        mission_type: it.mission_type,
-    }
-}
-
-/// The `MISSION_ITEM_INT` of a legacy `MISSION_ITEM` (a non-finite or
-/// out-of-range x or y saturates, and the mission check refuses it).
-fn item_int(it: &MISSION_ITEM_DATA) -> MISSION_ITEM_INT_DATA {
-    let k = int_scale(it.frame);
-    let int = |v: f32| {
-        let v = (f64::from(v) * k).round();
-        if v.is_nan() { i32::MAX } else { v as i32 }
-    };
-    MISSION_ITEM_INT_DATA {
-        param1: it.param1,
-        param2: it.param2,
-        param3: it.param3,
-        param4: it.param4,
-        x: int(it.x),
-        y: int(it.y),
-        z: it.z,
-        seq: it.seq,
-        command: it.command,
-        target_system: it.target_system,
-        target_component: it.target_component,
-        frame: it.frame,
-        current: it.current,
-        autocontinue: it.autocontinue,
-        mission_type: it.mission_type,
     }
 }
 
