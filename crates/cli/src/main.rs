@@ -2,6 +2,7 @@
 
 use clap::{CommandFactory, Parser, Subcommand};
 
+mod bench_cmd;
 mod console;
 mod control;
 mod demo;
@@ -59,7 +60,7 @@ enum Command {
     /// Monte Carlo campaign: dispersed parameters, wind and sensor seeds (rayon, shards, resume).
     Mc(mc_cmd::McArgs),
     /// Time the hot path on this machine: derivative, closed-loop step, real-time factor.
-    Bench(mc_cmd::BenchArgs),
+    Bench(bench_cmd::BenchArgs),
     /// Fly a closed-loop scenario (TOML): log.csv, summary.json, gains, plots, report.
     Sim(sim_cmd::SimArgs),
     /// Software in the loop: the simulator as the hardware on pseudo-terminals, the on-board runtime flying it.
@@ -158,7 +159,7 @@ fn run() -> anyhow::Result<()> {
         Command::Fuse(a) => sensors::run_fuse(&a),
         Command::Log(a) => log_cmd::run(&a),
         Command::Mc(a) => mc_cmd::run_mc(&a),
-        Command::Bench(a) => mc_cmd::run_bench(&a),
+        Command::Bench(a) => bench_cmd::run_bench(&a),
         Command::Sim(a) => sim_cmd::run(&a),
         Command::Sitl(a) => sitl_cmd::run(&a),
         Command::Onboard(a) => onboard_cmd::run(&a),

@@ -543,9 +543,13 @@ fn put_fmt(line: &mut String, v: f64) {
 pub struct LogWriter {
     path: PathBuf,
     label: String,
-    out: BufWriter<File>,
-    /// The line being formatted (reused: no allocation per row).
-    line: String,
+    /// Rows go to the formatter thread through this ring (taken by
+    /// [`Self::finish`]).
+    ring: Option<rtrb::Producer<LogRow>>,
+    /// The formatter thread: its rows written, or the first write error.
+    worker: Option<std::thread::JoinHandle<Result<usize, LogCsvError>>>,
+    /// Set by the formatter thread when a write failed (it then stops).
+    failed: std::sync::Arc<std::sync::atomic::AtomicBool>,
     rows: usize,
     last_t: f64,
     /// Write every `stride`-th row given.
@@ -554,6 +558,52 @@ pub struct LogWriter {
     given: usize,
     /// The last row given, when it was not written (written by `finish`).
     pending: Option<LogRow>,
+}
+
+/// Rows a [`LogWriter`]'s ring holds (about 2.5 MB): the flight runs ahead
+/// of its formatter by at most this many rows, then waits for it.
+pub const LOG_RING_ROWS: usize = 4096;
+
+/// The formatting and writing half of a [`LogWriter`], on its own thread:
+/// the rows it is given are checked already.
+struct RowFormatter<W: Write> {
+    label: String,
+    out: BufWriter<W>,
+    text: RowText,
+}
+
+impl<W: Write> RowFormatter<W> {
+    /// Format one checked row and write it.
+    fn write(&mut self, r: &LogRow) -> Result<(), LogCsvError> {
+        self.out
+            .write_all(self.text.format(r).as_bytes())
+            .map_err(|e| io_err(&self.label, e))
+    }
+
+    /// Write the rows of `ring` until its writer is gone, then flush; the
+    /// rows written. Waits a little when the ring is empty.
+    fn run(mut self, mut ring: rtrb::Consumer<LogRow>) -> Result<usize, LogCsvError> {
+        let mut rows = 0;
+        loop {
+            match ring.pop() {
+                Ok(r) => {
+                    self.write(&r)?;
+                    rows += 1;
+                }
+                Err(_) if ring.is_abandoned() => {
+                    // the last rows pushed before the writer went
+                    while let Ok(r) = ring.pop() {
+                        self.write(&r)?;
+                        rows += 1;
+                    }
+                    break;
+                }
+                Err(_) => std::thread::sleep(std::time::Duration::from_micros(200)),
+            }
+        }
+        self.out.flush().map_err(|e| io_err(&self.label, e))?;
+        Ok(rows)
+    }
 }
 
 /// The size of a `log.csv` before it is written: [`estimate_log_size`].
@@ -574,15 +624,40 @@ pub fn header_bytes() -> u64 {
 
 /// Bytes of one row as [`LogWriter`] writes it (its newline included).
 pub fn row_bytes(r: &LogRow) -> usize {
-    let mut line = String::with_capacity(2048);
-    let mut digits = zmij::Buffer::new();
-    for (j, c) in LOG_SCHEMA.iter().enumerate() {
-        if j > 0 {
-            line.push(',');
+    RowText::new().format(r).len()
+}
+
+/// The text of `log.csv` rows, one at a time: every column of
+/// [`LOG_SCHEMA`] in order, each number as [`LogWriter`] writes it, the
+/// newline included. Its buffers are reused: no allocation per row.
+#[derive(Default)]
+pub struct RowText {
+    line: String,
+    digits: zmij::Buffer,
+}
+
+impl RowText {
+    /// A formatter with room for a row.
+    pub fn new() -> Self {
+        RowText {
+            line: String::with_capacity(2048),
+            digits: zmij::Buffer::new(),
         }
-        put(&mut line, c.value(r), &mut digits);
     }
-    line.len() + 1
+
+    /// The line of one row. The values must be finite ([`LogWriter`]
+    /// checks them before formatting).
+    pub fn format(&mut self, r: &LogRow) -> &str {
+        self.line.clear();
+        for (j, c) in LOG_SCHEMA.iter().enumerate() {
+            if j > 0 {
+                self.line.push(',');
+            }
+            put(&mut self.line, c.value(r), &mut self.digits);
+        }
+        self.line.push('\n');
+        &self.line
+    }
 }
 
 /// The rows a writer of stride `stride` writes of `given` rows: every
@@ -642,17 +717,45 @@ impl LogWriter {
     pub fn create(path: &Path) -> Result<Self, LogCsvError> {
         let label = path.display().to_string();
         let file = File::create(path).map_err(|e| io_err(&label, e))?;
-        let mut out = BufWriter::with_capacity(1 << 16, file);
+        Self::start(path, label, file)
+    }
+
+    /// Write the header to `out`, then start the formatter thread on it.
+    fn start<W: Write + Send + 'static>(
+        path: &Path,
+        label: String,
+        out: W,
+    ) -> Result<Self, LogCsvError> {
+        let mut out = BufWriter::with_capacity(1 << 16, out);
         let header = LOG_SCHEMA.map(|c| c.name).join(",");
         out.write_all(header.as_bytes())
             .and_then(|()| out.write_all(b"\n"))
             .and_then(|()| out.flush())
             .map_err(|e| io_err(&label, e))?;
+        let (ring, rows_out) = rtrb::RingBuffer::new(LOG_RING_ROWS);
+        let failed = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let formatter = RowFormatter {
+            label: label.clone(),
+            out,
+            text: RowText::new(),
+        };
+        let flag = std::sync::Arc::clone(&failed);
+        let worker = std::thread::Builder::new()
+            .name("log.csv".into())
+            .spawn(move || {
+                let r = formatter.run(rows_out);
+                if r.is_err() {
+                    flag.store(true, std::sync::atomic::Ordering::Release);
+                }
+                r
+            })
+            .map_err(|e| io_err(&label, format!("starting its writer thread: {e}")))?;
         Ok(Self {
             path: path.to_path_buf(),
             label,
-            out,
-            line: String::with_capacity(2048),
+            ring: Some(ring),
+            worker: Some(worker),
+            failed,
             rows: 0,
             last_t: f64::NEG_INFINITY,
             stride: 1,
@@ -699,27 +802,26 @@ impl LogWriter {
         self.write_row(r)
     }
 
+    /// Check one row (finite values, increasing time) and hand it to the
+    /// formatter thread, waiting while its ring is full. A write error of
+    /// that thread is returned here, at the next row (or by
+    /// [`Self::finish`]).
     fn write_row(&mut self, r: &LogRow) -> Result<(), LogCsvError> {
         let line = self.rows + 2;
-        // each value computed once: checked, then formatted (the line is
-        // written only whole, after the time check)
-        self.line.clear();
-        let mut digits = zmij::Buffer::new();
-        for (j, c) in LOG_SCHEMA.iter().enumerate() {
-            let v = c.value(r);
-            if !v.is_finite() {
-                return Err(LogCsvError::NonFiniteValue {
-                    path: self.label.clone(),
-                    line,
-                    name: c.name.to_string(),
-                    value: v,
-                    t_s: r.t_s,
-                });
+        if !row_is_finite(r) {
+            // the column to name: the first of the schema that is not finite
+            for c in &LOG_SCHEMA {
+                let v = c.value(r);
+                if !v.is_finite() {
+                    return Err(LogCsvError::NonFiniteValue {
+                        path: self.label.clone(),
+                        line,
+                        name: c.name.to_string(),
+                        value: v,
+                        t_s: r.t_s,
+                    });
+                }
             }
-            if j > 0 {
-                self.line.push(',');
-            }
-            put(&mut self.line, v, &mut digits);
         }
         if r.t_s <= self.last_t {
             return Err(LogCsvError::TimeNotIncreasing {
@@ -729,13 +831,34 @@ impl LogWriter {
                 previous_s: self.last_t,
             });
         }
-        self.line.push('\n');
-        self.out
-            .write_all(self.line.as_bytes())
-            .map_err(|e| io_err(&self.label, e))?;
+        let mut row = *r;
+        loop {
+            if self.failed.load(std::sync::atomic::Ordering::Acquire) {
+                return Err(self.worker_error());
+            }
+            let Some(ring) = self.ring.as_mut() else {
+                return Err(io_err(&self.label, "written after its end"));
+            };
+            match ring.push(row) {
+                Ok(()) => break,
+                Err(rtrb::PushError::Full(back)) => {
+                    row = back;
+                    std::thread::yield_now();
+                }
+            }
+        }
         self.rows += 1;
         self.last_t = r.t_s;
         Ok(())
+    }
+
+    /// The formatter thread's error (it has stopped).
+    fn worker_error(&mut self) -> LogCsvError {
+        match self.worker.take().map(std::thread::JoinHandle::join) {
+            Some(Ok(Err(e))) => e,
+            Some(Ok(Ok(_))) | None => io_err(&self.label, "its writer thread stopped"),
+            Some(Err(_)) => io_err(&self.label, "its writer thread panicked"),
+        }
     }
 
     /// Write the last row given if the stride skipped it, flush and close;
@@ -744,8 +867,47 @@ impl LogWriter {
         if let Some(r) = self.pending.take() {
             self.write_row(&r)?;
         }
-        self.out.flush().map_err(|e| io_err(&self.label, e))?;
-        Ok(self.rows)
+        // the formatter ends when the ring's writer is gone
+        drop(self.ring.take());
+        match self.worker.take().map(std::thread::JoinHandle::join) {
+            Some(Ok(Ok(rows))) => Ok(rows),
+            Some(Ok(Err(e))) => Err(e),
+            None => Err(io_err(&self.label, "its writer thread stopped")),
+            Some(Err(_)) => Err(io_err(&self.label, "its writer thread panicked")),
+        }
+    }
+}
+
+/// Is every column of `r` finite? The row's fields are checked as arrays
+/// (several times faster than the schema's column walk, which names the
+/// column when one is not); the derived columns, the estimator's errors, are
+/// differences that can overflow and are checked as written.
+fn row_is_finite(r: &LogRow) -> bool {
+    let all = |v: &[f64]| v.iter().fold(true, |ok, x| ok & x.is_finite());
+    r.t_s.is_finite()
+        & all(r.x.as_slice())
+        & all(r.u.as_slice())
+        & all(&r.reference)
+        & all(&r.output)
+        & all(&r.estimate9)
+        & all(&r.measured9)
+        & all(&r.wind_ned)
+        & all(&r.lambda)
+        & all(&r.thrust)
+        & all(&r.imu_health)
+        & all(&r.excitation)
+        & (0..9).fold(true, |ok, i| ok & estimator_error(r, i).is_finite())
+}
+
+impl Drop for LogWriter {
+    /// A writer dropped without [`LogWriter::finish`] (a flight that ended
+    /// in an error) still writes and flushes the rows it was given.
+    fn drop(&mut self) {
+        drop(self.ring.take());
+        if let Some(w) = self.worker.take() {
+            // its error has no one to go to: the caller is on its own error path
+            let _ = w.join();
+        }
     }
 }
 
@@ -1188,5 +1350,128 @@ mod format_tests {
             let m = (next() >> 20) as f64;
             same(m / f64::from(1u32 << (next() % 12)), &mut buf);
         }
+    }
+}
+
+#[cfg(test)]
+mod writer_tests {
+    use super::{LOG_RING_ROWS, LogCsvError, LogWriter, RowText};
+    use crate::closed_loop::LogRow;
+    use helicon_model::{Input, State};
+    use std::io::Write;
+    use std::path::Path;
+    use std::sync::{Arc, Mutex};
+
+    fn row(t_s: f64) -> LogRow {
+        LogRow {
+            t_s,
+            x: State::from_fn(|i, _| 0.1 * i as f64 + t_s),
+            u: Input::from_fn(|i, _| 0.01 * i as f64),
+            reference: [1.0, 0.0, -0.5, 0.25],
+            output: [0.0; 4],
+            estimate9: [0.3; 9],
+            measured9: [0.2; 9],
+            wind_ned: [0.0; 3],
+            lambda: [0.05, 0.1],
+            thrust: [137.5, 4.0],
+            inflow_residual: [0.0; 2],
+            imu_health: [0.0; 3],
+            excitation: [0.0; 4],
+        }
+    }
+
+    /// An output that takes `room` bytes, then fails as a full disk does;
+    /// what it took is kept.
+    struct Disk {
+        room: usize,
+        taken: Arc<Mutex<Vec<u8>>>,
+    }
+
+    impl Write for Disk {
+        fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+            let mut t = self.taken.lock().map_err(|_| std::io::ErrorKind::Other)?;
+            if t.len() + buf.len() > self.room {
+                return Err(std::io::ErrorKind::StorageFull.into());
+            }
+            t.extend_from_slice(buf);
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    fn writer(room: usize) -> (LogWriter, Arc<Mutex<Vec<u8>>>) {
+        let taken = Arc::new(Mutex::new(Vec::new()));
+        let disk = Disk {
+            room,
+            taken: Arc::clone(&taken),
+        };
+        let w = LogWriter::start(Path::new("log.csv"), "log.csv".into(), disk).unwrap();
+        (w, taken)
+    }
+
+    #[test]
+    fn the_writer_thread_writes_every_row_in_order_as_formatted() {
+        // more rows than the ring holds: the flight waits for the formatter
+        let n = 3 * LOG_RING_ROWS + 7;
+        let (mut w, taken) = writer(usize::MAX);
+        let mut text = RowText::new();
+        let mut expected = String::new();
+        for k in 0..n {
+            let r = row(k as f64 * 0.0025 + 0.0025);
+            w.write(&r).unwrap();
+            expected.push_str(text.format(&r));
+        }
+        assert_eq!(w.finish().unwrap(), n);
+        let taken = taken.lock().unwrap();
+        let file = std::str::from_utf8(&taken).unwrap();
+        let (header, body) = file.split_once('\n').unwrap();
+        assert!(header.starts_with("t_s,"));
+        assert_eq!(body, expected);
+    }
+
+    #[test]
+    fn a_full_disk_is_an_error_naming_the_file_not_a_lost_log() {
+        // room for the header and a few rows: the formatter fails, and the
+        // flight hears of it at a later row or at the end
+        let (mut w, _) = writer(20_000);
+        let mut err = None;
+        for k in 0..100_000 {
+            if let Err(e) = w.write(&row(f64::from(k) + 1.0)) {
+                err = Some(e);
+                break;
+            }
+        }
+        let e = match err {
+            Some(e) => e,
+            None => w.finish().unwrap_err(),
+        };
+        assert!(
+            matches!(&e, LogCsvError::Io { path, .. } if path == "log.csv"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_non_finite_value_is_refused_on_the_flight_thread_naming_its_column() {
+        let (mut w, _) = writer(usize::MAX);
+        w.write(&row(1.0)).unwrap();
+        let mut bad = row(2.0);
+        bad.thrust[1] = f64::NAN;
+        let e = w.write(&bad).unwrap_err();
+        assert!(
+            matches!(&e, LogCsvError::NonFiniteValue { line: 3, name, .. } if name == "force_tr_y_n"),
+            "{e}"
+        );
+        // an overflowing estimator error is refused too (its inputs are finite)
+        let mut far = row(3.0);
+        far.estimate9[0] = -f64::MAX;
+        far.x[helicon_model::state::REDUCED_OFFSET] = f64::MAX;
+        assert!(matches!(
+            w.write(&far),
+            Err(LogCsvError::NonFiniteValue { .. })
+        ));
+        assert_eq!(w.finish().unwrap(), 1);
     }
 }

@@ -1,0 +1,376 @@
+//! `helicon bench`: the cost of each stage of a flight on this machine —
+//! the model's derivative and RK4 step, the closed loop, the log row (on
+//! the flight's thread and in its formatter), `helicon sim` streaming its
+//! log, the ESKF step and the SITL round trip through the pseudo-terminals.
+
+use anyhow::{Context, Result};
+use clap::Args;
+use helicon_model::integrate::rk4;
+use helicon_model::state::expand;
+use helicon_model::trim::{TrimOptions, TrimTarget, trim};
+use helicon_model::{Input, Model, Preset, State};
+use helicon_sim::closed_loop::{fly, fly_to, prepare};
+use helicon_sim::log_csv::{LogWriter, RowText};
+use helicon_sim::scenario::Scenario;
+use nalgebra::Vector3;
+use std::time::Instant;
+
+/// `helicon bench`.
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Print the figures as JSON: `derivative_ns`, `rk4_step_ns`,
+    /// `closed_loop_step_ns`, `closed_loop_rtf`, `log_row_ns` (on the
+    /// flight's thread), `log_row_format_ns` (the row's text),
+    /// `sim_with_log_step_ns`, `sim_with_log_rtf`, `eskf_step_imu_ns`,
+    /// `eskf_step_mag_ns`, `eskf_step_gps_ns`, `sitl_step_us`, `sitl_rtf`,
+    /// `sitl_compute_p50_us`, `sitl_sensor_to_servo_p50_us`.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// The closed loop measured by `helicon bench`: thesis controller with
+/// sensors, q-method + fusion and the state estimator, hovering in calm air.
+pub const BENCH_SCENARIO: &str = r#"
+name = "bench"
+preset = "thesis"
+duration_s = 2.0
+[controller]
+input_max = [0.1, 0.7, 0.7, 0.04]
+estimator = true
+fusion = true
+"#;
+
+/// Run `helicon bench`.
+pub fn run_bench(args: &BenchArgs) -> Result<()> {
+    // 1. derivative: hover trim of the Bergen Twin, batches of evaluations
+    let model = Model::bergen_twin(Preset::Thesis);
+    let t = trim(
+        &model,
+        &TrimTarget {
+            velocity_ned_m_s: Vector3::zeros(),
+            yaw_rad: 0.0,
+            wind_ned_m_s: Vector3::zeros(),
+        },
+        &TrimOptions::default(),
+    )
+    .context("hover trim")?;
+    let x: State = expand(&t.x, [0.0; 3]);
+    let u: Input = t.u;
+    let w = Vector3::zeros();
+    let batch = 20_000;
+    let mut per = Vec::new();
+    let mut sink = 0.0;
+    for _ in 0..15 {
+        let t0 = Instant::now();
+        for _ in 0..batch {
+            let (d, _) = model.derivative(std::hint::black_box(&x), &u, &w)?;
+            sink += d[5];
+        }
+        per.push(t0.elapsed().as_secs_f64() * 1e9 / f64::from(batch));
+    }
+    let derivative_ns = median(per);
+    // RK4 step for reference (4 derivatives)
+    let mut per = Vec::new();
+    for _ in 0..15 {
+        let t0 = Instant::now();
+        for _ in 0..batch / 4 {
+            let n = rk4(std::hint::black_box(&x), 0.0025, |s| {
+                model.derivative(s, &u, &w).map(|r| r.0)
+            })?;
+            sink += n[5];
+        }
+        per.push(t0.elapsed().as_secs_f64() * 1e9 / f64::from(batch / 4));
+    }
+    let rk4_ns = median(per);
+    std::hint::black_box(sink);
+    // 2. closed loop: whole flights (sensors, fusion, estimator, controller,
+    // RK4, logging and metrics) divided by their steps; median of flights
+    let scenario = Scenario::from_toml_str(BENCH_SCENARIO, "<bench scenario>")?;
+    let prepared = prepare(&scenario)?;
+    let mut per = Vec::new();
+    for _ in 0..15 {
+        let t0 = Instant::now();
+        let f = fly(&scenario, &prepared, None)?;
+        let steps = f.log.len().max(1) as f64;
+        per.push(t0.elapsed().as_secs_f64() * 1e9 / steps);
+    }
+    let step_ns = median(per);
+    let ts = prepared.gains.set.sample_time_s;
+    let rtf = ts * 1e9 / step_ns;
+    // 3. the log row, and `helicon sim` streaming its log
+    let (log_row_ns, log_format_ns, sim_step_ns, log_rows) = bench_log(&scenario, &prepared)?;
+    let sim_rtf = ts * 1e9 / sim_step_ns;
+    // 4. the ESKF step at 400 Hz: IMU only, with the magnetometer, with a
+    // delayed GPS fix (position, velocity) and the magnetometer
+    let (eskf_imu_ns, eskf_mag_ns, eskf_gps_ns) = bench_eskf()?;
+    // 5. SITL in lock-step: the on-board program's threads on
+    // pseudo-terminals against the simulated hardware
+    let sitl = bench_sitl()?;
+    let mut con = crate::console::Console::stdout();
+    if args.json {
+        writeln!(
+            con,
+            "{}",
+            serde_json::json!({
+                "derivative_ns": derivative_ns,
+                "rk4_step_ns": rk4_ns,
+                "closed_loop_step_ns": step_ns,
+                "closed_loop_rtf": rtf,
+                "log_row_ns": log_row_ns,
+                "log_row_format_ns": log_format_ns,
+                "sim_with_log_step_ns": sim_step_ns,
+                "sim_with_log_rtf": sim_rtf,
+                "eskf_step_imu_ns": eskf_imu_ns,
+                "eskf_step_mag_ns": eskf_mag_ns,
+                "eskf_step_gps_ns": eskf_gps_ns,
+                "sitl_step_us": sitl.step_us,
+                "sitl_rtf": sitl.rtf,
+                "sitl_compute_p50_us": sitl.compute_p50_us,
+                "sitl_sensor_to_servo_p50_us": sitl.sensor_to_servo_p50_us,
+            })
+        );
+    } else {
+        writeln!(
+            con,
+            "derivative f(x, u, wind)        {derivative_ns:10.0} ns (median of 15 batches of {batch})"
+        );
+        writeln!(con, "RK4 step (4 derivatives)         {rk4_ns:10.0} ns");
+        writeln!(
+            con,
+            "closed-loop step (sensors, fusion, estimator, controller, RK4, log) {step_ns:10.0} ns (median of 15 flights of {} s)",
+            scenario.duration_s
+        );
+        writeln!(
+            con,
+            "closed-loop real-time factor     {rtf:10.0} × (one thread, Ts = {} ms)",
+            ts * 1e3
+        );
+        writeln!(
+            con,
+            "log.csv row on the flight's thread (checks, hand-off) {log_row_ns:10.0} ns (median of 15 logs of {log_rows} rows)"
+        );
+        writeln!(
+            con,
+            "log.csv row text (83 numbers, the writer's thread) {log_format_ns:10.0} ns"
+        );
+        writeln!(
+            con,
+            "closed-loop step streaming log.csv (helicon sim) {sim_step_ns:10.0} ns: {sim_rtf:.0} × real time"
+        );
+        writeln!(
+            con,
+            "ESKF step (15 states, 400 Hz)    {eskf_imu_ns:10.0} ns IMU only, {eskf_mag_ns:.0} ns with magnetometer, {eskf_gps_ns:.0} ns with GPS and magnetometer"
+        );
+        writeln!(
+            con,
+            "SITL lock-step sample (ptys, both sides) {:10.1} µs: {:.0} × real time; on board: compute p50 {:.1} µs, sensor frame to servo frame p50 {:.1} µs (median of {SITL_RUNS} flights of {SITL_S} s)",
+            sitl.step_us, sitl.rtf, sitl.compute_p50_us, sitl.sensor_to_servo_p50_us
+        );
+    }
+    con.finish().context("writing to stdout")
+}
+
+/// The log row's cost (ns) on the flight's thread and in its formatter,
+/// `helicon sim`'s step streaming its log (ns), and the rows of the flight.
+fn bench_log(
+    scenario: &Scenario,
+    prepared: &helicon_sim::closed_loop::Prepared,
+) -> Result<(f64, f64, f64, usize)> {
+    let ts = prepared.gains.set.sample_time_s;
+    // the log row: on the flight's thread (the checks and the hand-off
+    // to the writer's thread, LogWriter::write), in the formatter (the
+    // text of a row, no I/O), and the flight as `helicon sim` flies it,
+    // streaming its log.csv. A fresh file each time: rewriting a truncated
+    // one makes ext4 write it back at close, which is not the log's cost.
+    let flight = fly(scenario, prepared, None)?;
+    let dir = std::env::temp_dir().join(format!("helicon-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let log_path = dir.join("log.csv");
+    let fresh = |path: &std::path::Path| -> Result<LogWriter> {
+        match std::fs::remove_file(path) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(e).with_context(|| format!("removing {}", path.display())),
+        }
+        Ok(LogWriter::create(path)?)
+    };
+    let rows = flight.log.len().max(1) as f64;
+    let mut per = Vec::new();
+    for _ in 0..15 {
+        let mut w = fresh(&log_path)?;
+        let t0 = Instant::now();
+        for r in &flight.log {
+            w.write(r)?;
+        }
+        per.push(t0.elapsed().as_secs_f64() * 1e9 / rows);
+        w.finish()?;
+    }
+    let log_row_ns = median(per);
+    let mut text = RowText::new();
+    let mut per = Vec::new();
+    let mut bytes = 0;
+    for _ in 0..15 {
+        let t0 = Instant::now();
+        for r in &flight.log {
+            bytes += std::hint::black_box(text.format(r)).len();
+        }
+        per.push(t0.elapsed().as_secs_f64() * 1e9 / rows);
+    }
+    std::hint::black_box(bytes);
+    let log_format_ns = median(per);
+    let mut per = Vec::new();
+    for _ in 0..15 {
+        let mut w = fresh(&log_path)?;
+        let t0 = Instant::now();
+        fly_to(scenario, prepared, &mut w, None)?;
+        w.finish()?;
+        let steps = (scenario.duration_s / ts).round().max(1.0);
+        per.push(t0.elapsed().as_secs_f64() * 1e9 / steps);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    let sim_step_ns = median(per);
+    Ok((log_row_ns, log_format_ns, sim_step_ns, flight.log.len()))
+}
+
+/// Median step costs (ns) of the ESKF at 400 Hz on a hovering IMU: IMU
+/// only, with the magnetometer, with a delayed GPS fix and the magnetometer.
+fn bench_eskf() -> Result<(f64, f64, f64)> {
+    use helicon_core::eskf::{Eskf, EskfConfig, ImuNoise};
+    use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
+    let imu = ImuNoise {
+        accel_noise_density: 0.004,
+        accel_bias_walk: 3e-4,
+        accel_bias_sigma: 0.2,
+        gyro_noise_density: 1e-4,
+        gyro_bias_walk: 2e-5,
+        gyro_bias_sigma: 0.01,
+        mag_sigma: 0.002,
+    };
+    let noise = SensorNoise {
+        gps_sigma_m: Vector3::new(1.5, 1.5, 3.0),
+        gps_vel_sigma_m_s: Vector3::new(0.05, 0.05, 0.1),
+        mag_field_ned: Vector3::new(0.153, 0.008, -0.438),
+        gravity_m_s2: 9.81,
+    };
+    let dt = 0.0025;
+    let mut f = Eskf::new(
+        &EskfConfig::default(),
+        &imu,
+        &noise,
+        dt,
+        &nalgebra::SVector::<f64, 9>::zeros(),
+    )?;
+    let mut k = 0.0;
+    let mut step = |f: &mut Eskf, mag: bool, gps: bool| {
+        k += 1.0;
+        let t: f64 = k * dt;
+        let frame = SensorFrame {
+            mag_body: mag.then_some(noise.mag_field_ned),
+            gps: gps.then_some(GpsFix {
+                epoch_s: t - 0.1,
+                fix: GpsFixType::Fix3d,
+                position_ned_m: Vector3::zeros(),
+                velocity_ned_m_s: Some(Vector3::zeros()),
+            }),
+            ..SensorFrame::imu_only(
+                t,
+                ImuSample {
+                    specific_force_body_m_s2: Vector3::new(0.01, -0.02, -9.81),
+                    gyro_body_rad_s: Vector3::new(0.001, -0.002, 0.003),
+                },
+            )
+        };
+        f.step(std::hint::black_box(&frame)).map(|m| m[0])
+    };
+    // a filled history and a settled covariance
+    for _ in 0..400 {
+        step(&mut f, false, false)?;
+    }
+    let mut sink = 0.0;
+    let mut time = |mag: bool, gps: bool, f: &mut Eskf| -> Result<f64> {
+        let mut per = Vec::new();
+        for _ in 0..15 {
+            let t0 = Instant::now();
+            for _ in 0..400 {
+                sink += step(f, mag, gps)?;
+            }
+            per.push(t0.elapsed().as_secs_f64() * 1e9 / 400.0);
+        }
+        Ok(median(per))
+    };
+    let imu_ns = time(false, false, &mut f)?;
+    let mag_ns = time(true, false, &mut f)?;
+    let gps_ns = time(true, true, &mut f)?;
+    std::hint::black_box(sink);
+    Ok((imu_ns, mag_ns, gps_ns))
+}
+
+/// Simulated seconds of each SITL flight of the benchmark.
+const SITL_S: f64 = 5.0;
+/// SITL flights of the benchmark.
+const SITL_RUNS: usize = 3;
+
+/// The SITL round trip measured by `helicon bench`.
+struct SitlBench {
+    /// Wall time per control sample, both sides (µs).
+    step_us: f64,
+    /// Simulated time per wall time.
+    rtf: f64,
+    /// The on-board control step's compute time, median (µs).
+    compute_p50_us: f64,
+    /// From a sensor frame's arrival to its servo frame, median (µs).
+    sensor_to_servo_p50_us: f64,
+}
+
+/// Lock-step SITL flights of the bench scenario ([`SITL_S`] s each): the
+/// median flight by wall time per sample.
+fn bench_sitl() -> Result<SitlBench> {
+    use helicon_flight::config::{FailsafeConfig, RealtimeConfig, StaleLimits};
+    use helicon_sitl::{Faults, Pilot, SitlOptions, Speed};
+    let mut scenario = Scenario::from_toml_str(BENCH_SCENARIO, "<bench scenario>")?;
+    scenario.duration_s = SITL_S;
+    let prepared = prepare(&scenario)?;
+    let dir = std::env::temp_dir().join(format!("helicon-bench-sitl-{}", std::process::id()));
+    let mut flights = Vec::new();
+    for k in 0..SITL_RUNS {
+        let options = SitlOptions {
+            speed: Speed::Max,
+            out_dir: dir.join(k.to_string()),
+            faults: Faults::default(),
+            pilot: Pilot::default(),
+            stale: StaleLimits::default(),
+            failsafe: FailsafeConfig::default(),
+            realtime: RealtimeConfig::default(),
+            keep_frames: false,
+            gcs: None,
+            log_stride: 1,
+            stop: None,
+            clock: None,
+        };
+        std::fs::create_dir_all(&options.out_dir)
+            .with_context(|| format!("creating {}", options.out_dir.display()))?;
+        let r = helicon_sitl::run(&scenario, &prepared, &options)
+            .context("the SITL benchmark flight")?;
+        if let Some(e) = &r.onboard.error {
+            anyhow::bail!("the SITL benchmark flight: the on-board program failed: {e}");
+        }
+        let samples = r.samples.max(1) as f64;
+        flights.push(SitlBench {
+            step_us: r.wall_s * 1e6 / samples,
+            rtf: r.speed_x,
+            compute_p50_us: r.onboard.compute.p50_us,
+            sensor_to_servo_p50_us: r.onboard.sensor_to_servo.p50_us,
+        });
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    flights.sort_by(|a, b| a.step_us.total_cmp(&b.step_us));
+    flights
+        .into_iter()
+        .nth(SITL_RUNS / 2)
+        .context("no SITL benchmark flight")
+}
