@@ -29,9 +29,7 @@ impl Server {
         // a change of the landed state is sent at once (EXTENDED_SYS_STATE
         // due now, to every peer that streams it; its grid restarts there):
         // at 1 Hz a short take-off or landing state would be missed
-        let landed_changed = self
-            .last_landed
-            .is_some_and(|l| l != s.ground.landed);
+        let landed_changed = self.last_landed.is_some_and(|l| l != s.ground.landed);
         self.last_landed = Some(s.ground.landed);
         for p in 0..self.peers.len() {
             if landed_changed {
