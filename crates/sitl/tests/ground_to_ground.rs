@@ -640,6 +640,7 @@ fn from_the_ground_to_the_ground_with_a_ground_station() {
 /// bound, each part a whole ULog file another reader (px4-ulog) opens
 /// alone, the data going on from one part to the next.
 #[test]
+#[allow(clippy::too_many_lines)] // one wait, one flight, their checks in order
 fn waits_on_the_ground_for_ten_minutes_then_flies() {
     let seed = 4;
     let wait_s = 600.0;
