@@ -546,7 +546,7 @@ fn flight(seed: u64, again: bool) -> Figures {
     // docs/monte-carlo.md): a slide on the skids under 0.25 m before
     // lift-off and after touchdown, touchdown under 2 m/s down (a hard
     // landing) and 0.5 m/s sideways (a skid caught). Measured: slides of
-    // millimetres to 2 cm, 0.2–0.5 m/s down, about 0.1 m/s sideways.
+    // millimetres to 2 cm, 0.2–0.65 m/s down, under 0.13 m/s sideways.
     assert!(
         tr.liftoff_drift_m < 0.25,
         "seed {seed}: slid {:.3} m before lift-off",
