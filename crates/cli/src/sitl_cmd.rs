@@ -90,8 +90,9 @@ pub struct SitlArgs {
     /// `[[reference]]` are ignored. The helicopter starts on the ground
     /// (landing gear, drivetrain and ground effect on when the scenario has
     /// no `[ground]`), disarmed, rotor stopped, and the run lasts until
-    /// stopped (Ctrl-C) — at most as long as `--max-log-bytes` allows the
-    /// on-board log — unless `--duration` is given.
+    /// stopped (Ctrl-C) unless `--duration` is given: its logs then go on
+    /// in numbered parts of at most `--max-log-bytes` each (`flight.ulg`,
+    /// `flight-0002.ulg`, …; `log.csv`, `log-0002.csv`, …).
     #[arg(long, value_name = "ADDRESS", conflicts_with_all = ["manual_at", "rc_failsafe_at", "rc_silent_at"])]
     pub gcs: Option<String>,
     /// Be ArduPilot's JSON physics backend instead of flying helicon's
@@ -185,12 +186,21 @@ fn check_events(a: &SitlArgs, duration_s: f64, source: &str) -> Result<()> {
 }
 
 /// The stride of `log.csv` ([`plan_log`]), after refusing a run whose
-/// on-board log, never thinned, would alone pass `--max-log-bytes`.
+/// on-board log, never thinned, would alone pass `--max-log-bytes`. A run
+/// until stopped (`parts`: its logs in parts of `--max-log-bytes`) is
+/// neither refused nor thinned to fit: only `--log-rate` thins it.
 fn plan_logs(
     case: &Scenario,
     prepared: &helicon_sim::closed_loop::Prepared,
     a: &SitlArgs,
+    parts: bool,
 ) -> Result<usize> {
+    if parts {
+        // the stride of --log-rate alone: one sample's flight fits any bound
+        let mut one = case.clone();
+        one.duration_s = prepared.gains.set.sample_time_s;
+        return plan_log(&one, prepared, &a.log);
+    }
     // the on-board log is never thinned: refused when it alone is over
     let ulog_bytes =
         sitl::estimate_ulog_bytes(case, prepared.gains.set.sample_time_s, a.gcs.is_some());
@@ -205,8 +215,8 @@ fn plan_logs(
 }
 
 /// A ground-station run's design, `case` put on the ground, disarmed,
-/// rotor stopped ([`sitl::ground_start`]), and without `--duration` as long
-/// as [`gcs_duration_s`] allows; told on `con`.
+/// rotor stopped ([`sitl::ground_start`]), and without `--duration` until
+/// stopped ([`until_stopped_s`]); told on `con`.
 fn prepare_on_the_ground(
     case: &mut Scenario,
     a: &SitlArgs,
@@ -230,12 +240,12 @@ fn prepare_on_the_ground(
             )
         })?;
     if a.duration.is_none() {
-        grounded.duration_s = gcs_duration_s(&grounded, &prepared, a.log.max_log_bytes);
+        grounded.duration_s = until_stopped_s(&grounded, &prepared);
         writeln!(
             con,
-            "{}: flying until stopped (Ctrl-C), at most {:.0} min (the on-board log's --max-log-bytes {})",
+            "{}: flying until stopped (Ctrl-C; the simulator's work limit is {:.0} h); flight.ulg and log.csv go on in numbered parts of at most --max-log-bytes {} each",
             grounded.name,
-            grounded.duration_s / 60.0,
+            grounded.duration_s / 3600.0,
             human_bytes(a.log.max_log_bytes)
         );
     }
@@ -243,31 +253,17 @@ fn prepare_on_the_ground(
     Ok(prepared)
 }
 
-/// How long a ground-station run without `--duration` may last: until the
-/// on-board log (written at its full rate) would pass `max_log_bytes`, and
-/// within the simulator's work limit.
-fn gcs_duration_s(
-    case: &Scenario,
-    prepared: &helicon_sim::closed_loop::Prepared,
-    max_log_bytes: u64,
-) -> f64 {
+/// How long a ground-station run without `--duration` lasts unless
+/// stopped: the simulator's work limit ([`MAX_PLANT_STEPS`] plant steps,
+/// days of flight), 1 % under it. Its logs are bounded by parts
+/// ([`SitlOptions::log_part_bytes`]), not by the duration.
+///
+/// [`MAX_PLANT_STEPS`]: helicon_sim::scenario::MAX_PLANT_STEPS
+fn until_stopped_s(case: &Scenario, prepared: &helicon_sim::closed_loop::Prepared) -> f64 {
     let ts = prepared.gains.set.sample_time_s;
-    let at = |duration_s: f64| {
-        let mut c = case.clone();
-        c.duration_s = duration_s;
-        sitl::estimate_ulog_bytes(&c, ts, true) as f64
-    };
-    let head = at(0.0);
-    let per_s = (at(100.0) - head) / 100.0;
-    let by_log = if per_s > 0.0 {
-        (max_log_bytes as f64 - head) / per_s
-    } else {
-        f64::INFINITY
-    };
     let by_work =
         helicon_sim::scenario::MAX_PLANT_STEPS * ts / f64::from(case.plant.substeps.max(1));
-    // 1 % under both limits: the estimate rounds
-    (0.99 * by_log.min(by_work)).max(ts)
+    (0.99 * by_work).max(ts)
 }
 
 /// An autopilot backend's run, prepared: the one case on the ground, its
@@ -534,7 +530,8 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
             None => prepare_step(&case)?.0,
         };
         case.check_work(&source, prepared.gains.set.sample_time_s)?;
-        let log_stride = plan_logs(&case, &prepared, a)?;
+        let parts = a.gcs.is_some() && a.duration.is_none();
+        let log_stride = plan_logs(&case, &prepared, a, parts)?;
         let status = SimStatus::start(a.speed == SpeedArg::Realtime, case.duration_s);
         let options = SitlOptions {
             speed: match a.speed {
@@ -564,6 +561,7 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
             keep_frames: false,
             gcs: a.gcs.clone(),
             log_stride,
+            log_part_bytes: parts.then_some(a.log.max_log_bytes),
             stop: Some(stop.flag().clone()),
             clock: Some(status.clock()),
         };

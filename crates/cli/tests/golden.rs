@@ -142,3 +142,91 @@ fn regress_sitl_demo_is_bit_identical() {
     let names: Vec<&str> = files.iter().map(String::as_str).collect();
     check("sitl ulog", &digests(&csv, &names), SITL_ULOG);
 }
+
+/// `helicon sim SCENARIO` into a fresh folder: the digests of every case's
+/// `log.csv` and `summary.json` (`case/file`, in the folders' order).
+fn sim_case_digests(scenario: &str) -> Vec<(String, String)> {
+    let dir = tmpdir(&format!("sim-{scenario}"));
+    let out = dir.join("out");
+    let (ok, _, err) = helicon(&[
+        "sim",
+        &format!("../../scenarios/{scenario}.toml"),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{scenario}: {err}");
+    let mut cases: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .filter(|e| e.file_type().unwrap().is_dir())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    cases.sort();
+    assert!(!cases.is_empty(), "{scenario}: no case folders");
+    let mut got = Vec::new();
+    for case in &cases {
+        for (f, d) in digests(&out.join(case), &["log.csv", "summary.json"]) {
+            got.push((format!("{case}/{f}"), d));
+        }
+    }
+    got
+}
+
+// The thesis's scenarios (they start in the air): their digests were taken
+// on commit a0f36ad, before the take-off and landing work touched anything
+// they fly (issue 27: "the thesis's own scenarios and figures stay
+// bit-identical").
+const SIM_FIG14_3: &[(&str, &str)] = &[
+    ("a/log.csv", "d58ab6613e777b45"),
+    ("a/summary.json", "067a5432abd6090f"),
+    ("b/log.csv", "225600ddf6f71f0d"),
+    ("b/summary.json", "1d3e7204f8f624d8"),
+    ("c/log.csv", "10f970babb12737c"),
+    ("c/summary.json", "9dcc5841e5a07f49"),
+    ("d/log.csv", "56545d4d0f7aa20f"),
+    ("d/summary.json", "0b931f291ec78141"),
+];
+const SIM_FIG14_5: &[(&str, &str)] = &[
+    ("a/log.csv", "02564e990f878e20"),
+    ("a/summary.json", "ed6611ab2b853783"),
+    ("b/log.csv", "c17357e73c20d70a"),
+    ("b/summary.json", "069ce89d780a087f"),
+    ("c/log.csv", "26345b91c9b0ff04"),
+    ("c/summary.json", "9f3ad98de139a8a2"),
+    ("d/log.csv", "d8549900175a8629"),
+    ("d/summary.json", "014462adc42eadf4"),
+];
+const SIM_FIG14_8: &[(&str, &str)] = &[
+    ("a/log.csv", "bf50ede7216b6b95"),
+    ("a/summary.json", "8d490d299c6ea060"),
+    ("b/log.csv", "6fea95bd69164909"),
+    ("b/summary.json", "aa069a10e2756df9"),
+    ("c/log.csv", "d1e67234cf6bd20e"),
+    ("c/summary.json", "c1b1e3114f4307e8"),
+    ("d/log.csv", "b1a3c2cbf8d4344c"),
+    ("d/summary.json", "803bba00036235ad"),
+    ("e/log.csv", "7ff0e0dc89fff781"),
+    ("e/summary.json", "190fef83616674cf"),
+];
+const SIM_APPENDIX_F: &[(&str, &str)] = &[
+    ("aggressive-converged/log.csv", "e20ebf1aa28f18da"),
+    ("aggressive-converged/summary.json", "1b7d0ef47dcad0a5"),
+    ("aggressive-thesis-inflow/log.csv", "65dfb8ebb9308d69"),
+    ("aggressive-thesis-inflow/summary.json", "f296e4617f27ae2b"),
+    ("converged/log.csv", "0fb2380d5d229a34"),
+    ("converged/summary.json", "9ee82ab8966ca3fc"),
+    ("thesis-inflow/log.csv", "c786fb0b17f3f341"),
+    ("thesis-inflow/summary.json", "923f5e0829e45c2c"),
+];
+
+#[test]
+fn regress_sim_thesis_scenarios_are_bit_identical() {
+    for (scenario, golden) in [
+        ("thesis-fig14-3", SIM_FIG14_3),
+        ("thesis-fig14-5", SIM_FIG14_5),
+        ("thesis-fig14-8", SIM_FIG14_8),
+        ("thesis-appendix-f", SIM_APPENDIX_F),
+    ] {
+        check(scenario, &sim_case_digests(scenario), golden);
+    }
+}

@@ -626,3 +626,130 @@ fn mission_types_and_the_upload_timeout_follow_the_microservice() {
     );
     h.stop();
 }
+
+/// A status of the land detector's `landed` state, disarmed.
+fn ground_status(t_s: f64, landed: helicon_gcs::link::LandedState) -> VehicleStatus {
+    let mut s = status(t_s, false, NavMode::Idle);
+    s.ground.landed = landed;
+    s
+}
+
+#[test]
+fn arming_off_the_ground_is_refused_with_its_reason() {
+    use helicon_gcs::link::LandedState;
+    let (mut c, mut v, h) = start();
+    // the land detector says in the air (a kill in flight: disarmed, falling)
+    v.downlink
+        .push(Downlink::Status(ground_status(0.1, LandedState::InAir)))
+        .unwrap();
+    settle(&h, 2);
+    assert!(
+        c.wait(0, Duration::from_secs(3), |m| matches!(
+            m,
+            MavMessage::HEARTBEAT(_)
+        ))
+        .is_some()
+    );
+    c.heartbeat();
+    let arm = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let from = c.log.len();
+    assert_eq!(
+        c.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm),
+        Some(MavResult::MAV_RESULT_DENIED)
+    );
+    // the reason, as a warning, to the ground station that asked
+    let texts = c.collect(from, |m| match m {
+        MavMessage::STATUSTEXT(s) => Some((
+            s.severity,
+            s.text
+                .to_str()
+                .unwrap_or("")
+                .trim_end_matches('\0')
+                .to_string(),
+        )),
+        _ => None,
+    });
+    assert!(
+        texts.contains(&(
+            MavSeverity::MAV_SEVERITY_WARNING,
+            "refused: arm off the ground".to_string()
+        )),
+        "{texts:?}"
+    );
+    // nothing reached the vehicle
+    let u: Vec<_> = uplinks(&mut v)
+        .into_iter()
+        .filter(|x| *x != Uplink::GcsHeartbeat)
+        .collect();
+    assert!(u.is_empty(), "{u:?}");
+    // on the ground the same command arms
+    v.downlink
+        .push(Downlink::Status(ground_status(0.2, LandedState::OnGround)))
+        .unwrap();
+    settle(&h, 3);
+    assert_eq!(
+        c.command(MavCmd::MAV_CMD_COMPONENT_ARM_DISARM, arm),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    let u: Vec<_> = uplinks(&mut v)
+        .into_iter()
+        .filter(|x| *x != Uplink::GcsHeartbeat)
+        .collect();
+    assert_eq!(u, vec![Uplink::Arm(true)]);
+    let report = h.stop();
+    assert_eq!(report.send_errors, 0);
+}
+
+#[test]
+fn the_landed_state_is_sent_at_once_on_each_change() {
+    use helicon_gcs::link::LandedState;
+    let (mut c, mut v, h) = start();
+    settle(&h, 1);
+    // statuses every 0.1 s for 5 s: on the ground, a take-off of 0.2 s from
+    // 2.5 s (shorter than the stream's 1 s period and off its grid), then
+    // in the air
+    let mut pushed = 1;
+    for k in 1..50 {
+        let t = f64::from(k) * 0.1;
+        let landed = if t < 2.45 {
+            LandedState::OnGround
+        } else if t < 2.65 {
+            LandedState::Takeoff
+        } else {
+            LandedState::InAir
+        };
+        v.downlink
+            .push(Downlink::Status(ground_status(t, landed)))
+            .unwrap();
+        pushed += 1;
+        settle(&h, pushed);
+        c.drain();
+    }
+    std::thread::sleep(Duration::from_millis(20));
+    c.drain();
+    let seen = c.collect(0, |m| match m {
+        MavMessage::EXTENDED_SYS_STATE(e) => Some(e.landed_state),
+        _ => None,
+    });
+    use MavLandedState::*;
+    // undefined at 0 s (the first status has no land detector), the change
+    // to on the ground at once (0.1 s) and then 1 Hz (1.1, 2.1 s); the
+    // changes at 2.5 and 2.7 s at once; then 1 Hz from the last change (3.7,
+    // 4.7 s): exact, the server's grid is on on-board time (at 1 Hz alone
+    // the take-off would not be seen)
+    assert_eq!(
+        seen,
+        vec![
+            MAV_LANDED_STATE_UNDEFINED,
+            MAV_LANDED_STATE_ON_GROUND,
+            MAV_LANDED_STATE_ON_GROUND,
+            MAV_LANDED_STATE_ON_GROUND,
+            MAV_LANDED_STATE_TAKEOFF,
+            MAV_LANDED_STATE_IN_AIR,
+            MAV_LANDED_STATE_IN_AIR,
+            MAV_LANDED_STATE_IN_AIR,
+        ]
+    );
+    let report = h.stop();
+    assert_eq!(report.send_errors, 0);
+}

@@ -26,6 +26,7 @@
 
 pub mod ardupilot;
 pub mod lockstep;
+pub mod log_parts;
 pub mod px4;
 pub(crate) mod swash;
 
@@ -108,7 +109,9 @@ pub struct SitlOptions {
     pub failsafe: FailsafeConfig,
     /// Real-time options of the on-board side (real-time speed only).
     pub realtime: RealtimeConfig,
-    /// Keep every sensor frame the hardware sent ([`SitlResult::sent`]).
+    /// Keep every sensor frame the hardware sent and every servo command
+    /// the plant received ([`SitlResult::sent`], [`SitlResult::received`]):
+    /// memory grows with the flight, off for a run until stopped.
     pub keep_frames: bool,
     /// Fly with the ground station: the MAVLink server at this address
     /// (`udpout:HOST:PORT`, `udpin:HOST:PORT`, `tcpin:HOST:PORT`, or several
@@ -120,6 +123,11 @@ pub struct SitlOptions {
     /// Write every n-th kept row of `log.csv` (and the last): the truth log
     /// at a lower rate (1: every row; the summary uses every row).
     pub log_stride: usize,
+    /// Each log file at most this many bytes: `flight.ulg` and `log.csv`
+    /// go on in numbered parts ([`log_parts`]: `flight-0002.ulg`,
+    /// `log-0002.csv`, …) when it is reached, the run carrying on (a run
+    /// until stopped). `None`: one file each, unbounded.
+    pub log_part_bytes: Option<u64>,
     /// Checked once per sample: once set, the run ends after the sample
     /// being flown, its files written as at a normal end and its summary
     /// [`Termination::Stopped`] (a signal handler's flag).
@@ -128,6 +136,11 @@ pub struct SitlOptions {
     /// as `f64::to_bits`): what a status line shows of a running flight.
     pub clock: Option<std::sync::Arc<std::sync::atomic::AtomicU64>>,
 }
+
+/// How far under [`SitlOptions::log_part_bytes`] `log.csv`'s next part
+/// begins (bytes): the writer's 64 KiB buffer not yet on the disk and the 64
+/// rows (at most 2 KiB each) until the size is looked at again.
+pub const CSV_PART_MARGIN_BYTES: u64 = 64 * 1024 + 64 * 2048;
 
 /// The home of the local NED frame (the GPS receiver's WGS-84 position of
 /// the origin): a field near Aalborg.
@@ -155,13 +168,18 @@ pub struct SitlResult {
     pub cpu_s: f64,
     /// The frames the hardware sent (when kept), in order.
     pub sent: Vec<SensorFrame>,
-    /// The servo commands the plant received, in order.
+    /// The servo commands the plant received, in order (when kept).
     pub received: Vec<Input>,
-    /// The on-board log.
+    /// The on-board log (its first part).
     pub ulog: PathBuf,
-    /// The truth log.
+    /// The on-board log's parts ([`SitlOptions::log_part_bytes`]; 1: the
+    /// one file).
+    pub ulog_parts: u32,
+    /// The truth log (its first part).
     pub log_csv: PathBuf,
-    /// Its rows.
+    /// The truth log's parts.
+    pub log_csv_parts: u32,
+    /// Its rows (all parts).
     pub log_rows: usize,
     /// The true state at the end of the flight (the simulator's frame).
     pub final_state: helicon_model::State,
@@ -290,12 +308,24 @@ pub fn run(
         ..GcsSection::default()
     });
     let info = sitl_log_info(scenario, ts, gcs_section.as_ref(), onboard_home_geo)?;
-    let log = FlightLog::create_replacing(&ulog, &info, FlushPolicy::default()).map_err(|e| {
-        SitlError::Log {
-            path: ulog.display().to_string(),
-            message: e.to_string(),
+    let log_err = |path: &Path, e: &dyn std::fmt::Display| SitlError::Log {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    };
+    let log_csv = options.out_dir.join("log.csv");
+    // the parts of an earlier run into this folder go: this run's are its own
+    for first in [&ulog, &log_csv] {
+        for n in 2.. {
+            let p = log_parts::part_path(first, n);
+            if std::fs::remove_file(&p).is_err() {
+                break;
+            }
         }
-    })?;
+    }
+    let part_bytes = options.log_part_bytes.unwrap_or(u64::MAX);
+    let sink = log_parts::UlogParts::create(&ulog, part_bytes).map_err(|e| log_err(&ulog, &e))?;
+    let log =
+        FlightLog::new(sink, &info, FlushPolicy::default()).map_err(|e| log_err(&ulog, &e))?;
     let (downlink_tx, mut downlink) = rtrb::RingBuffer::new(1024);
     let realtime = if lockstep {
         RealtimeConfig {
@@ -376,8 +406,10 @@ pub fn run(
     {
         eprintln!("warning: SCHED_FIFO for the simulated hardware not permitted ({e})");
     }
-    let log_csv = options.out_dir.join("log.csv");
     let mut writer = LogWriter::create(&log_csv)?.with_stride(options.log_stride);
+    let mut csv_part = 1u32;
+    let mut csv_rows_before = 0usize;
+    let mut kept_in_part = 0u64;
     let mut servo_in = wires.avionics.try_clone_master().map_err(dev("avionics"))?;
     let mut decoder = AvionicsDecoder::new();
     let mut buf = [0u8; 256];
@@ -386,7 +418,11 @@ pub fn run(
     let mut rc_seq = 0u8;
     let mut sent = Vec::new();
     // (a long run grows it: at most ten minutes up front)
-    let mut received = Vec::with_capacity(hw.samples().min(240_000));
+    let mut received = if options.keep_frames {
+        Vec::with_capacity(hw.samples().min(240_000))
+    } else {
+        Vec::new()
+    };
     let mut samples = 0u64;
     let timeout = Duration::from_secs(10);
     let t0 = helicon_flight::realtime::monotonic_ns();
@@ -526,7 +562,9 @@ pub fn run(
                 break;
             }
         }
-        received.push(u);
+        if options.keep_frames {
+            received.push(u);
+        }
         samples += 1;
         let Some(mut step) = hw.actuate(&u, report.as_ref().map(|r| &r.telemetry)) else {
             break;
@@ -544,6 +582,21 @@ pub fn run(
         }
         if step.kept {
             writer.write(&step.row)?;
+            kept_in_part += 1;
+            // the part's size looked at every 64 kept rows: its next part
+            // begins CSV_PART_MARGIN_BYTES under the bound (the writer's
+            // buffer and the rows until the next look)
+            if let Some(max) = options.log_part_bytes
+                && kept_in_part % 64 == 0
+                && std::fs::metadata(log_parts::part_path(&log_csv, csv_part))
+                    .is_ok_and(|m| m.len() + CSV_PART_MARGIN_BYTES >= max)
+            {
+                csv_part += 1;
+                let next = LogWriter::create(&log_parts::part_path(&log_csv, csv_part))?
+                    .with_stride(options.log_stride);
+                csv_rows_before += std::mem::replace(&mut writer, next).finish()?;
+                kept_in_part = 0;
+            }
         }
         if step.end.is_some() {
             break;
@@ -567,7 +620,10 @@ pub fn run(
     if let Some(server) = server {
         server.stop();
     }
-    let log_rows = writer.finish()?;
+    let log_rows = csv_rows_before + writer.finish()?;
+    let ulog_parts = (1..)
+        .take_while(|&n| log_parts::part_path(&ulog, n).exists())
+        .count() as u32;
     if let Some(e) = failure {
         return Err(e);
     }
@@ -590,7 +646,9 @@ pub fn run(
         sent,
         received,
         ulog,
+        ulog_parts,
         log_csv,
+        log_csv_parts: csv_part,
         log_rows,
         final_state: *hw.state(),
         initial_state: x0,

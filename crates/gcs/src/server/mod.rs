@@ -114,6 +114,11 @@ pub const STREAMS: [(u32, &str, f64); 12] = [
     (HOME_POSITION_DATA::ID, "HOME_POSITION", 0.5),
 ];
 
+/// `EXTENDED_SYS_STATE`'s place in [`STREAMS`]: besides its rate, it is sent
+/// at once on each change of the landed state.
+const EXTENDED_SYS_STATE_STREAM: usize = 9;
+const _: () = assert!(STREAMS[EXTENDED_SYS_STATE_STREAM].0 == EXTENDED_SYS_STATE_DATA::ID);
+
 /// The server's settings.
 #[derive(Debug, Clone)]
 pub struct ServerConfig {
@@ -458,6 +463,9 @@ struct Server {
     zones: Zones,
     upload: Upload,
     last_flight_mode: &'static str,
+    /// The landed state of the last status (`None` before the first): a
+    /// change sends `EXTENDED_SYS_STATE` at once.
+    last_landed: Option<LandedState>,
     /// An arm/disarm sent on and not yet seen in a status: the commands
     /// that follow it in the ring find the vehicle in that state.
     arm_requested: Option<bool>,
@@ -519,6 +527,7 @@ impl Server {
             zones: Zones::default(),
             upload: Upload::Idle,
             last_flight_mode: "",
+            last_landed: None,
             arm_requested: None,
             last_refusal: None,
             report: ServerReport::default(),

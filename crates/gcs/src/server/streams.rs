@@ -26,7 +26,15 @@ impl Server {
             }
             self.last_flight_mode = s.flight_mode.name;
         }
+        // a change of the landed state is sent at once (EXTENDED_SYS_STATE
+        // due now, to every peer that streams it; its grid restarts there):
+        // at 1 Hz a short take-off or landing state would be missed
+        let landed_changed = self.last_landed.is_some_and(|l| l != s.ground.landed);
+        self.last_landed = Some(s.ground.landed);
         for p in 0..self.peers.len() {
+            if landed_changed {
+                self.peers[p].next_due_s[EXTENDED_SYS_STATE_STREAM] = s.t_s;
+            }
             let peer = &self.peers[p];
             let heartbeat_only = !peer.trusted && peer.configured;
             let silent =

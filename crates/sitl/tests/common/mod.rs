@@ -34,6 +34,7 @@ pub fn options(tag: &str) -> SitlOptions {
         keep_frames: true,
         gcs: None,
         log_stride: 1,
+        log_part_bytes: None,
         stop: None,
         clock: None,
     }
