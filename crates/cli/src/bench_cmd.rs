@@ -351,6 +351,7 @@ fn bench_sitl() -> Result<SitlBench> {
             log_stride: 1,
             stop: None,
             clock: None,
+            log_part_bytes: None,
         };
         std::fs::create_dir_all(&options.out_dir)
             .with_context(|| format!("creating {}", options.out_dir.display()))?;
