@@ -189,7 +189,7 @@ fn run_inputs(args: &SimArgs) -> String {
 /// run refused before flying leaves the folder as it was).
 fn claim_out_folder(out: &Path, inputs: &str, force: bool) -> Result<()> {
     let stamp = out.join(RUN_STAMP);
-    if let Ok(prev) = std::fs::read_to_string(&stamp) {
+    if let Some(prev) = crate::files::read_text_if_present(&stamp)? {
         let prev = prev.trim();
         if prev != inputs && !force {
             bail!(

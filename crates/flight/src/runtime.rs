@@ -20,7 +20,7 @@
 //! on-board time is k·Ts from the first message). Either way each step is
 //! the [`ControlTask`]'s and sends exactly one servo frame.
 
-use crate::control::{ControlTask, StepReport, Tick};
+use crate::control::{ControlTask, RC_REFUSED_TEXT, StepReport, Tick};
 pub use crate::mission::{LastStep, Mission, flight_mode};
 use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
 use crate::records::{FlightRecord, step_records, write_record};
@@ -173,6 +173,9 @@ pub struct RunReport {
     pub servo_frames_dropped: u64,
     /// Watchdog trips.
     pub watchdog_trips: u64,
+    /// Receiver frames refused: a channel outside the receiver's range
+    /// (`rc.min_us`…`rc.max_us`); their sticks and switches were not used.
+    pub rc_frames_refused: u64,
     /// Wake-up lateness after the deadline (clock pacing).
     pub wakeup_jitter: LatencySummary,
     /// Compute time of a step (wake-up to servo command handed over).
@@ -207,6 +210,7 @@ struct ControlResult {
     superseded: u64,
     without_imu: u64,
     log_dropped: u64,
+    rc_refused: u64,
     jitter: LatencyStats,
     compute: LatencyStats,
     final_mode: Mode,
@@ -444,6 +448,7 @@ where
                 superseded: 0,
                 without_imu: 0,
                 log_dropped: 0,
+                rc_refused: 0,
                 jitter: LatencyStats::new(),
                 compute: LatencyStats::new(),
                 final_mode: Mode::Disarmed,
@@ -499,6 +504,7 @@ impl RuntimeHandle {
             servo_frames: 0,
             servo_frames_dropped: 0,
             watchdog_trips: 0,
+            rc_frames_refused: 0,
             wakeup_jitter: LatencyStats::new().summary(),
             compute: LatencyStats::new().summary(),
             sensor_to_servo: LatencyStats::new().summary(),
@@ -521,6 +527,7 @@ impl RuntimeHandle {
                 report.frames_superseded = c.superseded;
                 report.steps_without_imu = c.without_imu;
                 report.log_dropped += c.log_dropped;
+                report.rc_frames_refused = c.rc_refused;
                 report.wakeup_jitter = c.jitter.summary();
                 report.compute = c.compute.summary();
                 report.final_mode = c.final_mode.as_str().to_string();
@@ -766,6 +773,9 @@ fn control_loop(
         if let Some((kind, _)) = out.rejection {
             mission.notify(now_s, VehicleEvent::Warning(kind.text()));
         }
+        if out.rc_refusal.is_some() {
+            mission.notify(now_s, VehicleEvent::Warning(RC_REFUSED_TEXT));
+        }
         if let Some(c) = out.imu_health_change {
             mission.notify(now_s, VehicleEvent::Warning(c.text()));
         }
@@ -898,6 +908,7 @@ fn control_loop(
         superseded,
         without_imu,
         log_dropped,
+        rc_refused: task.rc_refused(),
         jitter,
         compute,
         final_mode: task.mode(),
