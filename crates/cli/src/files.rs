@@ -8,8 +8,8 @@
 
 use anyhow::Result;
 use helicon_model::config_error::{
-    Bounded, ConfigError, LineBounded, MAX_DATA_BYTES, MAX_LINE_BYTES, MAX_TEXT_BYTES, open_lines_bounded,
-    read_text_bounded,
+    Bounded, ConfigError, LineBounded, MAX_DATA_BYTES, MAX_LINE_BYTES, MAX_TEXT_BYTES,
+    open_lines_bounded, read_text_bounded,
 };
 use std::fs::File;
 use std::path::Path;

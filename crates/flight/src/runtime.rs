@@ -107,6 +107,19 @@ pub trait SensorPort: Send + 'static {
 pub trait RcPort: Send + 'static {
     /// Block up to `timeout` for the next receiver frame.
     fn next(&mut self, timeout: Duration) -> Result<Next<RcInput>, PortError>;
+
+    /// The port's event since the last call (its device lost or reopened),
+    /// logged and told to the ground station as the sensors' are.
+    fn take_event(&mut self) -> Option<crate::ports::DeviceEvent> {
+        None
+    }
+}
+
+/// The receiver thread's item: a frame, or its port's event.
+#[derive(Debug, Clone, Copy)]
+enum RcItem {
+    Frame(RcInput),
+    Device(crate::ports::DeviceEvent),
 }
 
 /// The servo side of the avionics board.
@@ -289,7 +302,7 @@ where
     let sensors_closed = Arc::new(AtomicBool::new(false));
     let last_output_ns = Arc::new(AtomicU64::new(realtime::monotonic_ns()));
     let (frame_tx, frame_rx) = rtrb::RingBuffer::<Arrival>::new(FRAME_RING);
-    let (rc_tx, rc_rx) = rtrb::RingBuffer::<RcInput>::new(RC_RING);
+    let (rc_tx, rc_rx) = rtrb::RingBuffer::<RcItem>::new(RC_RING);
     let (servo_tx, servo_rx) = rtrb::RingBuffer::<ServoItem>::new(SERVO_RING);
     let (log_tx, log_rx) = rtrb::RingBuffer::<FlightRecord>::new(LOG_RING);
     let (wlog_tx, wlog_rx) = rtrb::RingBuffer::<FlightRecord>::new(64);
@@ -595,14 +608,18 @@ fn sensor_loop<S: SensorPort>(
 
 fn receiver_loop<R: RcPort>(
     mut port: R,
-    mut ring: rtrb::Producer<RcInput>,
+    mut ring: rtrb::Producer<RcItem>,
     stop: &AtomicBool,
 ) -> ThreadResult {
     let mut result = ThreadResult::default();
     while !stop.load(Ordering::Relaxed) {
-        match port.next(POLL) {
+        let next = port.next(POLL);
+        if let Some(e) = port.take_event() {
+            let _ = ring.push(RcItem::Device(e));
+        }
+        match next {
             Ok(Next::Item(rc)) => {
-                let _ = ring.push(rc);
+                let _ = ring.push(RcItem::Frame(rc));
             }
             Ok(Next::Timeout) => {}
             Ok(Next::Closed) => break,
@@ -617,7 +634,7 @@ fn receiver_loop<R: RcPort>(
 
 struct ControlCtx<'a> {
     frames: rtrb::Consumer<Arrival>,
-    rc: rtrb::Consumer<RcInput>,
+    rc: rtrb::Consumer<RcItem>,
     servo: rtrb::Producer<ServoItem>,
     log: rtrb::Producer<FlightRecord>,
     stop: &'a AtomicBool,
@@ -733,7 +750,10 @@ fn control_loop(
         };
         let mut rc = arrival.and_then(|a| a.rc);
         while let Ok(r) = ctx.rc.pop() {
-            rc = Some(r);
+            match r {
+                RcItem::Frame(f) => rc = Some(f),
+                RcItem::Device(e) => device_events.push_event(e),
+            }
         }
         let frame = arrival.and_then(|a| a.frame);
         if frame.is_none() {

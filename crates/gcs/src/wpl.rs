@@ -181,15 +181,16 @@ pub fn parse(text: &str, file: &str) -> Result<Vec<MISSION_ITEM_INT_DATA>, WplEr
 /// limit).
 pub fn read(path: &Path) -> Result<Vec<MISSION_ITEM_INT_DATA>, WplError> {
     let file = path.display().to_string();
-    let text = helicon_config::files::read_text_bounded(path, helicon_config::files::MAX_TEXT_BYTES)
-        .map_err(|e| WplError {
-            file: file.clone(),
-            line: 0,
-            message: match e {
-                helicon_config::ConfigError::Io { source, .. } => source.to_string(),
-                other => other.to_string(),
-            },
-        })?;
+    let text =
+        helicon_config::files::read_text_bounded(path, helicon_config::files::MAX_TEXT_BYTES)
+            .map_err(|e| WplError {
+                file: file.clone(),
+                line: 0,
+                message: match e {
+                    helicon_config::ConfigError::Io { source, .. } => source.to_string(),
+                    other => other.to_string(),
+                },
+            })?;
     parse(&text, &file)
 }
 
