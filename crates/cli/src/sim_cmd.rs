@@ -60,11 +60,12 @@ pub struct LogArgs {
     /// use every sample.
     #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
     pub log_rate: Option<f64>,
-    /// The largest `log.csv` to write (bytes). Its size is estimated before
+    /// The largest `log.csv` to write (bytes; default the scenario's
+    /// `[log] max_bytes`, else 1000000000). Its size is estimated before
     /// the flight; a larger one is written at the highest rate that fits
     /// (said on stderr), or refused with --no-log-decimation or --log-rate.
-    #[arg(long, value_name = "BYTES", default_value_t = DEFAULT_MAX_LOG_BYTES)]
-    pub max_log_bytes: u64,
+    #[arg(long, value_name = "BYTES")]
+    pub max_log_bytes: Option<u64>,
     /// Refuse a flight whose `log.csv` would be larger than
     /// --max-log-bytes instead of lowering its rate.
     #[arg(long)]
@@ -75,8 +76,27 @@ impl Default for LogArgs {
     fn default() -> Self {
         LogArgs {
             log_rate: None,
-            max_log_bytes: DEFAULT_MAX_LOG_BYTES,
+            max_log_bytes: None,
             no_log_decimation: false,
+        }
+    }
+}
+
+impl LogArgs {
+    /// The log limit (bytes) for `scenario` and how messages name it:
+    /// `--max-log-bytes` when given, else the scenario's `[log] max_bytes`,
+    /// else [`DEFAULT_MAX_LOG_BYTES`] (named as the option's default).
+    pub fn limit(&self, scenario: &Scenario) -> (u64, String) {
+        match (self.max_log_bytes, scenario.log.max_bytes) {
+            (Some(b), _) => (b, format!("--max-log-bytes {b}")),
+            (None, Some(b)) => (
+                b,
+                format!("[log] max_bytes = {b} of scenario `{}`", scenario.name),
+            ),
+            (None, None) => (
+                DEFAULT_MAX_LOG_BYTES,
+                format!("--max-log-bytes {DEFAULT_MAX_LOG_BYTES}"),
+            ),
         }
     }
 }
@@ -120,7 +140,7 @@ pub fn plan_log(scenario: &Scenario, prepared: &Prepared, args: &LogArgs) -> Res
     }
     let est = estimate_log_csv(scenario, prepared, stride)
         .with_context(|| format!("scenario `{}`: estimating the log's size", scenario.name))?;
-    let max = args.max_log_bytes;
+    let (max, named) = args.limit(scenario);
     if est.bytes <= max {
         return Ok(usize::try_from(stride).unwrap_or(usize::MAX));
     }
@@ -132,7 +152,7 @@ pub fn plan_log(scenario: &Scenario, prepared: &Prepared, args: &LogArgs) -> Res
     let fits_rows = (target.saturating_sub(header) as f64 / est.bytes_per_row).floor();
     let fits_hz = (fits_rows - 1.0).max(0.0) / scenario.duration_s.max(1e-9);
     let said = format!(
-        "log.csv of this flight would be about {} ({} rows at {} Hz), over --max-log-bytes {max}",
+        "log.csv of this flight would be about {} ({} rows at {} Hz), over {named}",
         human_bytes(est.bytes),
         est.rows,
         num(rate)

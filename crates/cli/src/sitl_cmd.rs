@@ -194,11 +194,11 @@ fn plan_logs(
     // the on-board log is never thinned: refused when it alone is over
     let ulog_bytes =
         sitl::estimate_ulog_bytes(case, prepared.gains.set.sample_time_s, a.gcs.is_some());
-    if ulog_bytes > a.log.max_log_bytes {
+    let (max, named) = a.log.limit(case);
+    if ulog_bytes > max {
         anyhow::bail!(
-            "flight.ulg (the on-board log, written at its full rate) of this flight would be about {}, over --max-log-bytes {}: give a shorter --duration or a larger --max-log-bytes",
+            "flight.ulg (the on-board log, written at its full rate) of this flight would be about {}, over {named}: give a shorter --duration or a larger --max-log-bytes",
             human_bytes(ulog_bytes),
-            a.log.max_log_bytes
         );
     }
     plan_log(case, prepared, &a.log)
@@ -230,13 +230,14 @@ fn prepare_on_the_ground(
             )
         })?;
     if a.duration.is_none() {
-        grounded.duration_s = gcs_duration_s(&grounded, &prepared, a.log.max_log_bytes);
+        let (max, named) = a.log.limit(&grounded);
+        grounded.duration_s = gcs_duration_s(&grounded, &prepared, max);
         writeln!(
             con,
-            "{}: flying until stopped (Ctrl-C), at most {:.0} min (the on-board log's --max-log-bytes {})",
+            "{}: flying until stopped (Ctrl-C), at most {:.0} min (the on-board log's {named}, {})",
             grounded.name,
             grounded.duration_s / 60.0,
-            human_bytes(a.log.max_log_bytes)
+            human_bytes(max)
         );
     }
     *case = grounded;
