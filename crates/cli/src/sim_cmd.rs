@@ -52,7 +52,7 @@ pub struct SimArgs {
 pub const DEFAULT_MAX_LOG_BYTES: u64 = 1_000_000_000;
 
 /// How much of the flight `log.csv` keeps (`helicon sim`, `helicon sitl`).
-#[derive(Args, Debug, Clone)]
+#[derive(Args, Debug, Clone, Default)]
 pub struct LogArgs {
     /// Rows per second of `log.csv`: the log at a lower rate (every n-th
     /// sample, n = the log's full rate / HZ rounded; the full rate is the
@@ -70,16 +70,6 @@ pub struct LogArgs {
     /// --max-log-bytes instead of lowering its rate.
     #[arg(long)]
     pub no_log_decimation: bool,
-}
-
-impl Default for LogArgs {
-    fn default() -> Self {
-        LogArgs {
-            log_rate: None,
-            max_log_bytes: None,
-            no_log_decimation: false,
-        }
-    }
 }
 
 impl LogArgs {
