@@ -8,8 +8,8 @@
 
 use anyhow::Result;
 use helicon_model::config_error::{
-    Bounded, LineBounded, MAX_DATA_BYTES, MAX_LINE_BYTES, MAX_TEXT_BYTES, open_lines_bounded,
-    read_text_bounded,
+    Bounded, ConfigError, LineBounded, MAX_DATA_BYTES, MAX_LINE_BYTES, MAX_TEXT_BYTES,
+    open_lines_bounded, read_text_bounded,
 };
 use std::fs::File;
 use std::path::Path;
@@ -17,6 +17,19 @@ use std::path::Path;
 /// The text of the file at `path` (a configuration, a matrix, readings).
 pub fn read_text(path: &Path) -> Result<String> {
     Ok(read_text_bounded(path, MAX_TEXT_BYTES)?)
+}
+
+/// The text of the file at `path` as [`read_text`] reads it, or `None`
+/// when there is no such file (a file the toolkit left in its output
+/// folder: a stamp, a plan, an exit status).
+pub fn read_text_if_present(path: &Path) -> Result<Option<String>> {
+    match read_text_bounded(path, MAX_TEXT_BYTES) {
+        Ok(t) => Ok(Some(t)),
+        Err(ConfigError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => {
+            Ok(None)
+        }
+        Err(e) => Err(e.into()),
+    }
 }
 
 /// The file at `path` for a line reader (a CSV log, rows of numbers).

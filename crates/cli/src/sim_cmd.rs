@@ -52,7 +52,7 @@ pub struct SimArgs {
 pub const DEFAULT_MAX_LOG_BYTES: u64 = 1_000_000_000;
 
 /// How much of the flight `log.csv` keeps (`helicon sim`, `helicon sitl`).
-#[derive(Args, Debug, Clone)]
+#[derive(Args, Debug, Clone, Default)]
 pub struct LogArgs {
     /// Rows per second of `log.csv`: the log at a lower rate (every n-th
     /// sample, n = the log's full rate / HZ rounded; the full rate is the
@@ -60,23 +60,33 @@ pub struct LogArgs {
     /// use every sample.
     #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
     pub log_rate: Option<f64>,
-    /// The largest `log.csv` to write (bytes). Its size is estimated before
+    /// The largest `log.csv` to write (bytes; default the scenario's
+    /// `[log] max_bytes`, else 1000000000). Its size is estimated before
     /// the flight; a larger one is written at the highest rate that fits
     /// (said on stderr), or refused with --no-log-decimation or --log-rate.
-    #[arg(long, value_name = "BYTES", default_value_t = DEFAULT_MAX_LOG_BYTES)]
-    pub max_log_bytes: u64,
+    #[arg(long, value_name = "BYTES")]
+    pub max_log_bytes: Option<u64>,
     /// Refuse a flight whose `log.csv` would be larger than
     /// --max-log-bytes instead of lowering its rate.
     #[arg(long)]
     pub no_log_decimation: bool,
 }
 
-impl Default for LogArgs {
-    fn default() -> Self {
-        LogArgs {
-            log_rate: None,
-            max_log_bytes: DEFAULT_MAX_LOG_BYTES,
-            no_log_decimation: false,
+impl LogArgs {
+    /// The log limit (bytes) for `scenario` and how messages name it:
+    /// `--max-log-bytes` when given, else the scenario's `[log] max_bytes`,
+    /// else [`DEFAULT_MAX_LOG_BYTES`] (named as the option's default).
+    pub fn limit(&self, scenario: &Scenario) -> (u64, String) {
+        match (self.max_log_bytes, scenario.log.max_bytes) {
+            (Some(b), _) => (b, format!("--max-log-bytes {b}")),
+            (None, Some(b)) => (
+                b,
+                format!("[log] max_bytes = {b} of scenario `{}`", scenario.name),
+            ),
+            (None, None) => (
+                DEFAULT_MAX_LOG_BYTES,
+                format!("--max-log-bytes {DEFAULT_MAX_LOG_BYTES}"),
+            ),
         }
     }
 }
@@ -120,7 +130,7 @@ pub fn plan_log(scenario: &Scenario, prepared: &Prepared, args: &LogArgs) -> Res
     }
     let est = estimate_log_csv(scenario, prepared, stride)
         .with_context(|| format!("scenario `{}`: estimating the log's size", scenario.name))?;
-    let max = args.max_log_bytes;
+    let (max, named) = args.limit(scenario);
     if est.bytes <= max {
         return Ok(usize::try_from(stride).unwrap_or(usize::MAX));
     }
@@ -132,7 +142,7 @@ pub fn plan_log(scenario: &Scenario, prepared: &Prepared, args: &LogArgs) -> Res
     let fits_rows = (target.saturating_sub(header) as f64 / est.bytes_per_row).floor();
     let fits_hz = (fits_rows - 1.0).max(0.0) / scenario.duration_s.max(1e-9);
     let said = format!(
-        "log.csv of this flight would be about {} ({} rows at {} Hz), over --max-log-bytes {max}",
+        "log.csv of this flight would be about {} ({} rows at {} Hz), over {named}",
         human_bytes(est.bytes),
         est.rows,
         num(rate)
@@ -189,7 +199,7 @@ fn run_inputs(args: &SimArgs) -> String {
 /// run refused before flying leaves the folder as it was).
 fn claim_out_folder(out: &Path, inputs: &str, force: bool) -> Result<()> {
     let stamp = out.join(RUN_STAMP);
-    if let Ok(prev) = std::fs::read_to_string(&stamp) {
+    if let Some(prev) = crate::files::read_text_if_present(&stamp)? {
         let prev = prev.trim();
         if prev != inputs && !force {
             bail!(

@@ -204,11 +204,11 @@ fn plan_logs(
     // the on-board log is never thinned: refused when it alone is over
     let ulog_bytes =
         sitl::estimate_ulog_bytes(case, prepared.gains.set.sample_time_s, a.gcs.is_some());
-    if ulog_bytes > a.log.max_log_bytes {
+    let (max, named) = a.log.limit(case);
+    if ulog_bytes > max {
         anyhow::bail!(
-            "flight.ulg (the on-board log, written at its full rate) of this flight would be about {}, over --max-log-bytes {}: give a shorter --duration or a larger --max-log-bytes",
+            "flight.ulg (the on-board log, written at its full rate) of this flight would be about {}, over {named}: give a shorter --duration or a larger --max-log-bytes",
             human_bytes(ulog_bytes),
-            a.log.max_log_bytes
         );
     }
     plan_log(case, prepared, &a.log)
@@ -240,13 +240,14 @@ fn prepare_on_the_ground(
             )
         })?;
     if a.duration.is_none() {
+        let (max, named) = a.log.limit(&grounded);
         grounded.duration_s = until_stopped_s(&grounded, &prepared);
         writeln!(
             con,
-            "{}: flying until stopped (Ctrl-C; the simulator's work limit is {:.0} h); flight.ulg and log.csv go on in numbered parts of at most --max-log-bytes {} each",
+            "{}: flying until stopped (Ctrl-C; the simulator's work limit is {:.0} h); flight.ulg and log.csv go on in numbered parts of at most {} each ({named})",
             grounded.name,
             grounded.duration_s / 3600.0,
-            human_bytes(a.log.max_log_bytes)
+            human_bytes(max)
         );
     }
     *case = grounded;
@@ -561,7 +562,7 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
             keep_frames: false,
             gcs: a.gcs.clone(),
             log_stride,
-            log_part_bytes: parts.then_some(a.log.max_log_bytes),
+            log_part_bytes: parts.then(|| a.log.limit(&case).0),
             stop: Some(stop.flag().clone()),
             clock: Some(status.clock()),
         };

@@ -234,3 +234,71 @@ fn the_summary_says_the_log_size() {
     let thin = size_said("thin", &["--log-rate", "10"]);
     assert!(thin * 5 < full, "{thin} vs {full}");
 }
+
+/// The limit as a scenario key: `[log] max_bytes` thins the log as
+/// `--max-log-bytes` does, named in the warning; the option overrides it;
+/// 0 is refused naming the key.
+#[test]
+fn the_scenario_key_limits_the_log_and_the_option_overrides_it() {
+    let d = common::tmpdir("log_key");
+    let text = std::fs::read_to_string(demo()).unwrap();
+    assert!(text.contains("decimation = 4\n"));
+    let limit = 400_000u64;
+    let keyed = d.join("keyed.toml");
+    std::fs::write(
+        &keyed,
+        text.replace(
+            "decimation = 4\n",
+            &format!("decimation = 4\nmax_bytes = {limit}\n"),
+        ),
+    )
+    .unwrap();
+    let thin = out(&d, "thin");
+    let (ok, _, err) = common::helicon(&[
+        "sim",
+        keyed.to_str().unwrap(),
+        "--duration",
+        "30",
+        "--out",
+        thin.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("over [log] max_bytes = 400000 of scenario `demo`"),
+        "{err}"
+    );
+    let thin_bytes = std::fs::metadata(thin.join("log.csv")).unwrap().len();
+    assert!(
+        thin_bytes <= limit && thin_bytes > limit / 2,
+        "{thin_bytes}"
+    );
+    // the option overrides the key: the full-rate log
+    let full = out(&d, "full");
+    let (ok, _, err) = common::helicon(&[
+        "sim",
+        keyed.to_str().unwrap(),
+        "--duration",
+        "30",
+        "--max-log-bytes",
+        "1000000000",
+        "--out",
+        full.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(!err.contains("warning"), "{err}");
+    assert!(std::fs::metadata(full.join("log.csv")).unwrap().len() > 4 * limit);
+    let zero = d.join("zero.toml");
+    std::fs::write(
+        &zero,
+        text.replace("decimation = 4\n", "decimation = 4\nmax_bytes = 0\n"),
+    )
+    .unwrap();
+    let z = out(&d, "zero");
+    let (ok, _, err) =
+        common::helicon(&["sim", zero.to_str().unwrap(), "--out", z.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(
+        err.contains("log.max_bytes") && err.contains(">= 1"),
+        "{err}"
+    );
+}

@@ -100,11 +100,11 @@ fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
-/// `helicon sim` of an hour, SIGINT while it flies: exit 130, the run
-/// folder complete for what was flown, the summary `stopped`.
-#[test]
-fn sigint_ends_a_sim_run_with_its_folder_complete() {
-    let d = common::tmpdir("sim_sigint");
+/// `helicon sim` of an hour, stopped by `signal` while it flies: exit
+/// `code`, the run folder complete for what was flown, the summary
+/// `stopped` naming the signal.
+fn sim_run_stopped_by(name: &str, signal: Signal, code: i32) {
+    let d = common::tmpdir(name);
     let scenario = demo_scenario();
     let mut child = spawn(
         &d,
@@ -119,14 +119,17 @@ fn sigint_ends_a_sim_run_with_its_folder_complete() {
     );
     let log = d.join("run/log.csv");
     wait_until(&mut child, &d, "log rows", || size(&log) > 300_000);
-    let code = stop_with(&mut child, Signal::SIGINT);
+    let got = stop_with(&mut child, signal);
     let err = std::fs::read_to_string(d.join("stderr.txt")).unwrap();
-    assert_eq!(code, 130, "{err}");
-    assert!(err.contains("stopped by SIGINT"), "{err}");
+    assert_eq!(got, code, "{err}");
+    assert!(err.contains(&format!("stopped by {signal}")), "{err}");
     let s = json(&d.join("run/summary.json"));
     assert_eq!(s["outcome"], "stopped", "{s}");
     assert_eq!(s["termination"], "stopped");
-    assert!(s["reason"].as_str().unwrap().contains("SIGINT"), "{s}");
+    assert!(
+        s["reason"].as_str().unwrap().contains(signal.as_str()),
+        "{s}"
+    );
     let t_end = s["t_end_s"].as_f64().unwrap();
     assert!(t_end > 0.0 && t_end < 3600.0, "{t_end}");
     let back = helicon_sim::log_csv::read_log_csv(&log).unwrap();
@@ -139,12 +142,57 @@ fn sigint_ends_a_sim_run_with_its_folder_complete() {
     assert!(out.contains("outcome: STOPPED"), "{out}");
 }
 
-/// `helicon sitl` lock-step, SIGTERM while it flies: exit 143, the on-board
-/// ULog closed (read to its end), `log.csv`, `timing.json` and the
-/// summary (`stopped`) written.
+/// `helicon sim`, SIGINT (Ctrl-C): exit 130, the folder complete.
 #[test]
-fn sigterm_ends_a_sitl_run_with_its_logs_closed() {
-    let d = common::tmpdir("sitl_sigterm");
+fn sigint_ends_a_sim_run_with_its_folder_complete() {
+    sim_run_stopped_by("sim_sigint", Signal::SIGINT, 130);
+}
+
+/// `helicon sim`, SIGTERM (a service manager's stop): exit 143, the folder
+/// complete.
+#[test]
+fn sigterm_ends_a_sim_run_with_its_folder_complete() {
+    sim_run_stopped_by("sim_sigterm", Signal::SIGTERM, 143);
+}
+
+/// A second signal while a run stops exits at once with its own status
+/// (crates/cli/src/signals.rs): SIGINT, then SIGTERM 1 ms later, to a
+/// `helicon sim` flying. The clean end after the first signal (the step
+/// finished, `log.csv` flushed, the summary, the report and the plots
+/// written) takes far longer than the 1 ms between the two, so the second
+/// finds the run still stopping: exit 143, not 130, and no "stopped by"
+/// line (the clean end's) on stderr.
+#[test]
+fn a_second_signal_while_stopping_exits_at_once() {
+    let d = common::tmpdir("sim_second_signal");
+    let scenario = demo_scenario();
+    let mut child = spawn(
+        &d,
+        &[
+            "sim",
+            scenario.to_str().unwrap(),
+            "--duration",
+            "3600",
+            "--out",
+            "run",
+        ],
+    );
+    let log = d.join("run/log.csv");
+    wait_until(&mut child, &d, "log rows", || size(&log) > 300_000);
+    let pid = Pid::from_raw(i32::try_from(child.id()).unwrap());
+    kill(pid, Signal::SIGINT).unwrap();
+    std::thread::sleep(Duration::from_millis(1));
+    let code = stop_with(&mut child, Signal::SIGTERM);
+    let err = std::fs::read_to_string(d.join("stderr.txt")).unwrap();
+    assert_eq!(code, 143, "{err}");
+    assert!(!err.contains("stopped by"), "{err}");
+}
+
+/// `helicon sitl` lock-step, stopped by `signal` while it flies: exit
+/// `code`, the on-board ULog closed (read to its end), `log.csv`,
+/// `timing.json` and the summary (`stopped`, naming the signal) written.
+fn sitl_run_stopped_by(name: &str, signal: Signal, code: i32) {
+    let d = common::tmpdir(name);
     let scenario = demo_scenario();
     let mut child = spawn(
         &d,
@@ -159,13 +207,16 @@ fn sigterm_ends_a_sitl_run_with_its_logs_closed() {
     );
     let ulg = d.join("run/flight.ulg");
     wait_until(&mut child, &d, "an on-board log", || size(&ulg) > 200_000);
-    let code = stop_with(&mut child, Signal::SIGTERM);
+    let got = stop_with(&mut child, signal);
     let err = std::fs::read_to_string(d.join("stderr.txt")).unwrap();
-    assert_eq!(code, 143, "{err}");
-    assert!(err.contains("stopped by SIGTERM"), "{err}");
+    assert_eq!(got, code, "{err}");
+    assert!(err.contains(&format!("stopped by {signal}")), "{err}");
     let s = json(&d.join("run/summary.json"));
     assert_eq!(s["outcome"], "stopped", "{s}");
-    assert!(s["reason"].as_str().unwrap().contains("SIGTERM"), "{s}");
+    assert!(
+        s["reason"].as_str().unwrap().contains(signal.as_str()),
+        "{s}"
+    );
     let t_end = s["t_end_s"].as_f64().unwrap();
     assert!(t_end > 0.0 && t_end < 600.0, "{t_end}");
     let timing = json(&d.join("run/timing.json"));
@@ -174,6 +225,18 @@ fn sigterm_ends_a_sitl_run_with_its_logs_closed() {
     assert!(ulog_data_messages(&ulg) > steps as usize);
     let back = helicon_sim::log_csv::read_log_csv(&d.join("run/log.csv")).unwrap();
     assert!(back.rows() > 10);
+}
+
+/// `helicon sitl`, SIGTERM: exit 143, its logs closed.
+#[test]
+fn sigterm_ends_a_sitl_run_with_its_logs_closed() {
+    sitl_run_stopped_by("sitl_sigterm", Signal::SIGTERM, 143);
+}
+
+/// `helicon sitl`, SIGINT: exit 130, its logs closed.
+#[test]
+fn sigint_ends_a_sitl_run_with_its_logs_closed() {
+    sitl_run_stopped_by("sitl_sigint", Signal::SIGINT, 130);
 }
 
 /// The scripted hardware of a still helicopter at home on pseudo-terminals
@@ -263,9 +326,10 @@ fn flight_logs(dir: &Path) -> Vec<PathBuf> {
 }
 
 /// `helicon onboard` without `--duration`, SIGINT while it flies: exit
-/// 130, the flight log closed (read to its end), `timing.json` with
-/// `"stopped_by": "SIGINT"`. A second flight into the same folder gets the
-/// next number, the first log untouched.
+/// 130, the flight log closed (read to its end), its timing report
+/// (`flight-0001-…-timing.json`) with `"stopped_by": "SIGINT"`. A second
+/// flight into the same folder gets the next number and its own report,
+/// the first log and report untouched.
 #[test]
 fn sigint_ends_the_onboard_program_with_its_log_closed() {
     let d = common::tmpdir("onboard_sigint");
@@ -289,12 +353,15 @@ fn sigint_ends_the_onboard_program_with_its_log_closed() {
         name.starts_with("flight-0001-") && name.ends_with("Z.ulg"),
         "{name}"
     );
-    let timing = json(&logs.join("timing.json"));
+    // the flight's own timing report beside its log
+    let first_timing = logs.join(name.replace(".ulg", "-timing.json"));
+    let timing = json(&first_timing);
     assert_eq!(timing["stopped_by"], "SIGINT", "{timing}");
     let steps = timing["steps"].as_u64().unwrap();
     assert!(steps > 100, "{timing}");
     assert!(ulog_data_messages(&first[0]) > steps as usize);
     let bytes = std::fs::read(&first[0]).unwrap();
+    let timing_bytes = std::fs::read(&first_timing).unwrap();
 
     // a second, short flight in the same folder (same second or not)
     let mut child = spawn(
@@ -326,8 +393,46 @@ fn sigint_ends_the_onboard_program_with_its_log_closed() {
         "the first log untouched"
     );
     assert!(ulog_data_messages(&both[1]) > 0);
+    // the second flight's report is its own: the first one's is untouched
     assert_eq!(
-        json(&logs.join("timing.json"))["stopped_by"],
+        json(&logs.join(second.replace(".ulg", "-timing.json")))["stopped_by"],
         serde_json::Value::Null
     );
+    assert_eq!(
+        std::fs::read(&first_timing).unwrap(),
+        timing_bytes,
+        "the first flight's timing report untouched"
+    );
+    assert!(!logs.join("timing.json").exists());
+}
+
+/// `helicon onboard`, SIGTERM while it flies (a service manager stopping
+/// the flight computer's unit): exit 143, the log closed, its timing
+/// report with `"stopped_by": "SIGTERM"`.
+#[test]
+fn sigterm_ends_the_onboard_program_with_its_log_closed() {
+    let d = common::tmpdir("onboard_sigterm");
+    let done = Arc::new(AtomicBool::new(false));
+    let hw = hardware(&d, done.clone());
+    let logs = d.join("logs");
+    let mut child = spawn(&d, &["onboard", "--config", "onboard.toml"]);
+    wait_until(&mut child, &d, "a flight log", || {
+        flight_logs(&logs)
+            .first()
+            .is_some_and(|p| size(p) > 100_000)
+    });
+    let code = stop_with(&mut child, Signal::SIGTERM);
+    done.store(true, Ordering::Relaxed);
+    hw.join().unwrap();
+    let err = std::fs::read_to_string(d.join("stderr.txt")).unwrap();
+    assert_eq!(code, 143, "{err}");
+    assert!(err.contains("stopped by SIGTERM"), "{err}");
+    let logs_now = flight_logs(&logs);
+    assert_eq!(logs_now.len(), 1, "{logs_now:?}");
+    let name = logs_now[0].file_name().unwrap().to_str().unwrap();
+    let timing = json(&logs.join(name.replace(".ulg", "-timing.json")));
+    assert_eq!(timing["stopped_by"], "SIGTERM", "{timing}");
+    let steps = timing["steps"].as_u64().unwrap();
+    assert!(steps > 100, "{timing}");
+    assert!(ulog_data_messages(&logs_now[0]) > steps as usize);
 }

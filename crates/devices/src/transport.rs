@@ -137,8 +137,21 @@ impl SerialLink {
 
     /// Reads what is available into `buf`, waiting at most the read timeout;
     /// `Ok(0)` when nothing arrived in time.
+    ///
+    /// The port reads only once the line is readable (nothing within the
+    /// timeout is its `TimedOut`, `Ok(0)` here), so a read of nothing from
+    /// a readable line is its end: an error ([`ErrorKind::UnexpectedEof`]),
+    /// the device lost. (A pseudo-terminal whose master closed, or a
+    /// terminal hung up, polls as hung up: an error before any read.)
     pub fn read_chunk(&mut self, buf: &mut [u8]) -> Result<usize, TransportError> {
         match self.port.read(buf) {
+            Ok(0) if !buf.is_empty() => Err(TransportError::Io {
+                what: format!("reading {}", self.path.display()),
+                source: std::io::Error::new(
+                    ErrorKind::UnexpectedEof,
+                    "end of file: the line ended",
+                ),
+            }),
             Ok(n) => Ok(n),
             Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => Ok(0),
             Err(e) if e.kind() == ErrorKind::Interrupted => Ok(0),

@@ -60,12 +60,27 @@ pub struct ControlOutput {
     /// that count is 1 or a power of two (the log's and the operator's
     /// text: the first and each doubling, never one per sample).
     pub rejection: Option<(Rejection, u64)>,
+    /// A receiver frame refused this step (a channel outside the
+    /// receiver's range: its sticks and switches are not used), with the
+    /// frames refused so far, when that count is 1 or a power of two (as
+    /// [`ControlOutput::rejection`]: the first and each doubling).
+    pub rc_refusal: Option<u64>,
     /// The engine is cut (the servo frame's throttle hold): on the ground
     /// disarmed, with the ground logic ([`ControlTask::with_landing`]);
     /// never without it.
     pub throttle_hold: bool,
     /// The ground logic's step, when the task has it.
     pub landing: Option<LandingStep>,
+}
+
+/// The operator's text of refused receiver frames (at most 50 bytes: one
+/// MAVLink STATUSTEXT).
+pub const RC_REFUSED_TEXT: &str = "RC: channel out of range, frame refused";
+
+/// Whether the `count`-th refusal of a kind is told (logged, sent to the
+/// ground station): the first and each doubling, never one per sample.
+fn worth_a_text(count: u64) -> bool {
+    count.is_power_of_two()
 }
 
 /// A change of the IMU health monitor's flags (the settling flag aside):
@@ -287,14 +302,16 @@ impl ControlTask {
     pub fn step_with(&mut self, tick: &Tick, excitation: &Excitations) -> ControlOutput {
         let mut rejection = None;
         let mut note = |kind: Rejection, count: u64| {
-            if count.is_power_of_two() && rejection.is_none() {
+            if worth_a_text(count) && rejection.is_none() {
                 rejection = Some((kind, count));
             }
         };
+        let mut rc_refusal = None;
         if let Some(rc) = tick.rc
             && rc.out_of_range
         {
             self.rc_refused += 1;
+            rc_refusal = worth_a_text(self.rc_refused).then_some(self.rc_refused);
         }
         if let Some(rc) = tick.rc
             && !rc.failsafe
@@ -456,6 +473,7 @@ impl ControlTask {
             imu_health_change,
             rc_link_change,
             rejection,
+            rc_refusal,
             throttle_hold: landing.is_some_and(|l| l.throttle_hold),
             landing,
         }

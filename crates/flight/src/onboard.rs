@@ -140,9 +140,10 @@ fn mission_excitation(
     }
 }
 
-/// Run the on-board program of `cfg` for `duration` (until the IMU port
-/// closes when `None`); the log and `timing.json` go to the configured
-/// folder. Returns the runtime's report and the log's path.
+/// Run the on-board program of `cfg` for `duration` (when `None`, until
+/// stopped: a device lost is reopened, not the end); the log goes to the
+/// configured folder. Returns the runtime's report (the caller writes it
+/// beside the log) and the log's path.
 pub fn run(
     cfg: &OnboardConfig,
     duration: Option<Duration>,

@@ -441,6 +441,8 @@ pub struct DeviceRc {
     config: RcConfig,
     buf: [u8; 256],
     slot: Option<ReopenSlot>,
+    /// The port's event not yet taken (lost, reopened).
+    event: Option<DeviceEvent>,
 }
 
 /// The avionics port reopened by the servo side, handed to the receiver
@@ -475,6 +477,7 @@ impl DeviceRc {
             config: RcConfig::default(),
             buf: [0; 256],
             slot: None,
+            event: None,
         }
     }
 
@@ -509,13 +512,22 @@ pub fn rc_input(rc: &helicon_devices::RcInput, config: &RcConfig) -> RcInput {
 }
 
 impl RcPort for DeviceRc {
+    fn take_event(&mut self) -> Option<DeviceEvent> {
+        self.event.take()
+    }
+
     fn next(&mut self, timeout: Duration) -> Result<Next<RcInput>, PortError> {
         if self.port.link.is_none()
             && let Some(slot) = &self.slot
         {
             // the servo side reopens the (exclusive) port and hands it over
             if let Some(l) = slot.try_lock().ok().and_then(|mut g| g.take()) {
-                self.port.adopt(l);
+                if self.port.adopt(l) {
+                    self.event = Some(DeviceEvent {
+                        device: Device::Avionics,
+                        lost: false,
+                    });
+                }
             } else {
                 if !timeout.is_zero() {
                     std::thread::sleep(timeout);
@@ -523,7 +535,11 @@ impl RcPort for DeviceRc {
                 return Ok(Next::Timeout);
             }
         }
-        let LinkRead::Bytes(n) = self.port.read(&mut self.buf, timeout) else {
+        let r = self.port.read(&mut self.buf, timeout);
+        if let Some(e) = self.port.event(r) {
+            self.event = Some(e);
+        }
+        let LinkRead::Bytes(n) = r else {
             return Ok(Next::Timeout);
         };
         let mut last = None;
@@ -603,5 +619,58 @@ impl ServoPort for DeviceServos {
 
     fn dropped(&self) -> u64 {
         self.dropped
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use helicon_devices::PtyPair;
+
+    /// A lost port is retried first after 50 ms, then at doubling
+    /// intervals up to 2 s; no attempt before its time; the device back,
+    /// the next attempt reopens it and the back-off starts again at 50 ms.
+    /// (Each attempt's time is set due by hand: the schedule, not the wall
+    /// clock, is under test.)
+    #[test]
+    fn a_lost_port_is_retried_at_doubling_intervals_up_to_two_seconds() {
+        let pty = PtyPair::open().unwrap();
+        let link = SerialLink::open(pty.slave_path(), 115_200, Duration::ZERO).unwrap();
+        let mut r = Reopening::new(Device::Gps, link, 115_200);
+        // the device gone from its path
+        r.path = std::env::temp_dir().join(format!("helicon_gone_{}", std::process::id()));
+        let t0 = crate::realtime::monotonic_ns();
+        r.lose();
+        assert!(r.link.is_none());
+        assert_eq!(r.losses, 1);
+        assert_eq!(r.backoff, REOPEN_FIRST);
+        assert!(r.retry_at_ns >= t0 + duration_ns(REOPEN_FIRST));
+        // before its time: no attempt, the schedule unchanged
+        assert!(!r.try_reopen());
+        assert_eq!(r.backoff, REOPEN_FIRST);
+        let mut waits_ms = Vec::new();
+        for _ in 0..8 {
+            r.retry_at_ns = 0;
+            let before = crate::realtime::monotonic_ns();
+            assert!(!r.try_reopen());
+            let after = crate::realtime::monotonic_ns();
+            let wait = duration_ns(r.backoff);
+            assert!(r.retry_at_ns >= before + wait && r.retry_at_ns <= after + wait);
+            waits_ms.push(r.backoff.as_millis());
+        }
+        assert_eq!(waits_ms, [100, 200, 400, 800, 1600, 2000, 2000, 2000]);
+        assert_eq!(REOPEN_MAX, Duration::from_secs(2));
+        // the device back behind its path
+        r.path = pty.slave_path().to_path_buf();
+        r.retry_at_ns = 0;
+        assert!(r.try_reopen());
+        assert_eq!(r.backoff, REOPEN_FIRST);
+        assert_eq!(
+            r.event(LinkRead::Reopened),
+            Some(DeviceEvent {
+                device: Device::Gps,
+                lost: false
+            })
+        );
     }
 }

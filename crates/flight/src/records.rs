@@ -2,7 +2,7 @@
 //! message set, plus the supervisor's events with their precise reason,
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
-use crate::control::{ControlOutput, ImuHealthChange, Tick};
+use crate::control::{ControlOutput, ImuHealthChange, RC_REFUSED_TEXT, Tick};
 use crate::landing::{LandStage, LandingStep, SpoolState};
 use crate::mission::NavigatorNews;
 use crate::plausibility::Rejection;
@@ -62,6 +62,14 @@ pub enum FlightRecord {
         /// What was refused.
         kind: Rejection,
         /// Refusals of the kind so far.
+        count: u64,
+    },
+    /// Receiver frames refused (a channel outside the receiver's range):
+    /// the count so far, logged at the first and at each doubling.
+    RcRefused {
+        /// On-board time (s).
+        t_s: f64,
+        /// Frames refused so far.
         count: u64,
     },
     /// A device's port failed (read error, end of file, hang-up) or came
@@ -347,6 +355,16 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 "plausibility: sample refused",
             )
         }
+        FlightRecord::RcRefused { t_s, count } => {
+            let ts = timestamp_us(*t_s, "rc refused")?;
+            log_fmt(
+                log,
+                LogLevel::Warning,
+                ts,
+                format_args!("rc_input: {RC_REFUSED_TEXT} ({count} so far) at t = {t_s:.4} s"),
+                "rc_input: frame refused",
+            )
+        }
         FlightRecord::Device { t_s, event } => {
             let ts = timestamp_us(*t_s, "device")?;
             let level = if event.lost {
@@ -557,6 +575,12 @@ pub fn step_records(
         push(FlightRecord::SensorRejected {
             t_s: tick.now_s,
             kind,
+            count,
+        });
+    }
+    if let Some(count) = out.rc_refusal {
+        push(FlightRecord::RcRefused {
+            t_s: tick.now_s,
             count,
         });
     }

@@ -20,7 +20,7 @@
 //! on-board time is k·Ts from the first message). Either way each step is
 //! the [`ControlTask`]'s and sends exactly one servo frame.
 
-use crate::control::{ControlTask, StepReport, Tick};
+use crate::control::{ControlTask, RC_REFUSED_TEXT, StepReport, Tick};
 pub use crate::mission::{LastStep, Mission, flight_mode};
 use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
 use crate::records::{FlightRecord, step_records, write_record};
@@ -107,6 +107,19 @@ pub trait SensorPort: Send + 'static {
 pub trait RcPort: Send + 'static {
     /// Block up to `timeout` for the next receiver frame.
     fn next(&mut self, timeout: Duration) -> Result<Next<RcInput>, PortError>;
+
+    /// The port's event since the last call (its device lost or reopened),
+    /// logged and told to the ground station as the sensors' are.
+    fn take_event(&mut self) -> Option<crate::ports::DeviceEvent> {
+        None
+    }
+}
+
+/// The receiver thread's item: a frame, or its port's event.
+#[derive(Debug, Clone, Copy)]
+enum RcItem {
+    Frame(RcInput),
+    Device(crate::ports::DeviceEvent),
 }
 
 /// The servo side of the avionics board.
@@ -173,6 +186,9 @@ pub struct RunReport {
     pub servo_frames_dropped: u64,
     /// Watchdog trips.
     pub watchdog_trips: u64,
+    /// Receiver frames refused: a channel outside the receiver's range
+    /// (`rc.min_us`…`rc.max_us`); their sticks and switches were not used.
+    pub rc_frames_refused: u64,
     /// Wake-up lateness after the deadline (clock pacing).
     pub wakeup_jitter: LatencySummary,
     /// Compute time of a step (wake-up to servo command handed over).
@@ -207,6 +223,7 @@ struct ControlResult {
     superseded: u64,
     without_imu: u64,
     log_dropped: u64,
+    rc_refused: u64,
     jitter: LatencyStats,
     compute: LatencyStats,
     final_mode: Mode,
@@ -285,7 +302,7 @@ where
     let sensors_closed = Arc::new(AtomicBool::new(false));
     let last_output_ns = Arc::new(AtomicU64::new(realtime::monotonic_ns()));
     let (frame_tx, frame_rx) = rtrb::RingBuffer::<Arrival>::new(FRAME_RING);
-    let (rc_tx, rc_rx) = rtrb::RingBuffer::<RcInput>::new(RC_RING);
+    let (rc_tx, rc_rx) = rtrb::RingBuffer::<RcItem>::new(RC_RING);
     let (servo_tx, servo_rx) = rtrb::RingBuffer::<ServoItem>::new(SERVO_RING);
     let (log_tx, log_rx) = rtrb::RingBuffer::<FlightRecord>::new(LOG_RING);
     let (wlog_tx, wlog_rx) = rtrb::RingBuffer::<FlightRecord>::new(64);
@@ -444,6 +461,7 @@ where
                 superseded: 0,
                 without_imu: 0,
                 log_dropped: 0,
+                rc_refused: 0,
                 jitter: LatencyStats::new(),
                 compute: LatencyStats::new(),
                 final_mode: Mode::Disarmed,
@@ -499,6 +517,7 @@ impl RuntimeHandle {
             servo_frames: 0,
             servo_frames_dropped: 0,
             watchdog_trips: 0,
+            rc_frames_refused: 0,
             wakeup_jitter: LatencyStats::new().summary(),
             compute: LatencyStats::new().summary(),
             sensor_to_servo: LatencyStats::new().summary(),
@@ -521,6 +540,7 @@ impl RuntimeHandle {
                 report.frames_superseded = c.superseded;
                 report.steps_without_imu = c.without_imu;
                 report.log_dropped += c.log_dropped;
+                report.rc_frames_refused = c.rc_refused;
                 report.wakeup_jitter = c.jitter.summary();
                 report.compute = c.compute.summary();
                 report.final_mode = c.final_mode.as_str().to_string();
@@ -588,14 +608,18 @@ fn sensor_loop<S: SensorPort>(
 
 fn receiver_loop<R: RcPort>(
     mut port: R,
-    mut ring: rtrb::Producer<RcInput>,
+    mut ring: rtrb::Producer<RcItem>,
     stop: &AtomicBool,
 ) -> ThreadResult {
     let mut result = ThreadResult::default();
     while !stop.load(Ordering::Relaxed) {
-        match port.next(POLL) {
+        let next = port.next(POLL);
+        if let Some(e) = port.take_event() {
+            let _ = ring.push(RcItem::Device(e));
+        }
+        match next {
             Ok(Next::Item(rc)) => {
-                let _ = ring.push(rc);
+                let _ = ring.push(RcItem::Frame(rc));
             }
             Ok(Next::Timeout) => {}
             Ok(Next::Closed) => break,
@@ -610,7 +634,7 @@ fn receiver_loop<R: RcPort>(
 
 struct ControlCtx<'a> {
     frames: rtrb::Consumer<Arrival>,
-    rc: rtrb::Consumer<RcInput>,
+    rc: rtrb::Consumer<RcItem>,
     servo: rtrb::Producer<ServoItem>,
     log: rtrb::Producer<FlightRecord>,
     stop: &'a AtomicBool,
@@ -726,7 +750,10 @@ fn control_loop(
         };
         let mut rc = arrival.and_then(|a| a.rc);
         while let Ok(r) = ctx.rc.pop() {
-            rc = Some(r);
+            match r {
+                RcItem::Frame(f) => rc = Some(f),
+                RcItem::Device(e) => device_events.push_event(e),
+            }
         }
         let frame = arrival.and_then(|a| a.frame);
         if frame.is_none() {
@@ -765,6 +792,9 @@ fn control_loop(
         }
         if let Some((kind, _)) = out.rejection {
             mission.notify(now_s, VehicleEvent::Warning(kind.text()));
+        }
+        if out.rc_refusal.is_some() {
+            mission.notify(now_s, VehicleEvent::Warning(RC_REFUSED_TEXT));
         }
         if let Some(c) = out.imu_health_change {
             mission.notify(now_s, VehicleEvent::Warning(c.text()));
@@ -898,6 +928,7 @@ fn control_loop(
         superseded,
         without_imu,
         log_dropped,
+        rc_refused: task.rc_refused(),
         jitter,
         compute,
         final_mode: task.mode(),

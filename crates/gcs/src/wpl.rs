@@ -175,14 +175,22 @@ pub fn parse(text: &str, file: &str) -> Result<Vec<MISSION_ITEM_INT_DATA>, WplEr
     Ok(items)
 }
 
-/// Read a QGC WPL 110 file.
+/// Read a QGC WPL 110 file: a regular file of at most
+/// [`helicon_config::files::MAX_TEXT_BYTES`] (a FIFO, a device such as
+/// `/dev/zero` or a longer file is refused before it is read past the
+/// limit).
 pub fn read(path: &Path) -> Result<Vec<MISSION_ITEM_INT_DATA>, WplError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| WplError {
-        file: file.clone(),
-        line: 0,
-        message: e.to_string(),
-    })?;
+    let text =
+        helicon_config::files::read_text_bounded(path, helicon_config::files::MAX_TEXT_BYTES)
+            .map_err(|e| WplError {
+                file: file.clone(),
+                line: 0,
+                message: match e {
+                    helicon_config::ConfigError::Io { source, .. } => source.to_string(),
+                    other => other.to_string(),
+                },
+            })?;
     parse(&text, &file)
 }
 

@@ -157,6 +157,12 @@ pub struct LogSection {
     /// truth it was sampled from (`sensors.csv`, the sensor-log format that
     /// `helicon fuse` replays); needs `fusion = true`.
     pub sensors: bool,
+    /// The largest `log.csv` to write (bytes, ≥ 1; `helicon sim` and
+    /// `helicon sitl`, whose `--max-log-bytes` overrides it; unset: the
+    /// command's default, 1 GB). Its size is estimated before the flight;
+    /// a larger log is thinned to fit or the flight refused.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_bytes: Option<u64>,
 }
 
 impl Default for LogSection {
@@ -164,6 +170,7 @@ impl Default for LogSection {
         LogSection {
             decimation: 1,
             sensors: false,
+            max_bytes: None,
         }
     }
 }
@@ -494,6 +501,9 @@ impl Scenario {
         }
         if self.log.decimation == 0 {
             return Err(bad("log.decimation", "0".into(), "must be >= 1"));
+        }
+        if self.log.max_bytes == Some(0) {
+            return Err(bad("log.max_bytes", "0".into(), "must be >= 1 (bytes)"));
         }
         if let Err(e) = self.navigation.validate() {
             return Err(match e {

@@ -55,12 +55,24 @@ enum Fault {
     RcWild,
     /// The arm switch toggling every frame.
     ArmToggling,
+    /// The pilot's switch in manual, the sticks at the receiver's range
+    /// (800 and 2200 µs: in range, beyond the servos' limits).
+    ManualOverLimit,
 }
 
 struct Run {
     report: helicon_flight::runtime::RunReport,
     ulog: Ulog,
+    /// The servo commands of the servo frames the program sent on the
+    /// avionics line during the fault (read only for
+    /// [`Fault::ManualOverLimit`]).
+    servo_sent: Vec<helicon_core::state::Input>,
 }
+
+/// The sticks of [`Fault::ManualOverLimit`] (channels 1–4: `S_col`, `S_lat`,
+/// `S_lon`, `S_tr`): ±0.7 of servo command, beyond the collective's
+/// (−0.10…0.30) and the tail's (−0.37…0.62) limits.
+const OVER_LIMIT_STICKS_US: [u16; 4] = [2200, 2200, 800, 800];
 
 /// Point `link` at `target`, replacing what it pointed at (atomically).
 fn relink(target: &Path, link: &Path) {
@@ -126,6 +138,9 @@ fn fly(tag: &str, fault: Fault, at_s: f64, extra: &str, duration_s: f64) -> Run 
             // faults count from 1 s of the hardware's clock: the program
             // has aligned and armed by then (its clock a few ms behind)
             let at = at_s + 1.0;
+            let mut servo_sent = Vec::new();
+            let mut decoder = helicon_devices::avionics::AvionicsDecoder::new();
+            let mut buf = [0u8; 1024];
             while !done.load(Ordering::Relaxed) && k < 400 * 30 {
                 let t = k as f64 * 0.0025;
                 let faulty = t >= at && fault != Fault::None;
@@ -175,8 +190,12 @@ fn fly(tag: &str, fault: Fault, at_s: f64, extra: &str, duration_s: f64) -> Run 
                     if faulty && fault == Fault::ArmToggling && k % 16 == 8 {
                         channels_us[4] = 1000;
                     }
+                    let manual = faulty && fault == Fault::ManualOverLimit;
+                    if manual {
+                        channels_us[..4].copy_from_slice(&OVER_LIMIT_STICKS_US);
+                    }
                     let rc = RcFrame {
-                        autonomous: true,
+                        autonomous: !manual,
                         channels_us,
                         ..RcFrame::default()
                     };
@@ -220,24 +239,67 @@ fn fly(tag: &str, fault: Fault, at_s: f64, extra: &str, duration_s: f64) -> Run 
                     let vn = VnCommon::from_samples(t, &sample, mag.as_ref()).unwrap();
                     let _ = imu.write_all(vn.encode().unwrap().as_bytes());
                 }
+                if fault == Fault::ManualOverLimit {
+                    // the servo frames the program sent (drained every
+                    // sample: the line's buffer never fills)
+                    while let Ok(n) = av.read_timeout(&mut buf, Duration::ZERO) {
+                        if n == 0 {
+                            break;
+                        }
+                        decoder.push_with(&buf[..n], |m| {
+                            if let helicon_devices::avionics::AvionicsMessage::Servo(c) = m
+                                && faulty
+                            {
+                                servo_sent.push(c.inputs());
+                            }
+                        });
+                    }
+                }
                 k += 1;
                 let next = Duration::from_secs_f64(k as f64 * 0.0025);
                 if let Some(wait) = next.checked_sub(t0.elapsed()) {
                     std::thread::sleep(wait);
                 }
             }
+            servo_sent
         })
     };
     let (report, log) =
         helicon_flight::onboard::run(&cfg, Some(Duration::from_secs_f64(duration_s)), false)
             .unwrap();
     done.store(true, Ordering::Relaxed);
-    hw.join().unwrap();
+    let servo_sent = hw.join().unwrap();
     let ulog = Ulog::read(&log);
     for (t, text) in &ulog.texts {
         eprintln!("{tag}: {:.4} {text}", *t as f64 * 1e-6);
     }
-    Run { report, ulog }
+    Run {
+        report,
+        ulog,
+        servo_sent,
+    }
+}
+
+/// The time (s) from `cause` (the first logged text containing it) to
+/// `failsafe` (the first containing it), printed as `what`, and checked to
+/// be within `limit_s` (`stale_s`, the configured stale limit, plus 10 ms:
+/// the stale limit counts from the device's last good sample, which came
+/// before the fault's first sign, and the failsafe acts at the first
+/// 2.5 ms step past it; the texts carry the steps' on-board times).
+fn fault_to_failsafe(run: &Run, what: &str, cause: &str, failsafe: &str, stale_s: f64) -> f64 {
+    let t_cause = first(run, cause);
+    let t_failsafe = first(run, failsafe);
+    let dt = t_failsafe - t_cause;
+    eprintln!(
+        "fault to failsafe: {what}: {:.1} ms (stale limit {:.0} ms)",
+        dt * 1e3,
+        stale_s * 1e3
+    );
+    assert!(
+        dt > 0.0 && dt <= stale_s + 0.01,
+        "{what}: {cause:?} at {t_cause:.4} s, {failsafe:?} at {t_failsafe:.4} s"
+    );
+    dt
 }
 
 /// The values of a logged field, which must have been logged.
@@ -326,9 +388,10 @@ fn an_imu_hung_up_in_flight_is_an_imu_loss_and_is_reopened() {
     assert_eq!(run.report.final_mode, "hold");
 }
 
-/// The avionics line hung up: the receiver is silent (the pilot's link
-/// lost, logged), the servo frames meanwhile are dropped and counted, and
-/// both come back on the re-plugged line.
+/// The avionics line hung up: the loss is logged (the receiver side's
+/// event, as the sensors'), the receiver is silent (the pilot's link lost,
+/// logged) within `stale.rc_s` of the loss, the servo frames meanwhile are
+/// dropped and counted, and both come back on the re-plugged line.
 #[test]
 fn an_avionics_line_hung_up_is_reopened() {
     let run = fly(
@@ -340,7 +403,14 @@ fn an_avionics_line_hung_up_is_reopened() {
     );
     assert!(run.report.error.is_none(), "{:?}", run.report.error);
     assert_eq!(run.report.steps, 1200);
-    first(&run, "rc_link: receiver silent");
+    fault_to_failsafe(
+        &run,
+        "avionics hang-up -> receiver silent",
+        "device: avionics port lost",
+        "rc_link: receiver silent",
+        0.3,
+    );
+    first(&run, "device: avionics port reopened");
     first(&run, "rc_link: the pilot's link back");
     assert!(run.report.servo_frames_dropped > 0);
     assert_eq!(run.report.final_mode, "auto");
@@ -404,8 +474,13 @@ fn a_jumping_fix_is_refused_by_the_innovation_gate() {
 fn impossible_imu_samples_are_refused_and_the_imu_is_lost() {
     let run = fly("imu_absurd", Fault::ImuAbsurd, 0.5, "", 2.0);
     assert!(run.report.error.is_none(), "{:?}", run.report.error);
-    first(&run, "IMU: acceleration beyond range, refused (1 so far)");
-    first(&run, "imu_rejected: auto -> imu_lost");
+    fault_to_failsafe(
+        &run,
+        "IMU refused -> imu_rejected",
+        "IMU: acceleration beyond range, refused (1 so far)",
+        "imu_rejected: auto -> imu_lost",
+        0.05,
+    );
     assert_eq!(run.report.final_mode, "imu_lost");
     let att = values(&run, "control", "estimate[0]");
     assert!(
@@ -423,8 +498,13 @@ fn impossible_imu_samples_are_refused_and_the_imu_is_lost() {
 fn an_impossible_field_is_refused_and_the_mag_failsafe_acts() {
     let run = fly("mag_absurd", Fault::MagAbsurd, 0.5, "", 2.0);
     assert!(run.report.error.is_none(), "{:?}", run.report.error);
-    first(&run, "mag: field magnitude implausible, refused (1 so far)");
-    first(&run, "mag_rejected: auto -> hold");
+    fault_to_failsafe(
+        &run,
+        "field refused -> mag_rejected",
+        "mag: field magnitude implausible, refused (1 so far)",
+        "mag_rejected: auto -> hold",
+        0.5,
+    );
     let psi = values(&run, "control", "estimate[2]");
     assert!(psi.iter().all(|p| p.abs() < 0.1));
 }
@@ -440,11 +520,68 @@ fn wild_channels_are_refused_and_a_toggling_arm_switch_does_nothing() {
     first(&run, "rc_link: receiver silent");
     assert_eq!(run.report.final_mode, "auto");
     assert!(run.report.servo_frames >= 799);
+    // each refused frame counted (the fault from about 0.5 s of the 2 s
+    // flight, 50 frames/s: some 50–75 frames), texted at the first and
+    // each doubling only
+    let refused = run.report.rc_frames_refused;
+    let texts = run
+        .ulog
+        .texts_with("rc_input: RC: channel out of range, frame refused");
+    eprintln!(
+        "wild channels: {refused} frames refused, {} texts",
+        texts.len()
+    );
+    assert!(refused >= 20, "{refused} frames refused");
+    first(&run, "frame refused (1 so far)");
+    assert_eq!(texts.len() as u32, refused.ilog2() + 1, "{texts:?}");
     let run = fly("arm_toggling", Fault::ArmToggling, 0.5, "", 2.0);
     assert!(run.report.error.is_none(), "{:?}", run.report.error);
     assert_eq!(run.report.final_mode, "auto");
     assert!(
         run.ulog.texts_with("disarmed at").is_empty()
             && run.ulog.texts_with("-> disarmed").is_empty()
+    );
+}
+
+/// The pilot flying manual with the sticks at the receiver's range (800
+/// and 2200 µs, in range, so the frames are used): every servo frame sent
+/// on the avionics line is within the servos' limits (the collective's
+/// 0.30 and the tail's −0.37, not the sticks' ±0.7), the over-limit axes
+/// held at their limits.
+#[test]
+fn sticks_beyond_the_servo_limits_are_clamped_in_manual() {
+    let run = fly("manual_over_limit", Fault::ManualOverLimit, 0.5, "", 2.0);
+    assert!(run.report.error.is_none(), "{:?}", run.report.error);
+    assert_eq!(run.report.final_mode, "manual");
+    assert_eq!(run.report.rc_frames_refused, 0);
+    let limits = prepare(
+        &Scenario::from_toml_str("name = \"hover\"\nduration_s = 1.0\n", "s.toml").unwrap(),
+    )
+    .unwrap()
+    .model
+    .params()
+    .servo_limits();
+    // the frames carry counts of 1e-4: half a count of rounding
+    let tol = 0.5e-4 + 1e-12;
+    let sent = &run.servo_sent;
+    assert!(sent.len() > 100, "{} servo frames read", sent.len());
+    for u in sent {
+        for i in 0..4 {
+            assert!(
+                u[i] >= limits.min[i] - tol && u[i] <= limits.max[i] + tol,
+                "servo {i}: {} beyond {}…{}",
+                u[i],
+                limits.min[i],
+                limits.max[i]
+            );
+        }
+    }
+    // the pilot's sticks reached the servos, clamped
+    let last = sent.last().unwrap();
+    assert!((last[0] - limits.max[0]).abs() <= tol, "{last:?}");
+    assert!((last[3] - limits.min[3]).abs() <= tol, "{last:?}");
+    assert!(
+        (last[1] - 0.7).abs() <= tol && (last[2] + 0.7).abs() <= tol,
+        "{last:?}"
     );
 }

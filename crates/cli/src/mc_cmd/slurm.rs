@@ -288,8 +288,9 @@ fn shard_view(
         .as_ref()
         .and_then(|t| states.get(t))
         .map(|s| s.0.clone());
-    let exit = std::fs::read_to_string(dir.join("slurm-exit"))
+    let exit = crate::files::read_text_if_present(&dir.join("slurm-exit"))
         .ok()
+        .flatten()
         .map(|s| s.trim().to_string());
     let state = if p.as_ref().is_some_and(|p| p.finished) && done == runs {
         ShardState::Done
@@ -311,12 +312,11 @@ fn shard_view(
 
 fn read_plan(out: &Path) -> Result<Option<Plan>> {
     let p = out.join(PLAN);
-    match std::fs::read_to_string(&p) {
-        Ok(t) => Ok(Some(
+    match crate::files::read_text_if_present(&p)? {
+        Some(t) => Ok(Some(
             serde_json::from_str(&t).with_context(|| format!("reading {}", p.display()))?,
         )),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-        Err(e) => Err(e).with_context(|| format!("reading {}", p.display())),
+        None => Ok(None),
     }
 }
 
@@ -643,8 +643,9 @@ fn status_to(con: &mut crate::console::Console, dir: &Path) -> Result<()> {
     );
     writeln!(con, "runs: {done_runs}/{} done", plan.runs);
     let merged = folder_progress(dir)?.is_some_and(|p| p.finished && p.shard.is_none());
-    let merge_exit = std::fs::read_to_string(dir.join("slurm").join("merge-exit"))
+    let merge_exit = crate::files::read_text_if_present(&dir.join("slurm").join("merge-exit"))
         .ok()
+        .flatten()
         .map(|s| s.trim().to_string());
     let last = plan.submissions.last().map(|s| s.merge_job.clone());
     let mstate = last.as_ref().and_then(|j| states.get(j)).cloned();

@@ -153,10 +153,15 @@ pub(super) fn finish_file(path: &Path, mut w: BufWriter<File>) -> Result<(), McE
 /// The manifest of `dir`, if it has one, checked to be of this format version.
 pub(super) fn read_manifest(dir: &Path) -> Result<Option<Manifest>, McError> {
     let p = dir.join(MANIFEST);
-    let text = match std::fs::read_to_string(&p) {
+    let text = match helicon_config::read_text_bounded(&p, helicon_config::MAX_TEXT_BYTES) {
         Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-        Err(e) => return Err(io_err(&p, "read", e)),
+        Err(e) => {
+            let e = e.into_io();
+            if e.kind() == std::io::ErrorKind::NotFound {
+                return Ok(None);
+            }
+            return Err(io_err(&p, "read", e));
+        }
     };
     let m: Manifest = serde_json::from_str(&text).map_err(|e| McError::Csv {
         file: p.display().to_string(),
@@ -360,7 +365,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<McReport, McError> {
     write_json(&out.join(MANIFEST), &manifest)?;
     for f in [CAMPAIGN, SCENARIO, PARAMS] {
         let src = first.join(f);
-        let text = std::fs::read_to_string(&src).map_err(|e| io_err(&src, "read", e))?;
+        let text = helicon_config::read_text_bounded(&src, helicon_config::MAX_TEXT_BYTES)
+            .map_err(|e| io_err(&src, "read", e.into_io()))?;
         write_file(&out.join(f), &text)?;
     }
     let layout = layout_of(&manifest, out)?;
