@@ -239,3 +239,68 @@ fn a_scenario_with_cases_flies_each_into_its_folder() {
         "{report}"
     );
 }
+
+#[test]
+fn sim_with_log_sensors_writes_the_sensor_log_that_fuse_replays() {
+    let d = tmpdir("sim_sensors");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let demo = std::fs::read_to_string(root.join("scenarios/demo.toml")).unwrap();
+    assert!(demo.contains("[log]\n"), "demo.toml has a [log] section");
+    let scenario = d.join("sensed.toml");
+    std::fs::write(
+        &scenario,
+        demo.replace("[log]\n", "[log]\nsensors = true\n"),
+    )
+    .unwrap();
+    let out = d.join("run");
+    let o = helicon_in(
+        &d,
+        &[
+            "sim",
+            scenario.to_str().unwrap(),
+            "--duration",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    no_panic(&o);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let log = out.join("sensors.csv");
+    let body = std::fs::read_to_string(&log).unwrap();
+    assert!(
+        body.starts_with("# helicon sensor log v2"),
+        "{}",
+        &body[..80]
+    );
+    // one frame per controller sample: 2 s at 400 Hz, both ends
+    let rows = body.lines().filter(|l| !l.starts_with('#')).count() - 1;
+    assert_eq!(rows, 801, "data rows");
+    let fused = d.join("fused");
+    let o = helicon_in(
+        &d,
+        &[
+            "fuse",
+            log.to_str().unwrap(),
+            "--out",
+            fused.to_str().unwrap(),
+        ],
+    );
+    no_panic(&o);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // without the key, no sensor log
+    let plain = d.join("plain");
+    let o = helicon_in(
+        &d,
+        &[
+            "sim",
+            root.join("scenarios/demo.toml").to_str().unwrap(),
+            "--duration",
+            "1",
+            "--out",
+            plain.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(!plain.join("sensors.csv").exists());
+}
