@@ -172,6 +172,17 @@ pub enum SpoolState {
 }
 
 impl SpoolState {
+    /// Every state, in declaration order ([`SpoolState::code`] is the index).
+    pub const ALL: [SpoolState; 7] = [
+        SpoolState::Disarmed,
+        SpoolState::SpoolingUp,
+        SpoolState::Ready,
+        SpoolState::TakingOff,
+        SpoolState::Flying,
+        SpoolState::Landed,
+        SpoolState::SpoolingDown,
+    ];
+
     /// The name in logs and status texts.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -215,6 +226,31 @@ pub enum LandStage {
     MaybeLanded,
     /// Landed.
     Landed,
+}
+
+impl LandStage {
+    /// Every stage, in declaration order ([`LandStage::code`] is the index).
+    pub const ALL: [LandStage; 4] = [
+        LandStage::Air,
+        LandStage::GroundContact,
+        LandStage::MaybeLanded,
+        LandStage::Landed,
+    ];
+
+    /// The name in logs and plots (PX4's).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            LandStage::Air => "air",
+            LandStage::GroundContact => "ground contact",
+            LandStage::MaybeLanded => "maybe landed",
+            LandStage::Landed => "landed",
+        }
+    }
+
+    /// A code for the log (0 … 3 in declaration order).
+    pub fn code(self) -> u8 {
+        self as u8
+    }
 }
 
 /// One sample's view of the flight for the ground logic.
@@ -322,6 +358,18 @@ impl Landing {
             flags: DetectorFlags::default(),
             updates: 0,
         }
+    }
+
+    /// The same ground logic for a flight that starts in the air at `t0_s`:
+    /// armed, flying, the land detector in the air, the command the law's
+    /// (a simulation's start at its design point).
+    pub fn in_flight(config: LandingConfig, ts_s: f64, u_trim: &Input, t0_s: f64) -> Self {
+        let mut l = Landing::new(config, ts_s, u_trim, t0_s);
+        l.state = SpoolState::Flying;
+        l.stage = LandStage::Air;
+        l.blend = 1.0;
+        l.last_collective = u_trim[0];
+        l
     }
 
     /// The state now.

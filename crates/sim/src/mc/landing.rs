@@ -256,10 +256,14 @@ impl LandingCriteria {
             }
         };
         let liftoff = g("liftoff_time_s");
+        // the delay from the on-board take-off's start (the rotor at speed,
+        // in auto, a climb asked), or from the operator's `takeoff_s` when
+        // it never began
+        let takeoff = g("takeoff_start_s").unwrap_or(self.takeoff_s);
         set(
             LandingFailure::NoLiftoff,
             (completed && liftoff.is_none())
-                || over(liftoff, self.takeoff_s + self.max_liftoff_delay_s),
+                || over(liftoff, takeoff + self.max_liftoff_delay_s),
         );
         set(
             LandingFailure::LiftoffDrift,
