@@ -13,10 +13,16 @@ use std::process::Command;
 #[test]
 fn sim_of_the_ground_to_ground_scenario_writes_the_ground_files() {
     let d = tmpdir("ground-sim");
-    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/ground-to-ground.toml");
+    let scenario =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/ground-to-ground.toml");
     let out = d.join("run");
     let o = Command::new(env!("CARGO_BIN_EXE_helicon"))
-        .args(["sim", scenario.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args([
+            "sim",
+            scenario.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
@@ -28,14 +34,21 @@ fn sim_of_the_ground_to_ground_scenario_writes_the_ground_files() {
     let col = |name: &str| GROUND_COLUMNS.iter().position(|c| *c == name).unwrap();
     let (spool, stage) = (col("spool_state"), col("land_stage"));
     let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|c| c.parse().unwrap_or(f64::NAN)).collect())
+        .map(|l| {
+            l.split(',')
+                .map(|c| c.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
         .collect();
     // 45 s at 400 Hz, every 4th sample kept, and the last
     assert_eq!(rows.len(), 45 * 400 / 4 + 1);
     assert!(rows.iter().all(|r| r.len() == GROUND_COLUMNS.len()));
     // every on-board spool state and land-detector stage appears, each a
     // valid code
-    for (c, n) in [(spool, SpoolState::ALL.len()), (stage, LandStage::ALL.len())] {
+    for (c, n) in [
+        (spool, SpoolState::ALL.len()),
+        (stage, LandStage::ALL.len()),
+    ] {
         for k in 0..n {
             assert!(
                 rows.iter().any(|r| r[c] == k as f64),
@@ -43,13 +56,21 @@ fn sim_of_the_ground_to_ground_scenario_writes_the_ground_files() {
                 GROUND_COLUMNS[c]
             );
         }
-        assert!(rows.iter().all(|r| r[c] >= 0.0 && r[c] < n as f64 && r[c].fract() == 0.0));
+        assert!(
+            rows.iter()
+                .all(|r| r[c] >= 0.0 && r[c] < n as f64 && r[c].fract() == 0.0)
+        );
     }
     // the plots: a PNG (its signature) and an SVG
     let png = std::fs::read(out.join("ground.png")).unwrap();
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     let svg = std::fs::read_to_string(out.join("ground.svg")).unwrap();
-    for name in ["spooling up", "taking off", "maybe landed", "ground contact"] {
+    for name in [
+        "spooling up",
+        "taking off",
+        "maybe landed",
+        "ground contact",
+    ] {
         assert!(svg.contains(name), "the state axis lacks {name}");
     }
     // summary.json: the time from arming to lift-off, its own metric

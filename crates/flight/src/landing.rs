@@ -874,6 +874,47 @@ mod tests {
         assert_eq!(l.ground_state().landed, LandedState::OnGround);
     }
 
+    /// The codes are the indices of `ALL` (the logs' and plots' axes);
+    /// a ground logic started in the air flies the law and lands by its
+    /// detector, as one that took off.
+    #[test]
+    fn codes_index_all_and_a_start_in_the_air_flies_then_lands() {
+        for (i, s) in SpoolState::ALL.iter().enumerate() {
+            assert_eq!(usize::from(s.code()), i);
+        }
+        for (i, s) in LandStage::ALL.iter().enumerate() {
+            assert_eq!(usize::from(s.code()), i);
+        }
+        let c = LandingConfig::default();
+        let mut l = Landing::in_flight(c, TS, &trim(), 0.0);
+        assert_eq!((l.state(), l.stage()), (SpoolState::Flying, LandStage::Air));
+        assert!(!l.holds_law() && !l.on_ground());
+        let law = Input::new(0.12, 0.01, -0.02, 0.05);
+        assert_eq!(l.servo(&law, false), law);
+        let s = l.update(&input(
+            0.0,
+            true,
+            &Reference::default(),
+            (Vector3::new(0.0, 0.0, -5.0), Vector3::new(0.0, 0.0, 0.4)),
+            Vector3::zeros(),
+        ));
+        assert!(!s.throttle_hold && s.change.is_none());
+        // still on the ground with a descent asked: landed within the
+        // trigger time and the ramp down (as `from_the_ground_to_the_ground`)
+        let down = Reference {
+            velocity_ned_m_s: Vector3::new(0.0, 0.0, 0.3),
+            yaw_rad: 0.0,
+        };
+        let still = (Vector3::zeros(), Vector3::zeros());
+        let mut t = 0.0;
+        while l.state() != SpoolState::Landed {
+            t += TS;
+            l.servo(&law, false);
+            l.update(&input(t, true, &down, still, Vector3::zeros()));
+            assert!(t < 2.0 * c.trigger_s + c.takeoff_ramp_s, "not landed");
+        }
+    }
+
     /// A climb withdrawn before lift-off goes back to ready; no lift-off
     /// within the timeout is given up.
     #[test]

@@ -42,7 +42,10 @@ fn ground_to_ground_flies_spools_takes_off_and_lands() {
     let ts = params.control.sample_time_s;
     let t_to = m.takeoff_start_s.unwrap();
     assert!(t_to > g.takeoff_s);
-    assert!((t_to - (g.spool_up_s + cfg.runup_s)).abs() <= ts + 1e-9, "{t_to}");
+    assert!(
+        (t_to - (g.spool_up_s + cfg.runup_s)).abs() <= ts + 1e-9,
+        "{t_to}"
+    );
     // on the ground before it: spooled up to the governed speed (the
     // governor's 5 s soft start is within the 8 s run-up), on the skids
     let before = f.ground.iter().rfind(|r| r.t_s < t_to).unwrap();
@@ -113,10 +116,11 @@ fn the_ground_log_follows_the_on_board_states_in_order() {
     assert_eq!(seen, want, "{seen:?}");
     let last = f.ground.last().unwrap();
     assert_eq!(last.sample.land_stage, f64::from(LandStage::Landed.code()));
-    assert!(f
-        .ground
-        .iter()
-        .any(|r| r.sample.land_stage == f64::from(LandStage::Air.code())));
+    assert!(
+        f.ground
+            .iter()
+            .any(|r| r.sample.land_stage == f64::from(LandStage::Air.code()))
+    );
 }
 
 /// The figures docs/model-ground.md quotes for the shipped flight, to the

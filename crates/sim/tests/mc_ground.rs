@@ -115,7 +115,10 @@ fn a_benign_campaign_has_no_failure_and_a_hard_landing_is_one() {
     let stalled = calm.run_one(&nominal, 2).record;
     let n = stalled.metrics.len();
     assert!(stalled.metrics[n - 1].is_none(), "liftoff_detected_s");
-    assert!(stalled.metrics[n - 14].is_some(), "liftoff_time_s (the truth)");
+    assert!(
+        stalled.metrics[n - 14].is_some(),
+        "liftoff_time_s (the truth)"
+    );
     let vz = g.metrics["touchdown_vertical_speed_m_s"].max.unwrap();
     assert!(vz > 0.05 && vz < 0.6, "{vz}");
     // a 3 m/s descent onto the skids: a hard landing (it bounces and rolls
@@ -393,7 +396,7 @@ fn the_first_24_runs_of_the_shipped_campaign_give_the_documented_figures() {
 }
 
 /// The 200-run figures of the docs (`cargo test --release -p helicon-sim
-/// --test mc_ground -- --ignored`; ~20 s of CPU).
+/// --test mc_ground -- --ignored`; ~15 s on 2 shared cores).
 #[test]
 #[ignore = "the whole 200-run campaign: run with --ignored"]
 fn the_shipped_campaign_gives_the_documented_figures() {
@@ -425,6 +428,36 @@ fn the_shipped_campaign_gives_the_documented_figures() {
     );
     let det = &g.metrics["liftoff_detected_s"];
     assert_eq!(det.n, 175);
+    assert!(
+        near(det.p50, 10.0425) && near(det.p95, 11.4760) && near(det.max, 11.9675),
+        "{det:?}"
+    );
+    let first = |c: LandingFailure| {
+        g.criteria_failed
+            .iter()
+            .find(|x| x.criterion == c)
+            .unwrap()
+            .first_run
+    };
+    assert_eq!(first(LandingFailure::NoLiftoff), Some(0));
+    assert_eq!(first(LandingFailure::TipOver), Some(94));
+    assert_eq!(first(LandingFailure::Diverged), Some(138));
+    assert_eq!(criterion(&s, LandingFailure::TouchdownSideways), 1);
+    assert_eq!(criterion(&s, LandingFailure::TouchdownDrift), 2);
+    assert_eq!(criterion(&s, LandingFailure::HardLanding), 0);
+    for (k, p50, p95, max) in [
+        ("touchdown_horizontal_speed_m_s", 0.0468, 0.1265, 0.7729),
+        ("liftoff_time_s", 9.8150, 10.0155, 10.0700),
+        ("liftoff_drift_m", 0.0124, 0.0261, 0.0561),
+        ("touchdown_offset_m", 0.1807, 0.4539, 0.8095),
+        ("touchdown_drift_m", 0.0200, 0.0558, 0.6698),
+    ] {
+        let m = &g.metrics[k];
+        assert!(
+            near(m.p50, p50) && near(m.p95, p95) && near(m.max, max),
+            "{k}: {m:?}"
+        );
+    }
 }
 
 #[test]
@@ -441,5 +474,9 @@ fn the_hop_scenario_flies_as_the_campaign_says() {
         "{g:?}"
     );
     assert!(g.liftoff_detected_s.is_some(), "{g:?}");
+    // the nominal hop lifts off 1.7 s into the on-board take-off ramp
+    // (docs/monte-carlo.md, to its printed digit)
+    let into = g.liftoff_time_s.unwrap() - g.takeoff_start_s.unwrap();
+    assert!((into - 1.7).abs() <= 0.05, "{into}");
     assert!(g.touchdown_offset_m.unwrap() < 0.5, "{g:?}");
 }

@@ -616,7 +616,10 @@ fn fly_with(
         let exc = excitations.at(t);
         // the on-board ground logic: the law held on the ground and until
         // lift-off, the servos' command blended from ground idle
-        if plan.as_ref().is_some_and(crate::ground::GroundFlight::holds_law) {
+        if plan
+            .as_ref()
+            .is_some_and(crate::ground::GroundFlight::holds_law)
+        {
             onboard.reset_feedback();
         }
         let servo = |u: &Input| plan.as_mut().and_then(|p| p.servo(u));
@@ -639,10 +642,12 @@ fn fly_with(
             let truth = plant.truth(t);
             let onboard_view = crate::ground::OnBoardView {
                 // the navigation's solution; the truth with ideal navigation
-                position_velocity_ned: Some(tel.navigation.map_or(
-                    (truth.pos_ned_m, truth.vel_ned_m_s),
-                    |n| (n.position_ned_m, n.velocity_ned_m_s),
-                )),
+                position_velocity_ned: Some(
+                    tel.navigation
+                        .map_or((truth.pos_ned_m, truth.vel_ned_m_s), |n| {
+                            (n.position_ned_m, n.velocity_ned_m_s)
+                        }),
+                ),
                 gyro_body_rad_s: Some(gyro.unwrap_or(truth.omega_body_rad_s)),
             };
             plan.update(

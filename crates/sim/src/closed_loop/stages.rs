@@ -394,10 +394,7 @@ impl OnBoard {
                     t_s,
                     measured: SVector::from_fn(|i, _| xr[i]),
                 };
-                Ok((
-                    computer.step_servo(&m, reference, excitation, servo)?,
-                    None,
-                ))
+                Ok((computer.step_servo(&m, reference, excitation, servo)?, None))
             }
             OnBoard::Truth {
                 computer,
