@@ -216,3 +216,37 @@ fn a_ground_too_close_to_the_design_point_is_refused_naming_the_field() {
         "{e}"
     );
 }
+
+/// `on_ground = false`: the flight starts in the air at the design point,
+/// the on-board ground logic armed and flying (no arming, no take-off), the
+/// engine governed; the descent ends on the ground and the land detector
+/// lands it there.
+#[test]
+fn a_start_in_the_air_flies_the_law_and_the_land_detector_lands_it() {
+    use helicon_flight::landing::{LandStage, SpoolState};
+    let mut s = shipped();
+    s.ground.as_mut().unwrap().on_ground = false;
+    s.duration_s = 60.0;
+    let p = prepare(&s).unwrap();
+    let f = fly(&s, &p, None).unwrap();
+    assert_eq!(
+        f.summary.outcome,
+        Outcome::Completed,
+        "{:?}",
+        f.summary.reason
+    );
+    let m = f.summary.ground.unwrap();
+    eprintln!("{m:#?}");
+    let first = f.ground.first().unwrap();
+    assert_eq!(
+        first.sample.spool_state,
+        f64::from(SpoolState::Flying.code())
+    );
+    assert_eq!(first.sample.blend, 1.0);
+    assert!(first.sample.clearance_m > 4.0);
+    assert!(m.arm_time_s.is_none() && m.takeoff_start_s.is_none());
+    assert!(m.touchdown_time_s.is_some(), "{m:?}");
+    assert!(m.landed_detected_s.unwrap() > m.touchdown_time_s.unwrap());
+    let last = f.ground.last().unwrap();
+    assert_eq!(last.sample.land_stage, f64::from(LandStage::Landed.code()));
+}
