@@ -99,12 +99,29 @@ impl<E: Estimator, F: StateFeedback> FlightComputer<E, F> {
         offset: &Input,
         applied: Option<&Input>,
     ) -> Result<Telemetry, CoreError> {
+        self.step_servo(measurement, reference, offset, |_| applied.copied())
+    }
+
+    /// [`FlightComputer::step_applied`] with the servos' command decided
+    /// from this sample's law command: `servo` is given the law's command
+    /// and returns what the servos get instead (`None`: the law's). For a
+    /// ground logic that blends the law's fresh command from ground idle
+    /// (`helicon_flight::landing`): the estimator predicts with the
+    /// blended command, the law's own is what `servo` saw. Allocates
+    /// nothing.
+    pub fn step_servo(
+        &mut self,
+        measurement: &E::Measurement,
+        reference: &Reference,
+        offset: &Input,
+        servo: impl FnOnce(&Input) -> Option<Input>,
+    ) -> Result<Telemetry, CoreError> {
         let estimate = self.estimator.update(measurement)?;
         let cmd = self
             .feedback
             .command_with_offset(&estimate.state, reference, offset);
-        let (u, saturated) = match applied {
-            Some(a) => (*a, [false; NU]),
+        let (u, saturated) = match servo(&cmd.u) {
+            Some(a) => (a, [false; NU]),
             None => (cmd.u, cmd.saturated),
         };
         self.estimator.predict(&u)?;
@@ -180,6 +197,22 @@ impl SensorComputer {
         match self {
             SensorComputer::Thesis(c) => c.step_applied(frame, reference, offset, applied),
             SensorComputer::Eskf(c) => c.step_applied(frame, reference, offset, applied),
+        }
+    }
+
+    /// One control sample whose servos get what `servo` makes of the
+    /// law's command (see [`FlightComputer::step_servo`]).
+    #[inline]
+    pub fn step_servo(
+        &mut self,
+        frame: &SensorFrame,
+        reference: &Reference,
+        offset: &Input,
+        servo: impl FnOnce(&Input) -> Option<Input>,
+    ) -> Result<Telemetry, CoreError> {
+        match self {
+            SensorComputer::Thesis(c) => c.step_servo(frame, reference, offset, servo),
+            SensorComputer::Eskf(c) => c.step_servo(frame, reference, offset, servo),
         }
     }
 

@@ -244,3 +244,41 @@ fn the_predictor_is_told_what_was_applied() {
     }
     assert!(want.iter().skip(9).any(|v| v.abs() > 1e-6));
 }
+
+/// `step_servo`: the function sees this sample's law command (the one
+/// `step` sends), and what it returns is what the servos get and the
+/// estimator predicts with — a ground logic's blend of the fresh command.
+#[test]
+fn step_servo_blends_this_samples_law_command() {
+    let r = Reference::default();
+    let zero = SVector::zeros();
+    let (mut law_c, mut blend_c) = (computer(), computer());
+    for k in 0..20 {
+        let law = law_c.step(&frame(k), &r).unwrap();
+        let mut seen = None;
+        let blended = blend_c
+            .step_servo(&frame(k), &r, &zero, |u| {
+                seen = Some(*u);
+                None
+            })
+            .unwrap();
+        assert_eq!(blended, law, "None is the law's command, bit for bit");
+        assert_eq!(seen, Some(law.command));
+    }
+    let law = law_c.step(&frame(20), &r).unwrap();
+    let half = blend_c
+        .step_servo(&frame(20), &r, &zero, |u| Some(u * 0.5))
+        .unwrap();
+    assert_eq!(half.command, law.command * 0.5);
+    assert_eq!(half.saturated, [false; 4]);
+    // the next estimate differs by Γ (u_blend − u_law) off the measured block
+    let (n1, n2) = (
+        law_c.step(&frame(21), &r).unwrap(),
+        blend_c.step(&frame(21), &r).unwrap(),
+    );
+    let want = gains().gamma * (half.command - law.command);
+    for i in 9..27 {
+        let d = n2.estimate[i] - n1.estimate[i];
+        assert!((d - want[i]).abs() < 1e-15, "state {i}: {d} vs {}", want[i]);
+    }
+}

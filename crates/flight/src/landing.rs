@@ -172,6 +172,17 @@ pub enum SpoolState {
 }
 
 impl SpoolState {
+    /// Every state, in declaration order ([`SpoolState::code`] is the index).
+    pub const ALL: [SpoolState; 7] = [
+        SpoolState::Disarmed,
+        SpoolState::SpoolingUp,
+        SpoolState::Ready,
+        SpoolState::TakingOff,
+        SpoolState::Flying,
+        SpoolState::Landed,
+        SpoolState::SpoolingDown,
+    ];
+
     /// The name in logs and status texts.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -215,6 +226,31 @@ pub enum LandStage {
     MaybeLanded,
     /// Landed.
     Landed,
+}
+
+impl LandStage {
+    /// Every stage, in declaration order ([`LandStage::code`] is the index).
+    pub const ALL: [LandStage; 4] = [
+        LandStage::Air,
+        LandStage::GroundContact,
+        LandStage::MaybeLanded,
+        LandStage::Landed,
+    ];
+
+    /// The name in logs and plots (PX4's).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            LandStage::Air => "air",
+            LandStage::GroundContact => "ground contact",
+            LandStage::MaybeLanded => "maybe landed",
+            LandStage::Landed => "landed",
+        }
+    }
+
+    /// A code for the log (0 … 3 in declaration order).
+    pub fn code(self) -> u8 {
+        self as u8
+    }
 }
 
 /// One sample's view of the flight for the ground logic.
@@ -322,6 +358,18 @@ impl Landing {
             flags: DetectorFlags::default(),
             updates: 0,
         }
+    }
+
+    /// The same ground logic for a flight that starts in the air at `t0_s`:
+    /// armed, flying, the land detector in the air, the command the law's
+    /// (a simulation's start at its design point).
+    pub fn in_flight(config: LandingConfig, ts_s: f64, u_trim: &Input, t0_s: f64) -> Self {
+        let mut l = Landing::new(config, ts_s, u_trim, t0_s);
+        l.state = SpoolState::Flying;
+        l.stage = LandStage::Air;
+        l.blend = 1.0;
+        l.last_collective = u_trim[0];
+        l
     }
 
     /// The state now.
@@ -824,6 +872,47 @@ mod tests {
         }
         assert!(l.on_ground());
         assert_eq!(l.ground_state().landed, LandedState::OnGround);
+    }
+
+    /// The codes are the indices of `ALL` (the logs' and plots' axes);
+    /// a ground logic started in the air flies the law and lands by its
+    /// detector, as one that took off.
+    #[test]
+    fn codes_index_all_and_a_start_in_the_air_flies_then_lands() {
+        for (i, s) in SpoolState::ALL.iter().enumerate() {
+            assert_eq!(usize::from(s.code()), i);
+        }
+        for (i, s) in LandStage::ALL.iter().enumerate() {
+            assert_eq!(usize::from(s.code()), i);
+        }
+        let c = LandingConfig::default();
+        let mut l = Landing::in_flight(c, TS, &trim(), 0.0);
+        assert_eq!((l.state(), l.stage()), (SpoolState::Flying, LandStage::Air));
+        assert!(!l.holds_law() && !l.on_ground());
+        let law = Input::new(0.12, 0.01, -0.02, 0.05);
+        assert_eq!(l.servo(&law, false), law);
+        let s = l.update(&input(
+            0.0,
+            true,
+            &Reference::default(),
+            (Vector3::new(0.0, 0.0, -5.0), Vector3::new(0.0, 0.0, 0.4)),
+            Vector3::zeros(),
+        ));
+        assert!(!s.throttle_hold && s.change.is_none());
+        // still on the ground with a descent asked: landed within the
+        // trigger time and the ramp down (as `from_the_ground_to_the_ground`)
+        let down = Reference {
+            velocity_ned_m_s: Vector3::new(0.0, 0.0, 0.3),
+            yaw_rad: 0.0,
+        };
+        let still = (Vector3::zeros(), Vector3::zeros());
+        let mut t = 0.0;
+        while l.state() != SpoolState::Landed {
+            t += TS;
+            l.servo(&law, false);
+            l.update(&input(t, true, &down, still, Vector3::zeros()));
+            assert!(t < 2.0 * c.trigger_s + c.takeoff_ramp_s, "not landed");
+        }
     }
 
     /// A climb withdrawn before lift-off goes back to ready; no lift-off

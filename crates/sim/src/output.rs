@@ -781,7 +781,7 @@ pub fn write_cases_index(
 }
 
 /// The columns of `ground.csv`, in order (SI units in the names).
-pub const GROUND_COLUMNS: [&str; 14] = [
+pub const GROUND_COLUMNS: [&str; 15] = [
     "t_s",
     "height_m",
     "clearance_m",
@@ -794,7 +794,8 @@ pub const GROUND_COLUMNS: [&str; 14] = [
     "normal_total_n",
     "friction_total_n",
     "ground_effect_factor",
-    "phase",
+    "spool_state",
+    "land_stage",
     "blend",
 ];
 
@@ -802,10 +803,15 @@ pub const GROUND_COLUMNS: [&str; 14] = [
 /// `rows` is empty): `ground.csv` ([`GROUND_COLUMNS`]: the CM's height
 /// above the ground, the skids' clearance (empty without the landing gear),
 /// rotor speed, throttle, the contact points' normal forces, friction, the
-/// ground-effect factor, the plan's phase 0 ground, 1 taking off, 2 flying,
-/// 3 landed, and the blend from ground idle to the flight law) and
+/// ground-effect factor, the on-board spool state after the sample
+/// (`helicon_flight::landing::SpoolState::code`: 0 disarmed, 1 spooling up,
+/// 2 ready, 3 taking off, 4 flying, 5 landed, 6 spooling down), the land
+/// detector's stage (`LandStage::code`: 0 air, 1 ground contact, 2 maybe
+/// landed, 3 landed; both empty without `[ground]`) and the blend of the
+/// sample's command from ground idle to the flight law) and
 /// `ground.png`/`ground.svg` (height and clearance, rotor speed, contact
-/// forces, throttle and blend). Returns the files written.
+/// forces, throttle and blend, and the spool state and land-detector stage
+/// as step lines named on their axes). Returns the files written.
 pub fn write_ground(
     dir: &Path,
     rows: &[crate::closed_loop::GroundRow],
@@ -832,7 +838,8 @@ pub fn write_ground(
             g.normal_n.iter().sum(),
             g.friction_n,
             g.ground_effect_factor,
-            g.phase,
+            g.spool_state,
+            g.land_stage,
             g.blend,
         ];
         for (i, v) in cells.iter().enumerate() {
@@ -863,7 +870,9 @@ pub fn write_ground(
         forces = forces.series(Series::new(names[i], p));
     }
     forces = forces.series(Series::new("friction, total", &friction).dashed());
-    let fig = Figure::new(&format!("{title}: ground"), "time [s]")
+    let spool = steps(rows, |r| r.sample.spool_state);
+    let stage = steps(rows, |r| r.sample.land_stage);
+    let mut fig = Figure::new(&format!("{title}: ground"), "time [s]")
         .panel(
             Panel::new("height [m]")
                 .series(Series::new("CM above ground", &height))
@@ -876,6 +885,21 @@ pub fn write_ground(
                 .series(Series::new("throttle", &throttle))
                 .series(Series::new("blend idle → law", &blend).dashed()),
         );
+    // the on-board ground logic's states, when it flew ([ground])
+    if !spool.is_empty() {
+        use helicon_flight::landing::{LandStage, SpoolState};
+        fig = fig
+            .panel(
+                Panel::new("on-board spool state")
+                    .series(Series::new("spool state", &spool))
+                    .categories(SpoolState::ALL.iter().map(|s| s.as_str())),
+            )
+            .panel(
+                Panel::new("land detector")
+                    .series(Series::new("land detector stage", &stage).color([200, 60, 40]))
+                    .categories(LandStage::ALL.iter().map(|s| s.as_str())),
+            );
+    }
     let mut files = vec![csv_path];
     for ext in ["png", "svg"] {
         let path = dir.join(format!("ground.{ext}"));
@@ -883,6 +907,28 @@ pub fn write_ground(
         files.push(path);
     }
     Ok(files)
+}
+
+/// A coded state of the ground rows as a step line: each change drawn
+/// vertically at the sample it happened (empty when the rows have none).
+fn steps(
+    rows: &[crate::closed_loop::GroundRow],
+    code: impl Fn(&crate::closed_loop::GroundRow) -> f64,
+) -> Vec<(f64, f64)> {
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    for r in rows {
+        let v = code(r);
+        if !v.is_finite() {
+            continue;
+        }
+        if let Some(&(_, last)) = pts.last()
+            && last != v
+        {
+            pts.push((r.t_s, last));
+        }
+        pts.push((r.t_s, v));
+    }
+    pts
 }
 
 #[cfg(test)]

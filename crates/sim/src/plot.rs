@@ -389,6 +389,9 @@ pub struct Panel<'a> {
     pub y_include: Vec<f64>,
     /// Extra legend lines (text only), e.g. a limit outside the view.
     pub notes: Vec<String>,
+    /// Names of the y values 0, 1, 2 … (a coded state): the axis shows
+    /// them at those values instead of numbers ([`Panel::categories`]).
+    pub y_categories: Vec<String>,
 }
 
 impl<'a> Panel<'a> {
@@ -406,7 +409,23 @@ impl<'a> Panel<'a> {
         self
     }
 
+    /// Name the y values 0, 1, 2 … (the codes of a state): the axis spans
+    /// every name, labelled by name at its value.
+    pub fn categories<'n>(mut self, names: impl IntoIterator<Item = &'n str>) -> Self {
+        self.y_categories = names.into_iter().map(str::to_string).collect();
+        self
+    }
+
     fn y_bounds(&self) -> Option<(f64, f64)> {
+        if !self.y_categories.is_empty() {
+            // every name shown, the data or not
+            self.series
+                .iter()
+                .flat_map(|s| s.points.iter())
+                .any(|p| p.0.is_finite() && p.1.is_finite())
+                .then_some((-0.5, self.y_categories.len() as f64 - 0.5))?;
+            return Some((-0.5, self.y_categories.len() as f64 - 0.5));
+        }
         let mut b = (f64::INFINITY, f64::NEG_INFINITY);
         let ys = self
             .series
@@ -545,19 +564,42 @@ impl<'a> Figure<'a> {
         // with it, and a shared one runs on beside the panels that share it
         let (_, legend) = body.split_horizontally(self.width_px.saturating_sub(LEGEND_W));
         let xf = move |v: &f64| tick_label(*v, x0, x1, X_LABELS);
+        // room for the names of a coded state's axis
+        let y_area = if self.panels.iter().any(|p| !p.y_categories.is_empty()) {
+            118
+        } else {
+            88
+        };
         let blank = |_: &f64| String::new();
         for (i, ((panel, row), (y0, y1))) in self.panels.iter().zip(&rows).zip(ranges).enumerate() {
             let last = i + 1 == n;
             let legend_x = self.width_px.saturating_sub(LEGEND_W);
             let (left, _) = row.split_horizontally(legend_x);
-            let yf = move |v: &f64| tick_label(*v, y0, y1, Y_LABELS);
+            let categories = &panel.y_categories;
+            let yf = move |v: &f64| {
+                if categories.is_empty() {
+                    return tick_label(*v, y0, y1, Y_LABELS);
+                }
+                let k = v.round();
+                match categories.get(k as usize) {
+                    Some(name) if (v - k).abs() < 1e-6 && k >= 0.0 => name.clone(),
+                    _ => String::new(),
+                }
+            };
+            let y_labels = if categories.is_empty() {
+                Y_LABELS
+            } else {
+                // a tick at each code: plotters keeps a step of 1 for up
+                // to this many labels on a span of n
+                categories.len() + 1
+            };
             let mut chart = ChartBuilder::on(&left)
                 .margin_top(9)
                 .margin_bottom(if last { 0 } else { 9 })
                 .margin_right(12)
                 .margin_left(6)
                 .x_label_area_size(if last { X_AXIS_H } else { 0 })
-                .y_label_area_size(88)
+                .y_label_area_size(y_area)
                 .build_cartesian_2d(x0..x1, y0..y1)
                 .map_err(|e| err(&e))?;
             let mut mesh = chart.configure_mesh();
@@ -568,7 +610,7 @@ impl<'a> Figure<'a> {
                 .light_line_style(RGBColor(240, 240, 240))
                 .bold_line_style(RGBColor(212, 212, 212))
                 .x_labels(X_LABELS)
-                .y_labels(Y_LABELS)
+                .y_labels(y_labels)
                 .y_label_formatter(&yf);
             if self.log_x {
                 mesh.disable_x_mesh().x_label_formatter(&blank);

@@ -28,40 +28,60 @@ fn ground_to_ground_flies_spools_takes_off_and_lands() {
     );
     let m = f.summary.ground.unwrap();
     eprintln!("{m:#?}");
+    let cfg = g.landing_config();
     let weight = params.body.mass_kg * params.environment.g_m_s2;
     let first = f.ground.first().unwrap();
     let last = f.ground.last().unwrap();
-    // starts at rest on the skids, rotor stopped
+    // starts at rest on the skids, rotor stopped, the on-board logic disarmed
     assert_eq!(first.sample.omega_rad_s, 0.0);
     assert!(first.sample.clearance_m < 0.0);
     assert!(((first.sample.normal_n.iter().sum::<f64>() - weight) / weight).abs() < 1e-3);
-    // on the ground before the take-off: spooled up to the governed speed,
-    // still on the skids
-    let before = f.ground.iter().rfind(|r| r.t_s < g.takeoff_s).unwrap();
+    // the on-board take-off waits for its run-up timer after the arming
+    // (the operator's auto at takeoff_s comes first): it begins the sample
+    // after arm + runup_s (one control period, 2.5 ms)
+    let ts = params.control.sample_time_s;
+    let t_to = m.takeoff_start_s.unwrap();
+    assert!(t_to > g.takeoff_s);
+    assert!(
+        (t_to - (g.spool_up_s + cfg.runup_s)).abs() <= ts + 1e-9,
+        "{t_to}"
+    );
+    // on the ground before it: spooled up to the governed speed (the
+    // governor's 5 s soft start is within the 8 s run-up), on the skids
+    let before = f.ground.iter().rfind(|r| r.t_s < t_to).unwrap();
     let omega_gov = params.main_rotor.omega_rad_s;
     assert!((before.sample.omega_rad_s - omega_gov).abs() < 1e-3 * omega_gov);
     assert!(((before.sample.normal_n.iter().sum::<f64>() - weight) / weight).abs() < 1e-3);
-    // lift-off within the take-off ramp (plus a second), without sliding
+    assert_eq!(before.sample.blend, 0.0);
+    // lift-off within the take-off ramp (plus a second), without sliding;
+    // the on-board detector sees it after (0.3 m up or a 0.3 m/s climb)
     let t_lo = m.liftoff_time_s.unwrap();
-    assert!(
-        t_lo > g.takeoff_s && t_lo < g.takeoff_s + g.ramp_s + 1.0,
-        "{t_lo}"
-    );
+    assert!(t_lo > t_to && t_lo < t_to + g.ramp_s + 1.0, "{t_lo}");
+    assert_eq!(m.arm_to_liftoff_s.unwrap(), t_lo - g.spool_up_s);
+    assert!(m.liftoff_detected_s.unwrap() > t_lo);
     assert!(m.liftoff_drift_m.unwrap() < 0.1);
     assert!((m.liftoff_omega_rad_s.unwrap() - omega_gov).abs() < 0.01 * omega_gov);
-    // it climbed: 1 m/s for 5 s
+    // it climbed: 1 m/s from the take-off to 12 s
     let top = f
         .ground
         .iter()
         .map(|r| r.sample.clearance_m)
         .fold(f64::NEG_INFINITY, f64::max);
-    assert!(top > 4.0, "{top}");
+    assert!(top > 1.5, "{top}");
     // a soft landing at the commanded 0.5 m/s descent, hardly sliding
     let vz = m.touchdown_vertical_speed_m_s.unwrap();
     assert!(vz > 0.1 && vz < 0.6, "{vz}");
     assert!(m.touchdown_horizontal_speed_m_s.unwrap() < 0.2);
     assert!(m.touchdown_drift_m.unwrap() < 0.05);
     assert!(m.touchdown_peak_normal_n.unwrap() < 1.5 * weight);
+    // the land detector's three stages after the touchdown (each a third
+    // of trigger_s at least, the descent asked a trigger time first), then
+    // the disarm shutdown_delay_s later
+    let t_td = m.touchdown_time_s.unwrap();
+    let t_landed = m.landed_detected_s.unwrap();
+    assert!(t_landed - t_td > cfg.trigger_s, "{t_landed}");
+    let t_disarm = m.disarm_time_s.unwrap();
+    assert!((t_disarm - t_landed - g.shutdown_delay_s).abs() <= ts + 1e-9);
     // resting at the end: the weight on the skids, the engine cut
     let n_end: f64 = last.sample.normal_n.iter().sum();
     assert!(
@@ -70,6 +90,75 @@ fn ground_to_ground_flies_spools_takes_off_and_lands() {
     );
     assert_eq!(last.sample.throttle, 0.0);
     assert!(m.final_omega_rad_s < 0.8 * omega_gov);
+}
+
+/// The on-board spool state runs through every state once, in order —
+/// armed at the first sample (`spool_up_s = 0`), disarmed again
+/// `spooldown_s` after the disarm — and the land detector ends landed; the
+/// log's codes are the on-board ones.
+#[test]
+fn the_ground_log_follows_the_on_board_states_in_order() {
+    use helicon_flight::landing::{LandStage, SpoolState};
+    let s = shipped();
+    let p = prepare(&s).unwrap();
+    let f = fly(&s, &p, None).unwrap();
+    let mut seen: Vec<f64> = Vec::new();
+    for r in &f.ground {
+        if seen.last() != Some(&r.sample.spool_state) {
+            seen.push(r.sample.spool_state);
+        }
+    }
+    let want: Vec<f64> = SpoolState::ALL[1..]
+        .iter()
+        .chain(&SpoolState::ALL[..1])
+        .map(|s| f64::from(s.code()))
+        .collect();
+    assert_eq!(seen, want, "{seen:?}");
+    let last = f.ground.last().unwrap();
+    assert_eq!(last.sample.land_stage, f64::from(LandStage::Landed.code()));
+    assert!(
+        f.ground
+            .iter()
+            .any(|r| r.sample.land_stage == f64::from(LandStage::Air.code()))
+    );
+}
+
+/// The figures docs/model-ground.md quotes for the shipped flight, to the
+/// digits it prints (a tolerance of half its last digit).
+#[test]
+fn ground_to_ground_gives_the_documented_figures() {
+    let s = shipped();
+    let p = prepare(&s).unwrap();
+    let f = fly(&s, &p, None).unwrap();
+    let m = f.summary.ground.unwrap();
+    let near = |x: Option<f64>, want: f64, half: f64, what: &str| {
+        let x = x.unwrap();
+        assert!((x - want).abs() <= half, "{what}: {x} vs the docs' {want}");
+    };
+    near(m.takeoff_start_s, 8.00, 0.005, "take-off start");
+    near(m.liftoff_time_s, 9.81, 0.005, "lift-off");
+    near(m.arm_to_liftoff_s, 9.81, 0.005, "arm to lift-off");
+    near(m.liftoff_detected_s, 10.14, 0.005, "lift-off detected");
+    near(m.liftoff_drift_m, 0.011, 0.0005, "lift-off drift");
+    near(m.liftoff_omega_rad_s, 99.9, 0.05, "lift-off rotor speed");
+    near(m.touchdown_time_s, 26.02, 0.005, "touchdown");
+    near(m.touchdown_vertical_speed_m_s, 0.256, 0.0005, "down");
+    near(m.touchdown_horizontal_speed_m_s, 0.045, 0.0005, "across");
+    near(m.touchdown_offset_m, 8.05, 0.005, "offset");
+    near(m.touchdown_drift_m, 0.018, 0.0005, "slide");
+    near(
+        m.landed_detected_s.map(|t| t - m.touchdown_time_s.unwrap()),
+        2.32,
+        0.005,
+        "landed after touchdown",
+    );
+    near(
+        m.disarm_time_s.map(|t| t - m.landed_detected_s.unwrap()),
+        2.00,
+        0.005,
+        "disarm after landed",
+    );
+    near(Some(m.final_omega_rad_s), 53.9, 0.05, "final rotor speed");
 }
 
 #[test]
@@ -126,4 +215,38 @@ fn a_ground_too_close_to_the_design_point_is_refused_naming_the_field() {
         e.contains("landing_gear.ground_down_m") && e.contains("0.3"),
         "{e}"
     );
+}
+
+/// `on_ground = false`: the flight starts in the air at the design point,
+/// the on-board ground logic armed and flying (no arming, no take-off), the
+/// engine governed; the descent ends on the ground and the land detector
+/// lands it there.
+#[test]
+fn a_start_in_the_air_flies_the_law_and_the_land_detector_lands_it() {
+    use helicon_flight::landing::{LandStage, SpoolState};
+    let mut s = shipped();
+    s.ground.as_mut().unwrap().on_ground = false;
+    s.duration_s = 60.0;
+    let p = prepare(&s).unwrap();
+    let f = fly(&s, &p, None).unwrap();
+    assert_eq!(
+        f.summary.outcome,
+        Outcome::Completed,
+        "{:?}",
+        f.summary.reason
+    );
+    let m = f.summary.ground.unwrap();
+    eprintln!("{m:#?}");
+    let first = f.ground.first().unwrap();
+    assert_eq!(
+        first.sample.spool_state,
+        f64::from(SpoolState::Flying.code())
+    );
+    assert_eq!(first.sample.blend, 1.0);
+    assert!(first.sample.clearance_m > 4.0);
+    assert!(m.arm_time_s.is_none() && m.takeoff_start_s.is_none());
+    assert!(m.touchdown_time_s.is_some(), "{m:?}");
+    assert!(m.landed_detected_s.unwrap() > m.touchdown_time_s.unwrap());
+    let last = f.ground.last().unwrap();
+    assert_eq!(last.sample.land_stage, f64::from(LandStage::Landed.code()));
 }

@@ -91,7 +91,11 @@ fn criterion(s: &Stats, c: LandingFailure) -> usize {
 #[test]
 fn a_benign_campaign_has_no_failure_and_a_hard_landing_is_one() {
     // nominal parameters, the scenario's turbulence (W20 = 3.85 m/s) with a
-    // wind seed per run, the default criteria
+    // wind seed per run, the default criteria: the landings are all soft;
+    // one take-off of three (run 2) is a hover in ground effect the
+    // on-board program never detects as a lift-off (below its 0.3 m and
+    // 0.3 m/s, the law's integrators held), withdrawn when the climb ends:
+    // no_liftoff and nothing else
     let calm = hop(3, 0.5, "");
     assert!(calm.landing.is_some(), "a [ground] scenario has criteria");
     let out = tmp("benign");
@@ -99,15 +103,22 @@ fn a_benign_campaign_has_no_failure_and_a_hard_landing_is_one() {
     let g = r.stats.ground.as_ref().unwrap();
     assert_eq!(
         (g.runs, g.failed),
-        (3, 0),
+        (3, 1),
         "{}",
         read(&out.join("stats.md"))
     );
-    assert_eq!(g.failure_rate_low, 0.0);
-    assert!(g.failure_rate_high > 0.5 && g.failure_rate_high < 0.9);
     for c in &g.criteria_failed {
-        assert_eq!(c.runs, 0, "{:?}", c.criterion);
+        let want = usize::from(c.criterion == LandingFailure::NoLiftoff);
+        assert_eq!(c.runs, want, "{:?}", c.criterion);
     }
+    let nominal = calm.prepare_nominal().unwrap();
+    let stalled = calm.run_one(&nominal, 2).record;
+    let n = stalled.metrics.len();
+    assert!(stalled.metrics[n - 1].is_none(), "liftoff_detected_s");
+    assert!(
+        stalled.metrics[n - 14].is_some(),
+        "liftoff_time_s (the truth)"
+    );
     let vz = g.metrics["touchdown_vertical_speed_m_s"].max.unwrap();
     assert!(vz > 0.05 && vz < 0.6, "{vz}");
     // a 3 m/s descent onto the skids: a hard landing (it bounces and rolls
@@ -348,63 +359,105 @@ fn the_first_24_runs_of_the_shipped_campaign_give_the_documented_figures() {
     let t0 = std::time::Instant::now();
     let s = shipped_campaign(24);
     let g = s.ground.as_ref().unwrap();
-    assert_eq!((g.runs, g.failed), (24, 0));
+    // 4 take-offs the on-board program never detected (see
+    // docs/monte-carlo.md), no other failure
+    assert_eq!((g.runs, g.failed), (24, 4));
+    assert_eq!(criterion(&s, LandingFailure::NoLiftoff), 4);
     assert!(
-        (g.failure_rate_high - 0.138).abs() < 5e-4,
-        "{}",
+        (g.failure_rate_low - 0.0668).abs() < 5e-4 && (g.failure_rate_high - 0.3585).abs() < 5e-4,
+        "{} {}",
+        g.failure_rate_low,
         g.failure_rate_high
     );
     let m = |k: &str| &g.metrics[k];
     let vz = m("touchdown_vertical_speed_m_s");
     assert!(
-        near(vz.p50, 0.2827) && near(vz.p95, 0.5659) && near(vz.max, 0.5830),
+        near(vz.p50, 0.2959) && near(vz.p95, 0.3762) && near(vz.max, 0.4264),
         "{vz:?}"
     );
     let lo = m("liftoff_time_s");
     assert!(
-        near(lo.p50, 8.3087) && near(lo.p95, 8.3889) && near(lo.max, 8.4050),
+        near(lo.p50, 9.8375) && near(lo.p95, 10.0120) && near(lo.max, 10.0250),
         "{lo:?}"
     );
+    let arm = m("arm_to_liftoff_s");
+    assert!(near(arm.p50, 9.8375) && near(arm.max, 10.0250), "{arm:?}");
+    let det = m("liftoff_detected_s");
+    assert_eq!(det.n, 20);
+    assert!(near(det.p50, 10.0663) && near(det.max, 11.7600), "{det:?}");
     let off = m("touchdown_offset_m");
     assert!(
-        near(off.p50, 0.1893) && near(off.p95, 0.4282) && near(off.max, 0.4554),
+        near(off.p50, 0.1953) && near(off.p95, 0.4248) && near(off.max, 0.7100),
         "{off:?}"
     );
     let tilt = m("max_tilt_on_ground_rad");
-    assert!(near(tilt.p50, 0.1152) && near(tilt.max, 0.1280), "{tilt:?}");
+    assert!(near(tilt.p50, 0.0550) && near(tilt.max, 0.0815), "{tilt:?}");
     assert!(t0.elapsed().as_secs() < 60, "{:?}", t0.elapsed());
 }
 
 /// The 200-run figures of the docs (`cargo test --release -p helicon-sim
-/// --test mc_ground -- --ignored`; ~20 s of CPU).
+/// --test mc_ground -- --ignored`; ~15 s on 2 shared cores).
 #[test]
 #[ignore = "the whole 200-run campaign: run with --ignored"]
 fn the_shipped_campaign_gives_the_documented_figures() {
     let s = shipped_campaign(200);
     let g = s.ground.as_ref().unwrap();
-    assert_eq!((g.runs, g.failed), (200, 4));
+    assert_eq!((g.runs, g.failed), (200, 29));
+    assert_eq!(criterion(&s, LandingFailure::NoLiftoff), 25);
     assert_eq!(criterion(&s, LandingFailure::TipOver), 3);
-    assert_eq!(criterion(&s, LandingFailure::Diverged), 1);
+    assert_eq!(criterion(&s, LandingFailure::Diverged), 3);
     assert!(
-        (g.failure_rate_low - 0.0078).abs() < 1e-4,
+        (g.failure_rate_low - 0.1029).abs() < 1e-4,
         "{}",
         g.failure_rate_low
     );
     assert!(
-        (g.failure_rate_high - 0.0503).abs() < 1e-4,
+        (g.failure_rate_high - 0.2005).abs() < 1e-4,
         "{}",
         g.failure_rate_high
     );
     let vz = &g.metrics["touchdown_vertical_speed_m_s"];
     assert!(
-        near(vz.p50, 0.3069) && near(vz.p95, 0.5539) && near(vz.max, 0.7200),
+        near(vz.p50, 0.2878) && near(vz.p95, 0.5125) && near(vz.max, 0.6855),
         "{vz:?}"
     );
     let tilt = &g.metrics["max_tilt_on_ground_rad"];
     assert!(
-        near(tilt.p50, 0.1155) && near(tilt.p95, 0.1280) && near(tilt.max, 0.3091),
+        near(tilt.p50, 0.0525) && near(tilt.p95, 0.0816) && near(tilt.max, 1.2619),
         "{tilt:?}"
     );
+    let det = &g.metrics["liftoff_detected_s"];
+    assert_eq!(det.n, 175);
+    assert!(
+        near(det.p50, 10.0425) && near(det.p95, 11.4760) && near(det.max, 11.9675),
+        "{det:?}"
+    );
+    let first = |c: LandingFailure| {
+        g.criteria_failed
+            .iter()
+            .find(|x| x.criterion == c)
+            .unwrap()
+            .first_run
+    };
+    assert_eq!(first(LandingFailure::NoLiftoff), Some(0));
+    assert_eq!(first(LandingFailure::TipOver), Some(94));
+    assert_eq!(first(LandingFailure::Diverged), Some(138));
+    assert_eq!(criterion(&s, LandingFailure::TouchdownSideways), 1);
+    assert_eq!(criterion(&s, LandingFailure::TouchdownDrift), 2);
+    assert_eq!(criterion(&s, LandingFailure::HardLanding), 0);
+    for (k, p50, p95, max) in [
+        ("touchdown_horizontal_speed_m_s", 0.0468, 0.1265, 0.7729),
+        ("liftoff_time_s", 9.8150, 10.0155, 10.0700),
+        ("liftoff_drift_m", 0.0124, 0.0261, 0.0561),
+        ("touchdown_offset_m", 0.1807, 0.4539, 0.8095),
+        ("touchdown_drift_m", 0.0200, 0.0558, 0.6698),
+    ] {
+        let m = &g.metrics[k];
+        assert!(
+            near(m.p50, p50) && near(m.p95, p95) && near(m.max, max),
+            "{k}: {m:?}"
+        );
+    }
 }
 
 #[test]
@@ -413,10 +466,17 @@ fn the_hop_scenario_flies_as_the_campaign_says() {
     let p = prepare(&s).unwrap();
     let f = fly(&s, &p, None).unwrap();
     let g = f.summary.ground.unwrap();
-    // the tilt on the ground is the roll on the last loaded skid at lift-off
+    // the tilt on the ground is the roll on the last loaded skid at lift-off:
+    // about 2° with the on-board take-off (the law's integrators held until
+    // lift-off), 0.02 ... 0.05 rad
     assert!(
-        g.max_tilt_on_ground_rad > 0.05 && g.max_tilt_on_ground_rad < 0.14,
+        g.max_tilt_on_ground_rad > 0.02 && g.max_tilt_on_ground_rad < 0.05,
         "{g:?}"
     );
+    assert!(g.liftoff_detected_s.is_some(), "{g:?}");
+    // the nominal hop lifts off 1.7 s into the on-board take-off ramp
+    // (docs/monte-carlo.md, to its printed digit)
+    let into = g.liftoff_time_s.unwrap() - g.takeoff_start_s.unwrap();
+    assert!((into - 1.7).abs() <= 0.05, "{into}");
     assert!(g.touchdown_offset_m.unwrap() < 0.5, "{g:?}");
 }

@@ -665,8 +665,10 @@ pub const GROUND_START_DOWN_M: f64 = 5.0;
 /// below the origin unless the parameters place it), the drivetrain and the
 /// ground effect on, and a `[ground]` section starting on the skids, rotor
 /// stopped. A scenario that already starts on the ground is returned as it
-/// is. The simulator's take-off plan of `[ground]` is not used by SITL: the
-/// on-board ground logic flies the take-off and the landing.
+/// is. The operator times of `[ground]` (`spool_up_s`, `takeoff_s`: the
+/// arming and the switch to auto that `helicon sim` plays) are not used by
+/// SITL: its receiver or ground station arms, and the on-board ground logic
+/// (the same `helicon sim` flies) takes off and lands.
 pub fn ground_start(scenario: &Scenario) -> Result<(Scenario, helicon_model::Params), SitlError> {
     let mut params = helicon_sim::closed_loop::scenario_params(scenario)?;
     let mut s = scenario.clone();

@@ -123,11 +123,7 @@ impl<'a> Hardware<'a> {
     pub fn set_throttle_hold(&mut self, hold: bool) {
         let omega = self.plant.omega_rad_s();
         if let Some(spool) = self.spool.as_mut() {
-            if hold {
-                spool.stop();
-            } else {
-                spool.start(omega);
-            }
+            crate::ground::apply_throttle_hold(spool, hold, omega);
         }
     }
 

@@ -584,9 +584,9 @@ fn fly_with(
     }
     let mut plant = Plant::new(scenario, prepared, ts);
     let params = prepared.model.params();
-    let mut plan = scenario
-        .ground
-        .map(|g| crate::ground::GroundPlan::new(&g, params, ts, &plant.x));
+    let mut plan = scenario.ground.map(|g| {
+        crate::ground::GroundFlight::new(&g, params, ts, &prepared.gains.set.u_trim, &plant.x)
+    });
     let mut ground_rows = Vec::new();
     if plant.ground.is_some() {
         check_log_memory(rows, std::mem::size_of::<GroundRow>())?;
@@ -614,7 +614,17 @@ fn fly_with(
         };
         let record = record_sensors.then_some(&mut sensors);
         let exc = excitations.at(t);
-        let tel = match onboard.step(t, &plant, &reference, &exc, record, health.as_mut()) {
+        // the on-board ground logic: the law held on the ground and until
+        // lift-off, the servos' command blended from ground idle
+        if plan
+            .as_ref()
+            .is_some_and(crate::ground::GroundFlight::holds_law)
+        {
+            onboard.reset_feedback();
+        }
+        let servo = |u: &Input| plan.as_mut().and_then(|p| p.servo(u));
+        let stepped = onboard.step(t, &plant, &reference, &exc, record, health.as_mut(), servo);
+        let (tel, gyro) = match stepped {
             Ok(tel) => tel,
             Err(e) => {
                 reason = Some((
@@ -627,18 +637,34 @@ fn fly_with(
         let x_start = plant.x;
         let omega_start = plant.omega_rad_s();
         let contact_start = plant.ground.as_ref().map(|g| g.contact);
-        let command = match plan.as_mut() {
-            Some(plan) => {
-                let on_ground = contact_start.is_some_and(|c| c.on_ground());
-                let c = plan.command(t, &tel.command, on_ground, &plant.x, omega_start);
-                plan.observe_contact(contact_start.map_or(0.0, |c| c.total_normal_n()));
-                if let Some(g) = plant.ground.as_mut() {
-                    g.drive = plan.drive(params);
-                }
-                c
+        let command = tel.command;
+        if let Some(plan) = plan.as_mut() {
+            let truth = plant.truth(t);
+            let onboard_view = crate::ground::OnBoardView {
+                // the navigation's solution; the truth with ideal navigation
+                position_velocity_ned: Some(
+                    tel.navigation
+                        .map_or((truth.pos_ned_m, truth.vel_ned_m_s), |n| {
+                            (n.position_ned_m, n.velocity_ned_m_s)
+                        }),
+                ),
+                gyro_body_rad_s: Some(gyro.unwrap_or(truth.omega_body_rad_s)),
+            };
+            plan.update(
+                t,
+                &reference,
+                &onboard_view,
+                &crate::ground::TruthView {
+                    x: &x_start,
+                    on_ground: contact_start.is_some_and(|c| c.on_ground()),
+                    total_normal_n: contact_start.map_or(0.0, |c| c.total_normal_n()),
+                    omega_rad_s: omega_start,
+                },
+            );
+            if let Some(g) = plant.ground.as_mut() {
+                g.drive = plan.drive(params);
             }
-            None => tel.command,
-        };
+        }
         let step = plant.advance(&command, &wind_ned);
         // the log keeps every `decimation`-th sample (and the last one)
         if k % decimation == 0 || k == n {
@@ -707,10 +733,10 @@ fn fly_with(
 }
 
 /// The ground row of one sample: the state at its start, the contact there,
-/// the plan, the plant's auxiliary outputs.
+/// the on-board ground logic after it, the plant's auxiliary outputs.
 fn ground_row(
     prepared: &Prepared,
-    plan: Option<&crate::ground::GroundPlan>,
+    plan: Option<&crate::ground::GroundFlight>,
     t_s: f64,
     x: &State,
     omega_rad_s: f64,
@@ -733,8 +759,9 @@ fn ground_row(
             normal_n: contact.normal_n,
             friction_n: contact.friction_n.iter().sum(),
             ground_effect_factor: aux.ground_effect_factor,
-            phase: plan.map_or(2.0, |p| p.phase().code()),
-            blend: plan.map_or(1.0, crate::ground::GroundPlan::blend),
+            spool_state: plan.map_or(f64::NAN, |p| f64::from(p.spool_state().code())),
+            land_stage: plan.map_or(f64::NAN, |p| f64::from(p.land_stage().code())),
+            blend: plan.map_or(1.0, |p| p.sample_blend()),
         },
     }
 }

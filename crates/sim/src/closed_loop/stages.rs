@@ -4,6 +4,7 @@
 
 use super::*;
 use helicon_core::SensorComputer;
+use helicon_core::lqi::StateFeedback;
 use helicon_core::schedule::{AnyPredictor, Law};
 use helicon_model::drivetrain::{DriveCommand, RotorState, Spool, governed_state};
 use helicon_model::landing_gear::{Anchors, ContactWrench, contact_wrench, resting_state};
@@ -342,8 +343,21 @@ impl OnBoard {
         })
     }
 
+    /// Clear the law's integrators (the on-board ground logic holds them).
+    pub(super) fn reset_feedback(&mut self) {
+        match self {
+            OnBoard::Sensed { computer, .. } => computer.reset_feedback(),
+            OnBoard::IdealNavigation(c) => c.feedback.reset(),
+            OnBoard::Truth { computer, .. } => computer.feedback.reset(),
+        }
+    }
+
     /// One control sample against the plant's true state; the sensor frame
-    /// and its truth are pushed to `record` when given.
+    /// and its truth are pushed to `record` when given. `servo` makes the
+    /// servos' command of the law's (`None`: the law's; see
+    /// [`FlightComputer::step_servo`]). Returns the telemetry and the IMU's
+    /// body rates when sensor models ran.
+    #[allow(clippy::too_many_arguments)] // one sample's inputs, each from its own stage
     pub(super) fn step(
         &mut self,
         t_s: f64,
@@ -352,7 +366,8 @@ impl OnBoard {
         excitation: &Input,
         record: Option<&mut Vec<SensorLogRow>>,
         health: Option<&mut ImuHealthMonitor>,
-    ) -> Result<Telemetry, CoreError> {
+        servo: impl FnOnce(&Input) -> Option<Input>,
+    ) -> Result<(Telemetry, Option<Vector3<f64>>), CoreError> {
         let xr: ReducedState = reduce(&plant.x);
         let sense = |suite: &mut SensorSuite| {
             let truth = plant.truth(t_s);
@@ -371,14 +386,15 @@ impl OnBoard {
         match self {
             OnBoard::Sensed { suite, computer } => {
                 let frame = sense(suite);
-                computer.step_with_excitation(&frame, reference, excitation)
+                let tel = computer.step_servo(&frame, reference, excitation, servo)?;
+                Ok((tel, Some(frame.imu.gyro_body_rad_s)))
             }
             OnBoard::IdealNavigation(computer) => {
                 let m = StateMeasurement {
                     t_s,
                     measured: SVector::from_fn(|i, _| xr[i]),
                 };
-                computer.step_with_excitation(&m, reference, excitation)
+                Ok((computer.step_servo(&m, reference, excitation, servo)?, None))
             }
             OnBoard::Truth {
                 computer,
@@ -387,20 +403,27 @@ impl OnBoard {
                 let nav = match navigation {
                     Some((suite, filter)) => {
                         let frame = sense(suite);
-                        Some((filter.step(&frame)?, filter.solution()))
+                        Some((
+                            filter.step(&frame)?,
+                            filter.solution(),
+                            frame.imu.gyro_body_rad_s,
+                        ))
                     }
                     None => None,
                 };
-                let mut tel = computer.step_with_excitation(
+                let mut tel = computer.step_servo(
                     &TruthMeasurement { t_s, state: xr },
                     reference,
                     excitation,
+                    servo,
                 )?;
-                if let Some((y, solution)) = nav {
+                let mut gyro = None;
+                if let Some((y, solution, g)) = nav {
                     tel.measured = y;
                     tel.navigation = Some(solution);
+                    gyro = Some(g);
                 }
-                Ok(tel)
+                Ok((tel, gyro))
             }
         }
     }

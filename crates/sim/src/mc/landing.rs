@@ -127,7 +127,8 @@ pub enum LandingFailure {
     NotFlown,
     /// The flight stopped early (attitude, rate, model, …).
     Diverged,
-    /// No lift-off within `max_liftoff_delay_s` of the take-off ramp's start.
+    /// No lift-off within `max_liftoff_delay_s` of the take-off ramp's start,
+    /// or one the on-board program never detected.
     NoLiftoff,
     /// Slid more than `max_liftoff_drift_m` before lift-off.
     LiftoffDrift,
@@ -256,10 +257,18 @@ impl LandingCriteria {
             }
         };
         let liftoff = g("liftoff_time_s");
+        // the delay from the on-board take-off's start (the rotor at speed,
+        // in auto, a climb asked), or from the operator's `takeoff_s` when
+        // it never began
+        let takeoff = g("takeoff_start_s").unwrap_or(self.takeoff_s);
+        // a lift-off the on-board program never detected (a hover in ground
+        // effect below `liftoff_height_m`, the take-off then withdrawn or
+        // given up) is none either
+        let detected = g("liftoff_detected_s");
         set(
             LandingFailure::NoLiftoff,
-            (completed && liftoff.is_none())
-                || over(liftoff, self.takeoff_s + self.max_liftoff_delay_s),
+            (completed && (liftoff.is_none() || detected.is_none()))
+                || over(liftoff, takeoff + self.max_liftoff_delay_s),
         );
         set(
             LandingFailure::LiftoffDrift,

@@ -34,7 +34,7 @@ pub const METRIC_NAMES: [&str; 20] = [
 /// record's `metrics`, in this order (the fields of
 /// [`GroundMetrics`](crate::ground::GroundMetrics); empty when the flight
 /// had none, e.g. no touchdown).
-pub const GROUND_METRIC_NAMES: [&str; 11] = [
+pub const GROUND_METRIC_NAMES: [&str; 14] = [
     "liftoff_time_s",
     "liftoff_drift_m",
     "liftoff_omega_rad_s",
@@ -46,6 +46,9 @@ pub const GROUND_METRIC_NAMES: [&str; 11] = [
     "touchdown_peak_normal_n",
     "max_tilt_on_ground_rad",
     "final_omega_rad_s",
+    "takeoff_start_s",
+    "arm_to_liftoff_s",
+    "liftoff_detected_s",
 ];
 
 /// The metric names of a record: [`METRIC_NAMES`], then
@@ -65,7 +68,7 @@ pub fn metric_count(ground: bool) -> usize {
 
 /// The ground metrics of a flight as record values, in
 /// [`GROUND_METRIC_NAMES`] order.
-pub fn ground_values(m: &crate::ground::GroundMetrics) -> [Option<f64>; 11] {
+pub fn ground_values(m: &crate::ground::GroundMetrics) -> [Option<f64>; 14] {
     [
         m.liftoff_time_s,
         m.liftoff_drift_m,
@@ -78,6 +81,9 @@ pub fn ground_values(m: &crate::ground::GroundMetrics) -> [Option<f64>; 11] {
         m.touchdown_peak_normal_n,
         Some(m.max_tilt_on_ground_rad),
         Some(m.final_omega_rad_s),
+        m.takeoff_start_s,
+        m.arm_to_liftoff_s,
+        m.liftoff_detected_s,
     ]
 }
 
