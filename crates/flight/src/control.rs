@@ -390,7 +390,7 @@ impl ControlTask {
             let u_exc = offset.map_or_else(Input::zeros, |o| o.0);
             // outside the law's modes the predictor is told what the
             // servos get (the pilot's sticks, the trim), not the idle law's
-            let mut applied = match self.supervisor.mode() {
+            let applied = match self.supervisor.mode() {
                 Mode::Auto | Mode::Hold | Mode::Descent => None,
                 Mode::Manual | Mode::Disarmed | Mode::ImuLost => Some(self.supervisor.servo(
                     &self.u_trim,
@@ -399,23 +399,26 @@ impl ControlTask {
                 )),
             };
             // on the ground: the law's integrators held, the predictor told
-            // the blend from ground idle (of the last command, this one's
-            // comes after)
+            // this sample's command blended from ground idle (the servos
+            // blend the same below; `self.law` stays the law's own)
+            let mut blend = None;
             if let Some(l) = &self.landing {
                 if l.holds_law() {
                     self.computer.reset_feedback();
                 }
                 if self.supervisor.mode() != Mode::Manual && l.blend() < 1.0 {
-                    let cmd = applied.unwrap_or(self.law);
-                    applied = Some(l.idle() + (cmd - l.idle()) * l.blend());
+                    blend = Some((*l.idle(), l.blend()));
                 }
             }
-            match self
-                .computer
-                .step_applied(frame, &reference, &u_exc, applied.as_ref())
-            {
+            let mut law = None;
+            let stepped = self.computer.step_servo(frame, &reference, &u_exc, |u| {
+                law = Some(*u);
+                let sent = applied.unwrap_or(*u);
+                blend.map_or(applied, |(idle, b)| Some(idle + (sent - idle) * b))
+            });
+            match stepped {
                 Ok(t) => {
-                    self.law = t.command;
+                    self.law = law.unwrap_or(t.command);
                     self.heading_rad = t.estimate[2];
                     // a valid fix the navigation's innovation gate refused
                     // (a jump) counts as missing, as a refused one

@@ -21,9 +21,11 @@
 //! - **Take-off**: ready, in `auto`, with a reference that climbs (the
 //!   navigator's take-off, a mission's first leg, a scenario's `vd < 0`),
 //!   the servo command blends from ground idle into the law's over
-//!   `takeoff_ramp_s`, the integrators still held, until lift-off: the
-//!   estimated height `liftoff_height_m` above where it stood, or a climb
-//!   faster than `liftoff_climb_m_s`. The integrators then run. A climb
+//!   `takeoff_ramp_s`, the integrators held until the ramp is complete
+//!   and running from then (PX4's take-off: without them, the law's
+//!   command can hover in ground effect below the lift-off test). Lift-off:
+//!   the estimated height `liftoff_height_m` above where it stood, or a
+//!   climb faster than `liftoff_climb_m_s`. A climb
 //!   withdrawn before lift-off, or no lift-off `takeoff_timeout_s` after the
 //!   ramp, blends back to ground idle (ready).
 //! - **The land detector** (PX4's three stages): *ground contact* — no
@@ -398,10 +400,18 @@ impl Landing {
             && self.stage == LandStage::Landed
     }
 
-    /// The law's integrators are held at zero this sample (on the ground,
-    /// and taking off until lift-off).
+    /// The law's integrators are held at zero this sample: on the ground,
+    /// and taking off until the ramp has reached the law's command (as
+    /// PX4's take-off releases its integrators once the throttle ramp is
+    /// done). From there they run, so a climb the law without its
+    /// integrators would not make (a hover in ground effect below the
+    /// lift-off test) lifts off or meets the take-off's timeout.
     pub fn holds_law(&self) -> bool {
-        self.state != SpoolState::Flying
+        match self.state {
+            SpoolState::Flying => false,
+            SpoolState::TakingOff => self.ramp_done_s.is_none(),
+            _ => true,
+        }
     }
 
     /// The rotor is at speed (ready, taking off, flying, landed).
@@ -732,13 +742,16 @@ mod tests {
         }
         assert_eq!(l.state(), SpoolState::Ready);
         assert!((log[1].0 - c.runup_s).abs() < 2.0 * TS, "{log:?}");
-        // a climb: the ramp, held integrators, then lift-off at 0.3 m
+        // a climb: the ramp with the integrators held, the integrators
+        // released once it is complete (the skids still down), then
+        // lift-off at 0.3 m
         let law = Input::new(0.12, 0.0, 0.0, 0.05);
         let t_climb = t;
         let mut z = -0.3;
+        let mut released = false;
         while l.state() != SpoolState::Flying {
             t += TS;
-            if t - t_climb > 1.0 {
+            if t - t_climb > c.takeoff_ramp_s + 0.5 {
                 z -= 0.5 * TS;
             }
             let (u, _) = step(
@@ -750,9 +763,14 @@ mod tests {
                 &law,
             );
             assert!(u[0] <= law[0] + 1e-12);
-            assert!(l.holds_law() || l.state() == SpoolState::Flying);
+            if l.state() == SpoolState::TakingOff {
+                assert_eq!(l.holds_law(), l.blend() < 1.0, "t = {t}");
+                released |= !l.holds_law();
+            }
             assert!(t - t_climb < 5.0, "no lift-off");
         }
+        assert!(released, "the integrators ran before lift-off");
+        assert!(!l.holds_law());
         assert!((-0.3 - z - c.liftoff_height_m).abs() < 0.01, "{z}");
         assert_eq!(l.ground_state().landed, LandedState::InAir);
         // the landing: still, a descent asked, the collective falling with

@@ -361,7 +361,7 @@ impl GroundFlight {
     }
 
     /// The law's integrators are held at zero this sample (the on-board
-    /// ground logic: on the ground, and taking off until lift-off).
+    /// ground logic: on the ground, and taking off until the ramp has reached the law).
     pub fn holds_law(&self) -> bool {
         self.landing.holds_law()
     }
