@@ -237,3 +237,44 @@ fn a_full_output_buffer_drops_frames_without_blocking() {
     let n = pty.read_timeout(&mut buf, Duration::from_secs(5)).unwrap();
     assert_eq!(&buf[..n], frame.as_bytes());
 }
+
+/// A read of nothing from a readable line is the line's end: an error (the
+/// device lost, its port to be reopened), never "nothing yet". Nothing
+/// within the timeout is `Ok(0)`. The end is made for real: the terminal
+/// put in canonical mode (as a program that leaves a line cooked does)
+/// reads 0 bytes at its end-of-file character, as a line whose driver
+/// ended reads.
+#[test]
+fn a_zero_byte_read_of_a_readable_line_is_its_end() {
+    use rustix::fs::{Mode, OFlags};
+    use rustix::termios::{LocalModes, OptionalActions, SpecialCodeIndex};
+    let mut pty = PtyPair::open().unwrap();
+    let mut link = SerialLink::open(pty.slave_path(), 115_200, Duration::from_millis(100)).unwrap();
+    let mut buf = [0u8; 64];
+    assert_eq!(
+        link.read_chunk(&mut buf).unwrap(),
+        0,
+        "a quiet line is not its end"
+    );
+    pty.write_all(b"abc").unwrap();
+    assert_eq!(link.read_chunk(&mut buf).unwrap(), 3);
+    // the same terminal opened again (not as a controlling terminal) and
+    // cooked, its end-of-file character Ctrl-D
+    let fd = rustix::fs::open(
+        pty.slave_path(),
+        OFlags::RDWR | OFlags::NOCTTY,
+        Mode::empty(),
+    )
+    .unwrap();
+    let mut t = rustix::termios::tcgetattr(&fd).unwrap();
+    t.local_modes |= LocalModes::ICANON;
+    t.special_codes[SpecialCodeIndex::VEOF] = 4;
+    rustix::termios::tcsetattr(&fd, OptionalActions::Now, &t).unwrap();
+    pty.write_all(&[4]).unwrap();
+    let err = link.read_chunk(&mut buf).unwrap_err();
+    let text = err.to_string();
+    assert!(
+        text.contains("end of file") && text.contains(&pty.slave_path().display().to_string()),
+        "{text}"
+    );
+}

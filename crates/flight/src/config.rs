@@ -138,9 +138,10 @@ pub struct RcConfig {
     /// long (s): one glitching frame, or a toggling channel, does nothing.
     pub arm_hold_s: f64,
     /// A kill channel (1-based, 6..=8), high above 1500 µs: held for
-    /// `kill_hold_s` it disarms at any time. With one configured the arm
-    /// switch disarms only on the ground; without, the arm switch is the
-    /// only disarm of the receiver (held `arm_hold_s`).
+    /// `kill_hold_s` it disarms at any time: the receiver's only disarm in
+    /// flight. The arm switch (held `arm_hold_s`) disarms only on the
+    /// ground, which the ground logic (`landing.enabled`) tells; without
+    /// it, the arm switch never disarms an armed helicopter.
     pub kill_channel: Option<u8>,
     /// The kill channel acts once held this long (s; 0.1 s is five frames).
     pub kill_hold_s: f64,

@@ -65,6 +65,10 @@ pub struct ControlOutput {
     /// frames refused so far, when that count is 1 or a power of two (as
     /// [`ControlOutput::rejection`]: the first and each doubling).
     pub rc_refusal: Option<u64>,
+    /// The receiver's arm switch moved to off in flight this step and was
+    /// refused (only the kill channel disarms in flight), with the refusals
+    /// so far: the log's and the operator's [`DISARM_REFUSED_TEXT`].
+    pub disarm_refusal: Option<u64>,
     /// The engine is cut (the servo frame's throttle hold): on the ground
     /// disarmed, with the ground logic ([`ControlTask::with_landing`]);
     /// never without it.
@@ -76,6 +80,10 @@ pub struct ControlOutput {
 /// The operator's text of refused receiver frames (at most 50 bytes: one
 /// MAVLink STATUSTEXT).
 pub const RC_REFUSED_TEXT: &str = "RC: channel out of range, frame refused";
+
+/// The operator's text of an arm switch moved to off in flight (at most 50
+/// bytes: one MAVLink STATUSTEXT): refused, the helicopter flies on.
+pub const DISARM_REFUSED_TEXT: &str = "RC: disarm refused in flight (kill channel only)";
 
 /// Whether the `count`-th refusal of a kind is told (logged, sent to the
 /// ground station): the first and each doubling, never one per sample.
@@ -477,6 +485,10 @@ impl ControlTask {
             rc_link_change,
             rejection,
             rc_refusal,
+            disarm_refusal: self
+                .supervisor
+                .take_disarm_refused()
+                .then(|| self.supervisor.disarms_refused()),
             throttle_hold: landing.is_some_and(|l| l.throttle_hold),
             landing,
         }

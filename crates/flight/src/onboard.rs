@@ -352,6 +352,15 @@ pub fn run_until(
     for w in &handle.warnings() {
         eprintln!("warning: {w}");
     }
+    if !cfg.landing.enabled && cfg.rc.kill_channel.is_none() {
+        // the arm switch disarms only on the ground, which nothing tells
+        eprintln!(
+            "warning: {}: [landing] enabled = false and no rc.kill_channel: the receiver cannot \
+             disarm (the arm switch disarms only on the ground); set rc.kill_channel for a kill \
+             switch",
+            cfg.file
+        );
+    }
     while !handle.is_finished() {
         if stop.load(Ordering::SeqCst) {
             handle.stop();

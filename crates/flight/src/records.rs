@@ -2,7 +2,7 @@
 //! message set, plus the supervisor's events with their precise reason,
 //! carried to the logger thread through lock-free rings (all `Copy`).
 
-use crate::control::{ControlOutput, ImuHealthChange, RC_REFUSED_TEXT, Tick};
+use crate::control::{ControlOutput, DISARM_REFUSED_TEXT, ImuHealthChange, RC_REFUSED_TEXT, Tick};
 use crate::landing::{LandStage, LandingStep, SpoolState};
 use crate::mission::NavigatorNews;
 use crate::plausibility::Rejection;
@@ -70,6 +70,14 @@ pub enum FlightRecord {
         /// On-board time (s).
         t_s: f64,
         /// Frames refused so far.
+        count: u64,
+    },
+    /// The receiver's arm switch moved to off in flight: refused (only the
+    /// kill channel disarms in flight), the helicopter flies on.
+    DisarmRefused {
+        /// On-board time (s).
+        t_s: f64,
+        /// Refusals so far.
         count: u64,
     },
     /// A device's port failed (read error, end of file, hang-up) or came
@@ -365,6 +373,16 @@ pub fn write_record<W: Write>(log: &mut FlightLog<W>, r: &FlightRecord) -> Resul
                 "rc_input: frame refused",
             )
         }
+        FlightRecord::DisarmRefused { t_s, count } => {
+            let ts = timestamp_us(*t_s, "disarm refused")?;
+            log_fmt(
+                log,
+                LogLevel::Warning,
+                ts,
+                format_args!("rc_input: {DISARM_REFUSED_TEXT} ({count} so far) at t = {t_s:.4} s"),
+                "rc_input: disarm refused",
+            )
+        }
         FlightRecord::Device { t_s, event } => {
             let ts = timestamp_us(*t_s, "device")?;
             let level = if event.lost {
@@ -580,6 +598,12 @@ pub fn step_records(
     }
     if let Some(count) = out.rc_refusal {
         push(FlightRecord::RcRefused {
+            t_s: tick.now_s,
+            count,
+        });
+    }
+    if let Some(count) = out.disarm_refusal {
+        push(FlightRecord::DisarmRefused {
             t_s: tick.now_s,
             count,
         });

@@ -20,7 +20,7 @@
 //! on-board time is k·Ts from the first message). Either way each step is
 //! the [`ControlTask`]'s and sends exactly one servo frame.
 
-use crate::control::{ControlTask, RC_REFUSED_TEXT, StepReport, Tick};
+use crate::control::{ControlTask, DISARM_REFUSED_TEXT, RC_REFUSED_TEXT, StepReport, Tick};
 pub use crate::mission::{LastStep, Mission, flight_mode};
 use crate::realtime::{self, LatencyStats, LatencySummary, RealtimeStatus};
 use crate::records::{FlightRecord, step_records, write_record};
@@ -795,6 +795,9 @@ fn control_loop(
         }
         if out.rc_refusal.is_some() {
             mission.notify(now_s, VehicleEvent::Warning(RC_REFUSED_TEXT));
+        }
+        if out.disarm_refusal.is_some() {
+            mission.notify(now_s, VehicleEvent::Warning(DISARM_REFUSED_TEXT));
         }
         if let Some(c) = out.imu_health_change {
             mission.notify(now_s, VehicleEvent::Warning(c.text()));

@@ -34,11 +34,14 @@
 //! disarm ([`Supervisor::arm`], [`Supervisor::disarm`]) holds until the
 //! switch moves again. Once the supervisor is told where the helicopter is
 //! ([`Supervisor::set_landed`]: the land detector of
-//! [`crate::landing`]), arming off the ground is refused and the arm
-//! switch disarms only on the ground; so it does with a kill channel
-//! configured (`rc.kill_channel`). The kill channel held `rc.kill_hold_s`
-//! disarms at any time (reason `kill`); the ground logic disarms after its
-//! time on the ground (reason `landed`). A receiver frame with a channel outside the receiver's range is
+//! [`crate::landing`]), arming off the ground is refused. The arm switch
+//! disarms only on the ground: moved to off in flight, or while nothing
+//! has told the supervisor where the helicopter is (no ground logic), it is
+//! refused and said ([`Supervisor::take_disarm_refused`]); the helicopter
+//! flies on. Disarming in flight is the kill channel's alone
+//! (`rc.kill_channel`, held `rc.kill_hold_s`: reason `kill`) or the ground
+//! station's forced disarm; the ground logic disarms after its time on the
+//! ground (reason `landed`). A receiver frame with a channel outside the receiver's range is
 //! refused: not a frame of the pilot's.
 //!
 //! Sensor faults: a sample refused by the plausibility gate
@@ -295,6 +298,14 @@ pub struct Supervisor {
     ground_known: bool,
     /// The last disarm was the one after a landing.
     landed_disarm: bool,
+    /// The arm switch moved to off in flight and was refused, not yet
+    /// taken ([`Supervisor::take_disarm_refused`]).
+    disarm_refused: bool,
+    /// Arm-switch disarms refused so far.
+    disarms_refused: u64,
+    /// The arm switch has been off since a refused disarm: it disarms once
+    /// on the ground.
+    disarm_held_in_flight: bool,
 }
 
 impl Supervisor {
@@ -325,6 +336,9 @@ impl Supervisor {
             landed: false,
             ground_known: false,
             landed_disarm: false,
+            disarm_refused: false,
+            disarms_refused: 0,
+            disarm_held_in_flight: false,
         }
     }
 
@@ -338,8 +352,7 @@ impl Supervisor {
 
     /// Tell the supervisor whether the helicopter is on the ground (the land
     /// detector's or the navigator's word; until told, it is taken as
-    /// flying). With a kill channel configured, the arm switch disarms only
-    /// on the ground.
+    /// flying). The arm switch disarms only on the ground.
     pub fn set_landed(&mut self, landed: bool) {
         self.landed = landed;
         self.ground_known = true;
@@ -377,6 +390,17 @@ impl Supervisor {
             self.armed = false;
             self.landed_disarm = true;
         }
+    }
+
+    /// Whether the arm switch moved to off in flight since the last call
+    /// and was refused (the helicopter flies on): what the operator is told.
+    pub fn take_disarm_refused(&mut self) -> bool {
+        std::mem::take(&mut self.disarm_refused)
+    }
+
+    /// Arm-switch disarms refused so far (the switch moved to off in flight).
+    pub fn disarms_refused(&self) -> u64 {
+        self.disarms_refused
     }
 
     /// Armed (the flag: the mode follows at the next update).
@@ -558,8 +582,8 @@ impl Supervisor {
 
     /// The receiver's arm switch and kill channel of a frame of the pilot's:
     /// the switch's new position is taken once held `rc.arm_hold_s` (a
-    /// glitching or toggling channel does nothing); with a kill channel
-    /// configured it disarms only on the ground, the kill channel held
+    /// glitching or toggling channel does nothing); it disarms only on the
+    /// ground (refused in flight, counted), the kill channel held
     /// `rc.kill_hold_s` disarms at any time.
     fn arm_switch(&mut self, rc: &RcInput, now_s: f64) {
         let held = |since: f64, hold: f64| now_s - since >= hold - 1e-9;
@@ -577,6 +601,16 @@ impl Supervisor {
         }
         if self.rc_armed == Some(rc.armed) {
             self.arm_pending = None;
+            if !rc.armed
+                && self.armed
+                && self.disarm_held_in_flight
+                && self.ground_known
+                && self.landed
+            {
+                // held off since it was refused in flight: on the ground it acts
+                self.armed = false;
+                self.disarm_held_in_flight = false;
+            }
             return;
         }
         let since = match self.arm_pending {
@@ -592,13 +626,20 @@ impl Supervisor {
         // the switch moved (or its first position) and held: it acts
         self.arm_pending = None;
         self.rc_armed = Some(rc.armed);
+        self.disarm_held_in_flight = false;
         if rc.armed {
             if self.kill_since.is_none() && (self.landed || !self.ground_known) {
                 self.armed = true;
                 self.landed_disarm = false;
             }
-        } else if (self.rc_config.kill_channel.is_none() && !self.ground_known) || self.landed {
+        } else if self.ground_known && self.landed {
             self.armed = false;
+        } else if self.armed {
+            // in flight (or nothing says it is on the ground): only the
+            // kill channel disarms there
+            self.disarm_refused = true;
+            self.disarms_refused += 1;
+            self.disarm_held_in_flight = true;
         }
     }
 
@@ -848,7 +889,8 @@ mod tests {
         assert!(s.update(&h, None, 0.0).is_none());
         let ev = s.update(&h, None, 0.0).unwrap();
         assert_eq!((ev.to, ev.reason), (Mode::Hold, Reason::Overrun));
-        // disarmed: trim, nothing beyond
+        // disarmed (on the ground): trim, nothing beyond
+        s.set_landed(true);
         let ev = s
             .update(&health(0.05, true), Some(&rc(false, false)), 0.0)
             .unwrap();
@@ -868,7 +910,9 @@ mod tests {
         let ev = s.update(&h, None, 0.2).unwrap();
         assert_eq!((ev.to, ev.reason), (Mode::Hold, Reason::MagStale));
         assert_eq!(s.latched(), Some(Reason::MagStale));
-        // disarm, then arm again with a healthy magnetometer: auto, latch cleared
+        // disarm (on the ground), then arm again with a healthy
+        // magnetometer: auto, latch cleared
+        s.set_landed(true);
         s.update(&health(0.6, true), Some(&rc(false, false)), 0.2);
         assert_eq!(s.latched(), None);
         let ev = s
@@ -883,6 +927,7 @@ mod tests {
             .with_rc(instant());
         let off = rc(false, false);
         let on = rc(false, true);
+        s.set_landed(true);
         // the switch off at its first frame: disarmed
         assert!(s.update(&health(0.0, true), Some(&off), 0.0).is_none());
         // the ground station arms: the switch, still off, does not undo it
@@ -925,13 +970,19 @@ mod tests {
             assert!(step(&mut s, if k % 2 == 0 { &on } else { &off }).is_none());
         }
         assert_eq!(s.mode(), Mode::Auto);
-        // held low 0.5 s: disarmed (no kill channel configured)
-        let mut ev = None;
-        for _ in 0..26 {
-            ev = ev.or(step(&mut s, &off));
+        assert!(!s.take_disarm_refused());
+        // held low 0.5 s: nothing says it is on the ground, so it flies on,
+        // the refusal said once (no kill channel configured)
+        let mut refused = 0;
+        for _ in 0..60 {
+            assert!(step(&mut s, &off).is_none());
+            refused += usize::from(s.take_disarm_refused());
         }
+        assert_eq!((s.mode(), refused, s.disarms_refused()), (Mode::Auto, 1, 1));
+        // still held low when the land detector says it is down: disarmed
+        s.set_landed(true);
         assert_eq!(
-            ev.map(|e| (e.to, e.reason)),
+            step(&mut s, &off).map(|e| (e.to, e.reason)),
             Some((Mode::Disarmed, Reason::Disarmed))
         );
     }

@@ -55,6 +55,11 @@ enum Fault {
     RcWild,
     /// The arm switch toggling every frame.
     ArmToggling,
+    /// The arm switch moved to off and held there (no kill channel).
+    ArmOff,
+    /// The kill channel (channel 6, configured as `rc.kill_channel`) high
+    /// and held.
+    Kill,
     /// The pilot's switch in manual, the sticks at the receiver's range
     /// (800 and 2200 µs: in range, beyond the servos' limits).
     ManualOverLimit,
@@ -110,13 +115,18 @@ fn fly(tag: &str, fault: Fault, at_s: f64, extra: &str, duration_s: f64) -> Run 
          [devices.avionics]\npath = \"{}\"\nbaud = 115200\n\
          [stale]\nimu_s = 0.05\ngps_s = 1.0\nmag_s = 0.5\nrc_s = 0.3\n\
          [failsafe]\nhold_s = 30.0\n\
-         [rc]\narm_hold_s = 0.2\n\
+         [rc]\narm_hold_s = 0.2\n{kill}\
          [landing]\nenabled = false\n\
          [log]\ndir = \"logs\"\n\
          [realtime]\nsched_fifo = false\nmlockall = false\n{extra}\n",
         links[0].display(),
         links[1].display(),
         links[2].display(),
+        kill = if fault == Fault::Kill {
+            "kill_channel = 6\n"
+        } else {
+            ""
+        },
     );
     std::fs::write(dir.join("onboard.toml"), cfg_text).unwrap();
     let cfg = OnboardConfig::from_file(&dir.join("onboard.toml")).unwrap();
@@ -189,6 +199,12 @@ fn fly(tag: &str, fault: Fault, at_s: f64, extra: &str, duration_s: f64) -> Run 
                     }
                     if faulty && fault == Fault::ArmToggling && k % 16 == 8 {
                         channels_us[4] = 1000;
+                    }
+                    if faulty && fault == Fault::ArmOff {
+                        channels_us[4] = 1000;
+                    }
+                    if faulty && fault == Fault::Kill {
+                        channels_us[5] = 2000;
                     }
                     let manual = faulty && fault == Fault::ManualOverLimit;
                     if manual {
@@ -541,6 +557,35 @@ fn wild_channels_are_refused_and_a_toggling_arm_switch_does_nothing() {
         run.ulog.texts_with("disarmed at").is_empty()
             && run.ulog.texts_with("-> disarmed").is_empty()
     );
+}
+
+/// The arm switch moved to off in flight and held there: with no kill
+/// channel configured (and no ground logic to say the helicopter is down)
+/// it is refused and said once, the helicopter flying on in auto. With a
+/// kill channel configured, the kill held `rc.kill_hold_s` (0.1 s)
+/// disarms at once, reason `kill`.
+#[test]
+fn the_arm_switch_never_disarms_in_flight_only_the_kill_channel_does() {
+    let run = fly("arm_off", Fault::ArmOff, 0.5, "", 2.0);
+    assert!(run.report.error.is_none(), "{:?}", run.report.error);
+    assert_eq!(run.report.final_mode, "auto");
+    let refused = run.ulog.texts_with("disarm refused in flight");
+    assert_eq!(refused.len(), 1, "{:?}", run.ulog.texts);
+    assert!(
+        run.ulog.texts_with("-> disarmed").is_empty(),
+        "{:?}",
+        run.ulog.texts
+    );
+    let run = fly("kill", Fault::Kill, 0.5, "", 2.0);
+    assert!(run.report.error.is_none(), "{:?}", run.report.error);
+    assert_eq!(run.report.final_mode, "disarmed");
+    let t_kill = first(&run, "kill: auto -> disarmed");
+    let t_armed = first(&run, "armed: disarmed -> auto");
+    eprintln!(
+        "kill channel: disarmed {:.3} s after arming",
+        t_kill - t_armed
+    );
+    assert!(run.ulog.texts_with("disarm refused").is_empty());
 }
 
 /// The pilot flying manual with the sticks at the receiver's range (800
