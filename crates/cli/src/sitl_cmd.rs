@@ -542,7 +542,7 @@ fn run_onboard(a: &SitlArgs) -> Result<()> {
             out_dir: out.clone(),
             faults: Faults {
                 gps_lost_from_s: a.gps_loss_at,
-                imu_frozen_s: None,
+                ..Faults::default()
             },
             pilot: Pilot {
                 manual_from_s: a.manual_at,

@@ -71,6 +71,28 @@ pub struct Faults {
     /// The IMU repeats its last packet (its time does not advance) over
     /// this interval (s).
     pub imu_frozen_s: Option<(f64, f64)>,
+    /// The GPS receiver reports no fix over this interval (s): NAV-PVT
+    /// messages with a valid checksum, fix type 0 and no valid-fix flag.
+    pub gps_no_fix_s: Option<(f64, f64)>,
+    /// One glitching fix, the first at or after this time (s): 10 km
+    /// north, 5 km up, at 300 m/s north (a valid checksum).
+    pub gps_glitch_at_s: Option<f64>,
+    /// The GPS line hangs up at this time (s): the pseudo-terminal's
+    /// master closes, the device is gone for the rest of the run.
+    pub gps_hangup_at_s: Option<f64>,
+    /// IMU samples of 3e38 m/s² along body x over this interval (s): finite,
+    /// beyond any accelerometer's range.
+    pub imu_absurd_s: Option<(f64, f64)>,
+    /// A 3e38-gauss magnetic field over this interval (s).
+    pub mag_absurd_s: Option<(f64, f64)>,
+    /// Receiver frames with every channel at 65535 µs, and 0 µs every other
+    /// frame, over this interval (s).
+    pub rc_wild_s: Option<(f64, f64)>,
+}
+
+/// Whether `t` (s) is in the interval `span` (s), start included.
+fn within(span: Option<(f64, f64)>, t: f64) -> bool {
+    span.is_some_and(|(a, b)| t >= a && t < b)
 }
 
 /// The pilot's receiver.
@@ -416,6 +438,8 @@ pub fn run(
     let mut u = u_trim;
     let mut last_vn: Option<VnCommon> = None;
     let mut rc_seq = 0u8;
+    let mut gps_up = true;
+    let mut glitched = false;
     let mut sent = Vec::new();
     // (a long run grows it: at most ten minutes up front)
     let mut received = if options.keep_frames {
@@ -443,7 +467,7 @@ pub fn run(
             let pilot = &options.pilot;
             let manual = pilot.manual_from_s.is_some_and(|m| t >= m)
                 && pilot.manual_until_s.is_none_or(|m| t < m);
-            let failsafe = pilot.rc_failsafe_s.is_some_and(|(a, b)| t >= a && t < b);
+            let failsafe = within(pilot.rc_failsafe_s, t);
             let mut channels_us = [1500u16; 8];
             for i in 0..4 {
                 channels_us[i] = stick_us(u_trim[i] + pilot.stick_offset[i]);
@@ -452,6 +476,9 @@ pub fn run(
             if failsafe {
                 channels_us = [1500u16; 8];
                 channels_us[4] = 1000;
+            }
+            if within(options.faults.rc_wild_s, t) {
+                channels_us = [if s.k % 16 == 0 { 65535 } else { 0 }; 8];
             }
             let frame = RcFrame {
                 seq: rc_seq,
@@ -471,24 +498,47 @@ pub fn run(
             .faults
             .gps_lost_from_s
             .is_none_or(|t_loss| t < t_loss);
-        if let (Some(fix), true) = (&s.frame.gps, gps_on) {
+        if gps_up && options.faults.gps_hangup_at_s.is_some_and(|h| t >= h) {
+            // the line hangs up: the master closes, the slave's path goes
+            wires.gps = PtyPair::open().map_err(dev("GPS pseudo-terminal"))?;
+            gps_up = false;
+        }
+        if let (Some(fix), true, true) = (&s.frame.gps, gps_on, gps_up) {
             let itow_ms = ((TOW0_S + fix.epoch_s) * 1000.0).round() as u32;
-            let pvt =
-                NavPvt::from_gps_fix(fix, &home, itow_ms, 0.0).map_err(dev("GPS encoding"))?;
+            let mut fix = *fix;
+            if !glitched && options.faults.gps_glitch_at_s.is_some_and(|g| t >= g) {
+                glitched = true;
+                fix.position_ned_m = nalgebra::Vector3::new(10_000.0, 0.0, -5_000.0);
+                fix.velocity_ned_m_s = Some(nalgebra::Vector3::new(300.0, 0.0, 0.0));
+            }
+            let mut pvt =
+                NavPvt::from_gps_fix(&fix, &home, itow_ms, 0.0).map_err(dev("GPS encoding"))?;
+            if within(options.faults.gps_no_fix_s, t) {
+                pvt.fix_type = 0;
+                pvt.flags = 0;
+            }
             wires
                 .gps
                 .write_all(pvt.encode().as_bytes())
                 .map_err(dev("GPS"))?;
         }
         // the IMU (and magnetometer): last, it paces the on-board software
-        let frozen = options
-            .faults
-            .imu_frozen_s
-            .is_some_and(|(a, b)| t >= a && t < b);
+        let frozen = within(options.faults.imu_frozen_s, t);
         let vn = match (frozen, last_vn) {
             (true, Some(v)) => v,
-            _ => VnCommon::from_samples(t, &s.frame.imu, s.frame.mag_body.as_ref())
-                .map_err(dev("IMU encoding"))?,
+            _ => {
+                let mut imu = s.frame.imu;
+                if within(options.faults.imu_absurd_s, t) {
+                    imu.specific_force_body_m_s2.x = 3e38;
+                }
+                let absurd = nalgebra::Vector3::new(3e38, 0.0, 0.0);
+                let mag = if within(options.faults.mag_absurd_s, t) {
+                    s.frame.mag_body.map(|_| absurd)
+                } else {
+                    s.frame.mag_body
+                };
+                VnCommon::from_samples(t, &imu, mag.as_ref()).map_err(dev("IMU encoding"))?
+            }
         };
         last_vn = Some(vn);
         let bytes = vn.encode().map_err(dev("IMU encoding"))?;
