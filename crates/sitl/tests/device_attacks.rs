@@ -70,14 +70,15 @@ fn first(f: &Flown, needle: &str) -> f64 {
 }
 
 /// The time from the fault (`AT_S`) to `failsafe`, printed and checked to
-/// lie in `range` (s).
-fn fault_to(f: &Flown, what: &str, failsafe: &str, range: (f64, f64)) -> f64 {
+/// be exact: the device's last good sample at `last_good_s`, older than
+/// `stale_s` at the next step after `last_good_s + stale_s` (the limit is
+/// "older than", so the step at exactly the limit does not act).
+fn fault_to(f: &Flown, what: &str, failsafe: &str, last_good_s: f64, stale_s: f64) -> f64 {
     let dt = first(f, failsafe) - AT_S;
     eprintln!("lock-step fault to failsafe: {what}: {:.1} ms", dt * 1e3);
-    assert!(
-        dt >= range.0 - 1e-9 && dt <= range.1 + 1e-9,
-        "{what}: {dt} s not in {range:?}"
-    );
+    let want = last_good_s + stale_s + TS - AT_S;
+    // the log's timestamps are whole microseconds
+    assert!((dt - want).abs() < 2e-6, "{what}: {dt} s, not {want} s");
     dt
 }
 
@@ -95,12 +96,8 @@ fn a_gps_without_a_fix_is_refused_and_the_gps_failsafe_acts() {
     );
     let refused = first(&f, "GPS: no 3-D fix, refused (1 so far)");
     assert!((AT_S..AT_S + 0.2 + 0.1).contains(&refused), "{refused}");
-    fault_to(
-        &f,
-        "GPS no fix",
-        "gps_rejected: auto -> hold",
-        (0.8, 1.0 + TS),
-    );
+    // the fixes at 5 Hz: the last good one at 1.9 s
+    fault_to(&f, "GPS no fix", "gps_rejected: auto -> hold", 1.9, 1.0);
     assert_eq!(f.result.onboard.final_mode, "hold");
 }
 
@@ -150,12 +147,7 @@ fn a_gps_line_hung_up_is_a_gps_loss() {
     );
     let lost = first(&f, "device: GPS port lost");
     assert!((AT_S..AT_S + 0.25).contains(&lost), "{lost}");
-    fault_to(
-        &f,
-        "GPS hang-up",
-        "gps_stale: auto -> hold",
-        (0.8, 1.0 + TS),
-    );
+    fault_to(&f, "GPS hang-up", "gps_stale: auto -> hold", 1.9, 1.0);
     assert!(f.log.texts_with("GPS port reopened").is_empty());
     assert_eq!(f.result.onboard.final_mode, "hold");
 }
@@ -178,7 +170,8 @@ fn impossible_imu_samples_are_refused_and_the_imu_is_lost() {
         &f,
         "IMU absurd",
         "imu_rejected: auto -> imu_lost",
-        (0.02, 0.02 + 2.0 * TS),
+        AT_S - TS,
+        0.02,
     );
     assert_eq!(f.result.onboard.final_mode, "imu_lost");
     let att = f.log.f64s("control", "estimate[0]");
@@ -197,12 +190,8 @@ fn an_impossible_field_is_refused_and_the_mag_failsafe_acts() {
         },
     );
     first(&f, "mag: field magnitude implausible, refused (1 so far)");
-    fault_to(
-        &f,
-        "field absurd",
-        "mag_rejected: auto -> hold",
-        (0.49, 0.5 + 2.0 * TS),
-    );
+    // the field at 100 Hz: the last good one at 1.99 s
+    fault_to(&f, "field absurd", "mag_rejected: auto -> hold", 1.99, 0.5);
     assert_eq!(f.result.onboard.final_mode, "hold");
 }
 
@@ -218,12 +207,8 @@ fn wild_receiver_channels_are_refused_and_the_link_is_lost() {
             ..Faults::default()
         },
     );
-    fault_to(
-        &f,
-        "receiver wild",
-        "rc_link: receiver silent",
-        (0.48, 0.5 + 0.02 + TS),
-    );
+    // the frames at 50 Hz: the last good one at 1.98 s
+    fault_to(&f, "receiver wild", "rc_link: receiver silent", 1.98, 0.5);
     let refused = f.result.onboard.rc_frames_refused;
     // 50 frames/s from 2 s to 4.5 s
     assert!((120..=126).contains(&refused), "{refused} frames refused");
