@@ -785,3 +785,95 @@ fn with_signing_unsigned_heartbeats_do_not_hold_off_the_link_loss_failsafe() {
     let report = h.stop();
     assert!(report.refused_unsigned > 100, "{report:?}");
 }
+
+/// A hostile station on the server's port while the vehicle flies in
+/// lock-step: a 1-byte datagram, 300 bytes of junk, an arm command for
+/// another vehicle (system 99) and a takeoff to 3e38 m. The junk is counted
+/// and dropped, the command for another vehicle gets no answer and is not
+/// obeyed, the takeoff is refused with the protocol's result; the station
+/// that flies keeps its telemetry at its rate and arms when it asks.
+#[test]
+fn a_hostile_station_neither_steals_the_link_nor_commands_the_vehicle() {
+    let s = scenario(10.0);
+    let prepared = prepare(&s).unwrap();
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let mut cfg = server_config(&Client::new(None), None);
+    cfg.address = format!("udpin:127.0.0.1:{port}");
+    let mut good = Client::to_port(port, None);
+    let mut h = Harness::new(&s, &prepared, cfg, NavigatorConfig::default(), 4);
+    fly(&mut h, &mut good, 2.0, true);
+    let attitude_ms = |c: &Client, from: usize| {
+        c.collect(from, |m| match m {
+            MavMessage::ATTITUDE(a) => Some(a.time_boot_ms),
+            _ => None,
+        })
+    };
+    let before = rate_hz(&attitude_ms(&good, 0));
+    let from = good.log.len();
+
+    let raw = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let server = format!("127.0.0.1:{port}");
+    raw.send_to(&[0xFD], &server).unwrap();
+    raw.send_to(&[0x55; 300], &server).unwrap();
+    let mut evil = Client::to_port(port, None);
+    evil.send(&MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
+        param1: 1.0,
+        param2: 0.0,
+        param3: 0.0,
+        param4: 0.0,
+        param5: 0.0,
+        param6: 0.0,
+        param7: 0.0,
+        command: MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+        target_system: 99,
+        target_component: 1,
+        confirmation: 0,
+    }));
+    fly(&mut h, &mut good, 0.5, true);
+    evil.drain();
+    assert!(
+        !evil
+            .log
+            .iter()
+            .any(|(_, m)| matches!(m, MavMessage::COMMAND_ACK(_))),
+        "a command for system 99 was answered"
+    );
+    assert!(
+        !h.vehicle().armed(),
+        "armed by a command for another vehicle"
+    );
+    let r = evil.command(
+        MavCmd::MAV_CMD_NAV_TAKEOFF,
+        [0.0, 0.0, 0.0, f32::NAN, 0.0, 0.0, 3e38],
+    );
+    assert!(
+        r.is_some() && r != Some(MavResult::MAV_RESULT_ACCEPTED),
+        "a takeoff to 3e38 m: {r:?}"
+    );
+    fly(&mut h, &mut good, 2.0, true);
+    assert!(!h.vehicle().armed());
+    // the flying station's telemetry went on at its rate
+    let after = rate_hz(&attitude_ms(&good, from));
+    eprintln!(
+        "ATTITUDE to the flying station: {before:.2} Hz before the attack, {after:.2} Hz after"
+    );
+    assert!((after - before).abs() < 0.05 * before, "{before} {after}");
+    let r = good.command(
+        MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    );
+    assert_eq!(r, Some(MavResult::MAV_RESULT_ACCEPTED));
+    fly(&mut h, &mut good, 0.1, true);
+    assert!(h.vehicle().armed());
+    let report = h.stop();
+    eprintln!(
+        "server: {} garbage datagrams, {} for another vehicle",
+        report.garbage_datagrams, report.other_target
+    );
+    assert_eq!(report.garbage_datagrams, 2);
+    assert_eq!(report.other_target, 1);
+}
