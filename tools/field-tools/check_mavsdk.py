@@ -2,9 +2,12 @@
 """MAVSDK-Python (its wheel's mavsdk_server) against `helicon sitl --gcs`:
 connect, wait for a position, action.arm, action.takeoff, a one-waypoint
 mission uploaded and started, its progress to the end, action.land and
-the disarm, with the flight modes MAVSDK decodes on the way.
+the disarm, with the flight modes MAVSDK decodes on the way. With
+`--tcp TCPPORT` the same over TCP: the SITL listens on both (`--gcs
+udpin:…,tcpin:…`) and mavsdk_server connects to the TCP port
+(`tcpout://`), as to a vehicle's TCP port 5760.
 
-    python3 tools/field-tools/check_mavsdk.py PORT
+    python3 tools/field-tools/check_mavsdk.py PORT [--tcp TCPPORT]
 """
 import asyncio
 import math
@@ -24,11 +27,11 @@ async def first(aiter, pred=lambda x: True):
 STAGE = ["start"]
 
 
-async def fly(port):
+async def fly(address, grpc_port):
     from mavsdk import System
     from mavsdk.mission import MissionItem, MissionPlan
-    drone = System(port=50061)
-    await drone.connect(system_address=f"udpout://127.0.0.1:{port}")
+    drone = System(port=grpc_port)
+    await drone.connect(system_address=address)
     await first(drone.core.connection_state(), lambda s: s.is_connected)
     STAGE[0] = "connected"
     modes = []
@@ -64,10 +67,15 @@ async def fly(port):
     return modes
 
 
-def check(port):
-    with Sitl(port) as sitl:
+def check(port, tcp_port=None):
+    if tcp_port is None:
+        gcs, address, grpc_port = None, f"udpout://127.0.0.1:{port}", 50061
+    else:
+        gcs = f"udpin:127.0.0.1:{port},tcpin:127.0.0.1:{tcp_port}"
+        address, grpc_port = f"tcpout://127.0.0.1:{tcp_port}", 50062
+    with Sitl(port, gcs=gcs) as sitl:
         try:
-            modes = asyncio.run(asyncio.wait_for(fly(port), 90))
+            modes = asyncio.run(asyncio.wait_for(fly(address, grpc_port), 90))
         except asyncio.TimeoutError:
             print(sitl.tail(), file=sys.stderr)
             raise CheckFailed(f"timed out after the stage {STAGE[0]!r}")
@@ -75,9 +83,11 @@ def check(port):
             print(sitl.tail(), file=sys.stderr)
             raise CheckFailed(f"after the stage {STAGE[0]!r}: {type(e).__name__}: {e}")
         expect("TAKEOFF" in modes and "MISSION" in modes and "LAND" in modes, f"modes {modes}")
-        return f"arm, takeoff, mission (1 item), land; modes {' → '.join(modes)}"
+        over = "" if tcp_port is None else " over TCP"
+        return f"arm, takeoff, mission (1 item), land{over}; modes {' → '.join(modes)}"
 
 
 if __name__ == "__main__":
     port = int(sys.argv[1]) if len(sys.argv) > 1 else 14604
-    sys.exit(run("mavsdk", lambda: check(port)))
+    tcp = int(sys.argv[3]) if len(sys.argv) > 3 and sys.argv[2] == "--tcp" else None
+    sys.exit(run("mavsdk" if tcp is None else "mavsdk-tcp", lambda: check(port, tcp)))

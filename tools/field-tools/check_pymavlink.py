@@ -4,9 +4,9 @@
 Two ground stations at once (system 255 and 254 on their own ports): the
 HEARTBEAT names PX4's autopilot and modes as pymavlink decodes them;
 AUTOPILOT_VERSION's capabilities; a command id the common dialect does not
-define (ArduPilot's 42424) answered MAV_RESULT_UNSUPPORTED; a rally-point
-upload refused MAV_MISSION_UNSUPPORTED in its own type; each station's answers to
-it alone; arm, takeoff (NaN: the default height), the mode LAND set by name
+define (ArduPilot's 42424) answered MAV_RESULT_UNSUPPORTED; a rally point
+uploaded and downloaded in its own mission type (MAV_MISSION_TYPE_RALLY), the
+flight mission untouched; each station's answers to it alone; arm, takeoff (NaN: the default height), the mode LAND set by name
 (pymavlink's px4_map) and the disarm at touchdown.
 
     python3 tools/field-tools/check_pymavlink.py PORT
@@ -47,7 +47,7 @@ def fly(port, d):
     a.mav.command_long_send(1, 1, M.MAV_CMD_REQUEST_MESSAGE, 0, M.MAVLINK_MSG_ID_AUTOPILOT_VERSION,
                             0, 0, 0, 0, 0, 0)
     av = recv(a, "AUTOPILOT_VERSION", d, "AUTOPILOT_VERSION")
-    for cap in ("MISSION_INT", "COMMAND_INT", "MAVLINK2", "PARAM_FLOAT"):
+    for cap in ("MISSION_INT", "COMMAND_INT", "MAVLINK2", "PARAM_FLOAT", "MISSION_FENCE", "MISSION_RALLY"):
         expect(av.capabilities & getattr(M, f"MAV_PROTOCOL_CAPABILITY_{cap}"), f"capability {cap}")
     ack = recv(a, "COMMAND_ACK", d, "REQUEST_MESSAGE ack",
                lambda m: m.command == M.MAV_CMD_REQUEST_MESSAGE)
@@ -62,10 +62,26 @@ def fly(port, d):
                          condition="COMMAND_ACK.command==42424")
     expect(stray is None, "B's answer reached A")
 
-    # a rally-point upload: refused in its own type, the mission untouched
-    b.mav.mission_count_send(1, 1, 3, M.MAV_MISSION_TYPE_RALLY)
+    # a rally point 30 m north of home, uploaded from B in its own type and read back
+    rally = M.MAV_MISSION_TYPE_RALLY
+    x, y = round((57.0146 + 30.0 / 111_400.0) * 1e7), round(9.9869 * 1e7)
+    b.mav.mission_count_send(1, 1, 1, rally)
+    req = recv(b, "MISSION_REQUEST_INT", d, "rally MISSION_REQUEST_INT", lambda m: m.mission_type == rally)
+    expect(req.seq == 0 and (req.target_system, req.target_component) == (254, 190), f"{req}")
+    b.mav.mission_item_int_send(1, 1, 0, M.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT, M.MAV_CMD_NAV_RALLY_POINT,
+                                0, 0, 0, 0, 0, 0, x, y, 10.0, rally)
     ack = recv(b, "MISSION_ACK", d, "rally MISSION_ACK")
-    expect(ack.type == M.MAV_MISSION_UNSUPPORTED and ack.mission_type == M.MAV_MISSION_TYPE_RALLY, f"{ack}")
+    expect(ack.type == M.MAV_MISSION_ACCEPTED and ack.mission_type == rally, f"{ack}")
+    b.mav.mission_request_list_send(1, 1, rally)
+    n = recv(b, "MISSION_COUNT", d, "rally MISSION_COUNT", lambda m: m.mission_type == rally)
+    expect(n.count == 1, f"{n}")
+    b.mav.mission_request_int_send(1, 1, 0, rally)
+    it = recv(b, "MISSION_ITEM_INT", d, "rally MISSION_ITEM_INT", lambda m: m.mission_type == rally)
+    expect((it.x, it.y, it.command) == (x, y, M.MAV_CMD_NAV_RALLY_POINT), f"{it}")
+    b.mav.mission_request_list_send(1, 1, M.MAV_MISSION_TYPE_MISSION)
+    n = recv(b, "MISSION_COUNT", d, "mission MISSION_COUNT",
+             lambda m: m.mission_type == M.MAV_MISSION_TYPE_MISSION)
+    expect(n.count == 0, f"the flight mission changed: {n}")
 
     # fly from A: arm, take off to the default height, land by mode name
     a.mav.command_long_send(1, 1, M.MAV_CMD_COMPONENT_ARM_DISARM, 0, 1, 0, 0, 0, 0, 0, 0)
@@ -91,7 +107,7 @@ def fly(port, d):
          and not m.base_mode & M.MAV_MODE_FLAG_SAFETY_ARMED)
     seen = [x for i, x in enumerate(modes) if i == 0 or modes[i - 1] != x]
     expect("TAKEOFF" in seen and "LAND" in seen, f"modes {seen}")
-    return f"PX4 modes {' → '.join(seen)}; unknown command and rally points refused; two stations"
+    return f"PX4 modes {' → '.join(seen)}; unknown command refused; a rally point up and down; two stations"
 
 
 if __name__ == "__main__":

@@ -16,6 +16,8 @@
 //! - [`modes`]: the navigator's modes as PX4's custom modes (what ground
 //!   stations name, set and fly).
 //! - [`params`]: the parameter table (typed, validated).
+//! - [`rally`]: rally points, the safe landing places a return picks from
+//!   (the nearest of home and them).
 //! - [`server`]: the MAVLink 2 server (common dialect, UDP and TCP) on its own thread.
 //! - [`config`]: the `[gcs]` section of the on-board configuration.
 //! - [`client`]: the ground-station side (`helicon gcs`): the vehicles
@@ -32,6 +34,7 @@ pub mod mission_item;
 pub mod modes;
 pub mod navigator;
 pub mod params;
+pub mod rally;
 pub mod server;
 pub mod wpl;
 

@@ -35,6 +35,9 @@ pub enum Uplink {
     /// New fence zones (an upload of `MAV_MISSION_TYPE_FENCE`, checked by
     /// the server; boxed like a plan).
     Zones(Box<crate::fence::Zones>),
+    /// New rally points (an upload of `MAV_MISSION_TYPE_RALLY`, checked by
+    /// the server; boxed like a plan).
+    Rally(Box<crate::rally::RallyPoints>),
     /// A guided target.
     Guided(GuidedTarget),
     /// A status text the server told the operator of its own accord (a
@@ -440,6 +443,7 @@ impl Vehicle {
             }
             Uplink::Plan(p) => self.nav.set_plan(*p),
             Uplink::Zones(z) => self.nav.set_zones(*z),
+            Uplink::Rally(r) => self.nav.set_rally(*r),
             Uplink::Config(c) => {
                 // validated by the server; a refusal here keeps the old one
                 let before = *self.nav.config();

@@ -21,6 +21,7 @@
 //! `d = 0`. Allocation-free: a mission is a fixed-capacity [`Plan`].
 
 use crate::fence::{Fence, FenceAction, Zones};
+use crate::rally::RallyPoints;
 use helicon_core::Reference;
 use helicon_core::frames::wrap_pi;
 use nalgebra::Vector3;
@@ -324,7 +325,8 @@ pub enum NavMode {
     Mission,
     /// Holding a position and heading.
     Hold,
-    /// Flying home at the current height, then landing.
+    /// Flying to the nearest of home and the rally points at the current
+    /// height, then landing there.
     Return,
     /// Descending to the ground where it is.
     Land,
@@ -433,6 +435,8 @@ pub struct Navigator {
     fence_breached: bool,
     /// The zones uploaded into the fence (none: the cylinder alone).
     zones: Zones,
+    /// The rally points (none: a return flies home).
+    rally: RallyPoints,
 }
 
 impl Navigator {
@@ -456,6 +460,7 @@ impl Navigator {
             last_t_s: None,
             fence_breached: false,
             zones: Zones::default(),
+            rally: RallyPoints::default(),
         })
     }
 
@@ -513,6 +518,17 @@ impl Navigator {
         &self.zones
     }
 
+    /// Replace the rally points (checked by the server): the next return
+    /// flies to the nearest of home and them.
+    pub fn set_rally(&mut self, rally: RallyPoints) {
+        self.rally = rally;
+    }
+
+    /// The rally points.
+    pub fn rally(&self) -> &RallyPoints {
+        &self.rally
+    }
+
     fn enter(&mut self, mode: NavMode, events: &mut Events) {
         if self.mode != mode {
             self.mode = mode;
@@ -558,10 +574,12 @@ impl Navigator {
         self.enter(NavMode::Land, events);
     }
 
-    /// Fly home at the current height, then land.
+    /// Fly to the nearest of home and the rally points at the current
+    /// height, then land there.
     pub fn return_home(&mut self, at: &NavInput, events: &mut Events) {
         self.init(at);
-        self.target_ned_m = Vector3::new(0.0, 0.0, at.position_ned_m.z);
+        let (place, _) = self.rally.nearest(&at.position_ned_m);
+        self.target_ned_m = Vector3::new(place.x, place.y, at.position_ned_m.z);
         self.target_yaw_rad = None;
         self.leg_speed_m_s = self.config.cruise_speed_m_s;
         self.enter(NavMode::Return, events);

@@ -543,14 +543,14 @@ fn mission_types_and_the_upload_timeout_follow_the_microservice() {
             _ => None,
         })
     };
-    // a rally upload is refused in its type, a fence clear accepted in
-    // its; the flight mission stays
+    // an upload of type ALL is refused in its type, a fence clear
+    // accepted in its; the flight mission stays
     let from = c.log.len();
     c.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
         count: 4,
         target_system: 1,
         target_component: 1,
-        mission_type: MavMissionType::MAV_MISSION_TYPE_RALLY,
+        mission_type: MavMissionType::MAV_MISSION_TYPE_ALL,
         ..MISSION_COUNT_DATA::DEFAULT
     }));
     c.send(&MavMessage::MISSION_CLEAR_ALL(MISSION_CLEAR_ALL_DATA {
@@ -581,11 +581,11 @@ fn mission_types_and_the_upload_timeout_follow_the_microservice() {
     assert_eq!(it.seq, 1);
     assert!((f64::from(it.x) - 57.0147).abs() < 1e-5, "{}", it.x);
     let fence = MavMissionType::MAV_MISSION_TYPE_FENCE;
-    let rally = MavMissionType::MAV_MISSION_TYPE_RALLY;
+    let all = MavMissionType::MAV_MISSION_TYPE_ALL;
     assert_eq!(
         acks(&c, from),
         vec![
-            (MavMissionResult::MAV_MISSION_UNSUPPORTED, rally, 190),
+            (MavMissionResult::MAV_MISSION_UNSUPPORTED, all, 190),
             (MavMissionResult::MAV_MISSION_ACCEPTED, fence, 190)
         ]
     );

@@ -59,11 +59,20 @@ fn rate_hz(times_ms: &[u32]) -> f64 {
 }
 
 fn upload(c: &mut Client, items: &[MISSION_ITEM_INT_DATA]) -> MavMissionResult {
+    upload_of(c, items, MavMissionType::MAV_MISSION_TYPE_MISSION)
+}
+
+fn upload_of(
+    c: &mut Client,
+    items: &[MISSION_ITEM_INT_DATA],
+    mission_type: MavMissionType,
+) -> MavMissionResult {
     let mut cursor = c.log.len();
     c.send(&MavMessage::MISSION_COUNT(MISSION_COUNT_DATA {
         count: items.len() as u16,
         target_system: 1,
         target_component: 1,
+        mission_type,
         ..MISSION_COUNT_DATA::DEFAULT
     }));
     loop {
@@ -87,12 +96,16 @@ fn upload(c: &mut Client, items: &[MISSION_ITEM_INT_DATA]) -> MavMissionResult {
 }
 
 fn download(c: &mut Client) -> Vec<MISSION_ITEM_INT_DATA> {
+    download_of(c, MavMissionType::MAV_MISSION_TYPE_MISSION)
+}
+
+fn download_of(c: &mut Client, mission_type: MavMissionType) -> Vec<MISSION_ITEM_INT_DATA> {
     let from = c.log.len();
     c.send(&MavMessage::MISSION_REQUEST_LIST(
         MISSION_REQUEST_LIST_DATA {
             target_system: 1,
             target_component: 1,
-            ..MISSION_REQUEST_LIST_DATA::DEFAULT
+            mission_type,
         },
     ));
     let Some(MavMessage::MISSION_COUNT(n)) =
@@ -107,7 +120,7 @@ fn download(c: &mut Client) -> Vec<MISSION_ITEM_INT_DATA> {
                 seq,
                 target_system: 1,
                 target_component: 1,
-                ..MISSION_REQUEST_INT_DATA::DEFAULT
+                mission_type,
             }));
             match c.wait(
                 from,
@@ -876,4 +889,98 @@ fn a_hostile_station_neither_steals_the_link_nor_commands_the_vehicle() {
     );
     assert_eq!(report.garbage_datagrams, 2);
     assert_eq!(report.other_target, 1);
+}
+
+/// Rally points in lock-step SITL: uploaded and downloaded as the mission
+/// protocol's `MAV_MISSION_TYPE_RALLY`; a return from 30 m north flies to
+/// the rally point 45 m north (15 m away, home 30 m) and lands there, as
+/// PX4's default multicopter return picks the nearest of home and the
+/// rally points.
+#[test]
+fn a_return_lands_at_the_nearest_rally_point() {
+    let s = scenario(120.0);
+    let prepared = prepare(&s).unwrap();
+    let mut c = Client::new(None);
+    let cfg = server_config(&c, None);
+    let mut h = Harness::new(&s, &prepared, cfg, NavigatorConfig::default(), 4);
+    fly(&mut h, &mut c, 0.5, true);
+    let home_ned = LocalNed::new(home());
+    let g = home_ned.to_geodetic(&Vector3::new(45.0, 0.0, 0.0));
+    let rally = MISSION_ITEM_INT_DATA {
+        seq: 0,
+        frame: MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+        command: MavCmd::MAV_CMD_NAV_RALLY_POINT,
+        x: (g.latitude_deg * 1e7).round() as i32,
+        y: (g.longitude_deg * 1e7).round() as i32,
+        z: 10.0,
+        target_system: 1,
+        target_component: 1,
+        mission_type: MavMissionType::MAV_MISSION_TYPE_RALLY,
+        ..MISSION_ITEM_INT_DATA::DEFAULT
+    };
+    assert_eq!(
+        upload_of(
+            &mut c,
+            std::slice::from_ref(&rally),
+            MavMissionType::MAV_MISSION_TYPE_RALLY
+        ),
+        MavMissionResult::MAV_MISSION_ACCEPTED
+    );
+    let back = download_of(&mut c, MavMissionType::MAV_MISSION_TYPE_RALLY);
+    assert_eq!(back.len(), 1);
+    assert_eq!(
+        (
+            back[0].x,
+            back[0].y,
+            back[0].z,
+            back[0].command,
+            back[0].mission_type
+        ),
+        (rally.x, rally.y, rally.z, rally.command, rally.mission_type)
+    );
+    // the flight mission is another type: still empty
+    assert!(download(&mut c).is_empty());
+    assert_eq!(
+        c.command(
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut c, 0.1, true);
+    assert_eq!(
+        c.command(
+            MavCmd::MAV_CMD_NAV_TAKEOFF,
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 25.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(&mut h, &mut c, 10.0, true);
+    // guided north at 2 m/s until 30 m north
+    while h.truth_ned_m.x < 30.0 && h.t_s < 60.0 {
+        c.send(&position_target_velocity(2.0, 0.0));
+        fly(&mut h, &mut c, 0.2, true);
+    }
+    let from = h.truth_ned_m;
+    assert_eq!(
+        c.command(
+            MavCmd::MAV_CMD_NAV_RETURN_TO_LAUNCH,
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    let t0 = h.t_s;
+    while h.vehicle().armed() && h.t_s < t0 + 60.0 {
+        fly(&mut h, &mut c, 0.5, true);
+    }
+    let landed = h.truth_ned_m;
+    println!(
+        "return from ({:.1}, {:.1}) m: landed at ({:.2}, {:.2}) m NE, the rally point at (45, 0)",
+        from.x, from.y, landed.x, landed.y
+    );
+    assert!(!h.vehicle().armed(), "not landed within 60 s");
+    assert!(
+        (landed.xy() - nalgebra::Vector2::new(45.0, 0.0)).norm() < 2.0,
+        "landed at {landed}"
+    );
 }

@@ -1,5 +1,6 @@
 //! The mission microservice of the server: uploads (with the item
-//! timeout), downloads and clears of the flight mission and the fence.
+//! timeout), downloads and clears of the flight mission, the fence and the
+//! rally points.
 
 // ground stations still send the superseded *_INT mission frames
 #![allow(deprecated)]
@@ -9,6 +10,7 @@ use crate::fence::{MAX_FENCE_ITEMS, ZoneError, Zones};
 use crate::geo::{MissionError, plan_of};
 use crate::link::Uplink;
 use crate::mission_item::item_float;
+use crate::rally::{MAX_RALLY_POINTS, RallyPoints};
 use mavlink::dialects::common::*;
 
 impl Server {
@@ -97,13 +99,16 @@ impl Server {
         );
     }
 
-    /// The flight mission and the fence are offered; another type (rally
-    /// points, ALL outside a clear) is refused (`MAV_MISSION_UNSUPPORTED`,
-    /// answered in that type). `true`: one offered.
+    /// The flight mission, the fence and the rally points are offered;
+    /// another type (ALL outside a clear) is refused
+    /// (`MAV_MISSION_UNSUPPORTED`, answered in that type). `true`: one
+    /// offered.
     pub(super) fn mission_type_ok(&mut self, mission_type: MavMissionType) -> bool {
         if matches!(
             mission_type,
-            MavMissionType::MAV_MISSION_TYPE_MISSION | MavMissionType::MAV_MISSION_TYPE_FENCE
+            MavMissionType::MAV_MISSION_TYPE_MISSION
+                | MavMissionType::MAV_MISSION_TYPE_FENCE
+                | MavMissionType::MAV_MISSION_TYPE_RALLY
         ) {
             return true;
         }
@@ -111,13 +116,20 @@ impl Server {
         false
     }
 
-    /// The items uploaded of a type (the mission's or the fence's).
+    /// The items uploaded of a type (the mission's, the fence's or the
+    /// rally points').
     pub(super) fn items_of(&self, mission_type: MavMissionType) -> &[MISSION_ITEM_INT_DATA] {
-        if mission_type == MavMissionType::MAV_MISSION_TYPE_FENCE {
-            &self.fence_items
-        } else {
-            &self.mission
+        match mission_type {
+            MavMissionType::MAV_MISSION_TYPE_FENCE => &self.fence_items,
+            MavMissionType::MAV_MISSION_TYPE_RALLY => &self.rally_items,
+            _ => &self.mission,
         }
+    }
+
+    /// Clear the rally points (a return flies home).
+    pub(super) fn clear_rally(&mut self) {
+        self.rally_items.clear();
+        self.uplink(Uplink::Rally(Box::default()));
     }
 
     /// Clear the fence's zones (the cylinder stays).
@@ -133,6 +145,7 @@ impl Server {
         }
         let mission = c.mission_type;
         let fence = mission == MavMissionType::MAV_MISSION_TYPE_FENCE;
+        let rally = mission == MavMissionType::MAV_MISSION_TYPE_RALLY;
         let now = self.now_s();
         if let Upload::Receiving {
             from: owner,
@@ -152,6 +165,8 @@ impl Server {
         }
         let room = if fence {
             MAX_FENCE_ITEMS
+        } else if rally {
+            MAX_RALLY_POINTS
         } else {
             crate::navigator::MAX_MISSION_ITEMS * 2
         };
@@ -162,6 +177,12 @@ impl Server {
         if c.count == 0 && fence {
             self.upload = Upload::Idle;
             self.clear_fence();
+            self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
+            return;
+        }
+        if c.count == 0 && rally {
+            self.upload = Upload::Idle;
+            self.clear_rally();
             self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
             return;
         }
@@ -242,6 +263,23 @@ impl Server {
             return;
         }
         let fence = *self.fence();
+        if mission == MavMissionType::MAV_MISSION_TYPE_RALLY {
+            match RallyPoints::from_items(&self.home, &fence, &self.zones, &items) {
+                Ok(points) => {
+                    self.rally_items = items;
+                    self.uplink(Uplink::Rally(Box::new(points)));
+                    self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
+                }
+                Err(MissionError { seq, rule, result }) => {
+                    self.say(
+                        MavSeverity::MAV_SEVERITY_WARNING,
+                        &format!("rally refused: item {seq}: {rule}"),
+                    );
+                    self.mission_ack(result, mission);
+                }
+            }
+            return;
+        }
         match plan_of(&self.home, &fence, &self.zones, &items) {
             Ok(plan) => {
                 self.mission = items;
@@ -284,14 +322,17 @@ impl Server {
     }
 
     pub(super) fn clear_all(&mut self, mission_type: MavMissionType) {
-        // "all" clears the flight mission and the fence's zones; each type
-        // clears its own only
+        // "all" clears the flight mission, the fence's zones and the rally
+        // points; each type clears its own only
         let all = mission_type == MavMissionType::MAV_MISSION_TYPE_ALL;
         if !all && !self.mission_type_ok(mission_type) {
             return;
         }
         if all || mission_type == MavMissionType::MAV_MISSION_TYPE_FENCE {
             self.clear_fence();
+        }
+        if all || mission_type == MavMissionType::MAV_MISSION_TYPE_RALLY {
+            self.clear_rally();
         }
         if all || mission_type == MavMissionType::MAV_MISSION_TYPE_MISSION {
             self.mission.clear();

@@ -458,6 +458,9 @@ struct Server {
     mission: Vec<MISSION_ITEM_INT_DATA>,
     /// The fence items as uploaded (downloads return them).
     fence_items: Vec<MISSION_ITEM_INT_DATA>,
+    /// The rally points as uploaded (downloads return them; the navigator
+    /// has their positions).
+    rally_items: Vec<MISSION_ITEM_INT_DATA>,
     /// The zones of the fence upload (the server's target checks; the
     /// navigator holds a copy for its own and the breach monitor).
     zones: Zones,
@@ -524,6 +527,7 @@ impl Server {
             status: None,
             mission: Vec::new(),
             fence_items: Vec::new(),
+            rally_items: Vec::new(),
             zones: Zones::default(),
             upload: Upload::Idle,
             last_flight_mode: "",
@@ -1160,6 +1164,7 @@ fn autopilot_version() -> AUTOPILOT_VERSION_DATA {
         capabilities: MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_INT
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
+            | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_MISSION_RALLY
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_COMMAND_INT
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
             | MavProtocolCapability::MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
