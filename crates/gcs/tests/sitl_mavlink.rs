@@ -908,7 +908,7 @@ fn a_return_lands_at_the_nearest_rally_point() {
     let g = home_ned.to_geodetic(&Vector3::new(45.0, 0.0, 0.0));
     let rally = MISSION_ITEM_INT_DATA {
         seq: 0,
-        frame: MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+        frame: MavFrame::MAV_FRAME_GLOBAL_RELATIVE_ALT,
         command: MavCmd::MAV_CMD_NAV_RALLY_POINT,
         x: (g.latitude_deg * 1e7).round() as i32,
         y: (g.longitude_deg * 1e7).round() as i32,
