@@ -428,6 +428,27 @@ fn position_target_velocity(vn: f32, ve: f32) -> MavMessage {
     })
 }
 
+/// Arm, take off to 5 m above home and fly 10 s (the climb and the hold).
+fn arm_and_take_off_to_5_m(h: &mut Harness, c: &mut Client) {
+    assert_eq!(
+        c.command(
+            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(h, c, 0.1, true);
+    assert_eq!(
+        c.command(
+            MavCmd::MAV_CMD_NAV_TAKEOFF,
+            // PX4's param7: AMSL, home at 20 m: 5 m above it
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 25.0]
+        ),
+        Some(MavResult::MAV_RESULT_ACCEPTED)
+    );
+    fly(h, c, 10.0, true);
+}
+
 #[test]
 fn guided_velocity_followed_then_link_loss_returns_and_lands() {
     let s = scenario(120.0);
@@ -442,23 +463,7 @@ fn guided_velocity_followed_then_link_loss_returns_and_lands() {
     cfg.navigator = nav;
     let mut h = Harness::new(&s, &prepared, cfg, nav, 4);
     fly(&mut h, &mut c, 0.5, true);
-    assert_eq!(
-        c.command(
-            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
-            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-        ),
-        Some(MavResult::MAV_RESULT_ACCEPTED)
-    );
-    fly(&mut h, &mut c, 0.1, true);
-    assert_eq!(
-        c.command(
-            MavCmd::MAV_CMD_NAV_TAKEOFF,
-            // PX4's param7: AMSL, home at 20 m: 5 m above it
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 25.0]
-        ),
-        Some(MavResult::MAV_RESULT_ACCEPTED)
-    );
-    fly(&mut h, &mut c, 10.0, true);
+    arm_and_take_off_to_5_m(&mut h, &mut c);
     assert!(
         (h.truth_ned_m.z + 5.0).abs() < 0.5,
         "takeoff to 5 m: d = {}",
@@ -940,22 +945,7 @@ fn a_return_lands_at_the_nearest_rally_point() {
     );
     // the flight mission is another type: still empty
     assert!(download(&mut c).is_empty());
-    assert_eq!(
-        c.command(
-            MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
-            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-        ),
-        Some(MavResult::MAV_RESULT_ACCEPTED)
-    );
-    fly(&mut h, &mut c, 0.1, true);
-    assert_eq!(
-        c.command(
-            MavCmd::MAV_CMD_NAV_TAKEOFF,
-            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 25.0]
-        ),
-        Some(MavResult::MAV_RESULT_ACCEPTED)
-    );
-    fly(&mut h, &mut c, 10.0, true);
+    arm_and_take_off_to_5_m(&mut h, &mut c);
     // guided north at 2 m/s until 30 m north
     while h.truth_ned_m.x < 30.0 && h.t_s < 60.0 {
         c.send(&position_target_velocity(2.0, 0.0));

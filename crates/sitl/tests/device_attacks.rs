@@ -60,13 +60,7 @@ fn fly_twice(tag: &str, faults: Faults) -> Flown {
 
 /// The time (s) of the first text containing `needle`.
 fn first(f: &Flown, needle: &str) -> f64 {
-    let t = f.log.texts_with(needle);
-    assert!(
-        !t.is_empty(),
-        "no text with {needle:?} in {:?}",
-        f.log.texts
-    );
-    t[0].0
+    f.log.first_text(needle)
 }
 
 /// The time from the fault (`AT_S`) to `failsafe`, printed and checked to

@@ -327,13 +327,7 @@ fn values(run: &Run, topic: &str, field: &str) -> Vec<f64> {
 
 /// The first logged text containing `needle`, its time (s).
 fn first(run: &Run, needle: &str) -> f64 {
-    let t = run.ulog.texts_with(needle);
-    assert!(
-        !t.is_empty(),
-        "no text with {needle:?} in {:?}",
-        run.ulog.texts
-    );
-    t[0].0
+    run.ulog.first_text(needle)
 }
 
 /// The GPS line hung up in flight: the program runs on (it ended the

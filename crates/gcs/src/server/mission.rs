@@ -126,6 +126,24 @@ impl Server {
         }
     }
 
+    /// An upload refused: the operator told which item broke which rule (a
+    /// `STATUSTEXT`), the station answered the protocol's result in the
+    /// upload's type; what was there before is kept.
+    fn refuse_upload(
+        &mut self,
+        what: &str,
+        seq: u16,
+        rule: &str,
+        result: MavMissionResult,
+        mission: MavMissionType,
+    ) {
+        self.say(
+            MavSeverity::MAV_SEVERITY_WARNING,
+            &format!("{what} refused: item {seq}: {rule}"),
+        );
+        self.mission_ack(result, mission);
+    }
+
     /// Clear the rally points (a return flies home).
     pub(super) fn clear_rally(&mut self) {
         self.rally_items.clear();
@@ -253,11 +271,7 @@ impl Server {
                     self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
                 }
                 Err(ZoneError { seq, rule, result }) => {
-                    self.say(
-                        MavSeverity::MAV_SEVERITY_WARNING,
-                        &format!("fence refused: item {seq}: {rule}"),
-                    );
-                    self.mission_ack(result, mission);
+                    self.refuse_upload("fence", seq, rule, result, mission);
                 }
             }
             return;
@@ -271,11 +285,7 @@ impl Server {
                     self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
                 }
                 Err(MissionError { seq, rule, result }) => {
-                    self.say(
-                        MavSeverity::MAV_SEVERITY_WARNING,
-                        &format!("rally refused: item {seq}: {rule}"),
-                    );
-                    self.mission_ack(result, mission);
+                    self.refuse_upload("rally", seq, rule, result, mission);
                 }
             }
             return;
@@ -288,11 +298,7 @@ impl Server {
                 self.mission_ack(MavMissionResult::MAV_MISSION_ACCEPTED, mission);
             }
             Err(MissionError { seq, rule, result }) => {
-                self.say(
-                    MavSeverity::MAV_SEVERITY_WARNING,
-                    &format!("mission refused: item {seq}: {rule}"),
-                );
-                self.mission_ack(result, mission);
+                self.refuse_upload("mission", seq, rule, result, mission);
             }
         }
     }

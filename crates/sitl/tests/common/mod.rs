@@ -106,4 +106,12 @@ impl Ulog {
             .map(|(ts, t)| (*ts as f64 * 1e-6, t.clone()))
             .collect()
     }
+
+    /// The time (s) of the first text containing `needle`, which must have
+    /// been logged.
+    pub fn first_text(&self, needle: &str) -> f64 {
+        let t = self.texts_with(needle);
+        assert!(!t.is_empty(), "no text with {needle:?} in {:?}", self.texts);
+        t[0].0
+    }
 }
