@@ -355,38 +355,9 @@ pub fn fly_and_write_with(
         .with_context(|| format!("writing the run outputs to {}", out.display()))?;
     helicon_sim::output::write_ground(out, &flight.ground, &scenario.name)
         .with_context(|| format!("writing the ground files to {}", out.display()))?;
-    write_sensor_log(out, scenario, &flight.sensors)?;
+    helicon_sim::output::write_sensor_log(out, scenario, &flight.sensors)
+        .with_context(|| format!("writing the sensor log to {}", out.display()))?;
     Ok((flight, files, fly_s, t2.elapsed().as_secs_f64()))
-}
-
-/// `sensors.csv`, the sensor log of a flight with `[log] sensors = true`
-/// (the frames its flight software was given, with their truth; nothing
-/// without recorded frames).
-fn write_sensor_log(
-    out: &Path,
-    scenario: &Scenario,
-    rows: &[helicon_sim::sensor_log::SensorLogRow],
-) -> Result<()> {
-    if rows.is_empty() {
-        return Ok(());
-    }
-    let path = out.join("sensors.csv");
-    let name = path.display().to_string();
-    let file = std::fs::File::create(&path).with_context(|| format!("creating {name}"))?;
-    let mut w = helicon_sim::sensor_log::SensorLogWriter::new(
-        std::io::BufWriter::new(file),
-        &name,
-        &format!(
-            "helicon sim: scenario `{}`, sensor seed {}",
-            scenario.name, scenario.sensors.seed
-        ),
-    )?;
-    for r in rows {
-        w.write(r)?;
-    }
-    let mut file = w.finish()?;
-    std::io::Write::flush(&mut file).with_context(|| format!("writing {name}"))?;
-    Ok(())
 }
 
 /// Prepare, fly (with a progress bar on stderr) and write a scenario;

@@ -74,6 +74,9 @@ pub enum OutputError {
     /// Drawing a figure failed.
     #[error(transparent)]
     Plot(#[from] PlotError),
+    /// Writing the sensor log failed.
+    #[error(transparent)]
+    SensorLog(#[from] crate::sensor_log::SensorLogError),
 }
 
 /// The files written for one run.
@@ -798,6 +801,36 @@ pub const GROUND_COLUMNS: [&str; 15] = [
     "land_stage",
     "blend",
 ];
+
+/// `sensors.csv` in `dir`, the sensor log of a flight with `[log] sensors =
+/// true` (the frames its flight software was given, with their truth), its
+/// comment line naming the scenario and the sensor seed; nothing (`None`)
+/// without recorded frames. Returns the file written.
+pub fn write_sensor_log(
+    dir: &Path,
+    scenario: &Scenario,
+    rows: &[crate::sensor_log::SensorLogRow],
+) -> Result<Option<PathBuf>, OutputError> {
+    if rows.is_empty() {
+        return Ok(None);
+    }
+    let path = dir.join("sensors.csv");
+    let file = std::fs::File::create(&path).map_err(|e| io_err(&path, e))?;
+    let mut w = crate::sensor_log::SensorLogWriter::new(
+        std::io::BufWriter::new(file),
+        &path.display().to_string(),
+        &format!(
+            "helicon sim: scenario `{}`, sensor seed {}",
+            scenario.name, scenario.sensors.seed
+        ),
+    )?;
+    for r in rows {
+        w.write(r)?;
+    }
+    let mut file = w.finish()?;
+    std::io::Write::flush(&mut file).map_err(|e| io_err(&path, e))?;
+    Ok(Some(path))
+}
 
 /// The ground files of a flight with the ground blocks on (nothing when
 /// `rows` is empty): `ground.csv` ([`GROUND_COLUMNS`]: the CM's height
