@@ -51,6 +51,7 @@ fusion = true
 "#;
 
 /// Run `helicon bench`.
+#[allow(clippy::too_many_lines)] // one report: each stage measured, then its figures as JSON or text
 pub fn run_bench(args: &BenchArgs) -> Result<()> {
     // 1. derivative: hover trim of the Bergen Twin, batches of evaluations
     let model = Model::bergen_twin(Preset::Thesis);
