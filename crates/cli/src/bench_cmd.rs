@@ -23,7 +23,12 @@ pub struct BenchArgs {
     /// flight's thread), `log_row_format_ns` (the row's text),
     /// `sim_with_log_step_ns`, `sim_with_log_rtf`, `eskf_step_imu_ns`,
     /// `eskf_step_mag_ns`, `eskf_step_gps_ns`, `sitl_step_us`, `sitl_rtf`,
-    /// `sitl_compute_p50_us`, `sitl_sensor_to_servo_p50_us`.
+    /// `sitl_compute_p50_us`, `sitl_sensor_to_servo_p50_us`; the stages of
+    /// one closed-loop step (mean ns): `stage_sensors_ns`,
+    /// `stage_navigation_ns`, `stage_predictor_ns`, `stage_law_ns`,
+    /// `stage_plant_ns` (RK4 and the truth row), and of a SITL sample (mean
+    /// µs): `sitl_onboard_compute_us`, `sitl_hardware_compute_us`,
+    /// `sitl_transport_us`.
     #[arg(long)]
     pub json: bool,
 }
@@ -46,6 +51,7 @@ fusion = true
 "#;
 
 /// Run `helicon bench`.
+#[allow(clippy::too_many_lines)] // one report: each stage measured, then its figures as JSON or text
 pub fn run_bench(args: &BenchArgs) -> Result<()> {
     // 1. derivative: hover trim of the Bergen Twin, batches of evaluations
     let model = Model::bergen_twin(Preset::Thesis);
@@ -102,6 +108,8 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
     let step_ns = median(per);
     let ts = prepared.gains.set.sample_time_s;
     let rtf = ts * 1e9 / step_ns;
+    // 2b. the stages of one step, timed one by one
+    let stages = bench_stages(&scenario, &prepared)?;
     // 3. the log row, and `helicon sim` streaming its log
     let (log_row_ns, log_format_ns, sim_step_ns, log_rows) = bench_log(&scenario, &prepared)?;
     let sim_rtf = ts * 1e9 / sim_step_ns;
@@ -132,6 +140,14 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
                 "sitl_rtf": sitl.rtf,
                 "sitl_compute_p50_us": sitl.compute_p50_us,
                 "sitl_sensor_to_servo_p50_us": sitl.sensor_to_servo_p50_us,
+                "sitl_onboard_compute_us": sitl.onboard_us,
+                "sitl_hardware_compute_us": sitl.hardware_us,
+                "sitl_transport_us": sitl.transport_us,
+                "stage_sensors_ns": stages.sensors_ns,
+                "stage_navigation_ns": stages.navigation_ns,
+                "stage_predictor_ns": stages.predictor_ns,
+                "stage_law_ns": stages.law_ns,
+                "stage_plant_ns": stages.plant_ns,
             })
         );
     } else {
@@ -149,6 +165,15 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
             con,
             "closed-loop real-time factor     {rtf:10.0} × (one thread, Ts = {} ms)",
             ts * 1e3
+        );
+        writeln!(
+            con,
+            "  its stages (mean of {STAGE_FLIGHTS} flights, each timed): sensors {:.0} ns, navigation (q-method, fusion) {:.0} ns, Kalman predictor {:.0} ns, control law {:.0} ns, plant (RK4, truth row, checks) {:.0} ns",
+            stages.sensors_ns,
+            stages.navigation_ns,
+            stages.predictor_ns,
+            stages.law_ns,
+            stages.plant_ns
         );
         writeln!(
             con,
@@ -171,8 +196,87 @@ pub fn run_bench(args: &BenchArgs) -> Result<()> {
             "SITL lock-step sample (ptys, both sides) {:10.1} µs: {:.0} × real time; on board: compute p50 {:.1} µs, sensor frame to servo frame p50 {:.1} µs (median of {SITL_RUNS} flights of {SITL_S} s)",
             sitl.step_us, sitl.rtf, sitl.compute_p50_us, sitl.sensor_to_servo_p50_us
         );
+        writeln!(
+            con,
+            "  its parts (mean µs a sample): on-board compute {:.1}, simulated hardware compute {:.1}, transport (ptys, wake-ups) {:.1}",
+            sitl.onboard_us, sitl.hardware_us, sitl.transport_us
+        );
     }
     con.finish().context("writing to stdout")
+}
+
+/// Flights of the stage benchmark.
+const STAGE_FLIGHTS: usize = 5;
+
+/// The mean cost (ns) of each stage of a closed-loop step.
+struct StageCosts {
+    /// The sensor models (and the truth they sample, the wind, the reference).
+    sensors_ns: f64,
+    /// The navigation: q-method and the GPS/IMU fusion filter.
+    navigation_ns: f64,
+    /// The Kalman predictor: absorbing the measured states and advancing.
+    predictor_ns: f64,
+    /// The LQI control law.
+    law_ns: f64,
+    /// The plant: RK4 over the period, the truth row, the summary and the
+    /// envelope checks.
+    plant_ns: f64,
+}
+
+/// The closed loop of the bench scenario flown stage by stage, each stage
+/// timed on its own ([`STAGE_FLIGHTS`] flights; the clock read between the
+/// stages is not in any of them). The thesis chain only: the flight
+/// computer's navigation, predictor and law are stepped as
+/// `FlightComputer::step` steps them.
+fn bench_stages(
+    scenario: &Scenario,
+    prepared: &helicon_sim::closed_loop::Prepared,
+) -> Result<StageCosts> {
+    use helicon_core::SensorComputer;
+    use helicon_core::estimator::Predictor;
+    use helicon_core::lqi::StateFeedback;
+    use helicon_sim::closed_loop::{Hardware, flight_computer};
+    let mut sum = [0u128; 5];
+    let mut steps = 0u64;
+    let zero = Input::zeros();
+    for _ in 0..STAGE_FLIGHTS {
+        let mut hw = Hardware::new(scenario, prepared)?;
+        let computer = flight_computer(&prepared.onboard_setup(scenario, hw.state()))?;
+        let SensorComputer::Thesis(mut fc) = computer else {
+            anyhow::bail!("the bench scenario flies the thesis chain");
+        };
+        let mut t = Instant::now();
+        let mut lap = |k: usize| {
+            let now = Instant::now();
+            sum[k] += now.duration_since(t).as_nanos();
+            t = now;
+        };
+        while let Some(s) = hw.sense() {
+            lap(0);
+            let y = fc.estimator.navigation.step(&s.frame)?;
+            lap(1);
+            let x_hat = fc.estimator.predictor.absorb(&y)?;
+            lap(2);
+            let c = fc.feedback.command_with_offset(&x_hat, &s.reference, &zero);
+            lap(3);
+            fc.estimator.predictor.advance(&c.u)?;
+            lap(2);
+            let step = hw.actuate(&c.u, None);
+            lap(4);
+            steps += 1;
+            if step.is_none_or(|st| st.end.is_some()) {
+                break;
+            }
+        }
+    }
+    let per = |k: usize| sum[k] as f64 / steps.max(1) as f64;
+    Ok(StageCosts {
+        sensors_ns: per(0),
+        navigation_ns: per(1),
+        predictor_ns: per(2),
+        law_ns: per(3),
+        plant_ns: per(4),
+    })
 }
 
 /// The log row's cost (ns) on the flight's thread and in its formatter,
@@ -325,6 +429,14 @@ struct SitlBench {
     compute_p50_us: f64,
     /// From a sensor frame's arrival to its servo frame, median (µs).
     sensor_to_servo_p50_us: f64,
+    /// The on-board control step's compute time, mean (µs).
+    onboard_us: f64,
+    /// The simulated hardware's own work per sample (µs): all but its wait
+    /// for the servo frame.
+    hardware_us: f64,
+    /// The rest of the wait for the servo frame (µs): the bytes through
+    /// the pseudo-terminals both ways and the threads' wake-ups.
+    transport_us: f64,
 }
 
 /// Lock-step SITL flights of the bench scenario ([`SITL_S`] s each): the
@@ -366,6 +478,9 @@ fn bench_sitl() -> Result<SitlBench> {
             rtf: r.speed_x,
             compute_p50_us: r.onboard.compute.p50_us,
             sensor_to_servo_p50_us: r.onboard.sensor_to_servo.p50_us,
+            onboard_us: r.onboard.compute.mean_us,
+            hardware_us: (r.wall_s - r.servo_wait_s) * 1e6 / samples,
+            transport_us: (r.servo_wait_s * 1e6 / samples - r.onboard.compute.mean_us).max(0.0),
         });
     }
     let _ = std::fs::remove_dir_all(&dir);

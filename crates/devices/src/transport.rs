@@ -327,6 +327,29 @@ impl PtyPair {
         read_with_timeout(&mut self.master, buf, timeout)
     }
 
+    /// Waits at most `timeout` until the slave side's input holds bytes;
+    /// whether it does. The kernel moves what the master wrote to the
+    /// slave on a worker thread, after the write has returned: a lock-step
+    /// simulator that writes one device's bytes, then the device that
+    /// paces the reader, waits here in between so that the reader finds
+    /// both. Nothing is read (the bytes stay for the slave's reader).
+    pub fn wait_delivered(&self, timeout: Duration) -> Result<bool, TransportError> {
+        use rustix::event::{PollFd, PollFlags, Timespec, poll};
+        let ts = Timespec {
+            tv_sec: i64::try_from(timeout.as_secs()).unwrap_or(i64::MAX),
+            tv_nsec: i64::from(timeout.subsec_nanos()),
+        };
+        let mut fds = [PollFd::new(&self._slave_hold, PollFlags::IN)];
+        match poll(&mut fds, Some(&ts)) {
+            Ok(n) => Ok(n > 0),
+            Err(rustix::io::Errno::INTR) => Ok(false),
+            Err(e) => Err(TransportError::Io {
+                what: "waiting for the pseudo-terminal's slave side".into(),
+                source: e.into(),
+            }),
+        }
+    }
+
     /// Writes all of `bytes` to the master side.
     pub fn write_all(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         self.master

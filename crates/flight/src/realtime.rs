@@ -47,6 +47,31 @@ pub fn sleep_until_ns(deadline_ns: u64) {
     ) {}
 }
 
+/// How long a lock-step wait polls before it blocks (SITL at full speed:
+/// [`spin_for`]). The other side of a lock-step answers within tens of
+/// microseconds; a wait that lasts longer (a loaded machine, the end of a
+/// run) gives the CPU back and blocks.
+pub const LOCKSTEP_SPIN: std::time::Duration = std::time::Duration::from_micros(300);
+
+/// Lock-step waiting without a wake-up from sleep: calls `poll` (which
+/// must not block) until it gives something or `spin` has passed,
+/// yielding the CPU between calls (a runnable thread on this core, the
+/// other side of the lock-step on a 2-core machine, runs first). `None`
+/// when `spin` passed: the caller then blocks as it would have. Only for
+/// lock-step runs: a real board's threads never spin.
+pub fn spin_for<T>(spin: std::time::Duration, mut poll: impl FnMut() -> Option<T>) -> Option<T> {
+    let until = monotonic_ns().saturating_add(u64::try_from(spin.as_nanos()).unwrap_or(u64::MAX));
+    loop {
+        if let Some(v) = poll() {
+            return Some(v);
+        }
+        if monotonic_ns() >= until {
+            return None;
+        }
+        std::thread::yield_now();
+    }
+}
+
 /// Put the calling thread under SCHED_FIFO at `priority` (1..=99). `Err`
 /// carries the system's reason (typically: not permitted without
 /// CAP_SYS_NICE or an rtprio limit).

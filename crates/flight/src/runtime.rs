@@ -723,8 +723,16 @@ fn control_loop(
             Pacing::Sensor => {
                 // lock-step: the control task reads the sensors itself
                 let Some(d) = ctx.direct.as_mut() else { break };
+                // the simulator answers within microseconds: polled a
+                // little before blocking (no wake-up from sleep per sample)
+                let mut spun = realtime::spin_for(realtime::LOCKSTEP_SPIN, || {
+                    match d.sensors.next(Duration::ZERO) {
+                        Ok(Next::Timeout) => None,
+                        r => Some(r),
+                    }
+                });
                 let a = loop {
-                    match d.sensors.next(POLL) {
+                    match spun.take().unwrap_or_else(|| d.sensors.next(POLL)) {
                         Ok(Next::Item(a)) => break Some(a),
                         Ok(Next::Timeout) if !ctx.stop.load(Ordering::Relaxed) => {}
                         Ok(_) => break None,

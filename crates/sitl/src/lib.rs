@@ -164,6 +164,11 @@ pub struct SitlOptions {
 /// rows (at most 2 KiB each) until the size is looked at again.
 pub const CSV_PART_MARGIN_BYTES: u64 = 64 * 1024 + 64 * 2048;
 
+/// Lock-step: how long the simulator waits at most for a line's bytes to
+/// reach the on-board side before it writes the IMU's message
+/// ([`PtyPair::wait_delivered`]; microseconds normally).
+const DELIVERY_WAIT: Duration = Duration::from_millis(20);
+
 /// The home of the local NED frame (the GPS receiver's WGS-84 position of
 /// the origin): a field near Aalborg.
 pub const HOME: (f64, f64, f64) = (57.0146, 9.9869, 20.0);
@@ -188,6 +193,11 @@ pub struct SitlResult {
     pub speed_x: f64,
     /// CPU time of the process (both sides, all threads) during the flight (s).
     pub cpu_s: f64,
+    /// Wall time the simulated hardware spent waiting for the on-board
+    /// program's servo frames (s; lock-step): the on-board step and the
+    /// transport both ways. The rest of [`SitlResult::wall_s`] is the
+    /// hardware's own work.
+    pub servo_wait_s: f64,
     /// The frames the hardware sent (when kept), in order.
     pub sent: Vec<SensorFrame>,
     /// The servo commands the plant received, in order (when kept).
@@ -448,6 +458,7 @@ pub fn run(
         Vec::new()
     };
     let mut samples = 0u64;
+    let mut servo_wait_s = 0.0;
     let timeout = Duration::from_secs(10);
     let t0 = helicon_flight::realtime::monotonic_ns();
     let wall0 = Instant::now();
@@ -463,7 +474,8 @@ pub fn run(
             .pilot
             .rc_silent_s
             .is_some_and(|(a, b)| t >= a && t < b);
-        if s.k % 8 == 0 && server.is_none() && !silent {
+        let wrote_rc = s.k % 8 == 0 && server.is_none() && !silent;
+        if wrote_rc {
             let pilot = &options.pilot;
             let manual = pilot.manual_from_s.is_some_and(|m| t >= m)
                 && pilot.manual_until_s.is_none_or(|m| t < m);
@@ -503,6 +515,7 @@ pub fn run(
             wires.gps = PtyPair::open().map_err(dev("GPS pseudo-terminal"))?;
             gps_up = false;
         }
+        let wrote_gps = s.frame.gps.is_some() && gps_on && gps_up;
         if let (Some(fix), true, true) = (&s.frame.gps, gps_on, gps_up) {
             let itow_ms = ((TOW0_S + fix.epoch_s) * 1000.0).round() as u32;
             let mut fix = *fix;
@@ -521,6 +534,17 @@ pub fn run(
                 .gps
                 .write_all(pvt.encode().as_bytes())
                 .map_err(dev("GPS"))?;
+        }
+        // lock-step: the receiver's and the GPS's bytes reach their lines
+        // before the IMU's message (the kernel moves them after the write
+        // returns; a reader that polls would otherwise find them a sample
+        // late, and the run would not be the same twice)
+        if lockstep {
+            for (wrote, wire) in [(wrote_rc, &wires.avionics), (wrote_gps, &wires.gps)] {
+                if wrote {
+                    wire.wait_delivered(DELIVERY_WAIT).map_err(dev("line"))?;
+                }
+            }
         }
         // the IMU (and magnetometer): last, it paces the on-board software
         let frozen = within(options.faults.imu_frozen_s, t);
@@ -550,6 +574,8 @@ pub fn run(
         if lockstep {
             let start = Instant::now();
             let mut got = None;
+            // the on-board step takes microseconds: the line is polled a
+            // little before the wait blocks (no wake-up from sleep per sample)
             while got.is_none() {
                 if start.elapsed() > timeout {
                     failure = Some(SitlError::Silent {
@@ -558,11 +584,25 @@ pub fn run(
                     });
                     break;
                 }
-                let n = helicon_devices::transport::read_with_timeout(
-                    &mut servo_in,
-                    &mut buf,
-                    Duration::from_millis(100),
-                )
+                let polled = helicon_flight::realtime::spin_for(
+                    helicon_flight::realtime::LOCKSTEP_SPIN.saturating_sub(start.elapsed()),
+                    || match helicon_devices::transport::read_with_timeout(
+                        &mut servo_in,
+                        &mut buf,
+                        Duration::ZERO,
+                    ) {
+                        Ok(0) => None,
+                        r => Some(r),
+                    },
+                );
+                let n = match polled {
+                    Some(r) => r,
+                    None => helicon_devices::transport::read_with_timeout(
+                        &mut servo_in,
+                        &mut buf,
+                        Duration::from_millis(100),
+                    ),
+                }
                 .map_err(dev("avionics"))?;
                 decoder.push_with(&buf[..n], |m| {
                     if let AvionicsMessage::Servo(c) = m {
@@ -570,6 +610,7 @@ pub fn run(
                     }
                 });
             }
+            servo_wait_s += start.elapsed().as_secs_f64();
             match got {
                 Some((v, hold)) => {
                     u = v;
@@ -693,6 +734,7 @@ pub fn run(
         wall_s,
         speed_x: if wall_s > 0.0 { sim_s / wall_s } else { 0.0 },
         cpu_s,
+        servo_wait_s,
         sent,
         received,
         ulog,

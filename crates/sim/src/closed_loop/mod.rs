@@ -128,6 +128,31 @@ pub struct Prepared {
     pub gains: Gains,
     /// The gain schedule flown instead of `gains`, when the scenario names one.
     pub schedule: Option<std::sync::Arc<helicon_core::GainSchedule>>,
+    /// The summaries' `parameter_hash` of `model`, remembered (start with
+    /// `ParameterHash::default()`).
+    pub parameter_hash: ParameterHash,
+}
+
+/// The FNV-1a hash of the parameters' TOML that each flight's summary
+/// carries, computed once: writing the TOML costs about as much as a
+/// thousand control steps, and every flight of a prepared scenario has the
+/// same parameters.
+#[derive(Debug, Clone, Default)]
+pub struct ParameterHash(std::sync::OnceLock<(helicon_model::Params, String)>);
+
+impl ParameterHash {
+    /// The hash of `params`: remembered from the first call, for those
+    /// parameters (others are hashed afresh each time).
+    pub fn of(&self, params: &helicon_model::Params) -> String {
+        if let Some((p, h)) = self.0.get()
+            && p == params
+        {
+            return h.clone();
+        }
+        let h = fnv1a_hex(&params.to_toml());
+        let _ = self.0.set((*params, h.clone()));
+        h
+    }
 }
 
 impl Prepared {
@@ -270,6 +295,7 @@ pub fn prepare_with_params(
             trim: t,
             gains: schedule.points[nearest].clone(),
             schedule: Some(std::sync::Arc::new(core.clone())),
+            parameter_hash: ParameterHash::default(),
         });
     }
     let gains = match &scenario.controller.gains_file {
@@ -317,6 +343,7 @@ pub fn prepare_with_params(
         trim: t,
         gains,
         schedule: None,
+        parameter_hash: ParameterHash::default(),
     })
 }
 

@@ -345,7 +345,7 @@ pub(super) fn summarize(
         preset: scenario.preset.name().to_string(),
         wind_seed: scenario.wind.seed,
         sensor_seed: scenario.sensors.seed,
-        parameter_hash: fnv1a_hex(&prepared.model.params().to_toml()),
+        parameter_hash: prepared.parameter_hash.of(prepared.model.params()),
         version: env!("CARGO_PKG_VERSION").to_string(),
         sample_time_s: ts,
         metrics_stride: acc.stride,

@@ -211,7 +211,10 @@ impl<W: Write> RowFormatter<W> {
                     }
                     break;
                 }
-                Err(_) => std::thread::sleep(std::time::Duration::from_micros(200)),
+                // (a millisecond: the flight fills at most a tenth of the
+                // ring meanwhile, and a lock-step SITL run is not woken
+                // 5000 times a second)
+                Err(_) => std::thread::sleep(std::time::Duration::from_millis(1)),
             }
         }
         self.out.flush().map_err(|e| io_err(&self.label, e))?;

@@ -12,7 +12,7 @@ use super::{
     metric_names,
 };
 use crate::closed_loop::{
-    ClosedLoopError, LogRow, Prepared, Termination, fly, prepare_with_params,
+    ClosedLoopError, LogRow, ParameterHash, Prepared, Termination, fly, prepare_with_params,
 };
 use crate::scenario::{OUTPUTS, ScenarioError};
 use helicon_model::Model;
@@ -194,6 +194,7 @@ impl Campaign {
                         trim: t,
                         gains: nominal.gains.clone(),
                         schedule: nominal.schedule.clone(),
+                        parameter_hash: ParameterHash::default(),
                     })
                     .map_err(ClosedLoopError::from)
             }
