@@ -182,21 +182,21 @@ fn envelope_figure(schedule: &Schedule, check: Option<&FrozenCheck>, path: &Path
         }
     }
     let labels = [
-        "S_col (trim)",
-        "S_lat (trim)",
-        "S_lon (trim)",
-        "S_tr (trim)",
-        "roll phi (deg)",
-        "pitch theta (deg)",
-        "|z| max, design",
-        "|z| max, frozen loop",
+        "S_col trim [-]",
+        "S_lat trim [-]",
+        "S_lon trim [-]",
+        "S_tr trim [-]",
+        "φ trim [deg]",
+        "θ trim [deg]",
+        "|z| max, design [-]",
+        "|z| max, frozen [-]",
     ];
     let mut fig = Figure::new(
         &format!(
             "Envelope map `{}`: trims and stability versus forward speed",
             schedule.name
         ),
-        "forward speed (m/s)",
+        "forward speed [m/s]",
     );
     for (c, label) in labels.iter().enumerate() {
         if c == 7 && check.is_none() {

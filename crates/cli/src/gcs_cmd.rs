@@ -421,8 +421,10 @@ pub fn run(args: &GcsArgs) -> Result<()> {
             finished = step.done;
         }
         if let Some(done) = finished
-            && let Some((line, _)) = op.take()
+            && let Some((line, o)) = op.take()
         {
+            // an upload or a mission start begins the mission waited for
+            fleet.on_finished(&o, &done);
             match done
                 .map_err(anyhow::Error::from)
                 .and_then(|o| answer(&line, o))

@@ -950,18 +950,18 @@ pub(crate) fn percent_cell(pct: f64) -> String {
     }
 }
 
-/// A fitted model's magnitude and phase (`eval` gives T(jω)) on the
-/// response's grid, the phase shifted by whole turns to lie nearest the
-/// estimate where it is coherent.
-pub(crate) fn fit_curves(f: &Frf, eval: impl Fn(f64) -> Complex64) -> [Vec<(f64, f64)>; 2] {
-    let h: Vec<Complex64> = f.omega_rad_s.iter().map(|w| eval(*w)).collect();
+/// The phase (deg) of a model's response `h` on the grid of the estimate
+/// `f`, unwrapped and shifted by the whole turns that bring it nearest the
+/// estimate on average over the coherent points (γ² > 0.6; all points when
+/// none is): the one way every Bode overlay puts a model's phase against
+/// the data's.
+pub(crate) fn phase_near_estimate(f: &Frf, h: &[Complex64]) -> Vec<f64> {
     let mut ph = unwrap_deg(&h.iter().map(|v| v.arg().to_degrees()).collect::<Vec<_>>());
-    // Whole turns that bring the curve nearest the estimate on average over
-    // the coherent points (γ² > 0.6; all points when none is).
     let est = f.phase_deg();
-    let good: Vec<usize> = (0..est.len()).filter(|&k| f.coherence[k] > 0.6).collect();
+    let n = est.len().min(ph.len());
+    let good: Vec<usize> = (0..n).filter(|&k| f.coherence[k] > 0.6).collect();
     let idx: Vec<usize> = if good.is_empty() {
-        (0..est.len()).collect()
+        (0..n).collect()
     } else {
         good
     };
@@ -970,6 +970,15 @@ pub(crate) fn fit_curves(f: &Frf, eval: impl Fn(f64) -> Complex64) -> [Vec<(f64,
         let turns = (mean / 360.0).round() * 360.0;
         ph.iter_mut().for_each(|p| *p += turns);
     }
+    ph
+}
+
+/// A fitted model's magnitude and phase (`eval` gives T(jω)) on the
+/// response's grid, the phase placed against the estimate
+/// ([`phase_near_estimate`]).
+pub(crate) fn fit_curves(f: &Frf, eval: impl Fn(f64) -> Complex64) -> [Vec<(f64, f64)>; 2] {
+    let h: Vec<Complex64> = f.omega_rad_s.iter().map(|w| eval(*w)).collect();
+    let ph = phase_near_estimate(f, &h);
     let x: Vec<f64> = f.omega_rad_s.iter().map(|w| w.log10()).collect();
     [
         x.iter()

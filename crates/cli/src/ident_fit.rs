@@ -212,17 +212,6 @@ fn file_stem(s: &str) -> String {
         .collect()
 }
 
-/// Unwrapped phase in degrees, shifted by whole turns to start near `near`.
-fn phase_near(h: &[Complex64], near: f64) -> Vec<f64> {
-    let raw: Vec<f64> = h.iter().map(|z| z.arg().to_degrees()).collect();
-    let mut p = helicon_ident::frf::unwrap_deg(&raw);
-    if let Some(first) = p.first().copied() {
-        let shift = 360.0 * ((near - first) / 360.0).round();
-        p.iter_mut().for_each(|v| *v += shift);
-    }
-    p
-}
-
 /// One Bode overlay per operating point and response in the cost:
 /// estimate (all points), start and identified model, coherence panel.
 fn bode_overlays(id: &Identification, out: &Path) -> Result<usize> {
@@ -261,11 +250,10 @@ fn bode_overlays(id: &Identification, out: &Path) -> Result<usize> {
             let db = |h: &[Complex64]| -> Vec<f64> {
                 h.iter().map(|z| 20.0 * z.norm().log10()).collect()
             };
-            let ph_data = f.phase_deg();
-            let near = ph_data.first().copied().unwrap_or(0.0);
-            let (mag_d, ph_d, coh) = (lw(&f.mag_db()), lw(&ph_data), lw(&f.coherence));
-            let (mag_s, ph_s) = (lw(&db(&h0[p][k])), lw(&phase_near(&h0[p][k], near)));
-            let (mag_i, ph_i) = (lw(&db(&h1[p][k])), lw(&phase_near(&h1[p][k], near)));
+            let near = |h: &[Complex64]| crate::ident_cmd::phase_near_estimate(f, h);
+            let (mag_d, ph_d, coh) = (lw(&f.mag_db()), lw(&f.phase_deg()), lw(&f.coherence));
+            let (mag_s, ph_s) = (lw(&db(&h0[p][k])), lw(&near(&h0[p][k])));
+            let (mag_i, ph_i) = (lw(&db(&h1[p][k])), lw(&near(&h1[p][k])));
             let mut pc = Panel::new("coherence γ² [-]").series(Series::new("γ²", &coh));
             pc.hlines.push(HLine {
                 y: id.config.min_coherence,
@@ -317,14 +305,18 @@ fn verification_plots(id: &Identification, out: &Path) -> Result<usize> {
                 i + 1,
                 v.operating_point
             ),
-            "t − t0 [s]",
+            "time − t0 [s]",
         );
         for (o, s) in v.outputs.iter().zip(&series) {
             fig = fig.panel(
-                Panel::new(&format!("{} [SI]", o.output))
-                    .series(Series::new("flight log", &s[0]))
-                    .series(Series::new("start model", &s[1]).dashed())
-                    .series(Series::new("identified model", &s[2])),
+                Panel::new(&format!(
+                    "{} [{}]",
+                    o.output,
+                    helicon_sim::log_csv::log_unit(&o.output).unwrap_or("-")
+                ))
+                .series(Series::new("flight log", &s[0]))
+                .series(Series::new("start model", &s[1]).dashed())
+                .series(Series::new("identified model", &s[2])),
             );
         }
         let path = out.join(format!("verify_{}.png", i + 1));

@@ -108,10 +108,10 @@ fn plot(png: &std::path::Path, kind: Kind, r: &helicon_model::ground::GroundResu
             r.std_error,
             r.unit
         ),
-        x,
+        &helicon_sim::plot::column_label(x),
     )
     .panel(
-        Panel::new(y)
+        Panel::new(&helicon_sim::plot::column_label(y))
             .series(Series::new("readings", &read).dashed())
             .series(Series::new("fit", &fit)),
     )

@@ -376,7 +376,7 @@ fn overlay(
             "{file}: K {:.4}, ωn {:.2} rad/s, ζ {:.4}, {rate}",
             fit.gain_rad.value, fit.omega_n_rad_s.value, fit.zeta.value
         ),
-        "t [s]",
+        "time [s]",
     )
     .panel(
         Panel::new("position [rad]")

@@ -16,7 +16,7 @@ use helicon_model::Params;
 use helicon_sim::navigation::{
     NavigationConfig, ReplayInit, ReplayNavigation, imu_noise, replay_navigation, sensor_noise,
 };
-use helicon_sim::plot::{LinePlot, Series};
+use helicon_sim::plot::{Figure, Panel, Series};
 use helicon_sim::scenario::{EstimatorKind, EstimatorSection, Scenario};
 use helicon_sim::sensor_log::{
     GroupKind, LoggedTruth, SensorLogRow, SensorLogWriter, read_sensor_log,
@@ -586,29 +586,51 @@ pub fn run_fuse(args: &FuseArgs) -> Result<()> {
     let summary_path = args.out.join("summary.json");
     std::fs::write(&summary_path, serde_json::to_string_pretty(&summary)?)
         .with_context(|| format!("cannot write {}", summary_path.display()))?;
+    // ψ fused wrapped against the true ψ (one branch, no ±π seam between
+    // them); both drawn unconnected across a wrap
+    if series[13].len() == series[10].len() {
+        let truth = series[13].clone();
+        for (f, t) in series[10].iter_mut().zip(&truth) {
+            f.1 = t.1 + helicon_core::frames::wrap_pi(f.1 - t.1);
+        }
+    }
+    let pi = std::f64::consts::PI;
+    let has_truth = !series[3].is_empty();
+    let has_att_truth = !series[11].is_empty();
     for ext in ["png", "svg"] {
-        let mut pos = LinePlot::new("Fused position (NED)", "time [s]", "position [m]")
-            .series(Series::new("north fused", &series[0]))
-            .series(Series::new("east fused", &series[1]))
-            .series(Series::new("down fused", &series[2]))
-            .series(Series::new("GPS north", &series[6]))
-            .series(Series::new("GPS east", &series[7]));
-        if !series[3].is_empty() {
-            pos = pos
-                .series(Series::new("north true", &series[3]))
-                .series(Series::new("east true", &series[4]))
-                .series(Series::new("down true", &series[5]));
+        // one panel per axis: the fused estimate, the GPS fixes, the truth
+        // (dashed) of that axis only
+        let mut pos = Figure::new("Fused position (NED)", "time [s]");
+        for (i, axis) in ["north", "east", "down"].into_iter().enumerate() {
+            let mut p = Panel::new(&format!("{axis} [m]")).series(Series::new("fused", &series[i]));
+            if i < 2 {
+                p = p.series(Series::new("GPS", &series[6 + i]));
+            }
+            if has_truth {
+                p = p.series(
+                    Series::new("true", &series[3 + i])
+                        .color([0, 0, 0])
+                        .dashed(),
+                );
+            }
+            pos = pos.panel(p);
         }
         pos.write(&args.out.join(format!("position.{ext}")))?;
-        let mut att = LinePlot::new("Fused attitude (3-2-1 Euler)", "time [s]", "angle [rad]")
-            .series(Series::new("phi fused", &series[8]))
-            .series(Series::new("theta fused", &series[9]))
-            .series(Series::new("psi fused", &series[10]));
-        if !series[11].is_empty() {
-            att = att
-                .series(Series::new("phi true", &series[11]))
-                .series(Series::new("theta true", &series[12]))
-                .series(Series::new("psi true", &series[13]));
+        let mut att = Figure::new("Fused attitude (3-2-1 Euler)", "time [s]");
+        for (i, axis) in ["φ", "θ", "ψ"].into_iter().enumerate() {
+            let mut fused = Series::new("fused", &series[8 + i]);
+            let mut truth = Series::new("true", &series[11 + i])
+                .color([0, 0, 0])
+                .dashed();
+            if i == 2 {
+                fused = fused.break_jumps_over(pi);
+                truth = truth.break_jumps_over(pi);
+            }
+            let mut p = Panel::new(&format!("{axis} [rad]")).series(fused);
+            if has_att_truth {
+                p = p.series(truth);
+            }
+            att = att.panel(p);
         }
         att.write(&args.out.join(format!("attitude.{ext}")))?;
     }

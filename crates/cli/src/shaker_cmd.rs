@@ -231,7 +231,7 @@ fn shaker_figure(
     };
     let (out_pts, avg_pts) = (pts(ys), pts(avg));
     let avg_name = format!("mean of {window}");
-    let mut panel = Panel::new("g")
+    let mut panel = Panel::new("acceleration [g]")
         .series(Series::new("acc. output", &out_pts).color([31, 119, 180]))
         .series(Series::new(&avg_name, &avg_pts).color([214, 39, 40]));
     panel.hlines = vec![

@@ -405,14 +405,14 @@ fn run_sweep(model: &Model, args: &TrimArgs, axis: SweepAxis) -> Result<()> {
         p.write(&args.out.join(format!("inputs.{ext}")))?;
     }
     let p = LinePlot::new("Trim attitude", &xl, "angle [deg]")
-        .series(Series::new("phi", &series[4]))
-        .series(Series::new("theta", &series[5]));
+        .series(Series::new("φ", &series[4]))
+        .series(Series::new("θ", &series[5]));
     for ext in ["png", "svg"] {
         p.write(&args.out.join(format!("attitude.{ext}")))?;
     }
-    let p = LinePlot::new("Trim inflow ratios", &xl, "lambda [-]")
-        .series(Series::new("lambda_mr", &series[6]))
-        .series(Series::new("lambda_tr", &series[7]));
+    let p = LinePlot::new("Trim inflow ratios", &xl, "λ [-]")
+        .series(Series::new("λ_mr", &series[6]))
+        .series(Series::new("λ_tr", &series[7]));
     for ext in ["png", "svg"] {
         p.write(&args.out.join(format!("inflow.{ext}")))?;
     }

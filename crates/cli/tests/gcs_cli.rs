@@ -460,3 +460,74 @@ fn gcs_commands_go_to_the_vehicle_chosen() {
     assert_eq!(two.join().unwrap(), 0);
     assert!(three.join().unwrap() >= 1);
 }
+
+/// A QGC WPL mission of waypoints 3 m above home, each (north, east) in
+/// metres from home.
+fn waypoints(points: &[(f64, f64)]) -> String {
+    let (lat0, lon0) = (57.014_636, 9.986_9);
+    let mut s = String::from("QGC WPL 110\n");
+    for (k, (n, e)) in points.iter().enumerate() {
+        let lat = lat0 + n / 111_320.0;
+        let lon = lon0 + e / (111_320.0 * lat0.to_radians().cos());
+        s += &format!(
+            "{k}\t{}\t3\t16\t0\t0\t0\t0\t{lat:.8}\t{lon:.8}\t3.0\t1\n",
+            u8::from(k == 0)
+        );
+    }
+    s
+}
+
+#[test]
+fn gcs_waits_for_the_mission_started_last() {
+    // one mission flown to its end, a second uploaded and started: its
+    // `wait mission done` ends at the second's last item, not at once on
+    // the first's completion
+    let dir = helicon_test_support::tmpdir("gcs_two_missions");
+    let dir_path = dir.to_path_buf();
+    std::fs::write(
+        dir_path.join("a.waypoints"),
+        waypoints(&[(0.0, 4.0), (0.0, 0.0)]),
+    )
+    .unwrap();
+    std::fs::write(
+        dir_path.join("b.waypoints"),
+        waypoints(&[(4.0, 0.0), (4.0, 4.0), (0.0, 0.0)]),
+    )
+    .unwrap();
+    let script = "arm\nwait armed\ntakeoff 3\nwait mode HOLD\n\
+                  mission upload a.waypoints\nmission start\nwait mission done\n\
+                  mission upload b.waypoints\nmission start\nwait mission done\n\
+                  land\nwait landed\nquit\n";
+    let port = free_udp_port();
+    let vehicle = sitl(port, &dir_path.join("out"));
+    let out = gcs(port, script, &["--timeout", "40"], &dir_path);
+    stop(vehicle);
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{text}\n{err}");
+    let at = |want: &str, from: usize| {
+        text[from..]
+            .find(want)
+            .map(|i| from + i)
+            .unwrap_or_else(|| panic!("no `{want}` after byte {from} in\n{text}\n{err}"))
+    };
+    let first = at(
+        "mission upload a.waypoints: MAV_MISSION_ACCEPTED (2 items)",
+        0,
+    );
+    let first_last = at("reached mission item 1", first);
+    let first_done = at("wait mission done: done", first);
+    assert!(first_last < first_done, "{text}");
+    let second = at(
+        "mission upload b.waypoints: MAV_MISSION_ACCEPTED (3 items)",
+        first_done,
+    );
+    let started = at("mission start: MAV_RESULT_ACCEPTED", second);
+    let second_last = at("reached mission item 2", started);
+    let second_done = at("wait mission done: done", started);
+    assert!(
+        second_last < second_done,
+        "the second wait ended before the second mission's last item:\n{text}"
+    );
+    at("wait landed: done", second_done);
+}

@@ -93,8 +93,10 @@ pub struct VehicleView {
     pub local: Option<LOCAL_POSITION_NED_DATA>,
     /// The land detector's state.
     pub landed: Option<MavLandedState>,
-    /// The mission's state.
+    /// The mission's state (MISSION_CURRENT's last).
     pub mission_state: Option<MissionState>,
+    /// The progress of the mission flown now ([`MissionProgress`]).
+    pub mission: MissionProgress,
     /// Home's altitude AMSL (m).
     pub home_amsl_m: Option<f64>,
     /// Messages received.
@@ -102,6 +104,69 @@ pub struct VehicleView {
     /// Messages lost (sequence gaps per component).
     pub lost: u64,
     last_seq: BTreeMap<u8, u8>,
+}
+
+/// The mission this station waits for, as MAVLink tells it.
+///
+/// A mission begins with an upload or a `MAV_CMD_MISSION_START` accepted
+/// from this station ([`Fleet::on_finished`]), or, once the last one is
+/// done, with a `MISSION_CURRENT` that is not `COMPLETE` on another item
+/// or another mission (flown again or replaced from elsewhere). It is done
+/// when, after it began, `MISSION_ITEM_REACHED` names its last item, or
+/// `MISSION_CURRENT` says `COMPLETE` after having said otherwise: a
+/// `COMPLETE` left over from an earlier mission never ends a later one.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MissionProgress {
+    /// Missions begun so far (the current one's number; 0: none seen
+    /// begin).
+    pub begun: u32,
+    /// Items in the current mission (the count uploaded, or
+    /// `MISSION_CURRENT`'s total).
+    pub total: Option<u16>,
+    /// The current mission was heard not complete since it began.
+    pub heard_unfinished: bool,
+    /// The current mission is done.
+    pub done: bool,
+}
+
+impl MissionProgress {
+    /// A new mission begins (`total` items, when known).
+    pub fn begin(&mut self, total: Option<u16>) {
+        self.begun = self.begun.wrapping_add(1);
+        if total.is_some() {
+            self.total = total;
+        }
+        self.heard_unfinished = false;
+        self.done = false;
+    }
+
+    /// A `MISSION_CURRENT`: item `seq` of `total` in `state`.
+    pub fn on_current(&mut self, seq: u16, total: u16, state: MissionState) {
+        if state == MissionState::MISSION_STATE_COMPLETE {
+            // a COMPLETE not preceded by this mission's running is an
+            // earlier mission's
+            self.done |= self.heard_unfinished;
+            return;
+        }
+        if self.done && (self.total != Some(total) || seq.saturating_add(1) < total) {
+            // flown again or replaced, not by this station
+            self.begin(Some(total));
+        }
+        if !self.done {
+            self.total = Some(total);
+            self.heard_unfinished = true;
+        }
+    }
+
+    /// A `MISSION_ITEM_REACHED` of item `seq`.
+    pub fn on_reached(&mut self, seq: u16) {
+        if self
+            .total
+            .is_some_and(|n| n > 0 && u32::from(seq) + 1 >= u32::from(n))
+        {
+            self.done = true;
+        }
+    }
 }
 
 /// ψ (rad) in degrees, wrapped to (−180°, 180°].
@@ -216,7 +281,11 @@ impl Fleet {
             MavMessage::GLOBAL_POSITION_INT(p) => v.position = Some(p.clone()),
             MavMessage::LOCAL_POSITION_NED(l) => v.local = Some(l.clone()),
             MavMessage::EXTENDED_SYS_STATE(e) => v.landed = Some(e.landed_state),
-            MavMessage::MISSION_CURRENT(m) => v.mission_state = Some(m.mission_state),
+            MavMessage::MISSION_CURRENT(m) => {
+                v.mission_state = Some(m.mission_state);
+                v.mission.on_current(m.seq, m.total, m.mission_state);
+            }
+            MavMessage::MISSION_ITEM_REACHED(r) => v.mission.on_reached(r.seq),
             MavMessage::HOME_POSITION(h) => v.home_amsl_m = Some(f64::from(h.altitude) * 1e-3),
             _ => {}
         }
@@ -230,6 +299,29 @@ impl Fleet {
             .filter(|(_, v)| v.heartbeat.is_some())
             .map(|(id, v)| v.line(*id, now_s))
             .collect()
+    }
+
+    /// `op` finished with `result`: an upload or a `MAV_CMD_MISSION_START`
+    /// accepted begins a new mission on its vehicle ([`MissionProgress`]).
+    pub fn on_finished(&mut self, op: &Operation, result: &Result<Outcome, ClientError>) {
+        let total = match (&op.request, result) {
+            (Request::Upload(items), Ok(Outcome::Uploaded(..))) => {
+                Some(u16::try_from(items.len()).unwrap_or(u16::MAX))
+            }
+            (
+                Request::Command {
+                    command: MavCmd::MAV_CMD_MISSION_START,
+                    ..
+                },
+                Ok(Outcome::Command(_)),
+            ) => None,
+            _ => return,
+        };
+        self.vehicles
+            .entry(op.target)
+            .or_default()
+            .mission
+            .begin(total);
     }
 
     /// A vehicle's view.
@@ -251,7 +343,8 @@ pub enum WaitFor {
     Mode(u8, u8, String),
     /// This long (s; bounded by itself, not by the timeout).
     Seconds(f64),
-    /// The mission flown to its end (`MISSION_CURRENT` complete).
+    /// The current mission flown to its end ([`MissionProgress::done`]):
+    /// the one begun last, not an earlier one's completion.
     MissionDone,
 }
 
@@ -488,9 +581,7 @@ impl Operation {
                 WaitFor::Disarmed => v.and_then(VehicleView::armed) == Some(false),
                 WaitFor::Landed => v.is_some_and(VehicleView::on_ground),
                 WaitFor::Mode(main, sub, _) => v.and_then(VehicleView::mode) == Some((*main, *sub)),
-                WaitFor::MissionDone => {
-                    v.and_then(|v| v.mission_state) == Some(MissionState::MISSION_STATE_COMPLETE)
-                }
+                WaitFor::MissionDone => v.is_some_and(|v| v.mission.done),
             };
             if reached {
                 step.done = Some(Ok(Outcome::Reached));
@@ -985,5 +1076,105 @@ mod tests {
         assert_eq!(wrap_deg(std::f64::consts::PI), 180.0);
         assert!((wrap_deg(-std::f64::consts::PI) - 180.0).abs() < 1e-9);
         assert!((wrap_deg(7.0_f64.to_radians() + 4.0 * std::f64::consts::PI) - 7.0).abs() < 1e-9);
+    }
+    #[test]
+    fn waiting_for_a_mission_is_not_ended_by_an_earlier_ones_completion() {
+        let mut f = fleet();
+        let current = |seq, total, mission_state| {
+            MavMessage::MISSION_CURRENT(MISSION_CURRENT_DATA {
+                seq,
+                total,
+                mission_state,
+                ..MISSION_CURRENT_DATA::DEFAULT
+            })
+        };
+        let reached = |seq| MavMessage::MISSION_ITEM_REACHED(MISSION_ITEM_REACHED_DATA { seq });
+        let done = |f: &Fleet| {
+            let mut w = Operation::new(Request::Wait(WaitFor::MissionDone), 1, 0.0, 10.0).unwrap();
+            w.poll(f, 0.0).done == Some(Ok(Outcome::Reached))
+        };
+        // a COMPLETE heard first is no mission seen running: not done
+        f.on_message(
+            &header(1),
+            &current(1, 2, MissionState::MISSION_STATE_COMPLETE),
+            0.0,
+        );
+        assert!(!done(&f));
+        // a first mission (2 items) flown to its end
+        f.on_message(
+            &header(1),
+            &current(0, 2, MissionState::MISSION_STATE_ACTIVE),
+            1.0,
+        );
+        assert!(!done(&f));
+        f.on_message(
+            &header(1),
+            &current(1, 2, MissionState::MISSION_STATE_COMPLETE),
+            2.0,
+        );
+        assert!(done(&f));
+        // a second (3 items) uploaded and started from here: the last
+        // COMPLETE, and another still stale, are the first's
+        let upload = Operation::new(Request::Upload(items(3)), 1, 3.0, 10.0).unwrap();
+        f.on_finished(
+            &upload,
+            &Ok(Outcome::Uploaded(MavMissionResult::MAV_MISSION_ACCEPTED, 3)),
+        );
+        let start = Operation::new(
+            Request::Command {
+                command: MavCmd::MAV_CMD_MISSION_START,
+                params: [0.0; 7],
+            },
+            1,
+            3.0,
+            10.0,
+        )
+        .unwrap();
+        let accepted = Ok(Outcome::Command(MavResult::MAV_RESULT_ACCEPTED));
+        f.on_finished(&start, &accepted);
+        assert_eq!(f.get(1).unwrap().mission.begun, 2);
+        assert!(!done(&f));
+        f.on_message(
+            &header(1),
+            &current(1, 2, MissionState::MISSION_STATE_COMPLETE),
+            3.1,
+        );
+        assert!(!done(&f));
+        f.on_message(
+            &header(1),
+            &current(0, 3, MissionState::MISSION_STATE_ACTIVE),
+            3.2,
+        );
+        f.on_message(&header(1), &reached(1), 4.0);
+        assert!(!done(&f), "item 1 of 3 is not the last");
+        f.on_message(&header(1), &reached(2), 5.0);
+        assert!(done(&f));
+        // an ACTIVE still on the last item is the same mission's
+        f.on_message(
+            &header(1),
+            &current(2, 3, MissionState::MISSION_STATE_ACTIVE),
+            5.1,
+        );
+        assert!(done(&f));
+        // the mission flown again from elsewhere (back at item 0): a new one
+        f.on_message(
+            &header(1),
+            &current(0, 3, MissionState::MISSION_STATE_ACTIVE),
+            6.0,
+        );
+        assert!(!done(&f));
+        assert_eq!(f.get(1).unwrap().mission.begun, 3);
+        // a refused command or another command begins nothing
+        f.on_finished(
+            &start,
+            &Err(ClientError::Refused("MAV_RESULT_DENIED".into())),
+        );
+        assert_eq!(f.get(1).unwrap().mission.begun, 3);
+        f.on_message(
+            &header(1),
+            &current(2, 3, MissionState::MISSION_STATE_COMPLETE),
+            7.0,
+        );
+        assert!(done(&f));
     }
 }

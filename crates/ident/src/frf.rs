@@ -457,16 +457,28 @@ impl Frf {
         self.h.iter().map(|h| 20.0 * h.norm().log10()).collect()
     }
 
-    /// ∠H in degrees, unwrapped along the frequency axis (the first point in
-    /// (−180, 180]).
+    /// ∠H in degrees, unwrapped along the frequency axis outward from the
+    /// most coherent point, whose phase lies in (−180, 180].
     pub fn phase_deg(&self) -> Vec<f64> {
-        unwrap_deg(
-            &self
-                .h
-                .iter()
-                .map(|h| h.arg().to_degrees())
-                .collect::<Vec<_>>(),
-        )
+        let raw: Vec<f64> = self.h.iter().map(|h| h.arg().to_degrees()).collect();
+        // unwrapped outward from the most coherent point (its phase in
+        // (−180°, 180°]): the turns noisy, incoherent points pick up stay
+        // among them instead of shifting the coherent band
+        let coh = |k: usize| {
+            self.coherence
+                .get(k)
+                .copied()
+                .filter(|c| c.is_finite())
+                .unwrap_or(-1.0)
+        };
+        let Some(k0) = (0..raw.len()).max_by(|&a, &b| coh(a).total_cmp(&coh(b))) else {
+            return Vec::new();
+        };
+        let up = unwrap_deg(&raw[k0..]);
+        let down: Vec<f64> = raw[..=k0].iter().rev().copied().collect();
+        let mut out: Vec<f64> = unwrap_deg(&down).into_iter().rev().collect();
+        out.extend_from_slice(&up[1..]);
+        out
     }
 
     /// Number of points.
@@ -770,6 +782,28 @@ pub fn log_grid(lo: f64, hi: f64, n: usize) -> Result<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A noisy, incoherent first point does not shift the coherent band by
+    /// a turn: the phase is unwrapped outward from the most coherent point.
+    #[test]
+    fn phase_is_unwrapped_from_the_most_coherent_point() {
+        let deg = |d: f64| Complex64::from_polar(1.0, d.to_radians());
+        // an incoherent point at 170°, then a coherent band falling from
+        // −60° to −120° (the first point's branch would put it at 300°)
+        let f = Frf {
+            omega_rad_s: vec![1.0, 2.0, 3.0, 4.0, 5.0],
+            h: vec![deg(170.0), deg(-60.0), deg(-80.0), deg(-100.0), deg(-120.0)],
+            coherence: vec![0.05, 0.9, 0.95, 0.9, 0.9],
+            random_error: vec![0.1; 5],
+        };
+        let p = f.phase_deg();
+        for (got, want) in p[1..].iter().zip([-60.0, -80.0, -100.0, -120.0]) {
+            assert!((got - want).abs() < 1e-9, "{p:?}");
+        }
+        // the incoherent point within half a turn of its neighbour
+        assert!((p[0] - p[1]).abs() <= 180.0, "{p:?}");
+        assert!(Frf::default().phase_deg().is_empty());
+    }
 
     /// Hostile arguments give NaN, never a plausible correlation (before:
     /// a NaN frequency difference gave 1, a NaN frequency 0).

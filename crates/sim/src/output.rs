@@ -305,6 +305,32 @@ const BLACK: [u8; 3] = [0, 0, 0];
 const BLUE: [u8; 3] = [31, 119, 180];
 const RED: [u8; 3] = [214, 39, 40];
 
+/// How far past ±π of its reference a drawn ψ may stay to keep its line
+/// whole (rad): an error of about π is either branch.
+const PSI_WRAP_SLACK_RAD: f64 = 0.05;
+
+/// ψ (rad) as drawn against its reference `psi_ref_rad`: within ±π of it
+/// (−π against a +π reference is the same heading, and would read as a 2π
+/// error); an error within [`PSI_WRAP_SLACK_RAD`] of ±π takes the branch
+/// nearest the last ψ drawn, so a heading step of π does not leave a lone
+/// point a turn away.
+fn psi_against_reference(psi_rad: f64, psi_ref_rad: f64, last_rad: Option<f64>) -> f64 {
+    let pi = std::f64::consts::PI;
+    let e = helicon_core::frames::wrap_pi(psi_rad - psi_ref_rad);
+    let w = psi_ref_rad + e;
+    match last_rad {
+        Some(last) if e.abs() > pi - PSI_WRAP_SLACK_RAD => {
+            let other = w - 2.0 * pi * e.signum();
+            if (other - last).abs() < (w - last).abs() {
+                other
+            } else {
+                w
+            }
+        }
+        _ => w,
+    }
+}
+
 /// Draw the run figures (PNG and SVG) into `dir` from the log file `log_csv`
 /// (read back with [`LogReader`], min/max-decimated to at most
 /// `2 × max_buckets` points per line, so the time and memory are bounded by
@@ -319,13 +345,13 @@ pub fn write_figures(
     let mut reader = LogReader::open(log_csv, &FIG_COLUMNS)?;
     let mut dec = Decimator::new(FIG_COLUMNS.len() - 1, opts.max_buckets);
     let mut wind = false;
+    let mut last_psi: Option<f64> = None;
     while let Some(row) = reader.next_row()? {
         wind |= row[WIND0..WIND0 + 3].iter().any(|v| *v != 0.0);
         let mut row = row.to_vec();
-        // ψ drawn within ±π of its reference: −π against a +π reference is
-        // the same heading, and would read as a 2π error
         let (psi, psi_ref) = (OUT0 + 3, REF0 + 3);
-        row[psi] = row[psi_ref] + helicon_core::frames::wrap_pi(row[psi] - row[psi_ref]);
+        row[psi] = psi_against_reference(row[psi], row[psi_ref], last_psi);
+        last_psi = Some(row[psi]);
         dec.push(row[0], &row[1..]);
     }
     if dec.rows() == 0 {
@@ -967,6 +993,22 @@ fn steps(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn psi_is_drawn_against_its_reference_without_a_lone_point() {
+        let pi = std::f64::consts::PI;
+        // −π against +π: the same heading, drawn at +π
+        assert!((psi_against_reference(-pi + 0.2, pi, None) - (pi + 0.2)).abs() < 1e-12);
+        // a step of the reference from 0 to π while ψ is still at 0 (a hair
+        // below): the branch of the last ψ drawn, not 2π
+        let a = psi_against_reference(-1e-5, pi, Some(0.0));
+        assert!((a + 1e-5).abs() < 1e-12, "{a}");
+        let b = psi_against_reference(2e-5, pi, Some(a));
+        assert!((b - 2e-5).abs() < 1e-12, "{b}");
+        // past the slack the error is wrapped again
+        let c = psi_against_reference(-0.2, pi, Some(-0.04));
+        assert!((c - (2.0 * pi - 0.2)).abs() < 1e-12, "{c}");
+    }
 
     #[test]
     fn figure_column_positions_match_the_names() {

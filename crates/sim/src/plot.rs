@@ -364,6 +364,33 @@ pub fn log_ticks(lo: f64, hi: f64) -> Vec<(f64, bool, Option<String>)> {
         .collect()
 }
 
+/// The axis label of a quantity named with its unit as a suffix
+/// (`thrust_n` → `thrust [N]`, `omega_rad_s` → `omega [rad/s]`,
+/// `liftoff_drift_m` → `liftoff_drift [m]`); a name without a known suffix
+/// is labelled `[-]`.
+pub fn column_label(name: &str) -> String {
+    const SUFFIXES: [(&str, &str); 10] = [
+        ("_n_m", "N·m"),
+        ("_m_s", "m/s"),
+        ("_rad_s", "rad/s"),
+        ("_kg_m2", "kg·m²"),
+        ("_rad", "rad"),
+        ("_deg", "deg"),
+        ("_pct", "%"),
+        ("_m", "m"),
+        ("_s", "s"),
+        ("_n", "N"),
+    ];
+    for (suffix, unit) in SUFFIXES {
+        if let Some(stem) = name.strip_suffix(suffix)
+            && !stem.is_empty()
+        {
+            return format!("{stem} [{unit}]");
+        }
+    }
+    format!("{name} [-]")
+}
+
 /// A dashed horizontal line of a [`Panel`] (a limit), labelled in the legend.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HLine {
@@ -756,65 +783,85 @@ impl<'a> Figure<'a> {
 
 /// A histogram in the theme of [`Figure`]: outlined bars, integer counts on
 /// the y-axis, the x label with its unit, and the legend column beside the
-/// plot holding the notes (e.g. how many runs are included, and why some
-/// are not).
+/// plot holding the count of values and the notes (e.g. how many runs are
+/// included, and why some are not).
 #[derive(Debug, Clone)]
-pub struct Histogram<'a> {
+pub struct Histogram {
     /// Title.
     pub title: String,
     /// X-axis label (with unit).
     pub x_label: String,
-    /// The values; non-finite ones are left out (and counted in the notes).
-    pub values: &'a [f64],
+    /// Y-axis label: what is counted (`count`, `runs`).
+    pub y_label: String,
+    /// The bins, left to right: `(left edge, width, count)`.
+    pub bins: Vec<(f64, f64, usize)>,
     /// Notes beside the plot, one a line.
     pub notes: Vec<String>,
     /// Image size in pixels.
     pub size_px: (u32, u32),
 }
 
-impl<'a> Histogram<'a> {
-    /// A histogram of `values`, 1000×500 px.
-    pub fn new(title: &str, x_label: &str, values: &'a [f64]) -> Self {
+/// The bins of `n` values over `[lo, hi]`: `(first edge, width, count)`;
+/// √n of them (5 … 50), one of width 1 around a single value. The one
+/// binning of every histogram (values at hand, [`Histogram::new`], or
+/// streamed, counted by the caller, [`Histogram::of_bins`]).
+pub fn bin_layout(n: u64, lo: f64, hi: f64) -> (f64, f64, usize) {
+    if hi <= lo {
+        return (lo - 0.5, 1.0, 1);
+    }
+    let bins = ((n as f64).sqrt().ceil() as usize).clamp(5, 50);
+    (lo, (hi - lo) / bins as f64, bins)
+}
+
+/// The bin of `x` in a [`bin_layout`] `(first edge, width, count)`: the
+/// last bin holds its right edge.
+pub fn bin_of(x: f64, layout: (f64, f64, usize)) -> usize {
+    let (lo, w, n) = layout;
+    (((x - lo) / w).max(0.0) as usize).min(n.saturating_sub(1))
+}
+
+impl Histogram {
+    /// A histogram of `values` ([`bin_layout`]; non-finite values are left
+    /// out), 1000×500 px.
+    pub fn new(title: &str, x_label: &str, values: &[f64]) -> Self {
+        let finite = || values.iter().copied().filter(|x| x.is_finite());
+        let (lo, hi) = finite().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+        let n = finite().count();
+        let mut bins = Vec::new();
+        if n > 0 {
+            let layout = bin_layout(n as u64, lo, hi);
+            let mut counts = vec![0usize; layout.2];
+            for x in finite() {
+                counts[bin_of(x, layout)] += 1;
+            }
+            bins = counts
+                .into_iter()
+                .enumerate()
+                .map(|(b, c)| (layout.0 + b as f64 * layout.1, layout.1, c))
+                .collect();
+        }
+        Self::of_bins(title, x_label, bins)
+    }
+
+    /// A histogram of bins counted by the caller (`(left edge, width,
+    /// count)`, left to right), 1000×500 px.
+    pub fn of_bins(title: &str, x_label: &str, bins: Vec<(f64, f64, usize)>) -> Self {
         Self {
             title: title.to_string(),
             x_label: x_label.to_string(),
-            values,
+            y_label: "count".to_string(),
+            bins,
             notes: Vec::new(),
             size_px: (1000, 500),
         }
     }
 
-    /// The bins: `(left edge, width, count)`; √n of them (5 … 50) over the
-    /// finite values' range, one of width 1 around a single value.
-    pub fn bins(&self) -> Vec<(f64, f64, usize)> {
-        let v: Vec<f64> = self
-            .values
-            .iter()
-            .copied()
-            .filter(|x| x.is_finite())
-            .collect();
-        if v.is_empty() {
-            return Vec::new();
-        }
-        let (lo, hi) = v
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                (a.min(x), b.max(x))
-            });
-        if hi <= lo {
-            return vec![(lo - 0.5, 1.0, v.len())];
-        }
-        let n = ((v.len() as f64).sqrt().ceil() as usize).clamp(5, 50);
-        let w = (hi - lo) / n as f64;
-        let mut counts = vec![0usize; n];
-        for x in &v {
-            counts[(((x - lo) / w) as usize).min(n - 1)] += 1;
-        }
-        counts
-            .into_iter()
-            .enumerate()
-            .map(|(b, c)| (lo + b as f64 * w, w, c))
-            .collect()
+    /// Add a note (a line beside the plot).
+    pub fn note(mut self, line: impl Into<String>) -> Self {
+        self.notes.push(line.into());
+        self
     }
 
     fn draw<DB: DrawingBackend>(
@@ -826,7 +873,7 @@ impl<'a> Histogram<'a> {
             path: path.to_string(),
             message: e.to_string(),
         };
-        let bins = self.bins();
+        let bins = &self.bins;
         let (Some(first), Some(last)) = (bins.first(), bins.last()) else {
             return Err(PlotError::Empty {
                 title: self.title.clone(),
@@ -861,21 +908,21 @@ impl<'a> Histogram<'a> {
         chart
             .configure_mesh()
             .x_desc(self.x_label.as_str())
-            .y_desc("runs [count]")
+            .y_desc(self.y_label.as_str())
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 15))
             .max_light_lines(1)
             .light_line_style(RGBColor(240, 240, 240))
             .bold_line_style(RGBColor(212, 212, 212))
             .x_labels(X_LABELS)
-            .y_labels(Y_LABELS.min(cmax + 1))
+            .y_labels(Y_LABELS)
             .x_label_formatter(&xf)
             .y_label_formatter(&yf)
             .draw()
             .map_err(|e| err(&e))?;
         let fill = PALETTE[0].mix(0.45).filled();
         let edge = PALETTE[0].stroke_width(1);
-        for &(l, w, c) in &bins {
+        for &(l, w, c) in bins {
             if c == 0 {
                 continue;
             }
@@ -1155,6 +1202,20 @@ mod tests {
     }
 
     #[test]
+    fn column_names_become_labels_with_units() {
+        assert_eq!(column_label("thrust_n"), "thrust [N]");
+        assert_eq!(column_label("torque_n_m"), "torque [N·m]");
+        assert_eq!(column_label("omega_rad_s"), "omega [rad/s]");
+        assert_eq!(
+            column_label("touchdown_vertical_speed_m_s"),
+            "touchdown_vertical_speed [m/s]"
+        );
+        assert_eq!(column_label("liftoff_time_s"), "liftoff_time [s]");
+        assert_eq!(column_label("pitch_rad"), "pitch [rad]");
+        assert_eq!(column_label("gain"), "gain [-]");
+    }
+
+    #[test]
     fn significant_digits() {
         assert_eq!(significant(0.021_63, 3), "0.0216");
         assert_eq!(significant(12.345, 3), "12.3");
@@ -1189,14 +1250,16 @@ mod tests {
             .chain([f64::NAN])
             .collect();
         let h = Histogram::new("t", "x [s]", &v);
-        let b = h.bins();
+        let b = &h.bins;
         assert_eq!(b.len(), 10);
         assert_eq!(b.iter().map(|x| x.2).sum::<usize>(), 100);
+        // the largest value in the last bin
+        assert_eq!(b[9].2, 10);
         assert_eq!(
-            Histogram::new("t", "x", &[2.0, 2.0]).bins(),
+            Histogram::new("t", "x", &[2.0, 2.0]).bins,
             vec![(1.5, 1.0, 2)]
         );
-        assert!(Histogram::new("t", "x", &[]).bins().is_empty());
+        assert!(Histogram::new("t", "x", &[]).bins.is_empty());
     }
 
     #[test]

@@ -11,7 +11,7 @@ use super::store::{
     trace_lines, write_file, write_json,
 };
 use super::{McError, Stats, TracePoint, csv_header, metric_count, metric_names};
-use crate::plot::{LinePlot, Series};
+use crate::plot::{self, Figure, Panel, Series};
 use crate::scenario::OUTPUTS;
 use std::io::Write as _;
 use std::path::Path;
@@ -79,15 +79,16 @@ pub(super) fn finish(manifest: &Manifest, store: &Store, out: &Path) -> Result<S
         },
     )?;
     let hist = histograms(store, &acc, ground)?;
+    let (runs, completed) = (acc.runs, acc.completed);
     let stats = acc.finish(&manifest.name, &manifest.hash, &pct);
     let json = out.join("stats.json");
     stats.check_finite(&json.display().to_string())?;
     write_json(&json, &stats)?;
     write_file(&out.join("stats.md"), &stats.to_markdown())?;
     for h in &hist {
-        plot_histogram(h, out)?;
+        plot_histogram(h, runs, completed, out)?;
     }
-    envelopes(store, &env_t[..env_len], out)?;
+    envelopes(store, &env_t[..env_len], runs, out)?;
     Ok(stats)
 }
 
@@ -105,14 +106,16 @@ const GROUND_HISTOGRAMS: [&str; 7] = [
 /// A histogram of one metric over the runs counted in its statistics.
 struct Histogram {
     metric: &'static str,
-    lo: f64,
-    width: f64,
+    /// The bins ([`plot::bin_layout`]).
+    layout: (f64, f64, usize),
     counts: Vec<usize>,
+    /// The runs whose value is counted.
+    n: u64,
 }
 
 /// The histograms (one pass over the store) of the rms, max and settling
 /// metrics and, with `ground`, of the take-off and landing metrics, with at
-/// least two values: √n bins (5 to 50) over [min, max].
+/// least two values, binned as every histogram is ([`plot::bin_layout`]).
 fn histograms(store: &Store, acc: &StatsAcc, ground: bool) -> Result<Vec<Histogram>, McError> {
     let mut hs: Vec<(usize, Histogram)> = Vec::new();
     for (j, m) in metric_names(ground).enumerate() {
@@ -127,19 +130,14 @@ fn histograms(store: &Store, acc: &StatsAcc, ground: bool) -> Result<Vec<Histogr
         if a.n < 2 {
             continue;
         }
-        let bins = ((a.n as f64).sqrt().ceil() as usize).clamp(5, 50);
-        let width = if a.hi > a.lo {
-            (a.hi - a.lo) / bins as f64
-        } else {
-            1.0
-        };
+        let layout = plot::bin_layout(a.n, a.lo, a.hi);
         hs.push((
             j,
             Histogram {
                 metric: m,
-                lo: a.lo,
-                width,
-                counts: vec![0; bins],
+                layout,
+                counts: vec![0; layout.2],
+                n: a.n,
             },
         ));
     }
@@ -152,8 +150,7 @@ fn histograms(store: &Store, acc: &StatsAcc, ground: bool) -> Result<Vec<Histogr
                 && x.is_finite()
                 && counted(*j, r)
             {
-                let b = (((x - h.lo) / h.width) as usize).min(h.counts.len() - 1);
-                h.counts[b] += 1;
+                h.counts[plot::bin_of(x, h.layout)] += 1;
             }
         }
         Ok(())
@@ -161,30 +158,64 @@ fn histograms(store: &Store, acc: &StatsAcc, ground: bool) -> Result<Vec<Histogr
     Ok(hs.into_iter().map(|(_, h)| h).collect())
 }
 
-/// `hist_<metric>.png`: the histogram as a step outline.
-fn plot_histogram(h: &Histogram, out: &Path) -> Result<(), McError> {
-    let (lo, w, m) = (h.lo, h.width, h.metric);
-    let mut pts = vec![(lo, 0.0)];
-    for (b, c) in h.counts.iter().enumerate() {
-        let x0 = lo + b as f64 * w;
-        pts.push((x0, *c as f64));
-        pts.push((x0 + w, *c as f64));
+/// The x label of metric `m`: an output's rms or peak in the output's unit
+/// (`vn_rms [m/s]`, `psi_max_abs [rad]`), else its unit from its name
+/// ([`plot::column_label`]).
+fn metric_label(m: &str) -> String {
+    if m.ends_with("_rms") || m.ends_with("_max_abs") {
+        let unit = if m.starts_with("psi") { "rad" } else { "m/s" };
+        format!("{m} [{unit}]")
+    } else {
+        plot::column_label(m)
     }
-    pts.push((lo + h.counts.len() as f64 * w, 0.0));
-    let over = if GROUND_HISTOGRAMS.contains(&m) {
+}
+
+/// `hist_<metric>.png`: outlined bars, the metric with its unit on x, how
+/// many of the campaign's `runs` (`completed` of them) are counted and why
+/// the others are not.
+fn plot_histogram(h: &Histogram, runs: usize, completed: usize, out: &Path) -> Result<(), McError> {
+    let m = h.metric;
+    let (lo, w, _) = h.layout;
+    let bins = h
+        .counts
+        .iter()
+        .enumerate()
+        .map(|(b, c)| (lo + b as f64 * w, w, *c))
+        .collect();
+    let ground = GROUND_HISTOGRAMS.contains(&m);
+    let over = if ground {
         "flown runs"
     } else {
         "completed runs"
     };
-    LinePlot::new(&format!("{m} ({over})"), m, "runs")
-        .series(Series::new(m, &pts))
-        .write(&out.join(format!("hist_{m}.png")))?;
+    let mut hist = plot::Histogram::of_bins(&format!("{m} ({over})"), &metric_label(m), bins)
+        .note(format!("{} runs flown", runs));
+    hist.y_label = "runs".into();
+    let pool = if ground {
+        runs
+    } else {
+        hist = hist.note(format!("{} completed", completed));
+        completed
+    };
+    let missing = pool.saturating_sub(usize::try_from(h.n).unwrap_or(usize::MAX));
+    if missing > 0 {
+        hist = hist.note(if m.ends_with("_settling_s") {
+            format!("{missing} not settled")
+        } else {
+            format!("{missing} without a value")
+        });
+        if m.ends_with("_settling_s") {
+            hist = hist.note("before the end");
+        }
+    }
+    hist.write(&out.join(format!("hist_{m}.png")))?;
     Ok(())
 }
 
 /// `envelope_<output>.png`: p5 / p50 / p95 over the runs still flying at
-/// each trace sample `k` (times `grid`), exact.
-fn envelopes(store: &Store, grid: &[Option<f64>], out: &Path) -> Result<(), McError> {
+/// each trace sample `k` (times `grid`), exact; the note names the
+/// campaign's `runs`.
+fn envelopes(store: &Store, grid: &[Option<f64>], runs: usize, out: &Path) -> Result<(), McError> {
     let len = grid.len();
     if len < 2 {
         return Ok(());
@@ -214,15 +245,18 @@ fn envelopes(store: &Store, grid: &[Option<f64>], out: &Path) -> Result<(), McEr
                 }
             }
         }
-        LinePlot::new(
+        let mut panel = Panel::new(&format!("{name} [{}]", units[o]))
+            .series(Series::new("p5", &bands[0]))
+            .series(Series::new("p50", &bands[1]))
+            .series(Series::new("p95", &bands[2]));
+        panel.notes = vec![format!("over {runs} runs,"), "those still flying".into()];
+        let mut fig = Figure::new(
             &format!("{name}: envelope over runs (runs still flying)"),
             "time [s]",
-            &format!("{name} [{}]", units[o]),
         )
-        .series(Series::new("p5", &bands[0]))
-        .series(Series::new("p50", &bands[1]))
-        .series(Series::new("p95", &bands[2]))
-        .write(&out.join(format!("envelope_{name}.png")))?;
+        .panel(panel);
+        (fig.width_px, fig.panel_height_px) = (1000, 508);
+        fig.write(&out.join(format!("envelope_{name}.png")))?;
     }
     Ok(())
 }

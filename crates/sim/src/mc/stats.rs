@@ -223,8 +223,10 @@ impl Default for MetricAcc {
 /// classes are bounded by the kinds of termination and parameter keys).
 #[derive(Debug, Clone, Default)]
 pub(super) struct StatsAcc {
-    runs: usize,
-    completed: usize,
+    /// Runs counted.
+    pub(super) runs: usize,
+    /// Runs completed (their flight metrics enter the statistics).
+    pub(super) completed: usize,
     classes: BTreeMap<RunTermination, FailureCount>,
     /// Per metric, in [`metric_names`](super::metric_names) order.
     pub(super) metrics: Vec<MetricAcc>,
