@@ -719,8 +719,13 @@ fn report_excitation(
     }
 }
 
-/// Write magnitude, phase and coherence against ω on a logarithmic axis, with an optional
-/// fit (magnitude and phase curves) overlaid, to `path`.
+/// The coherence above which a Bode plot draws the estimate's confidence
+/// band (γ² ≥ 0.6, the usual threshold for a usable frequency response).
+const COHERENT_GAMMA2: f64 = 0.6;
+
+/// Write magnitude, phase and coherence against ω on a logarithmic axis,
+/// with the estimate's 95 % band (±2ε over the coherent points) and an
+/// optional fit (magnitude and phase curves) overlaid, to `path`.
 pub(crate) fn write_bode(
     path: &Path,
     title: &str,
@@ -734,16 +739,48 @@ pub(crate) fn write_bode(
             .map(|(w, y)| (w.log10(), *y))
             .collect()
     };
-    let (mag, ph, coh) = (lw(&f.mag_db()), lw(&f.phase_deg()), lw(&f.coherence));
+    let (mag_db, phase_deg) = (f.mag_db(), f.phase_deg());
+    let (mag, ph, coh) = (lw(&mag_db), lw(&phase_deg), lw(&f.coherence));
+    // the estimate's 95 % band, ±2ε (ε its normalised random error, of |H|
+    // and of ∠H in rad), drawn over the coherent points only: where γ² is
+    // low ε grows without bound and says nothing
+    let band = |k: usize, sign: f64| -> (f64, f64) {
+        let e = f.random_error.get(k).copied().unwrap_or(f64::NAN);
+        if f.coherence.get(k).is_none_or(|c| *c < COHERENT_GAMMA2) || !e.is_finite() {
+            return (f64::NAN, f64::NAN);
+        }
+        let ratio = (1.0 + sign * 2.0 * e).max(1e-3);
+        (
+            mag_db[k] + 20.0 * ratio.log10(),
+            phase_deg[k] + sign * (2.0 * e).to_degrees(),
+        )
+    };
+    let at = |sign: f64, which: usize| -> Vec<(f64, f64)> {
+        (0..f.omega_rad_s.len())
+            .map(|k| {
+                let b = band(k, sign);
+                (f.omega_rad_s[k].log10(), if which == 0 { b.0 } else { b.1 })
+            })
+            .collect()
+    };
+    let (mag_hi, mag_lo, ph_hi, ph_lo) = (at(1.0, 0), at(-1.0, 0), at(1.0, 1), at(-1.0, 1));
+    const GREY: [u8; 3] = [150, 150, 150];
     let mut pm = Panel::new("magnitude [dB]").series(Series::new("estimate", &mag));
     let mut pp = Panel::new("phase [deg]").series(Series::new("estimate", &ph));
     if let Some(fit) = fit {
         pm = pm.series(Series::new("fit", &fit[0]).dashed());
         pp = pp.series(Series::new("fit", &fit[1]).dashed());
     }
+    for (name, m, p) in [
+        ("+2ε (γ² ≥ 0.6)", &mag_hi, &ph_hi),
+        ("−2ε", &mag_lo, &ph_lo),
+    ] {
+        pm = pm.series(Series::new(name, m).color(GREY).with_gaps());
+        pp = pp.series(Series::new(name, p).color(GREY).with_gaps());
+    }
     let mut pc = Panel::new("coherence γ² [-]").series(Series::new("γ²", &coh));
     pc.hlines.push(HLine {
-        y: 0.6,
+        y: COHERENT_GAMMA2,
         label: "0.6".into(),
         color: [127, 127, 127],
     });

@@ -70,6 +70,9 @@ pub struct Series<'a> {
     /// In a [`Figure`]: do not connect points whose y jumps by more than
     /// this (an angle wrapping through ±π: use π).
     pub break_jumps_over: Option<f64>,
+    /// In a [`Figure`]: a non-finite point ends the line (a gap), instead of
+    /// being skipped and its neighbours joined.
+    pub gaps: bool,
 }
 
 impl<'a> Series<'a> {
@@ -81,6 +84,7 @@ impl<'a> Series<'a> {
             dashed: false,
             color: None,
             break_jumps_over: None,
+            gaps: false,
         }
     }
 
@@ -99,6 +103,14 @@ impl<'a> Series<'a> {
     /// Not connected across jumps larger than `jump` (angles: π).
     pub fn break_jumps_over(mut self, jump: f64) -> Self {
         self.break_jumps_over = Some(jump);
+        self
+    }
+
+    /// In a [`Figure`]: not connected across non-finite points (a curve
+    /// drawn only where it is defined, as a confidence band over the
+    /// coherent frequencies).
+    pub fn with_gaps(mut self) -> Self {
+        self.gaps = true;
         self
     }
 }
@@ -688,11 +700,6 @@ impl<'a> Figure<'a> {
             for (k, s) in panel.series.iter().enumerate() {
                 let (color, dashed) = style_of(k, s);
                 styles.push((color, dashed));
-                let finite = s
-                    .points
-                    .iter()
-                    .copied()
-                    .filter(|(x, y)| x.is_finite() && y.is_finite());
                 let mut run: Vec<(f64, f64)> = Vec::new();
                 let mut flush = |run: &mut Vec<(f64, f64)>| {
                     draw_run(
@@ -705,7 +712,13 @@ impl<'a> Figure<'a> {
                     )
                     .map_err(|e| err(&e))
                 };
-                for (x, y) in finite {
+                for &(x, y) in s.points {
+                    if !(x.is_finite() && y.is_finite()) {
+                        if s.gaps {
+                            flush(&mut run)?;
+                        }
+                        continue;
+                    }
                     if let (Some(jump), Some(&(_, yl))) = (s.break_jumps_over, run.last())
                         && (y - yl).abs() > jump
                     {

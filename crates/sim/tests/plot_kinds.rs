@@ -77,14 +77,42 @@ fn every_plot_kind_renders() {
         let w: Vec<f64> = (0..60).map(|k| 0.2 + f64::from(k) * 0.03).collect();
         let mag: Vec<(f64, f64)> = w.iter().map(|x| (*x, -20.0 * x)).collect();
         let ph: Vec<(f64, f64)> = w.iter().map(|x| (*x, -90.0 * x)).collect();
+        // a band defined on the first and last 20 points only (NaN between,
+        // as a confidence band over the coherent points): two lines, a gap
+        let band: Vec<(f64, f64)> = mag
+            .iter()
+            .enumerate()
+            .map(|(k, &(x, y))| {
+                (
+                    x,
+                    if (20..40).contains(&k) {
+                        f64::NAN
+                    } else {
+                        y + 3.0
+                    },
+                )
+            })
+            .collect();
         let p = d.join(format!("bode.{ext}"));
         Figure::new("bode", "ω [rad/s]")
             .log_x()
-            .panel(Panel::new("magnitude [dB]").series(Series::new("estimate", &mag)))
+            .panel(
+                Panel::new("magnitude [dB]")
+                    .series(Series::new("estimate", &mag))
+                    .series(Series::new("+2ε", &band).color([150, 150, 150]).with_gaps()),
+            )
             .panel(Panel::new("phase [deg]").series(Series::new("estimate", &ph)))
             .write(&p)
             .unwrap();
         if ext == "svg" {
+            let text = std::fs::read_to_string(&p).unwrap();
+            let grey_lines = text
+                .split("<polyline")
+                .skip(1)
+                .filter(|l| l.contains("#969696"))
+                .count();
+            // its two pieces and its legend sample (one piece without the gap)
+            assert_eq!(grey_lines, 3, "the band is not broken at its gap");
             // marked in rad/s (2, 5, 10, 20, 50 on less than two decades),
             // not in log10 ω
             let texts = svg_texts(&p);
