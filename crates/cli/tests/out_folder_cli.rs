@@ -58,6 +58,11 @@ fn a_run_of_other_inputs_is_refused_without_force() {
         report.contains("yaw-gyro.toml` over the Bergen Twin; stock yaw gyro on"),
         "{report}"
     );
+    // and every figure's title names the parameter file
+    for fig in ["outputs", "servos", "estimator", "inflow"] {
+        let svg = std::fs::read_to_string(out.join(format!("{fig}.svg"))).unwrap();
+        assert!(svg.contains("demo [yaw-gyro.toml]: "), "{fig}.svg");
+    }
 }
 
 #[test]

@@ -683,7 +683,13 @@ pub fn finish_run(
     let summary_path = dir.join("summary.json");
     check_summary(&summary_path, summary)?;
     let log = dir.join("log.csv");
-    let (figures, plots) = write_figures(dir, &log, &FigureOptions::for_run(prepared, summary))?;
+    let mut opts = FigureOptions::for_run(prepared, summary);
+    if let Some(name) = scenario.params.as_deref().and_then(Path::file_name) {
+        // another helicopter (or the same with other switches): said on
+        // every figure, as the report says it
+        opts.name = format!("{} [{}]", opts.name, name.to_string_lossy());
+    }
+    let (figures, plots) = write_figures(dir, &log, &opts)?;
     write_summary(&summary_path, summary)?;
     let gains = dir.join("gains.json");
     prepared.gains.save(&gains)?;
