@@ -5,8 +5,11 @@
 //!
 //! - **Commands** (`COMMAND_LONG`): resent every [`COMMAND_RETRY_S`] with
 //!   `confirmation` incremented until the `COMMAND_ACK` of the command
-//!   arrives (`MAV_RESULT_IN_PROGRESS` waits on); any result but
-//!   `MAV_RESULT_ACCEPTED` is a refusal.
+//!   arrives (`MAV_RESULT_IN_PROGRESS` waits on;
+//!   `MAV_RESULT_TEMPORARILY_REJECTED`, "retrying later should work" in
+//!   MAVLink's words — a vehicle whose navigation is still aligning — is
+//!   sent again as a new command every [`COMMAND_RETRY_S`] until the
+//!   timeout); any other result but `MAV_RESULT_ACCEPTED` is a refusal.
 //! - **Mission upload**: `MISSION_COUNT`, then the vehicle drives — each
 //!   `MISSION_REQUEST_INT` (or `MISSION_REQUEST`) is answered with its item
 //!   — until its `MISSION_ACK`. The count is resent while no request came.
@@ -404,6 +407,9 @@ enum Phase {
     Start,
     /// Sent; the count of sends so far.
     Sent(u8),
+    /// Answered `MAV_RESULT_TEMPORARILY_REJECTED`: sent again (a new
+    /// command) after [`COMMAND_RETRY_S`].
+    Rejected,
     /// Upload: the vehicle requests items.
     Uploading,
     /// Download: items expected (count), received, sends of this request.
@@ -634,6 +640,13 @@ impl Operation {
                     self.last_sent_s = now_s;
                 }
             }
+            Phase::Rejected if since >= COMMAND_RETRY_S => {
+                if let Some(m) = self.message(fleet, 0) {
+                    step.send.push(m);
+                    self.phase = Phase::Sent(1);
+                    self.last_sent_s = now_s;
+                }
+            }
             Phase::Downloading(count, got, n) if since >= MISSION_RETRY_S => {
                 if n >= MAX_SENDS {
                     step.done = Some(Err(self.timeout()));
@@ -647,6 +660,22 @@ impl Operation {
             _ => {}
         }
         step
+    }
+
+    /// The outcome of a command's `COMMAND_ACK` at `now_s`: accepted, a
+    /// refusal, or nothing yet (in progress; temporarily rejected: sent
+    /// again after [`COMMAND_RETRY_S`], the operation's timeout bounding it).
+    fn ack_result(&mut self, r: MavResult, now_s: f64) -> Option<Result<Outcome, ClientError>> {
+        match r {
+            MavResult::MAV_RESULT_ACCEPTED => Some(Ok(Outcome::Command(r))),
+            MavResult::MAV_RESULT_IN_PROGRESS => None,
+            MavResult::MAV_RESULT_TEMPORARILY_REJECTED => {
+                self.phase = Phase::Rejected;
+                self.last_sent_s = now_s;
+                None
+            }
+            _ => Some(Err(ClientError::Refused(format!("{r:?}")))),
+        }
     }
 
     /// A message from (`sysid`, `compid`) at `now_s`.
@@ -663,12 +692,12 @@ impl Operation {
             (Request::Command { command, .. }, MavMessage::COMMAND_ACK(a))
                 if a.command == *command =>
             {
-                step.done = ack_result(a.result);
+                step.done = self.ack_result(a.result, now_s);
             }
             (Request::Takeoff(_), MavMessage::COMMAND_ACK(a))
                 if a.command == MavCmd::MAV_CMD_NAV_TAKEOFF =>
             {
-                step.done = ack_result(a.result);
+                step.done = self.ack_result(a.result, now_s);
             }
             (
                 Request::Upload(items),
@@ -770,14 +799,6 @@ impl Operation {
     }
 }
 
-fn ack_result(r: MavResult) -> Option<Result<Outcome, ClientError>> {
-    match r {
-        MavResult::MAV_RESULT_ACCEPTED => Some(Ok(Outcome::Command(r))),
-        MavResult::MAV_RESULT_IN_PROGRESS => None,
-        _ => Some(Err(ClientError::Refused(format!("{r:?}")))),
-    }
-}
-
 /// The ground station's heartbeat.
 pub fn gcs_heartbeat() -> MavMessage {
     MavMessage::HEARTBEAT(HEARTBEAT_DATA {
@@ -868,6 +889,50 @@ mod tests {
             done,
             Some(Err(ClientError::Refused("MAV_RESULT_DENIED".into())))
         );
+    }
+
+    /// Temporarily rejected (the navigation aligning): sent again as a new
+    /// command (confirmation 0) a retry period later, accepted then; the
+    /// operation's timeout bounds the retries.
+    #[test]
+    fn a_temporarily_rejected_command_is_tried_again_until_its_timeout() {
+        let f = fleet();
+        let arm = MavCmd::MAV_CMD_COMPONENT_ARM_DISARM;
+        let mut params = [0.0; 7];
+        params[0] = 1.0;
+        let request = Request::Command {
+            command: arm,
+            params,
+        };
+        let mut op = Operation::new(request.clone(), 1, 0.0, 10.0).unwrap();
+        assert_eq!(op.poll(&f, 0.0).send.len(), 1);
+        let later = ack(arm, MavResult::MAV_RESULT_TEMPORARILY_REJECTED);
+        assert_eq!(op.on_message(1, &later, 0.1).done, None);
+        assert!(op.poll(&f, 0.6).send.is_empty());
+        match &op.poll(&f, 1.2).send[..] {
+            [MavMessage::COMMAND_LONG(c)] => assert_eq!((c.command, c.confirmation), (arm, 0)),
+            other => panic!("{other:?}"),
+        }
+        let done = op
+            .on_message(1, &ack(arm, MavResult::MAV_RESULT_ACCEPTED), 1.3)
+            .done;
+        assert_eq!(
+            done,
+            Some(Ok(Outcome::Command(MavResult::MAV_RESULT_ACCEPTED)))
+        );
+        // rejected every time: the timeout ends it
+        let mut op = Operation::new(request, 1, 0.0, 3.0).unwrap();
+        let mut t = 0.0;
+        let mut end = None;
+        while end.is_none() && t < 10.0 {
+            let s = op.poll(&f, t);
+            end = s.done;
+            if !s.send.is_empty() {
+                assert_eq!(op.on_message(1, &later, t + 0.05).done, None);
+            }
+            t += 0.1;
+        }
+        assert!(matches!(end, Some(Err(_))) && t <= 3.2, "{end:?} at {t}");
     }
 
     #[test]

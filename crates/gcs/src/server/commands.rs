@@ -284,7 +284,9 @@ impl Server {
                     MavSeverity::MAV_SEVERITY_WARNING,
                     "refused: no navigation solution",
                 );
-                return MavResult::MAV_RESULT_DENIED;
+                // (aligning: the station may try again, as PX4 answers a
+                // failed arming check)
+                return MavResult::MAV_RESULT_TEMPORARILY_REJECTED;
             }
             if !s.armed && s.ground.on_ground() == Some(false) {
                 self.say(
