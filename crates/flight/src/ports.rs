@@ -393,12 +393,6 @@ impl SensorPort for DeviceSensors {
             _ => 0,
         };
         if n == 0 {
-            // a look that does not wait (a lock-step wait polling the IMU)
-            // leaves the other lines to the wait that blocks: one system
-            // call a look; their bytes are read with the IMU's message
-            if timeout.is_zero() && self.pending_event.is_none() {
-                return Ok(Next::Timeout);
-            }
             // the GPS keeps being read while the IMU is silent
             self.drain_gps();
             self.drain_rc()?;
