@@ -393,6 +393,14 @@ impl SensorPort for DeviceSensors {
             _ => 0,
         };
         if n == 0 {
+            // lock-step (the receiver read here too, only there): a look
+            // that does not wait, polling the IMU, leaves the other lines to
+            // the IMU's message, whose GPS and receiver bytes the simulator
+            // delivers first (one system call a look). In real time every
+            // look drains them: there the GPS would starve.
+            if timeout.is_zero() && self.receiver.is_some() && self.pending_event.is_none() {
+                return Ok(Next::Timeout);
+            }
             // the GPS keeps being read while the IMU is silent
             self.drain_gps();
             self.drain_rc()?;
