@@ -19,6 +19,7 @@ board, so that three on two cores keep their deadlines). Exit status 0 when
 every flight passed; one line per flight with its figures.
 """
 import argparse
+import contextlib
 import csv
 import math
 import os
@@ -201,10 +202,15 @@ def main() -> int:
     ap.add_argument("--helicon", default="target/release/helicon")
     ap.add_argument("--scenario", default="scenarios/demo.toml")
     ap.add_argument("--seed", type=int, action="append")
+    ap.add_argument("--keep", metavar="DIR",
+                    help="write each seed's outputs to DIR/seedN and keep them")
     a = ap.parse_args()
     seeds = a.seed or [1, 2, 3]
     results = {}
-    with tempfile.TemporaryDirectory(prefix="helicon-g2g-") as out_root:
+    if a.keep:
+        os.makedirs(a.keep, exist_ok=True)
+    with (contextlib.nullcontext(a.keep) if a.keep
+          else tempfile.TemporaryDirectory(prefix="helicon-g2g-")) as out_root:
         def run(seed):
             try:
                 results[seed] = (True, fly(a.helicon, a.scenario, seed, out_root))

@@ -115,9 +115,17 @@ pub struct NavigationFilter {
     gravity_weight: f64,
     last_f: Vector3<f64>,
     last_w: Vector3<f64>,
+    /// The time of the last sample stepped (s): samples that never came
+    /// between it and the next are propagated ([`NavigationFilter::step`]).
+    last_t_s: Option<f64>,
     attitude_fix: bool,
     gps_fused: bool,
 }
+
+/// The most sample periods a missing stretch of samples is propagated over
+/// (40 ms at 400 Hz: twice the IMU's default stale limit; a longer gap is
+/// the IMU lost, and the filter goes on from the first sample back).
+pub const MAX_MISSED_PERIODS: u32 = 16;
 
 /// What the navigation knows after one sample (for telemetry and logs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -189,6 +197,7 @@ impl NavigationFilter {
             gravity_weight: config.gravity_weight,
             last_f: trig.ned_from_body().transpose() * Vector3::new(0.0, 0.0, -noise.gravity_m_s2),
             last_w: *omega0,
+            last_t_s: None,
             attitude_fix: false,
             gps_fused: false,
         })
@@ -197,10 +206,35 @@ impl NavigationFilter {
     /// One sample: determine attitude by the q-method when the magnetometer
     /// was sampled, fuse it with the IMU and a valid GPS fix; returns the nine
     /// measured states (15.2) `[φ θ ψ u v w p q r]`.
+    ///
+    /// The filter is sampled every `dt_s`: when the sample's time is more
+    /// than one period after the last one's (samples that never came, or
+    /// that a real-time reader superseded), the missing periods are
+    /// predicted first with the last sample held (at most
+    /// [`MAX_MISSED_PERIODS`]), so that the filter's time keeps up with
+    /// the GPS's and a missed sample costs resolution, not a bias.
     pub fn step(&mut self, frame: &SensorFrame) -> Result<MeasuredStates, FusionError> {
         if let Some(what) = frame.first_non_finite() {
             return Err(FusionError::NonFiniteInput { what });
         }
+        let missed = self.last_t_s.map_or(0, |last| {
+            let periods = ((frame.t_s - last) / self.filter.config().dt_s).round();
+            if periods > 1.0 {
+                (periods as u32).min(MAX_MISSED_PERIODS) - 1
+            } else {
+                0
+            }
+        });
+        for _ in 0..missed {
+            self.filter.step(&FusionInput {
+                specific_force_body_m_s2: self.last_f,
+                gyro_body_rad_s: self.last_w,
+                gps_ned_m: None,
+                gps_vel_ned_m_s: None,
+                attitude_rad: None,
+            })?;
+        }
+        self.last_t_s = Some(frame.t_s);
         let imu = &frame.imu;
         let attitude = frame.mag_body.and_then(|m| {
             let obs = [

@@ -573,6 +573,10 @@ impl Landing {
             return;
         }
         let c = self.config;
+        // a sample without its evidence tells nothing (as in flight)
+        if vel.is_none() || i.gyro_body_rad_s.is_none() {
+            return;
+        }
         let still = self.not_moving(vel) && !self.rotating(i.gyro_body_rad_s);
         if !still {
             self.set_stage(LandStage::Air, now);
@@ -637,9 +641,18 @@ impl Landing {
             rotating,
             descending: self.descent_since_s.is_some(),
         };
+        // a sample without the IMU's rates or the navigation's velocity (a
+        // reader that fell behind, a sample refused) tells nothing: the
+        // stage and its clock stay, the blend goes on as the stage has it.
+        // Taken as moving, every such sample would send a touchdown back to
+        // the air, and a real-time board that misses one sample in ten
+        // would never land. A sensor silent for its stale limit is the
+        // supervisor's failsafe.
+        let evidence = vel.is_some() && i.gyro_body_rad_s.is_some();
         let third = c.trigger_s / 3.0 - 1e-9;
         let held = now - self.stage_since_s >= third;
         let next = match self.stage {
+            s if !evidence => s,
             _ if !contact => LandStage::Air,
             LandStage::Air => LandStage::GroundContact,
             LandStage::GroundContact if held && minimal && !rotating => LandStage::MaybeLanded,
@@ -810,6 +823,61 @@ mod tests {
             Some((SpoolState::Landed, SpoolState::SpoolingDown))
         );
         assert!(s.throttle_hold);
+    }
+
+    /// A touchdown whose samples now and then come without the IMU's rates
+    /// or the navigation's velocity (a real-time reader that fell behind:
+    /// one sample in three here) lands, in the time a touchdown without
+    /// gaps takes (to a sample a stage): a missing sample holds the detector, it
+    /// does not send it back to the air. Disarmed in the air (a kill), the
+    /// settling on the ground holds the same way.
+    #[test]
+    fn samples_without_their_evidence_hold_the_land_detector() {
+        let c = LandingConfig::default();
+        let down = Reference {
+            velocity_ned_m_s: Vector3::new(0.0, 0.0, 0.3),
+            yaw_rad: 0.0,
+        };
+        let still = (Vector3::new(0.0, 0.0, -0.3), Vector3::zeros());
+        let law = Input::new(0.12, 0.0, 0.0, 0.05);
+        // from flying to landed, each `gap`-th sample without evidence
+        let land = |gap: Option<usize>, armed: bool| {
+            let mut l = Landing::in_flight(c, TS, &trim(), 0.0);
+            let mut t = 0.0;
+            for k in 1.. {
+                t += TS;
+                let missing = gap.is_some_and(|g| k % g == 0);
+                l.servo(&law, false);
+                let mut i = input(t, armed, &down, still, Vector3::zeros());
+                if missing {
+                    i.position_velocity_ned = if k % 2 == 0 { None } else { Some(still) };
+                    i.gyro_body_rad_s = if k % 2 == 0 {
+                        Some(Vector3::zeros())
+                    } else {
+                        None
+                    };
+                }
+                l.update(&i);
+                if l.stage() == LandStage::Landed {
+                    break;
+                }
+                assert!(
+                    t < 10.0,
+                    "gap {gap:?}, armed {armed}: not landed: {:?}",
+                    l.stage()
+                );
+            }
+            t
+        };
+        for armed in [true, false] {
+            let (whole, gappy) = (land(None, armed), land(Some(3), armed));
+            // each of the three stages' changes waits at most one sample
+            // for one with its evidence
+            assert!(
+                (whole - gappy).abs() <= 3.0 * TS + 1e-9,
+                "armed {armed}: landed at {whole} s, with gaps at {gappy} s"
+            );
+        }
     }
 
     /// In the air, hovering at the trim collective, or descending: no

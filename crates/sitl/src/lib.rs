@@ -71,6 +71,11 @@ pub struct Faults {
     /// The IMU repeats its last packet (its time does not advance) over
     /// this interval (s).
     pub imu_frozen_s: Option<(f64, f64)>,
+    /// Over this interval (s) every tenth IMU packet repeats the one
+    /// before (its time does not advance): the on-board program steps
+    /// without a fresh sample one step in ten, as a real-time reader that
+    /// falls behind now and then (never long enough for the stale limit).
+    pub imu_stutter_s: Option<(f64, f64)>,
     /// The GPS receiver reports no fix over this interval (s): NAV-PVT
     /// messages with a valid checksum, fix type 0 and no valid-fix flag.
     pub gps_no_fix_s: Option<(f64, f64)>,
@@ -547,7 +552,8 @@ pub fn run(
             }
         }
         // the IMU (and magnetometer): last, it paces the on-board software
-        let frozen = within(options.faults.imu_frozen_s, t);
+        let frozen = within(options.faults.imu_frozen_s, t)
+            || (within(options.faults.imu_stutter_s, t) && s.k % 10 == 9);
         let vn = match (frozen, last_vn) {
             (true, Some(v)) => v,
             _ => {

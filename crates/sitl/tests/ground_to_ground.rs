@@ -323,7 +323,7 @@ fn truth(log: &std::path::Path, gear: &LandingGear, t_arm_s: f64, t_settled_s: f
 
 /// One flight from the ground to the ground; the measured figures.
 #[allow(clippy::too_many_lines)] // one flight, its checks in order
-fn flight(seed: u64, again: bool) -> Figures {
+fn flight(seed: u64, again: bool, stutter: bool) -> Figures {
     // the wait on the ground before arming: 5-60 s, drawn from the seed
     let wait_s =
         5.0 + (seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11) as f64 / (1u64 << 53) as f64 * 55.0;
@@ -339,6 +339,9 @@ fn flight(seed: u64, again: bool) -> Figures {
     let mut opts = common::options(&format!("ground{seed}"));
     opts.keep_frames = false;
     opts.gcs = Some(format!("udpout:127.0.0.1:{port}"));
+    if stutter {
+        opts.faults.imu_stutter_s = Some((0.0, f64::INFINITY));
+    }
     let out_dir = opts.out_dir.clone();
     let run = std::thread::spawn(move || sitl::run(&s, &prepared, &opts));
     let mut c = Client {
@@ -598,7 +601,7 @@ struct Figures {
 
 #[test]
 fn from_the_ground_to_the_ground_with_a_ground_station() {
-    let figures: Vec<Figures> = [1, 2, 3].map(|seed| flight(seed, seed == 1)).into();
+    let figures: Vec<Figures> = [1, 2, 3].map(|seed| flight(seed, seed == 1, false)).into();
     let range = |f: &dyn Fn(&Figures) -> f64| {
         figures
             .iter()
@@ -627,6 +630,19 @@ fn from_the_ground_to_the_ground_with_a_ground_station() {
         let (lo, hi) = range(f);
         println!("{what}: {lo:.3}–{hi:.3}");
     }
+}
+
+/// The same flight with one IMU sample in ten missing from the start to
+/// the end (the on-board program steps without a fresh sample, as a
+/// real-time board whose reader falls behind): it takes off, flies the
+/// mission, lands and is disarmed within every bound of the flight
+/// without gaps. (Before the land detector held its stage on such
+/// samples, each sent the touchdown back to the air: never landed, the
+/// law wound up on the ground.)
+#[test]
+fn lands_with_one_imu_sample_in_ten_missing() {
+    let f = flight(2, false, true);
+    println!("{f:?}");
 }
 
 /// `helicon sitl --gcs` waits on the ground until stopped: ten minutes of

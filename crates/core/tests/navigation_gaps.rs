@@ -1,0 +1,101 @@
+//! The navigation filter over samples that never came: one in ten missing
+//! (a real-time reader that fell behind now and then) leaves its solution
+//! as it is with every sample, because the missing periods are predicted
+//! with the last sample held. Without that, the filter's clock fell behind
+//! the GPS's by a tenth and every fix pulled the estimate back: here 2.0 m
+//! behind after 20 s at 2 m/s; in SITL a steady 0.18 m/s error of the
+//! vertical velocity at a touchdown, enough to keep the land detector from
+//! seeing the helicopter still.
+#![allow(clippy::unwrap_used)] // test helpers: a failed unwrap is a failed test
+
+use helicon_core::sensor::{GpsFix, GpsFixType, ImuSample, SensorFrame, SensorNoise};
+use helicon_core::{NavigationConfig, NavigationFilter};
+use nalgebra::{SVector, Vector3};
+
+const TS: f64 = 0.0025;
+const G: f64 = 9.81;
+const FIELD: [f64; 3] = [0.153, 0.008, -0.438];
+/// The truth: level, heading north, a steady climb and forward flight (m/s).
+const V_NED: [f64; 3] = [2.0, 0.0, -0.5];
+
+fn filter() -> NavigationFilter {
+    let noise = SensorNoise {
+        gps_sigma_m: Vector3::new(1.5, 1.5, 3.0),
+        gps_vel_sigma_m_s: Vector3::new(0.05, 0.05, 0.1),
+        mag_field_ned: Vector3::from(FIELD),
+        gravity_m_s2: G,
+    };
+    let mut x0 = SVector::<f64, 9>::zeros();
+    for i in 0..3 {
+        x0[3 + i] = V_NED[i];
+    }
+    NavigationFilter::new(
+        &NavigationConfig::default(),
+        &noise,
+        TS,
+        &x0,
+        &Vector3::zeros(),
+    )
+    .unwrap()
+}
+
+/// Sample k of the steady flight: the magnetometer every 4th, a GPS fix
+/// (position and Doppler velocity, exact) every 40th (10 Hz).
+fn frame(k: u64) -> SensorFrame {
+    let t = k as f64 * TS;
+    let v = Vector3::from(V_NED);
+    SensorFrame {
+        t_s: t,
+        imu: ImuSample {
+            specific_force_body_m_s2: Vector3::new(0.0, 0.0, -G),
+            gyro_body_rad_s: Vector3::zeros(),
+        },
+        mag_body: (k % 4 == 0).then(|| Vector3::from(FIELD)),
+        gps: (k % 40 == 0).then(|| GpsFix {
+            epoch_s: t,
+            fix: GpsFixType::Fix3d,
+            position_ned_m: v * t,
+            velocity_ned_m_s: Some(v),
+        }),
+    }
+}
+
+/// The velocity and position errors after 20 s, every `gap`-th sample
+/// missing (none: every sample). A missing sample's GPS fix comes with the
+/// next sample, as a receiver's message waits for the next IMU sample.
+fn fly(gap: Option<u64>) -> (f64, f64) {
+    let mut f = filter();
+    let mut pending_gps = None;
+    let n = (20.0 / TS) as u64;
+    for k in 0..=n {
+        let mut fr = frame(k);
+        if gap.is_some_and(|g| k % g == g - 1) && k < n {
+            pending_gps = fr.gps.or(pending_gps);
+            continue;
+        }
+        fr.gps = fr.gps.or(pending_gps.take());
+        f.step(&fr).unwrap();
+    }
+    let s = f.solution();
+    let t = n as f64 * TS;
+    let v = Vector3::from(V_NED);
+    (
+        (s.velocity_ned_m_s - v).norm(),
+        (s.position_ned_m - v * t).norm(),
+    )
+}
+
+#[test]
+fn a_missing_sample_costs_no_velocity_bias() {
+    let (v_all, p_all) = fly(None);
+    let (v_gap, p_gap) = fly(Some(10));
+    println!(
+        "every sample: |dv| {v_all:.5} m/s, |dp| {p_all:.4} m; one in ten missing: |dv| {v_gap:.5} m/s, |dp| {p_gap:.4} m"
+    );
+    assert!(v_all < 1e-3 && p_all < 1e-2, "{v_all} {p_all}");
+    // the truth is steady: held samples are the truth, so the gappy filter
+    // is as good as the whole one (measured: both 0.1 mm off; a tenth of
+    // the periods unpropagated would leave it 2.0 m behind)
+    assert!(v_gap < 1e-3, "velocity off by {v_gap} m/s");
+    assert!(p_gap < 1e-2, "position off by {p_gap} m");
+}
