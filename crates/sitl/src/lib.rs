@@ -463,6 +463,7 @@ pub fn run(
         Vec::new()
     };
     let mut samples = 0u64;
+    let mut last_report: Option<StepReport> = None;
     let mut servo_wait_s = 0.0;
     let timeout = Duration::from_secs(10);
     let t0 = helicon_flight::realtime::monotonic_ns();
@@ -649,7 +650,12 @@ pub fn run(
                 }
             }
         }
-        // the telemetry of this sample (lock-step: pushed before its servo frame)
+        // the telemetry of this sample (lock-step: pushed before its servo
+        // frame). In real time a period whose report has not come yet (the
+        // on-board step late, or a step without a sample) logs the newest
+        // one the link had, as a ground station shows the last telemetry:
+        // not zeros, which the estimate columns would show as a false
+        // estimate of 0
         let mut report: Option<StepReport> = None;
         while let Ok(x) = downlink.pop() {
             if report.is_none_or(|r| x.telemetry.sample >= r.telemetry.sample) {
@@ -658,6 +664,11 @@ pub fn run(
             if lockstep {
                 break;
             }
+        }
+        if report.is_some() {
+            last_report = report;
+        } else if !lockstep {
+            report = last_report;
         }
         if options.keep_frames {
             received.push(u);

@@ -163,4 +163,29 @@ fn a_real_time_run_uses_every_thread_and_logs_in_order() {
     assert!(t.windows(2).all(|w| w[1] > w[0]), "monotonic");
     let samples = log.u64s("control", "sample");
     assert!(samples.windows(2).all(|w| w[1] == w[0] + 1));
+    // log.csv's estimate columns: from the first on-board report on, every
+    // row carries one (a period whose report had not come yet the newest
+    // the link had), never the nine zeros of no report
+    let table = helicon_sim::log_csv::read_log_csv(&r.log_csv).unwrap();
+    let names = [
+        "est_phi",
+        "est_theta",
+        "est_psi",
+        "est_u",
+        "est_v",
+        "est_w",
+        "est_p",
+        "est_q",
+        "est_r",
+    ];
+    let cols: Vec<&[f64]> = names.iter().map(|n| table.column(n).unwrap()).collect();
+    let none = |k: usize| cols.iter().all(|c| c[k] == 0.0);
+    let first = (0..table.rows())
+        .find(|&k| !none(k))
+        .expect("no estimate logged");
+    let missing = (first..table.rows()).filter(|&k| none(k)).count();
+    assert_eq!(
+        missing, 0,
+        "{missing} rows without an estimate after row {first}"
+    );
 }
