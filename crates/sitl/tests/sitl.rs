@@ -166,19 +166,14 @@ fn a_real_time_run_uses_every_thread_and_logs_in_order() {
     // log.csv's estimate columns: from the first on-board report on, every
     // row carries one (a period whose report had not come yet the newest
     // the link had), never the nine zeros of no report
-    let table = helicon_sim::log_csv::read_log_csv(&r.log_csv).unwrap();
-    let names = [
-        "est_phi",
-        "est_theta",
-        "est_psi",
-        "est_u",
-        "est_v",
-        "est_w",
-        "est_p",
-        "est_q",
-        "est_r",
-    ];
-    let cols: Vec<&[f64]> = names.iter().map(|n| table.column(n).unwrap()).collect();
+    use helicon_sim::log_csv::{LOG_SCHEMA, LogSource, read_log_csv};
+    let table = read_log_csv(&r.log_csv).unwrap();
+    let cols: Vec<&[f64]> = LOG_SCHEMA
+        .iter()
+        .filter(|c| matches!(c.source, LogSource::Estimate(_)))
+        .map(|c| table.column(c.name).unwrap())
+        .collect();
+    assert_eq!(cols.len(), 9);
     let none = |k: usize| cols.iter().all(|c| c[k] == 0.0);
     let first = (0..table.rows())
         .find(|&k| !none(k))
