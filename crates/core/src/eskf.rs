@@ -459,15 +459,26 @@ impl Eskf {
 
     /// One sample: propagate over the interval ending at the frame's time with
     /// its IMU sample (the mean over the interval, as delta-angle and
-    /// delta-velocity IMUs deliver it), then fuse the magnetometer and a valid
-    /// GPS fix. Returns the nine measured states (15.2) `[φ θ ψ u v w p q r]`.
+    /// delta-velocity IMUs deliver it; the periods of samples that did not
+    /// come propagated too, at most
+    /// [`MAX_MISSED_PERIODS`](crate::navigation::MAX_MISSED_PERIODS)), then
+    /// fuse the magnetometer and a valid GPS fix. Returns the nine measured
+    /// states (15.2) `[φ θ ψ u v w p q r]`.
     pub fn step(&mut self, frame: &SensorFrame) -> Result<MeasuredStates, FusionError> {
         if let Some(what) = frame.first_non_finite() {
             return Err(FusionError::NonFiniteInput { what });
         }
         let omega = frame.imu.gyro_body_rad_s - self.b_g;
         let f = frame.imu.specific_force_body_m_s2 - self.b_a;
-        if self.t_s.is_some() {
+        if let Some(last) = self.t_s {
+            // periods without a sample (never came, or a real-time reader
+            // superseded them) propagated with this sample, the mean over
+            // the interval, each with its history entry
+            let missed = crate::navigation::missed_periods(Some(last), frame.t_s, self.dt_s);
+            for k in 1..=missed {
+                self.propagate(&omega, &f);
+                self.push_history(last + f64::from(k) * self.dt_s);
+            }
             self.propagate(&omega, &f);
         }
         self.push_history(frame.t_s);

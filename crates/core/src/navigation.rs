@@ -124,8 +124,23 @@ pub struct NavigationFilter {
 
 /// The most sample periods a missing stretch of samples is propagated over
 /// (40 ms at 400 Hz: twice the IMU's default stale limit; a longer gap is
-/// the IMU lost, and the filter goes on from the first sample back).
+/// the IMU lost, and is propagated over this many periods only).
 pub const MAX_MISSED_PERIODS: u32 = 16;
+
+/// The sample periods of `dt_s` that passed without a sample between the
+/// last sample stepped (`last_t_s`) and one at `t_s`: 0 for the next
+/// sample in line (or a time that did not advance, or none before), at
+/// most [`MAX_MISSED_PERIODS`] − 1. Both navigation filters predict these
+/// periods first, so that their clock keeps up with the GPS's.
+pub fn missed_periods(last_t_s: Option<f64>, t_s: f64, dt_s: f64) -> u32 {
+    let Some(last) = last_t_s else { return 0 };
+    let periods = ((t_s - last) / dt_s).round();
+    if periods > 1.0 {
+        (periods.min(f64::from(MAX_MISSED_PERIODS)) as u32) - 1
+    } else {
+        0
+    }
+}
 
 /// What the navigation knows after one sample (for telemetry and logs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -217,14 +232,7 @@ impl NavigationFilter {
         if let Some(what) = frame.first_non_finite() {
             return Err(FusionError::NonFiniteInput { what });
         }
-        let missed = self.last_t_s.map_or(0, |last| {
-            let periods = ((frame.t_s - last) / self.filter.config().dt_s).round();
-            if periods > 1.0 {
-                (periods as u32).min(MAX_MISSED_PERIODS) - 1
-            } else {
-                0
-            }
-        });
+        let missed = missed_periods(self.last_t_s, frame.t_s, self.filter.config().dt_s);
         for _ in 0..missed {
             self.filter.step(&FusionInput {
                 specific_force_body_m_s2: self.last_f,

@@ -574,7 +574,7 @@ impl Landing {
         }
         let c = self.config;
         // a sample without its evidence tells nothing (as in flight)
-        if vel.is_none() || i.gyro_body_rad_s.is_none() {
+        if !Self::evidence(i, vel) {
             return;
         }
         let still = self.not_moving(vel) && !self.rotating(i.gyro_body_rad_s);
@@ -585,6 +585,12 @@ impl Landing {
         } else if now - self.stage_since_s >= c.trigger_s - 1e-9 {
             self.set_stage(LandStage::Landed, now);
         }
+    }
+
+    /// The sample carries the detector's evidence: the IMU's rates and the
+    /// navigation's velocity (a step without a fresh sample has neither).
+    fn evidence(i: &LandingInput<'_>, vel: Option<Vector3<f64>>) -> bool {
+        vel.is_some() && i.gyro_body_rad_s.is_some()
     }
 
     /// No vertical and no horizontal movement (an unknown velocity moves).
@@ -648,7 +654,7 @@ impl Landing {
         // the air, and a real-time board that misses one sample in ten
         // would never land. A sensor silent for its stale limit is the
         // supervisor's failsafe.
-        let evidence = vel.is_some() && i.gyro_body_rad_s.is_some();
+        let evidence = Self::evidence(i, vel);
         let third = c.trigger_s / 3.0 - 1e-9;
         let held = now - self.stage_since_s >= third;
         let next = match self.stage {

@@ -651,11 +651,11 @@ pub fn run(
             }
         }
         // the telemetry of this sample (lock-step: pushed before its servo
-        // frame). In real time a period whose report has not come yet (the
-        // on-board step late, or a step without a sample) logs the newest
-        // one the link had, as a ground station shows the last telemetry:
-        // not zeros, which the estimate columns would show as a false
-        // estimate of 0
+        // frame). A period without a report of its own (in real time the
+        // on-board step late; a step without a fresh sample computes none)
+        // logs the newest one the link had, as a ground station shows the
+        // last telemetry: not zeros, which the estimate columns would show
+        // as a false estimate of 0
         let mut report: Option<StepReport> = None;
         while let Ok(x) = downlink.pop() {
             if report.is_none_or(|r| x.telemetry.sample >= r.telemetry.sample) {
@@ -667,7 +667,7 @@ pub fn run(
         }
         if report.is_some() {
             last_report = report;
-        } else if !lockstep {
+        } else {
             report = last_report;
         }
         if options.keep_frames {
