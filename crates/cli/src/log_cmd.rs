@@ -65,22 +65,34 @@ fn run_export(a: &ExportArgs) -> Result<()> {
     // the errors name the file, the byte offset and the rule
     let report = export_csv(&a.file, &a.csv)?;
     let mut con = crate::console::Console::stdout();
+    let (mut nan, mut inf) = (0u64, 0u64);
     for ((topic, multi_id), t) in &report.topics {
+        let mut marks = String::new();
+        if t.nan_values > 0 {
+            marks.push_str(&format!(", {} NaN", t.nan_values));
+        }
+        if t.infinite_values > 0 {
+            marks.push_str(&format!(", {} inf", t.infinite_values));
+        }
         writeln!(
             con,
-            "{} {multi_id}: {} rows -> {}",
+            "{} {multi_id}: {} rows{marks} -> {}",
             esc(topic),
             t.stats.rows,
             t.file.display()
         );
+        nan += t.nan_values;
+        inf += t.infinite_values;
     }
     for f in &report.text_files {
         writeln!(con, "{}", f.display());
     }
-    if report.non_finite_values > 0 {
+    if nan + inf > 0 {
+        // PX4's topics mark a field the vehicle does not have with NaN,
+        // and a limit that does not apply (vehicle_local_position's
+        // vxy_max, vz_max, hagl_*) with INFINITY
         crate::console::note!(
-            "warning: {} non-finite values written as NaN/inf",
-            report.non_finite_values
+            "note: {nan} values NaN and {inf} infinite, per topic above (in PX4's topics NaN is \"not available\", INFINITY \"no limit\")"
         );
     }
     truncation_note(&a.file, report.pass.end);

@@ -90,6 +90,11 @@ pub struct TopicReport {
     pub file: PathBuf,
     /// Its rows and span.
     pub stats: TopicStats,
+    /// Float values written as `NaN`: in PX4's topics, a field the vehicle
+    /// does not have ("not available").
+    pub nan_values: u64,
+    /// Float values written as `inf` or `-inf`.
+    pub infinite_values: u64,
 }
 
 /// What a log holds (`helicon log info`).
@@ -163,8 +168,6 @@ pub struct ExportReport {
     pub topics: BTreeMap<(String, u8), TopicReport>,
     /// The text files written (info, parameters, messages).
     pub text_files: Vec<PathBuf>,
-    /// Non-finite float values written (`NaN`, `inf`).
-    pub non_finite_values: u64,
     /// Text messages.
     pub log_messages: u64,
     /// Total dropout duration (ms).
@@ -228,18 +231,19 @@ fn non_finite_text(x: f64) -> &'static str {
     }
 }
 
-/// Format one value as a CSV field into `s`; true when non-finite.
-fn format_value(v: &Value, s: &mut String) -> bool {
+/// Format one value as a CSV field into `s`; the value when non-finite.
+fn format_value(v: &Value, s: &mut String) -> Option<f64> {
     s.clear();
-    match v {
-        Value::Float(x) if !x.is_finite() => s.push_str(non_finite_text(*x)),
-        Value::Float32(x) if !x.is_finite() => s.push_str(non_finite_text(f64::from(*x))),
+    let x = match v {
+        Value::Float(x) if !x.is_finite() => *x,
+        Value::Float32(x) if !x.is_finite() => f64::from(*x),
         _ => {
             let _ = write!(s, "{v}");
-            return false;
+            return None;
         }
-    }
-    true
+    };
+    s.push_str(non_finite_text(x));
+    Some(x)
 }
 
 type TopicCsv = (csv::Writer<File>, (String, u8), TopicReport);
@@ -266,6 +270,8 @@ fn new_csv(
     let report = TopicReport {
         file: path,
         stats: TopicStats::default(),
+        nan_values: 0,
+        infinite_values: 0,
     };
     Ok((w, key, report))
 }
@@ -298,7 +304,6 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
     let mut by_msg_id: BTreeMap<u16, usize> = BTreeMap::new();
     let mut csvs: Vec<TopicCsv> = Vec::new();
     let mut field = String::new();
-    let mut non_finite = 0u64;
     let mut log_messages = 0u64;
     let mut dropout_ms = 0u64;
     let csv_err = |p: &Path| {
@@ -377,7 +382,11 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
                 let n = topic.format.columns.len();
                 for i in std::iter::once(ts).chain((0..n).filter(|i| *i != ts)) {
                     if let Some(v) = topic.format.value(payload, i) {
-                        non_finite += u64::from(format_value(&v, &mut field));
+                        match format_value(&v, &mut field) {
+                            Some(x) if x.is_nan() => report.nan_values += 1,
+                            Some(_) => report.infinite_values += 1,
+                            None => {}
+                        }
                     }
                     w.write_field(&field).map_err(csv_err(&report.file))?;
                 }
@@ -419,7 +428,6 @@ pub fn export_csv(input: &Path, dir: &Path) -> Result<ExportReport, ExportError>
     Ok(ExportReport {
         topics,
         text_files: vec![info_path, params_path, msgs_path],
-        non_finite_values: non_finite,
         log_messages,
         dropout_ms,
         pass,

@@ -469,3 +469,27 @@ fn export_skips_topics_without_records() {
     assert_eq!(s.topics[&("timing".to_string(), 0)].rows, 0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The export counts, per topic, the floats written as `NaN` and as
+/// `inf`/`-inf` (PX4's "not available" and "no limit"), and no others.
+#[test]
+fn export_counts_non_finite_values_per_topic() {
+    let dir = tmpdir("non_finite");
+    let mut w = UlogWriter::new(Vec::new(), 0, FlushPolicy::default()).unwrap();
+    w.add_format::<Control>().unwrap();
+    let tc = w.add_logged::<Control>(0).unwrap();
+    let mut c = Control::default();
+    c.command = [f64::NAN, 0.0, f64::INFINITY, f64::NEG_INFINITY];
+    w.write(tc, &c).unwrap();
+    c.command = [0.5, f64::NAN, 0.0, 0.0];
+    w.write(tc, &c).unwrap();
+    let path = dir.join("x.ulg");
+    std::fs::write(&path, w.finish().unwrap()).unwrap();
+    let report = helicon_ulog::export::export_csv(&path, &dir.join("csv")).unwrap();
+    let t = &report.topics[&("control".to_string(), 0)];
+    assert_eq!((t.stats.rows, t.nan_values, t.infinite_values), (2, 2, 2));
+    let text = std::fs::read_to_string(dir.join("csv/x_control_0.csv")).unwrap();
+    assert_eq!(text.matches("NaN").count(), 2, "{text}");
+    assert_eq!(text.matches("-inf").count(), 1, "{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
