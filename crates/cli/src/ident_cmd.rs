@@ -678,7 +678,7 @@ pub fn run_frf(a: &FrfArgs) -> Result<()> {
         }
         let good = f.coherence.iter().filter(|c| **c > 0.6).count();
         let png = a.out.join(format!("bode_{}.png", file_stem(name)));
-        write_bode(&png, &format!("{name} / {}", a.input), &f, None)?;
+        write_bode(&png, &format!("{name} / {}", a.input), &f, None, None)?;
         println!(
             "  {name}: {} points, {good} with γ² > 0.6; {}",
             f.len(),
@@ -725,12 +725,16 @@ const COHERENT_GAMMA2: f64 = 0.6;
 
 /// Write magnitude, phase and coherence against ω on a logarithmic axis,
 /// with the estimate's 95 % band (±2ε over the coherent points) and an
-/// optional fit (magnitude and phase curves) overlaid, to `path`.
+/// optional fit (magnitude and phase curves, x = log10 ω) overlaid, to
+/// `path`. A fit made over a narrower band than the estimate's, `fit_band`
+/// `(ω_min, ω_max)` in rad/s, is drawn in the theme's colour inside the band
+/// and pale outside it, so a model is judged where it was fitted.
 pub(crate) fn write_bode(
     path: &Path,
     title: &str,
     f: &Frf,
     fit: Option<&[Vec<(f64, f64)>; 2]>,
+    fit_band: Option<(f64, f64)>,
 ) -> Result<()> {
     let lw = |v: &[f64]| -> Vec<(f64, f64)> {
         f.omega_rad_s
@@ -767,9 +771,54 @@ pub(crate) fn write_bode(
     const GREY: [u8; 3] = [150, 150, 150];
     let mut pm = Panel::new("magnitude [dB]").series(Series::new("estimate", &mag));
     let mut pp = Panel::new("phase [deg]").series(Series::new("estimate", &ph));
-    if let Some(fit) = fit {
-        pm = pm.series(Series::new("fit", &fit[0]).dashed());
-        pp = pp.series(Series::new("fit", &fit[1]).dashed());
+    // the fit inside its band, and outside it (NaN where the other is)
+    let (lo, hi) = fit_band.map_or((f64::NEG_INFINITY, f64::INFINITY), |(a, b)| {
+        (a.log10() - 1e-9, b.log10() + 1e-9)
+    });
+    let part = |c: &[(f64, f64)], inside: bool| -> Vec<(f64, f64)> {
+        c.iter()
+            .map(|&(x, y)| {
+                if ((lo..=hi).contains(&x)) == inside {
+                    (x, y)
+                } else {
+                    (x, f64::NAN)
+                }
+            })
+            .collect()
+    };
+    let fits = fit.map(|c| {
+        [
+            part(&c[0], true),
+            part(&c[1], true),
+            part(&c[0], false),
+            part(&c[1], false),
+        ]
+    });
+    let band_label = fit_band.map(|(a, b)| match (a > 0.0, b.is_finite()) {
+        (true, true) => format!("fit ({}–{} rad/s)", fmt_omega(a), fmt_omega(b)),
+        (true, false) => format!("fit (ω ≥ {} rad/s)", fmt_omega(a)),
+        (false, true) => format!("fit (ω ≤ {} rad/s)", fmt_omega(b)),
+        (false, false) => "fit".to_string(),
+    });
+    if let Some([m_in, p_in, m_out, p_out]) = &fits {
+        let label = band_label.as_deref().unwrap_or("fit");
+        pm = pm.series(Series::new(label, m_in).dashed().with_gaps());
+        pp = pp.series(Series::new(label, p_in).dashed().with_gaps());
+        if m_out.iter().any(|p| p.1.is_finite()) {
+            const PALE: [u8; 3] = [253, 198, 150];
+            pm = pm.series(
+                Series::new("fit, outside", m_out)
+                    .dashed()
+                    .color(PALE)
+                    .with_gaps(),
+            );
+            pp = pp.series(
+                Series::new("fit, outside", p_out)
+                    .dashed()
+                    .color(PALE)
+                    .with_gaps(),
+            );
+        }
     }
     for (name, m, p) in [
         ("+2ε (γ² ≥ 0.6)", &mag_hi, &ph_hi),
@@ -792,6 +841,14 @@ pub(crate) fn write_bode(
         .panel(pc)
         .write(path)
         .with_context(|| path.display().to_string())
+}
+
+/// A frequency as a legend prints it: up to 3 significant digits, no
+/// trailing zeros (`1.5`, `12`, `0.25`).
+fn fmt_omega(w: f64) -> String {
+    let t = format!("{w:.3}");
+    let t = t.trim_end_matches('0').trim_end_matches('.');
+    t.to_string()
 }
 
 /// Read the rows of `output` from a frf.csv.
@@ -942,7 +999,7 @@ pub fn run_tf(a: &TfArgs) -> Result<()> {
         a.den,
         if a.delay { " + delay" } else { "" }
     );
-    write_bode(&png, &title, &f, Some(&overlay))?;
+    write_bode(&png, &title, &f, Some(&overlay), None)?;
     println!(
         "{}: J = {:.3} over {} points",
         a.output, fit.cost, fit.n_points

@@ -80,10 +80,9 @@ pub fn run(a: &GroundArgs) -> Result<()> {
     plot(&png, kind, &r)?;
     writeln!(
         con,
-        "{file}: {} = {} ± {:.3e} {} ({} readings, {:.2} %)",
+        "{file}: {} = {} {} ({} readings, {:.2} %)",
         r.key,
-        r.value,
-        r.std_error,
+        helicon_sim::plot::value_pm(r.value, r.std_error),
         r.unit,
         r.n_readings,
         100.0 * r.std_error / r.value.abs()
@@ -101,18 +100,17 @@ fn plot(png: &std::path::Path, kind: Kind, r: &helicon_model::ground::GroundResu
     let [x, y] = kind.columns();
     Figure::new(
         &format!(
-            "{}: {} = {:.6} ± {:.2e} {}",
+            "{}: {} = {} {}",
             kind.name(),
             r.key,
-            r.value,
-            r.std_error,
+            helicon_sim::plot::value_pm(r.value, r.std_error),
             r.unit
         ),
         &helicon_sim::plot::column_label(x),
     )
     .panel(
         Panel::new(&helicon_sim::plot::column_label(y))
-            .series(Series::new("readings", &read).dashed())
+            .series(Series::new("readings", &read).markers())
             .series(Series::new("fit", &fit)),
     )
     .write(png)

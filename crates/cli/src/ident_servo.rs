@@ -191,7 +191,7 @@ pub fn run_servo(a: &ServoArgs) -> Result<()> {
         .with_context(|| format!("{}: cannot write", json_path.display()))?;
     let png = a.out.join("servo.png");
     overlay(&png, &file, cmd, pos, dt, &fit, a.substeps)?;
-    let pm = |e: helicon_ident::servo::Estimate| format!("{:.6} ± {:.2e}", e.value, e.std_error);
+    let pm = |e: helicon_ident::servo::Estimate| helicon_sim::plot::value_pm(e.value, e.std_error);
     let mut con = crate::console::Console::stdout();
     writeln!(
         con,

@@ -172,7 +172,8 @@ pub fn run_ss(a: &SsArgs) -> Result<()> {
             "{} / {}: state-space fit, J = {:.3}",
             c.output, c.input, c.cost
         );
-        write_bode(&png, &title, f, overlay.as_ref())?;
+        let band = (responses[i].omega_min_rad_s, responses[i].omega_max_rad_s);
+        write_bode(&png, &title, f, overlay.as_ref(), Some(band))?;
         println!(
             "  {} / {}: J = {:.3} over {} points; {}",
             c.output,

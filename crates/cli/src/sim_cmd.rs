@@ -426,7 +426,7 @@ pub fn print_run(con: &mut Console, report: &RunReport) {
     writeln!(
         con,
         "  {:<4} {:>10} {:>8} {:>13} {:>10} {:>10} {:>10}",
-        "out", "excitation", "at [s]", "settle 1% [s]", "overshoot", "RMS err", "max err"
+        "out", "step size", "at [s]", "settle 1% [s]", "overshoot", "RMS err", "max err"
     );
     for name in OUTPUTS {
         if let Some(m) = s.metrics.get(name) {

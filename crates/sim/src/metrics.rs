@@ -3,7 +3,10 @@
 //! For an output with reference r(t) and response y(t), e = r − y (yaw
 //! wrapped). The *excitation* is the last reference change before the end
 //! (its size and the time it completes) or, without one, the initial error
-//! at t = 0. Then:
+//! at t = 0. A reference that moves smoothly (a shaped trajectory, a
+//! mission's legs) rather than by the scenario's steps and ramps has its
+//! last move found in the flown reference itself ([`last_reference_move`]).
+//! Then:
 //! * `settling_time_s`: time from the excitation until |e| stays within 1 % of
 //!   the excitation size (band ≥ 1e-3 in SI units, so an output that was
 //!   never excited settles at 0); `None` ("not settled before the end") when
@@ -110,9 +113,83 @@ pub fn output_metrics(
     }
 }
 
+/// The last move of a flown reference `r(t)` (heading: `wrap` the
+/// differences into ±π): the move ends at the last sample where `r`
+/// changed and begins where `r` last stood still for [`MIN_DWELL_S`] before
+/// it (shorter pauses belong to the move). Returns `(t_start_s, t_end_s,
+/// size)`, the size the largest distance of `r` over the move from where it
+/// ended (a step from a to b: |b − a|; a turn out and back: how far it went
+/// out); `None` when `r` never changed.
+pub fn last_reference_move(t: &[f64], r: &[f64], wrap: bool) -> Option<(f64, f64, f64)> {
+    let n = t.len().min(r.len());
+    let diff = |a: f64, b: f64| {
+        let d = a - b;
+        if wrap {
+            helicon_core::frames::wrap_pi(d)
+        } else {
+            d
+        }
+    };
+    // a change of a rounding error is no change
+    let moved = |k: usize| diff(r[k], r[k - 1]).abs() > 1e-12 * r[k].abs().max(1.0);
+    let end = (1..n).rev().find(|&k| moved(k))?;
+    let mut start = end - 1;
+    let mut k = end;
+    while k > 0 {
+        if moved(k) {
+            start = k - 1;
+        } else if t[start] - t[k] >= MIN_DWELL_S {
+            break;
+        }
+        k -= 1;
+    }
+    let size = (start..=end).fold(0.0f64, |m, i| m.max(diff(r[i], r[end]).abs()));
+    Some((t[start], t[end], size))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_last_move_of_a_smooth_reference_is_found_in_the_flown_reference() {
+        let t: Vec<f64> = (0..2001).map(|k| f64::from(k) * 0.01).collect();
+        // a ramp 0 → 3 over 2–5 s, held, then out to 1.5 and back over 10–12 s
+        // with a 0.5 s pause at the top
+        let r: Vec<f64> = t
+            .iter()
+            .map(|&t| match t {
+                t if t < 2.0 => 0.0,
+                t if t < 5.0 => t - 2.0,
+                t if t < 10.0 => 3.0,
+                t if t < 11.0 => 3.0 + 1.5 * (t - 10.0),
+                t if t < 11.5 => 4.5,
+                t if t < 12.5 => 4.5 - 1.5 * (t - 11.5),
+                _ => 3.0,
+            })
+            .collect();
+        let (t0, t1, size) = last_reference_move(&t, &r, false).unwrap();
+        assert!(
+            (t0 - 10.0).abs() < 0.011 && (t1 - 12.5).abs() < 0.011,
+            "{t0} {t1}"
+        );
+        assert!((size - 1.5).abs() < 0.02, "{size}");
+        // the ramp alone
+        let (t0, t1, size) = last_reference_move(&t[..900], &r[..900], false).unwrap();
+        assert!(
+            (t0 - 2.0).abs() < 0.011 && (t1 - 5.0).abs() < 0.011,
+            "{t0} {t1}"
+        );
+        assert!((size - 3.0).abs() < 0.011, "{size}");
+        // a heading turned through ±π is a small move, not 2π
+        let h = [3.1, 3.12, -3.14, -3.12, -3.12];
+        let (_, _, size) = last_reference_move(&[0.0, 1.0, 2.0, 3.0, 4.0], &h, true).unwrap();
+        assert!(
+            (size - (2.0 * std::f64::consts::PI - 6.22)).abs() < 1e-9,
+            "{size}"
+        );
+        assert!(last_reference_move(&t, &vec![2.0; t.len()], false).is_none());
+    }
 
     #[test]
     fn first_order_step_settles_at_ln_100_tau() {

@@ -597,7 +597,7 @@ pub fn report_markdown(
     let _ = writeln!(r, "## Tracking\n");
     let _ = writeln!(
         r,
-        "| output | excitation | at (s) | 1 % settling (s) | overshoot (%) | RMS error | max abs error |"
+        "| output | step size | at (s) | 1 % settling (s) | overshoot (%) | RMS error | max abs error |"
     );
     let _ = writeln!(r, "|---|---|---|---|---|---|---|");
     for name in OUTPUTS {

@@ -73,6 +73,9 @@ pub struct Series<'a> {
     /// In a [`Figure`]: a non-finite point ends the line (a gap), instead of
     /// being skipped and its neighbours joined.
     pub gaps: bool,
+    /// In a [`Figure`]: drawn as points (a circle each), not joined
+    /// (readings, measurements at a few settings).
+    pub markers: bool,
 }
 
 impl<'a> Series<'a> {
@@ -85,6 +88,7 @@ impl<'a> Series<'a> {
             color: None,
             break_jumps_over: None,
             gaps: false,
+            markers: false,
         }
     }
 
@@ -111,6 +115,12 @@ impl<'a> Series<'a> {
     /// coherent frequencies).
     pub fn with_gaps(mut self) -> Self {
         self.gaps = true;
+        self
+    }
+
+    /// In a [`Figure`]: drawn as points, a circle each, not joined.
+    pub fn markers(mut self) -> Self {
+        self.markers = true;
         self
     }
 }
@@ -700,6 +710,16 @@ impl<'a> Figure<'a> {
             for (k, s) in panel.series.iter().enumerate() {
                 let (color, dashed) = style_of(k, s);
                 styles.push((color, dashed));
+                if s.markers {
+                    let points = s
+                        .points
+                        .iter()
+                        .filter(|(x, y)| x.is_finite() && y.is_finite());
+                    chart
+                        .draw_series(points.map(|&p| Circle::new(p, 4, color.stroke_width(2))))
+                        .map_err(|e| err(&e))?;
+                    continue;
+                }
                 let mut run: Vec<(f64, f64)> = Vec::new();
                 let mut flush = |run: &mut Vec<(f64, f64)>| {
                     draw_run(
@@ -746,8 +766,15 @@ impl<'a> Figure<'a> {
             let note_font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
             let mut y = 18 + i32::try_from(i as u64 * u64::from(self.panel_height_px)).unwrap_or(0);
             for (s, (color, dashed)) in panel.series.iter().zip(&styles) {
-                legend_entry(&legend, y, s.name, color.stroke_width(2), *dashed, &font)
-                    .map_err(|e| err(&e))?;
+                if s.markers {
+                    legend
+                        .draw(&Circle::new((20, y), 4, color.stroke_width(2)))
+                        .and_then(|()| legend.draw(&Text::new(s.name, (40, y - 8), font.clone())))
+                        .map_err(|e| err(&e))?;
+                } else {
+                    legend_entry(&legend, y, s.name, color.stroke_width(2), *dashed, &font)
+                        .map_err(|e| err(&e))?;
+                }
                 y += 22;
             }
             for h in &panel.hlines {
@@ -949,7 +976,16 @@ impl Histogram {
         let n = bins.iter().map(|b| b.2).sum::<usize>();
         let mut lines = vec![
             format!("{n} values"),
-            format!("bin width {}", significant(first.1, 3)),
+            // the bin width in the axis' unit (`… [s]`)
+            match self
+                .x_label
+                .rsplit_once('[')
+                .and_then(|(_, u)| u.strip_suffix(']'))
+                .filter(|u| !u.is_empty() && *u != "-")
+            {
+                Some(unit) => format!("bin width {} {unit}", significant(first.1, 3)),
+                None => format!("bin width {}", significant(first.1, 3)),
+            },
         ];
         lines.extend(self.notes.iter().cloned());
         for line in &lines {
@@ -992,6 +1028,38 @@ fn significant(v: f64, digits: i32) -> String {
     }
     let d = usize::try_from(digits - 1 - mag).unwrap_or(0);
     format!("{v:.d$}")
+}
+
+/// An estimate and its standard error as an engineer writes them: the
+/// error to two significant digits, the value to the same decimal place
+/// (`6.014 ± 0.019`, `246 ± 14`; with a shared exponent outside
+/// 1e-4..1e6: `(3.21 ± 0.15)e-5`). An error that is zero, non-finite or
+/// negative leaves the value at six significant digits and says so
+/// (`± inf`, `± 0`).
+pub fn value_pm(value: f64, std_error: f64) -> String {
+    if !value.is_finite() {
+        return format!("{value} ± {std_error}");
+    }
+    if !(std_error.is_finite() && std_error > 0.0) {
+        let e = if std_error.is_nan() {
+            "NaN".to_string()
+        } else {
+            format!("{std_error}")
+        };
+        return format!("{} ± {e}", significant(value, 6));
+    }
+    // the decimal place of the error's second significant digit
+    let place = std_error.log10().floor() as i32 - 1;
+    let big = value.abs().max(std_error);
+    let mag = big.log10().floor() as i32;
+    if (-4..6).contains(&mag) && place >= -12 {
+        let d = usize::try_from(-place).unwrap_or(0);
+        format!("{value:.d$} ± {std_error:.d$}")
+    } else {
+        let scale = 10f64.powi(mag);
+        let d = usize::try_from(mag - place).unwrap_or(0);
+        format!("({:.d$} ± {:.d$})e{mag}", value / scale, std_error / scale)
+    }
 }
 
 /// One legend line: a 28 px sample of the line and its label.
@@ -1226,6 +1294,18 @@ mod tests {
         assert_eq!(column_label("liftoff_time_s"), "liftoff_time [s]");
         assert_eq!(column_label("pitch_rad"), "pitch [rad]");
         assert_eq!(column_label("gain"), "gain [-]");
+    }
+
+    #[test]
+    fn estimates_are_written_to_the_digits_their_error_allows() {
+        assert_eq!(value_pm(6.014_124_273, 0.018_88), "6.014 ± 0.019");
+        assert_eq!(value_pm(245.989_3, 13.7), "246 ± 14");
+        assert_eq!(value_pm(0.70021, 0.000_35), "0.70021 ± 0.00035");
+        assert_eq!(value_pm(-2.0, 0.5), "-2.00 ± 0.50");
+        assert_eq!(value_pm(3.21e-5, 1.5e-6), "(3.21 ± 0.15)e-5");
+        assert_eq!(value_pm(1.5e7, 2.0e5), "(1.500 ± 0.020)e7");
+        assert_eq!(value_pm(5.0, f64::INFINITY), "5.00000 ± inf");
+        assert_eq!(value_pm(5.0, 0.0), "5.00000 ± 0");
     }
 
     #[test]

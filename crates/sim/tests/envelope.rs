@@ -59,7 +59,26 @@ fn shortened_mission_flies_with_the_schedule() {
             cruise.horizontal_m_s < 0.12 && cruise.vertical_m_s < 0.5,
             "{cruise:?}"
         );
+        // the summary's step of a shaped reference is its last move as
+        // flown: vd out to −2 m/s and back by 25 s (its size how far it
+        // went); vn's is the turn begun at 30 s, still under way when the
+        // record ends: not settled
+        let m = |o: &str| f.summary.metrics[o];
+        let (vn, vd) = (m("vn"), m("vd"));
+        assert!((vd.excitation - 2.0).abs() < 1e-6, "{vd:?}");
+        assert!((vd.excitation_time_s - 25.0).abs() < 0.02, "{vd:?}");
+        assert!(vn.excitation_time_s > 31.9 && vn.settling_time_s.is_none(), "{vn:?}");
     }
+    // ended before the turn: vn's last move is the acceleration 0 → 15 m/s
+    // arriving at 22 s; ψ never moved
+    let mut s = mission();
+    s.duration_s = 29.0;
+    let f = fly(&s, &prepare(&s).unwrap(), None).unwrap();
+    let vn = f.summary.metrics["vn"];
+    assert!((vn.excitation - 15.0).abs() < 1e-6, "{vn:?}");
+    assert!((vn.excitation_time_s - 22.0).abs() < 0.02, "{vn:?}");
+    assert!(vn.settling_time_s.is_some(), "{vn:?}");
+    assert!(f.summary.metrics["psi"].excitation < 1e-3);
 }
 
 /// The single hover design against the schedule on the whole mission, the

@@ -180,9 +180,9 @@ fn unwrap_heading_error(e: &mut [f64]) {
 
 /// What the summary needs from the kept log rows, gathered as they are
 /// flown so that its memory does not grow with the duration: sums for the
-/// RMS figures (every row) and the output errors for the settling metrics,
-/// kept for every row up to [`METRIC_TRACE_CAP`] rows and thinned evenly
-/// beyond (every second row dropped, the stride doubled).
+/// RMS figures (every row) and the output errors and references for the
+/// settling metrics, kept for every row up to [`METRIC_TRACE_CAP`] rows and
+/// thinned evenly beyond (every second row dropped, the stride doubled).
 #[derive(Debug, Clone)]
 pub struct SummaryAccumulator {
     rows: usize,
@@ -196,10 +196,12 @@ pub struct SummaryAccumulator {
     cap: usize,
     trace_t: Vec<f64>,
     trace_e: [Vec<f64>; 4],
+    trace_r: [Vec<f64>; 4],
 }
 
-/// The number of rows of output errors the summary keeps in memory (each
-/// 40 bytes): 2¹⁹ rows, 21 MB, every row of a 1310 s flight at 400 Hz.
+/// The number of rows of output errors and references the summary keeps in
+/// memory (each 72 bytes): 2¹⁹ rows, 38 MB, every row of a 1310 s flight at
+/// 400 Hz.
 pub const METRIC_TRACE_CAP: usize = 1 << 19;
 
 impl SummaryAccumulator {
@@ -217,6 +219,7 @@ impl SummaryAccumulator {
             cap: METRIC_TRACE_CAP,
             trace_t: Vec::new(),
             trace_e: Default::default(),
+            trace_r: Default::default(),
         }
     }
 
@@ -242,6 +245,7 @@ impl SummaryAccumulator {
                 self.trace_t.push(r.t_s);
                 for j in 0..4 {
                     self.trace_e[j].push(r.reference[j] - r.output[j]);
+                    self.trace_r[j].push(r.reference[j]);
                 }
             }
         }
@@ -258,7 +262,7 @@ impl SummaryAccumulator {
             });
         };
         keep(&mut self.trace_t);
-        for e in &mut self.trace_e {
+        for e in self.trace_e.iter_mut().chain(&mut self.trace_r) {
             keep(e);
         }
         self.stride *= 2;
@@ -304,6 +308,13 @@ pub(super) fn summarize(
             let before = scenario.reference_at(c.t_s - 1e-9)[j];
             t_exc = c.t_s + c.ramp_s;
             size = size_of(c.value - before);
+        } else if let Some((_, t_end_move, moved)) =
+            crate::metrics::last_reference_move(t, &acc.trace_r[j], j == 3)
+        {
+            // a reference shaped in flight (a trajectory, a mission): its
+            // last move as flown
+            t_exc = t_end_move;
+            size = moved;
         }
         excitations.push((e, t_exc, size, wrapped));
     }
@@ -391,6 +402,7 @@ mod tests {
             cap: 8,
             trace_t: Vec::new(),
             trace_e: Default::default(),
+            trace_r: Default::default(),
         };
         for k in 0..100 {
             acc.push(&row(k));
@@ -400,6 +412,7 @@ mod tests {
         assert_eq!(acc.stride(), 16);
         assert_eq!(acc.trace_t, [0.0, 16.0, 32.0, 48.0, 64.0, 80.0, 96.0]);
         assert_eq!(acc.trace_e[0], acc.trace_t);
+        assert_eq!(acc.trace_r[0].len(), acc.trace_t.len());
         // the RMS sums still see every row
         assert_eq!(acc.rows, 100);
     }
