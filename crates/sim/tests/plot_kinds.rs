@@ -59,6 +59,9 @@ fn every_plot_kind_renders() {
             color: [214, 39, 40],
         });
         limits.notes.push("min -1.5 (off scale)".into());
+        // readings drawn as points beside a fitted line
+        let readings = [(2.0, 0.5), (9.0, -0.4), (15.0, 0.6)];
+        limits = limits.series(Series::new("readings", &readings).markers());
         let p = d.join(format!("panels.{ext}"));
         Figure::new("panels", "time [s]")
             .panel(limits)
@@ -147,9 +150,13 @@ fn every_plot_kind_renders() {
         h.y_label = "runs".into();
         h.write(&p2).unwrap();
         if ext == "svg" {
+            // the readings: three circles and the legend's
+            let text = std::fs::read_to_string(d.join("panels.svg")).unwrap();
+            assert_eq!(text.matches("<circle").count(), 4, "readings not drawn as points");
             let texts = svg_texts(&p2);
             for text in [
                 "3 values",
+                "bin width 0.200 s",
                 "97 not settled",
                 "settling [s]",
                 "runs",
