@@ -478,8 +478,10 @@ fn export_counts_non_finite_values_per_topic() {
     let mut w = UlogWriter::new(Vec::new(), 0, FlushPolicy::default()).unwrap();
     w.add_format::<Control>().unwrap();
     let tc = w.add_logged::<Control>(0).unwrap();
-    let mut c = Control::default();
-    c.command = [f64::NAN, 0.0, f64::INFINITY, f64::NEG_INFINITY];
+    let mut c = Control {
+        command: [f64::NAN, 0.0, f64::INFINITY, f64::NEG_INFINITY],
+        ..Control::default()
+    };
     w.write(tc, &c).unwrap();
     c.command = [0.5, f64::NAN, 0.0, 0.0];
     w.write(tc, &c).unwrap();
