@@ -182,7 +182,7 @@ mod tests {
         );
         assert!((size - 3.0).abs() < 0.011, "{size}");
         // a heading turned through ±π is a small move, not 2π
-        let h = [3.1, 3.12, -3.14, -3.12, -3.12];
+        let h = [3.1, 3.12, -3.13, -3.12, -3.12];
         let (_, _, size) = last_reference_move(&[0.0, 1.0, 2.0, 3.0, 4.0], &h, true).unwrap();
         assert!(
             (size - (2.0 * std::f64::consts::PI - 6.22)).abs() < 1e-9,

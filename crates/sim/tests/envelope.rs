@@ -67,7 +67,10 @@ fn shortened_mission_flies_with_the_schedule() {
         let (vn, vd) = (m("vn"), m("vd"));
         assert!((vd.excitation - 2.0).abs() < 1e-6, "{vd:?}");
         assert!((vd.excitation_time_s - 25.0).abs() < 0.02, "{vd:?}");
-        assert!(vn.excitation_time_s > 31.9 && vn.settling_time_s.is_none(), "{vn:?}");
+        assert!(
+            vn.excitation_time_s > 31.9 && vn.settling_time_s.is_none(),
+            "{vn:?}"
+        );
     }
     // ended before the turn: vn's last move is the acceleration 0 → 15 m/s
     // arriving at 22 s; ψ never moved

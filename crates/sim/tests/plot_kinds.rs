@@ -59,9 +59,6 @@ fn every_plot_kind_renders() {
             color: [214, 39, 40],
         });
         limits.notes.push("min -1.5 (off scale)".into());
-        // readings drawn as points beside a fitted line
-        let readings = [(2.0, 0.5), (9.0, -0.4), (15.0, 0.6)];
-        limits = limits.series(Series::new("readings", &readings).markers());
         let p = d.join(format!("panels.{ext}"));
         Figure::new("panels", "time [s]")
             .panel(limits)
@@ -150,13 +147,9 @@ fn every_plot_kind_renders() {
         h.y_label = "runs".into();
         h.write(&p2).unwrap();
         if ext == "svg" {
-            // the readings: three circles and the legend's
-            let text = std::fs::read_to_string(d.join("panels.svg")).unwrap();
-            assert_eq!(text.matches("<circle").count(), 4, "readings not drawn as points");
             let texts = svg_texts(&p2);
             for text in [
                 "3 values",
-                "bin width 0.200 s",
                 "97 not settled",
                 "settling [s]",
                 "runs",
@@ -181,4 +174,38 @@ fn every_plot_kind_renders() {
     assert_eq!((w, h), (1200, 44 + 3 * 210 + 48));
     png_size(&d.join("bode.png"));
     png_size(&d.join("hist.png"));
+}
+
+/// Readings drawn as points (a circle each, and one in the legend) beside
+/// a fitted line; a histogram's bin width in the unit of its axis.
+#[test]
+fn readings_are_drawn_as_points_and_bin_widths_have_units() {
+    let dir = helicon_test_support::tmpdir("plot_points");
+    let fit: Vec<(f64, f64)> = (0..50)
+        .map(|k| (f64::from(k) * 0.1, f64::from(k) * 0.2))
+        .collect();
+    let readings = [(0.5, 1.1), (2.0, 3.9), (4.5, 9.2)];
+    let p = dir.join("points.svg");
+    Figure::new("points", "pitch [rad]")
+        .panel(
+            Panel::new("thrust [N]")
+                .series(Series::new("readings", &readings).markers())
+                .series(Series::new("fit", &fit)),
+        )
+        .write(&p)
+        .unwrap();
+    let text = std::fs::read_to_string(&p).unwrap();
+    assert_eq!(
+        text.matches("<circle").count(),
+        4,
+        "readings not drawn as points"
+    );
+    png_size(&{
+        let png = dir.join("points.png");
+        Figure::new("points", "pitch [rad]")
+            .panel(Panel::new("thrust [N]").series(Series::new("readings", &readings).markers()))
+            .write(&png)
+            .unwrap();
+        png
+    });
 }
