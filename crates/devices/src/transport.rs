@@ -24,25 +24,51 @@ pub const PARTIAL_WRITE_WAIT: Duration = Duration::from_millis(1);
 /// on Linux a terminal is writable when fewer than 256 bytes wait to be sent
 /// and there is room.
 fn writable(fd: &OwnedFd, timeout: Duration) -> Result<bool, std::io::Error> {
-    use rustix::event::{PollFd, PollFlags, Timespec, poll};
+    use rustix::event::PollFlags;
+    match poll_one(fd, PollFlags::OUT, timeout)? {
+        None => Ok(false),
+        Some(r) if r.intersects(PollFlags::ERR | PollFlags::HUP | PollFlags::NVAL) => Err(
+            std::io::Error::new(ErrorKind::BrokenPipe, "the device hung up"),
+        ),
+        Some(r) => Ok(r.contains(PollFlags::OUT)),
+    }
+}
+
+/// Whether the line has bytes to read, waiting at most `timeout`: as the
+/// `serialport` crate's own read decides (a hang-up is
+/// [`ErrorKind::BrokenPipe`], any other error event an error), without its
+/// allocations: it reports a wait that timed out as an [`std::io::Error`]
+/// carrying a formatted message, three allocations for each look at an
+/// idle line.
+fn readable(fd: &OwnedFd, timeout: Duration) -> Result<bool, std::io::Error> {
+    use rustix::event::PollFlags;
+    match poll_one(fd, PollFlags::IN, timeout)? {
+        None => Ok(false),
+        Some(r) if r.intersects(PollFlags::HUP | PollFlags::NVAL) => Err(std::io::Error::new(
+            ErrorKind::BrokenPipe,
+            "the device hung up",
+        )),
+        Some(r) if r == PollFlags::IN => Ok(true),
+        Some(_) => Err(std::io::Error::other("the line reported an error")),
+    }
+}
+
+/// One `poll` of `fd` for `events`, waiting at most `timeout`: the events
+/// that came, `None` when none did in time (or a signal interrupted).
+fn poll_one(
+    fd: &OwnedFd,
+    events: rustix::event::PollFlags,
+    timeout: Duration,
+) -> Result<Option<rustix::event::PollFlags>, std::io::Error> {
+    use rustix::event::{PollFd, Timespec, poll};
     let ts = Timespec {
         tv_sec: i64::try_from(timeout.as_secs()).unwrap_or(i64::MAX),
         tv_nsec: i64::from(timeout.subsec_nanos()),
     };
-    let mut fds = [PollFd::new(fd, PollFlags::OUT)];
+    let mut fds = [PollFd::new(fd, events)];
     match poll(&mut fds, Some(&ts)) {
-        Ok(0) | Err(rustix::io::Errno::INTR) => Ok(false),
-        Ok(_) => {
-            let r = fds[0].revents();
-            if r.intersects(PollFlags::ERR | PollFlags::HUP | PollFlags::NVAL) {
-                Err(std::io::Error::new(
-                    ErrorKind::BrokenPipe,
-                    "the device hung up",
-                ))
-            } else {
-                Ok(r.contains(PollFlags::OUT))
-            }
-        }
+        Ok(0) | Err(rustix::io::Errno::INTR) => Ok(None),
+        Ok(_) => Ok(Some(fds[0].revents())),
         Err(e) => Err(e.into()),
     }
 }
@@ -50,10 +76,15 @@ fn writable(fd: &OwnedFd, timeout: Duration) -> Result<bool, std::io::Error> {
 /// An open serial port with a read timeout; writes queue in the kernel's
 /// buffer without waiting for the transmission.
 pub struct SerialLink {
+    /// The port as the `serialport` crate configured it (8N1, the baud
+    /// rate, exclusive): kept open for its settings and its lock.
     port: Box<dyn serialport::SerialPort>,
-    /// A non-blocking handle of the device for writing (its own open file
-    /// description: the reads keep waiting up to their timeout).
-    writer: OwnedFd,
+    /// A non-blocking handle of the device (its own open file description)
+    /// that reads and writes: a read waits in `poll` up to `read_timeout`,
+    /// then takes what the line holds; a write never waits.
+    fd: OwnedFd,
+    /// How long [`SerialLink::read_chunk`] waits at most.
+    read_timeout: Duration,
     path: PathBuf,
     baud: u32,
 }
@@ -71,14 +102,14 @@ impl SerialLink {
     /// `read_timeout`; writes do not wait ([`SerialLink::write_all`]).
     pub fn open(path: &Path, baud: u32, read_timeout: Duration) -> Result<Self, TransportError> {
         use rustix::fs::{Mode, OFlags};
-        // the writer first: the port's exclusive mode refuses later opens
-        let writer = rustix::fs::open(
+        // the handle first: the port's exclusive mode refuses later opens
+        let fd = rustix::fs::open(
             path,
-            OFlags::WRONLY | OFlags::NOCTTY | OFlags::NONBLOCK | OFlags::CLOEXEC,
+            OFlags::RDWR | OFlags::NOCTTY | OFlags::NONBLOCK | OFlags::CLOEXEC,
             Mode::empty(),
         )
         .map_err(|e| TransportError::Io {
-            what: format!("opening {} for writing", path.display()),
+            what: format!("opening {}", path.display()),
             source: e.into(),
         })?;
         let name = path.to_string_lossy();
@@ -95,7 +126,8 @@ impl SerialLink {
             })?;
         Ok(Self {
             port,
-            writer,
+            fd,
+            read_timeout,
             path: path.to_path_buf(),
             baud,
         })
@@ -110,16 +142,14 @@ impl SerialLink {
                 path: self.path.clone(),
                 source,
             })?;
-        let writer = self
-            .writer
-            .try_clone()
-            .map_err(|source| TransportError::Io {
-                what: format!("cloning {}", self.path.display()),
-                source,
-            })?;
+        let fd = self.fd.try_clone().map_err(|source| TransportError::Io {
+            what: format!("cloning {}", self.path.display()),
+            source,
+        })?;
         Ok(Self {
             port,
-            writer,
+            fd,
+            read_timeout: self.read_timeout,
             path: self.path.clone(),
             baud: self.baud,
         })
@@ -136,29 +166,30 @@ impl SerialLink {
     }
 
     /// Reads what is available into `buf`, waiting at most the read timeout;
-    /// `Ok(0)` when nothing arrived in time.
+    /// `Ok(0)` when nothing arrived in time (an empty `buf` reads nothing).
     ///
-    /// The port reads only once the line is readable (nothing within the
-    /// timeout is its `TimedOut`, `Ok(0)` here), so a read of nothing from
-    /// a readable line is its end: an error ([`ErrorKind::UnexpectedEof`]),
-    /// the device lost. (A pseudo-terminal whose master closed, or a
-    /// terminal hung up, polls as hung up: an error before any read.)
+    /// The line is read only once it is readable (one `poll`, then one
+    /// `read`; a look at an idle line is the `poll` alone and allocates
+    /// nothing), so a read of nothing from a readable line is its end: an
+    /// error ([`ErrorKind::UnexpectedEof`]), the device lost. (A
+    /// pseudo-terminal whose master closed, or a terminal hung up, polls as
+    /// hung up: an error before any read.)
     pub fn read_chunk(&mut self, buf: &mut [u8]) -> Result<usize, TransportError> {
-        match self.port.read(buf) {
-            Ok(0) if !buf.is_empty() => Err(TransportError::Io {
-                what: format!("reading {}", self.path.display()),
-                source: std::io::Error::new(
-                    ErrorKind::UnexpectedEof,
-                    "end of file: the line ended",
-                ),
-            }),
+        let io = |source: std::io::Error| TransportError::Io {
+            what: format!("reading {}", self.path.display()),
+            source,
+        };
+        if buf.is_empty() || !readable(&self.fd, self.read_timeout).map_err(io)? {
+            return Ok(0);
+        }
+        match rustix::io::read(&self.fd, &mut *buf) {
+            Ok(0) => Err(io(std::io::Error::new(
+                ErrorKind::UnexpectedEof,
+                "end of file: the line ended",
+            ))),
             Ok(n) => Ok(n),
-            Err(e) if matches!(e.kind(), ErrorKind::TimedOut | ErrorKind::WouldBlock) => Ok(0),
-            Err(e) if e.kind() == ErrorKind::Interrupted => Ok(0),
-            Err(source) => Err(TransportError::Io {
-                what: format!("reading {}", self.path.display()),
-                source,
-            }),
+            Err(rustix::io::Errno::AGAIN | rustix::io::Errno::INTR) => Ok(0),
+            Err(e) => Err(io(e.into())),
         }
     }
 
@@ -170,12 +201,7 @@ impl SerialLink {
         buf: &mut [u8],
         timeout: Duration,
     ) -> Result<usize, TransportError> {
-        self.port
-            .set_timeout(timeout)
-            .map_err(|source| TransportError::Serial {
-                path: self.path.clone(),
-                source,
-            })?;
+        self.read_timeout = timeout;
         self.read_chunk(buf)
     }
 
@@ -210,13 +236,13 @@ impl SerialLink {
         if bytes.is_empty() {
             return Ok(Written::All);
         }
-        if !writable(&self.writer, Duration::ZERO).map_err(io)? {
+        if !writable(&self.fd, Duration::ZERO).map_err(io)? {
             return Ok(Written::Dropped { queued: 0 });
         }
         let mut done = 0;
         let mut waited = false;
         while done < bytes.len() {
-            match rustix::io::write(&self.writer, &bytes[done..]) {
+            match rustix::io::write(&self.fd, &bytes[done..]) {
                 Ok(n) => done += n,
                 Err(rustix::io::Errno::INTR) => {}
                 Err(rustix::io::Errno::AGAIN) => {
@@ -225,7 +251,7 @@ impl SerialLink {
                         return Ok(Written::Dropped { queued: done });
                     }
                     waited = true;
-                    if !writable(&self.writer, PARTIAL_WRITE_WAIT).map_err(io)? {
+                    if !writable(&self.fd, PARTIAL_WRITE_WAIT).map_err(io)? {
                         return Ok(Written::Dropped { queued: done });
                     }
                 }

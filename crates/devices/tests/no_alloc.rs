@@ -134,3 +134,34 @@ fn decoders_and_encoders_do_not_allocate() {
 fn black_box_fix(f: GpsFix) -> GpsFix {
     std::hint::black_box(f)
 }
+
+/// A serial link's look at an idle line, its read of a frame and its write
+/// allocate nothing (a lock-step SITL polls its lines many times a sample;
+/// the `serialport` crate's own read allocated a formatted error for each
+/// look that found nothing).
+#[test]
+fn serial_link_looks_reads_and_writes_allocate_nothing() {
+    use std::io::Write;
+    use std::time::Duration;
+    let mut pty = PtyPair::open().unwrap();
+    let mut link = SerialLink::open(pty.slave_path(), 115_200, Duration::ZERO).unwrap();
+    let mut buf = [0u8; 64];
+    let frame = ServoCommand::from_inputs(1, true, &Vector4::new(0.1, 0.0, 0.0, 0.2))
+        .unwrap()
+        .encode();
+    // warm up (the first calls may set up thread-local state)
+    assert_eq!(link.read_chunk(&mut buf).unwrap(), 0);
+    let before = allocations();
+    for _ in 0..100 {
+        assert_eq!(link.read_chunk(&mut buf).unwrap(), 0);
+        assert_eq!(link.read_timeout(&mut buf, Duration::ZERO).unwrap(), 0);
+    }
+    assert_eq!(allocations() - before, 0, "looks at an idle line allocated");
+    pty.master().write_all(frame.as_bytes()).unwrap();
+    assert!(pty.wait_delivered(Duration::from_secs(1)).unwrap());
+    let before = allocations();
+    let n = link.read_timeout(&mut buf, Duration::from_secs(1)).unwrap();
+    assert_eq!(link.try_write(frame.as_bytes()).unwrap(), Written::All);
+    assert_eq!(allocations() - before, 0, "a read and a write allocated");
+    assert_eq!(&buf[..n], frame.as_bytes());
+}

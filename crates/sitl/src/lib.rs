@@ -548,7 +548,20 @@ pub fn run(
         if lockstep {
             for (wrote, wire) in [(wrote_rc, &wires.avionics), (wrote_gps, &wires.gps)] {
                 if wrote {
-                    wire.wait_delivered(DELIVERY_WAIT).map_err(dev("line"))?;
+                    // looked at without sleeping first (the kernel's worker
+                    // moves them within microseconds), then waited for
+                    let looked = helicon_flight::realtime::spin_for(
+                        helicon_flight::realtime::LOCKSTEP_SPIN,
+                        || match wire.wait_delivered(Duration::ZERO) {
+                            Ok(false) => None,
+                            r => Some(r),
+                        },
+                    );
+                    match looked {
+                        Some(r) => r,
+                        None => wire.wait_delivered(DELIVERY_WAIT),
+                    }
+                    .map_err(dev("line"))?;
                 }
             }
         }
