@@ -305,7 +305,9 @@ impl Model {
             drive,
             anchors: &plant.anchors,
         };
-        self.eval(&plant.x, u, wind_ned, inflow, Some(ext))
+        let mut aux = Aux::default();
+        let (xdot, rates) = self.eval(&plant.x, u, wind_ned, inflow, Some(ext), &mut aux)?;
+        Ok((xdot, rates, aux))
     }
 
     /// After an integration step of the plant: the friction anchors follow
@@ -359,8 +361,25 @@ impl Model {
         wind_ned: &Vector3<f64>,
         inflow: InflowMode,
     ) -> Result<(State, Aux), ModelError> {
-        self.eval(x, u, wind_ned, inflow, None)
-            .map(|(xdot, _, aux)| (xdot, aux))
+        let mut aux = Aux::default();
+        let xdot = self.derivative_into(x, u, wind_ned, inflow, &mut aux)?;
+        Ok((xdot, aux))
+    }
+
+    /// [`Model::derivative_with`] writing the auxiliary outputs into `aux`
+    /// (every field; unspecified after an error) instead of returning them:
+    /// for integration loops, which keep one [`Aux`] of a step and would
+    /// otherwise copy the large struct out of each evaluation.
+    pub fn derivative_into(
+        &self,
+        x: &State,
+        u: &Input,
+        wind_ned: &Vector3<f64>,
+        inflow: InflowMode,
+        aux: &mut Aux,
+    ) -> Result<State, ModelError> {
+        self.eval(x, u, wind_ned, inflow, None, aux)
+            .map(|(xdot, _)| xdot)
     }
 
     #[allow(clippy::too_many_lines)] // the blocks of Figure 4.4 in data-flow order in one hot function (no call overhead, no allocation)
@@ -371,7 +390,8 @@ impl Model {
         wind_ned: &Vector3<f64>,
         inflow: InflowMode,
         ext: Option<PlantInputs<'_>>,
-    ) -> Result<(State, RotorState, Aux), ModelError> {
+        aux: &mut Aux,
+    ) -> Result<(State, RotorState), ModelError> {
         check_finite(x, u, wind_ned)?;
         let p = &self.params;
         let geo = &p.geometry;
@@ -415,7 +435,7 @@ impl Model {
         let omega = Vector3::new(x[ix::P], x[ix::Q], x[ix::R]);
         let (pr, qr, rr) = (omega.x, omega.y, omega.z);
         let mut xdot = State::zeros();
-        let mut aux = Aux::default();
+        *aux = Aux::default();
 
         // Actuators (5.1)–(5.4), (D.16)–(D.23).
         for (ch, (&pos, &rate)) in [ix::THETA0, ix::A1_SWASH, ix::B1_SWASH, ix::THETA_TR]
@@ -773,7 +793,7 @@ impl Model {
         xdot[ix::B1SB] = sb_rate.y;
         xdot[ix::A1SB_DOT] = sb_ddot.x;
         xdot[ix::B1SB_DOT] = sb_ddot.y;
-        Ok((xdot, rotor_rates, aux))
+        Ok((xdot, rotor_rates))
     }
 }
 

@@ -609,13 +609,18 @@ impl Params {
     }
 
     /// The Bergen Industrial Twin (thesis Nomenclature), from the embedded
-    /// `params/bergen_twin.toml`.
+    /// `params/bergen_twin.toml`, parsed once per process (parsing the TOML
+    /// costs about as much as a hundred control steps, and every flight's
+    /// sensor suite asks for these parameters).
     pub fn bergen_twin() -> Params {
+        static PARSED: std::sync::OnceLock<Params> = std::sync::OnceLock::new();
         // The embedded file is complete and valid: `tests::embedded_file_is_complete`
         // parses it in full, so this cannot fail at run time.
         #[allow(clippy::expect_used)]
-        Self::parse_complete(BERGEN_TWIN_TOML, "<embedded bergen_twin.toml>")
-            .expect("embedded bergen_twin.toml is valid")
+        *PARSED.get_or_init(|| {
+            Self::parse_complete(BERGEN_TWIN_TOML, "<embedded bergen_twin.toml>")
+                .expect("embedded bergen_twin.toml is valid")
+        })
     }
 
     /// Parse a complete parameter file: every key must be present.

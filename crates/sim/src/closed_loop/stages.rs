@@ -148,7 +148,11 @@ impl<'a> Plant<'a> {
         if self.ground.is_some() {
             return self.advance_ground(u, wind_ned);
         }
-        let mut first: Option<(Aux, State)> = None;
+        // the first evaluation's ẋ and aux (the step's start), the others'
+        // aux written over one scratch: no copy of the large Aux per stage
+        let mut first: Option<State> = None;
+        let mut aux_first = Aux::default();
+        let mut aux_stage = Aux::default();
         let mut error = None;
         let (inflow, iterations, model) = (self.inflow, self.inflow_iterations, self.model);
         let lam = &mut self.lambda;
@@ -165,11 +169,16 @@ impl<'a> Plant<'a> {
                         iterations,
                     },
                 };
-                let (d, a) = model.derivative_with(s, u, wind_ned, mode)?;
+                let a = if first.is_none() {
+                    &mut aux_first
+                } else {
+                    &mut aux_stage
+                };
+                let d = model.derivative_into(s, u, wind_ned, mode, a)?;
                 // warm start (converged) or the thesis's recursion (iteration)
                 *lam = (a.lambda_mr, a.lambda_tr);
                 if first.is_none() {
-                    first = Some((a, d));
+                    first = Some(d);
                 }
                 Ok::<_, ModelError>(d)
             });
@@ -181,7 +190,10 @@ impl<'a> Plant<'a> {
                 }
             }
         }
-        let (aux, xdot) = first.unwrap_or_default();
+        let (aux, xdot) = match first {
+            Some(d) => (aux_first, d),
+            None => (Aux::default(), State::zeros()),
+        };
         self.xdot = xdot;
         PlantStep { aux, error }
     }
